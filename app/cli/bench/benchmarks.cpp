@@ -1,0 +1,13 @@
+#include "app/cli/bench/benchmarks.hpp"
+
+namespace flexirob::bench {
+
+void registerAllBenchmarks() {
+  static bool registered = false;
+  if (registered) return;
+  registered = true;
+  // One line per module.
+  registerKinematicsBenchmarks();
+}
+
+}  // namespace flexirob::bench

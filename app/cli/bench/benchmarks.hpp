@@ -1,0 +1,13 @@
+#pragma once
+// Google Benchmark cases of every module, registered explicitly (static registration would be
+// dropped from a static library). Shared by the `flexirob-bench` executable and by
+// `flexirob-cli bench`, which reports each case's median in microseconds.
+namespace flexirob::bench {
+
+void registerKinematicsBenchmarks();
+// Each module adds its register function here and calls it from registerAllBenchmarks().
+
+/// Registers every benchmark of the product once.
+void registerAllBenchmarks();
+
+}  // namespace flexirob::bench

@@ -1,0 +1,110 @@
+#include "app/cli/cli_support.hpp"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+
+#include "robot/errors.hpp"
+
+namespace flexirob::cli {
+
+Eigen::VectorXd parseNumberList(const std::string& text, const std::string& what, std::size_t max_count) {
+  std::vector<double> values;
+  std::size_t start = 0;
+  if (text.empty()) throw InputError(what + ": expected comma-separated numbers, got an empty value");
+  while (start <= text.size()) {
+    const std::size_t end = std::min(text.find(',', start), text.size());
+    std::string token = text.substr(start, end - start);
+    // Allow spaces around entries ("0.1, 0.2"), nothing else.
+    const auto first = token.find_first_not_of(" \t");
+    const auto last = token.find_last_not_of(" \t");
+    token = first == std::string::npos ? std::string() : token.substr(first, last - first + 1);
+    if (token.empty()) throw InputError(what + ": empty entry in '" + text + "'");
+    errno = 0;
+    char* parsed_end = nullptr;
+    const double value = std::strtod(token.c_str(), &parsed_end);
+    if (parsed_end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value)) {
+      throw InputError(what + ": '" + token + "' is not a finite number");
+    }
+    values.push_back(value);
+    if (values.size() > max_count) throw InputError(what + ": more than " + std::to_string(max_count) + " entries");
+    start = end + 1;
+    if (end == text.size()) break;
+  }
+  return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+}
+
+Eigen::VectorXd parseNumberList(const std::string& text, const std::string& what, int count) {
+  Eigen::VectorXd values = parseNumberList(text, what, static_cast<std::size_t>(count) + 1);
+  if (values.size() != count) {
+    throw InputError(what + ": expected " + std::to_string(count) + " values, got " + std::to_string(values.size()));
+  }
+  return values;
+}
+
+Json toJson(const Eigen::VectorXd& v) {
+  Json array = Json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    if (std::isfinite(v[i])) {
+      array.push_back(v[i]);
+    } else {
+      array.push_back(nullptr);
+    }
+  }
+  return array;
+}
+
+Json toJsonRows(const Eigen::MatrixXd& m) {
+  Json rows = Json::array();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) rows.push_back(toJson(m.row(r).transpose()));
+  return rows;
+}
+
+void reportProgress(const std::string& what, double fraction) {
+  static const bool enabled = isatty(STDERR_FILENO) != 0 || std::getenv("FLEXIROB_PROGRESS") != nullptr;
+  if (!enabled) return;
+  const int percent = static_cast<int>(std::lround(std::clamp(fraction, 0.0, 1.0) * 100.0));
+  std::fprintf(stderr, "\r%s: %3d%%%s", what.c_str(), percent, percent >= 100 ? "\n" : "");
+  std::fflush(stderr);
+}
+
+int runCli(int argc, const char* const* argv) {
+  CLI::App app{"FlexIRob headless tools: every command prints one JSON object on stdout", "flexirob-cli"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string(FLEXIROB_VERSION_STRING));
+  CommandRunner runner;
+  registerRobotCommands(app, runner);
+  registerRenderCommand(app, runner);
+  registerLearnCommands(app, runner);
+  registerItmCommands(app, runner);
+  registerBenchCommand(app, runner);
+  try {
+    app.parse(argc, argv);
+    if (!runner.hasAction()) throw InputError("no command given; see --help");
+    const Json result = runner.run();
+    std::cout << result.dump(2) << std::endl;
+    return 0;
+  } catch (const CLI::Success& e) {
+    // --help and --version: CLI11 prints them itself.
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "error: " << e.what() << std::endl;
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "error: out of memory (the input is too large)" << std::endl;
+    return 2;
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    for (char& c : message) {
+      if (c == '\n' || c == '\r') c = ' ';
+    }
+    std::cerr << "error: " << message << std::endl;
+    return 2;
+  }
+}
+
+}  // namespace flexirob::cli

@@ -1,0 +1,53 @@
+#pragma once
+// Shared plumbing of flexirob-cli's commands: how a command hands its JSON result back, and
+// strict parsing of the numeric lists users type on the command line.
+#include <CLI/CLI.hpp>
+#include <Eigen/Core>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace flexirob::cli {
+
+using Json = nlohmann::ordered_json;
+
+/// What a parsed command will do; it returns the JSON object printed on stdout.
+using Action = std::function<Json()>;
+
+/// Collects the action of whichever subcommand the user chose.
+class CommandRunner {
+ public:
+  void select(Action action) { action_ = std::move(action); }
+  bool hasAction() const { return static_cast<bool>(action_); }
+  Json run() const { return action_(); }
+
+ private:
+  Action action_;
+};
+
+/// Registers subcommands on `app`. Each group lives in its own file.
+void registerRobotCommands(CLI::App& app, CommandRunner& runner);   // robot info, fk
+void registerRenderCommand(CLI::App& app, CommandRunner& runner);   // render
+void registerLearnCommands(CLI::App& app, CommandRunner& runner);   // learn fit|predict
+void registerItmCommands(CLI::App& app, CommandRunner& runner);     // itm build|path
+void registerBenchCommand(CLI::App& app, CommandRunner& runner);    // bench
+
+/// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.
+/// Returns the process exit code (0 success, 2 bad input).
+int runCli(int argc, const char* const* argv);
+
+/// Parses "1.0,2,-3e-2" strictly: every entry a finite number, no empty entries, at most
+/// max_count entries. Throws InputError naming `what`.
+Eigen::VectorXd parseNumberList(const std::string& text, const std::string& what,
+                                std::size_t max_count = 4096);
+/// As parseNumberList with exactly `count` entries.
+Eigen::VectorXd parseNumberList(const std::string& text, const std::string& what, int count);
+
+Json toJson(const Eigen::VectorXd& v);
+Json toJsonRows(const Eigen::MatrixXd& m);
+
+/// Progress on stderr for long work ("what: 42%"); silent when stderr is not a terminal
+/// unless FLEXIROB_PROGRESS=1.
+void reportProgress(const std::string& what, double fraction);
+
+}  // namespace flexirob::cli

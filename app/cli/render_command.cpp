@@ -1,0 +1,5 @@
+// Placeholder registration while the owning module is being built.
+#include "app/cli/cli_support.hpp"
+namespace flexirob::cli {
+void registerRenderCommand(CLI::App&, CommandRunner&) {}
+}  // namespace flexirob::cli

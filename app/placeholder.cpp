@@ -1,0 +1,1 @@
+namespace flexirob::app { int placeholder() { return 0; } }

@@ -1,0 +1,1 @@
+namespace flexirob::learning { int placeholder() { return 0; } }

@@ -1,0 +1,1 @@
+namespace flexirob::planning { int placeholder() { return 0; } }

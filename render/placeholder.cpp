@@ -1,0 +1,1 @@
+namespace flexirob::render { int placeholder() { return 0; } }

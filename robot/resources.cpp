@@ -1,0 +1,59 @@
+#include "robot/resources.hpp"
+
+#include <cstdlib>
+#include <system_error>
+
+#include "robot/errors.hpp"
+
+#ifndef FLEXIROB_SOURCE_RESOURCE_DIR
+#define FLEXIROB_SOURCE_RESOURCE_DIR ""
+#endif
+
+namespace flexirob {
+namespace fs = std::filesystem;
+
+namespace {
+fs::path executableDir() {
+  std::error_code error;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", error);
+  return error ? fs::path{} : exe.parent_path();
+}
+}  // namespace
+
+fs::path resourceDir() {
+  if (const char* env = std::getenv("FLEXIROB_RESOURCES"); env != nullptr && *env != '\0') {
+    if (fs::is_directory(env)) return fs::path(env);
+    throw InputError("FLEXIROB_RESOURCES points to '" + std::string(env) + "', which is not a folder");
+  }
+  const fs::path exe_dir = executableDir();
+  if (!exe_dir.empty()) {
+    const fs::path installed = exe_dir / ".." / "share" / "flexirob" / "resources";
+    if (fs::is_directory(installed)) return fs::weakly_canonical(installed);
+  }
+  const fs::path source_tree(FLEXIROB_SOURCE_RESOURCE_DIR);
+  if (!source_tree.empty() && fs::is_directory(source_tree)) return source_tree;
+  throw InputError("cannot find the resources folder; set FLEXIROB_RESOURCES");
+}
+
+const std::vector<std::string>& builtinRobotNames() {
+  static const std::vector<std::string> names{"lwr4", "arm9"};
+  return names;
+}
+
+fs::path resolveRobotPath(const std::string& robot_argument) {
+  if (robot_argument.empty()) throw InputError("expected a robot name or URDF path, got an empty string");
+  for (const auto& name : builtinRobotNames()) {
+    if (robot_argument == name) return resourceDir() / "robots" / name / (name + ".urdf");
+  }
+  const fs::path path(robot_argument);
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) {
+    std::string known;
+    for (const auto& name : builtinRobotNames()) known += (known.empty() ? "" : ", ") + name;
+    throw InputError("robot '" + robot_argument + "' is neither a built-in robot (" + known +
+                     ") nor a readable URDF file");
+  }
+  return path;
+}
+
+}  // namespace flexirob

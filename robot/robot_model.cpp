@@ -1,0 +1,405 @@
+#include "robot/robot_model.hpp"
+
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "robot/errors.hpp"
+
+namespace flexirob::robot {
+namespace fs = std::filesystem;
+
+const char* toString(JointType type) {
+  switch (type) {
+    case JointType::kRevolute: return "revolute";
+    case JointType::kContinuous: return "continuous";
+    case JointType::kPrismatic: return "prismatic";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// Files larger than this are refused before parsing: a URDF of a real arm is a few hundred kB.
+constexpr std::uintmax_t kMaxUrdfBytes = 64ULL * 1024 * 1024;
+// Far beyond any real arm; keeps absurd descriptions from exhausting memory in later stages.
+constexpr std::size_t kMaxLinks = 10000;
+
+// urdfdom reports parse errors through console_bridge; keep the first error as our reason and
+// keep the library from printing anything itself.
+class ErrorCollector : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR && first_error.empty()) first_error = text;
+  }
+  std::string first_error;
+};
+
+std::string oneLine(std::string text) {
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  while (!text.empty() && (text.back() == ' ' || text.back() == '.')) text.pop_back();
+  return text;
+}
+
+Eigen::Isometry3d toIsometry(const urdf::Pose& pose) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  const Eigen::Quaterniond rotation(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
+  X.linear() = rotation.normalized().toRotationMatrix();
+  X.translation() = Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z);
+  return X;
+}
+
+bool isFinite(const Eigen::Isometry3d& X) { return X.matrix().allFinite(); }
+
+// A package:// URI names a ROS package; without ROS we look for a folder of that name among
+// the URDF's ancestors (the usual layout pkg/urdf/robot.urdf) and in $ROS_PACKAGE_PATH.
+fs::path resolveMeshUri(const std::string& uri, const fs::path& base_dir, const std::string& link) {
+  const std::string package_prefix = "package://";
+  const std::string file_prefix = "file://";
+  std::vector<fs::path> candidates;
+  if (uri.rfind(package_prefix, 0) == 0) {
+    const std::string rest = uri.substr(package_prefix.size());
+    const auto slash = rest.find('/');
+    if (slash == std::string::npos || slash == 0) {
+      throw InputError("link '" + link + "': malformed mesh URI '" + uri + "'");
+    }
+    const std::string package = rest.substr(0, slash);
+    const fs::path relative = rest.substr(slash + 1);
+    for (fs::path dir = fs::absolute(base_dir); !dir.empty(); dir = dir.parent_path()) {
+      if (dir.filename() == package) candidates.push_back(dir / relative);
+      candidates.push_back(dir / package / relative);
+      if (dir == dir.parent_path()) break;
+    }
+    if (const char* ros_path = std::getenv("ROS_PACKAGE_PATH"); ros_path != nullptr) {
+      std::stringstream entries(ros_path);
+      for (std::string entry; std::getline(entries, entry, ':');) {
+        if (!entry.empty()) candidates.push_back(fs::path(entry) / package / relative);
+      }
+    }
+  } else if (uri.rfind(file_prefix, 0) == 0) {
+    candidates.emplace_back(uri.substr(file_prefix.size()));
+  } else if (uri.find("://") != std::string::npos) {
+    throw InputError("link '" + link + "': unsupported mesh URI scheme in '" + uri + "'");
+  } else {
+    const fs::path path(uri);
+    candidates.push_back(path.is_absolute() ? path : base_dir / path);
+  }
+  for (const auto& candidate : candidates) {
+    std::error_code error;
+    if (fs::is_regular_file(candidate, error)) return fs::weakly_canonical(candidate);
+  }
+  throw InputError("link '" + link + "': mesh file '" + uri + "' not found");
+}
+
+Geometry toGeometry(const urdf::GeometrySharedPtr& geometry, const urdf::Pose& origin,
+                    const fs::path& base_dir, const std::string& link) {
+  if (!geometry) throw InputError("link '" + link + "': a visual or collision element has no geometry");
+  Geometry result;
+  result.X_BG = toIsometry(origin);
+  result.source_link = link;
+  switch (geometry->type) {
+    case urdf::Geometry::SPHERE: {
+      const auto& sphere = dynamic_cast<const urdf::Sphere&>(*geometry);
+      result.kind = Geometry::Kind::kSphere;
+      result.size = Eigen::Vector3d(sphere.radius, 0, 0);
+      break;
+    }
+    case urdf::Geometry::BOX: {
+      const auto& box = dynamic_cast<const urdf::Box&>(*geometry);
+      result.kind = Geometry::Kind::kBox;
+      result.size = Eigen::Vector3d(box.dim.x, box.dim.y, box.dim.z);
+      break;
+    }
+    case urdf::Geometry::CYLINDER: {
+      const auto& cylinder = dynamic_cast<const urdf::Cylinder&>(*geometry);
+      result.kind = Geometry::Kind::kCylinder;
+      result.size = Eigen::Vector3d(cylinder.radius, cylinder.length, 0);
+      break;
+    }
+    case urdf::Geometry::MESH: {
+      const auto& mesh = dynamic_cast<const urdf::Mesh&>(*geometry);
+      result.kind = Geometry::Kind::kMesh;
+      result.mesh_file = resolveMeshUri(mesh.filename, base_dir, link);
+      result.mesh_scale = Eigen::Vector3d(mesh.scale.x, mesh.scale.y, mesh.scale.z);
+      break;
+    }
+  }
+  if (!result.size.allFinite() || (result.size.array() < 0).any() || !result.mesh_scale.allFinite() ||
+      !isFinite(result.X_BG)) {
+    throw InputError("link '" + link + "': geometry with a negative or non-finite size or pose");
+  }
+  return result;
+}
+
+// Adds a link's own geometry and inertia to a body; X_BL is the link's pose in the body frame.
+void foldLinkInto(Body& body, const urdf::Link& link, const Eigen::Isometry3d& X_BL,
+                  const fs::path& base_dir) {
+  for (const auto& visual : link.visual_array) {
+    if (!visual) continue;
+    Geometry geometry = toGeometry(visual->geometry, visual->origin, base_dir, link.name);
+    geometry.X_BG = X_BL * geometry.X_BG;
+    if (visual->material) {
+      const auto& c = visual->material->color;
+      geometry.rgba = Eigen::Vector4f(c.r, c.g, c.b, c.a);
+    }
+    body.visuals.push_back(std::move(geometry));
+  }
+  for (const auto& collision : link.collision_array) {
+    if (!collision) continue;
+    Geometry geometry = toGeometry(collision->geometry, collision->origin, base_dir, link.name);
+    geometry.X_BG = X_BL * geometry.X_BG;
+    body.collisions.push_back(std::move(geometry));
+  }
+  if (link.inertial && link.inertial->mass > 0.0) {
+    const auto& inertial = *link.inertial;
+    if (!std::isfinite(inertial.mass)) throw InputError("link '" + link.name + "': non-finite mass");
+    const Eigen::Isometry3d X_BC = X_BL * toIsometry(inertial.origin);
+    Eigen::Matrix3d I_C;
+    I_C << inertial.ixx, inertial.ixy, inertial.ixz, inertial.ixy, inertial.iyy, inertial.iyz,
+        inertial.ixz, inertial.iyz, inertial.izz;
+    if (!I_C.allFinite()) throw InputError("link '" + link.name + "': non-finite inertia");
+    // Combine with what the body already has: common COM, then parallel-axis theorem.
+    const double total_mass = body.mass + inertial.mass;
+    const Eigen::Vector3d p_new = X_BC.translation();
+    const Eigen::Vector3d com = (body.mass * body.p_BCom + inertial.mass * p_new) / total_mass;
+    auto shifted = [](const Eigen::Matrix3d& I, double m, const Eigen::Vector3d& d) {
+      return Eigen::Matrix3d(I + m * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose()));
+    };
+    const Eigen::Matrix3d I_new_B = X_BC.linear() * I_C * X_BC.linear().transpose();
+    body.I_BCom = shifted(body.I_BCom, body.mass, body.p_BCom - com) + shifted(I_new_B, inertial.mass, p_new - com);
+    body.p_BCom = com;
+    body.mass = total_mass;
+  }
+}
+
+int countMovable(const urdf::Link* link) {
+  int count = 0;
+  for (; link != nullptr && link->parent_joint; link = link->getParent().get()) {
+    if (link->parent_joint->type != urdf::Joint::FIXED) ++count;
+  }
+  return count;
+}
+
+int countDepth(const urdf::Link* link) {
+  int depth = 0;
+  for (; link != nullptr && link->parent_joint; link = link->getParent().get()) ++depth;
+  return depth;
+}
+
+// The default tip: the leaf with the most movable joints above it; among equals the deepest
+// (so a flange or tool frame after the last joint wins). Two different chains of equal
+// length are ambiguous: the description is not a serial arm unless a tip is named.
+std::string defaultTip(const urdf::ModelInterface& model) {
+  const urdf::Link* best = nullptr;
+  int best_movable = -1;
+  int best_depth = -1;
+  bool ambiguous = false;
+  std::string rival;
+  for (const auto& [name, link] : model.links_) {
+    if (!link->child_links.empty()) continue;
+    const int movable = countMovable(link.get());
+    const int depth = countDepth(link.get());
+    if (movable > best_movable || (movable == best_movable && depth > best_depth)) {
+      best = link.get();
+      best_movable = movable;
+      best_depth = depth;
+      ambiguous = false;
+    } else if (movable == best_movable && depth == best_depth && movable > 0) {
+      ambiguous = true;
+      rival = name;
+    }
+  }
+  if (best == nullptr) throw InputError("the URDF has no links");
+  if (best_movable <= 0) throw InputError("the URDF has no movable joint between its root and any leaf");
+  if (ambiguous) {
+    throw InputError("not a serial chain: the chains to '" + best->name + "' and '" + rival +
+                     "' are equally long; choose the tip with --tip");
+  }
+  return best->name;
+}
+
+// Links hanging off `link` through fixed joints only, except `skip` (the next chain link).
+void foldFixedSubtree(Body& body, const urdf::Link& link, const Eigen::Isometry3d& X_BL,
+                      const urdf::Link* skip, const fs::path& base_dir) {
+  for (const auto& child : link.child_links) {
+    if (child.get() == skip || !child->parent_joint) continue;
+    if (child->parent_joint->type != urdf::Joint::FIXED) continue;  // off-chain movable branches are not ours
+    const Eigen::Isometry3d X_BC = X_BL * toIsometry(child->parent_joint->parent_to_joint_origin_transform);
+    foldLinkInto(body, *child, X_BC, base_dir);
+    body.folded_links.push_back(child->name);
+    foldFixedSubtree(body, *child, X_BC, nullptr, base_dir);
+  }
+}
+
+}  // namespace
+
+RobotModel RobotModel::fromUrdfFile(const fs::path& urdf_file, const std::string& tip_link) {
+  std::error_code error;
+  if (!fs::is_regular_file(urdf_file, error)) throw InputError("cannot read URDF '" + urdf_file.string() + "'");
+  if (fs::file_size(urdf_file, error) > kMaxUrdfBytes) {
+    throw InputError("URDF '" + urdf_file.string() + "' is larger than 64 MB");
+  }
+  std::ifstream stream(urdf_file, std::ios::binary);
+  if (!stream) throw InputError("cannot open URDF '" + urdf_file.string() + "'");
+  std::ostringstream buffer;
+  buffer << stream.rdbuf();
+  RobotModel model = fromUrdfString(buffer.str(), fs::absolute(urdf_file).parent_path(), tip_link);
+  model.urdf_path_ = fs::weakly_canonical(fs::absolute(urdf_file));
+  return model;
+}
+
+RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& base_dir,
+                                      const std::string& tip_link) {
+  if (xml.size() > kMaxUrdfBytes) throw InputError("URDF is larger than 64 MB");
+  ErrorCollector collector;
+  console_bridge::OutputHandler* previous = console_bridge::getOutputHandler();
+  console_bridge::useOutputHandler(&collector);
+  urdf::ModelInterfaceSharedPtr urdf_model;
+  try {
+    urdf_model = urdf::parseURDF(xml);
+  } catch (const std::exception& e) {
+    collector.first_error = collector.first_error.empty() ? e.what() : collector.first_error;
+  }
+  console_bridge::useOutputHandler(previous);
+  if (!urdf_model) {
+    const std::string reason = collector.first_error.empty() ? "malformed XML" : oneLine(collector.first_error);
+    throw InputError("invalid URDF: " + reason);
+  }
+  if (urdf_model->links_.size() > kMaxLinks) throw InputError("URDF has more than 10000 links");
+  const urdf::LinkConstSharedPtr root = urdf_model->getRoot();
+  if (!root) throw InputError("invalid URDF: no root link");
+
+  // The chain, from the tip up to the root.
+  const std::string tip = tip_link.empty() ? defaultTip(*urdf_model) : tip_link;
+  const urdf::LinkConstSharedPtr tip_ptr = urdf_model->getLink(tip);
+  if (!tip_ptr) throw InputError("tip link '" + tip + "' is not in the URDF");
+  std::vector<const urdf::Link*> path;  // root ... tip
+  for (const urdf::Link* link = tip_ptr.get(); link != nullptr; link = link->getParent().get()) {
+    path.push_back(link);
+    if (path.size() > kMaxLinks) throw InputError("invalid URDF: the chain to the tip does not end at a root");
+  }
+  std::reverse(path.begin(), path.end());
+  if (path.front() != root.get()) throw InputError("invalid URDF: the tip is not connected to the root link");
+
+  RobotModel model;
+  model.name_ = urdf_model->getName();
+  model.tip_link_ = tip;
+  model.bodies_.emplace_back();
+  model.bodies_.back().name = root->name;
+  foldLinkInto(model.bodies_.back(), *root, Eigen::Isometry3d::Identity(), base_dir);
+
+  // Walk down the chain. X_BL: pose of the current link in the current body frame.
+  Eigen::Isometry3d X_BL = Eigen::Isometry3d::Identity();
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const urdf::Link& link = *path[i];
+    const urdf::Joint& joint = *link.parent_joint;
+    const Eigen::Isometry3d X_PJ = X_BL * toIsometry(joint.parent_to_joint_origin_transform);
+    if (!isFinite(X_PJ)) throw InputError("joint '" + joint.name + "': non-finite origin");
+    // Fixed side-branches of the previous chain link belong to the current body.
+    foldFixedSubtree(model.bodies_.back(), *path[i - 1], X_BL, &link, base_dir);
+    if (joint.type == urdf::Joint::FIXED) {
+      X_BL = X_PJ;
+      foldLinkInto(model.bodies_.back(), link, X_BL, base_dir);
+      model.bodies_.back().folded_links.push_back(link.name);
+      continue;
+    }
+    Joint model_joint;
+    model_joint.name = joint.name;
+    model_joint.X_PJ = X_PJ;
+    switch (joint.type) {
+      case urdf::Joint::REVOLUTE: model_joint.type = JointType::kRevolute; break;
+      case urdf::Joint::CONTINUOUS: model_joint.type = JointType::kContinuous; break;
+      case urdf::Joint::PRISMATIC: model_joint.type = JointType::kPrismatic; break;
+      case urdf::Joint::FLOATING:
+        throw InputError("joint '" + joint.name + "': floating joints are not supported on the chain");
+      case urdf::Joint::PLANAR:
+        throw InputError("joint '" + joint.name + "': planar joints are not supported on the chain");
+      default: throw InputError("joint '" + joint.name + "': unknown joint type");
+    }
+    if (joint.mimic) throw InputError("joint '" + joint.name + "': mimic joints are not supported on the chain");
+    const Eigen::Vector3d axis(joint.axis.x, joint.axis.y, joint.axis.z);
+    if (!axis.allFinite() || axis.norm() < 1e-9) throw InputError("joint '" + joint.name + "': zero or non-finite axis");
+    model_joint.axis_J = axis.normalized();
+    JointLimits& limits = model_joint.limits;
+    if (model_joint.type == JointType::kContinuous) {
+      limits.lower = -std::numeric_limits<double>::infinity();
+      limits.upper = std::numeric_limits<double>::infinity();
+    } else {
+      if (!joint.limits) throw InputError("joint '" + joint.name + "': no <limit> element");
+      limits.lower = joint.limits->lower;
+      limits.upper = joint.limits->upper;
+      if (!std::isfinite(limits.lower) || !std::isfinite(limits.upper) || limits.lower > limits.upper) {
+        throw InputError("joint '" + joint.name + "': expected finite limits with lower <= upper");
+      }
+    }
+    limits.soft_lower = limits.lower;
+    limits.soft_upper = limits.upper;
+    if (joint.safety && model_joint.type != JointType::kContinuous) {
+      const double soft_lower = joint.safety->soft_lower_limit;
+      const double soft_upper = joint.safety->soft_upper_limit;
+      // urdfdom defaults both to 0 when absent; only a proper interval narrows the limits.
+      if (std::isfinite(soft_lower) && std::isfinite(soft_upper) && soft_lower < soft_upper) {
+        limits.soft_lower = std::max(limits.lower, soft_lower);
+        limits.soft_upper = std::min(limits.upper, soft_upper);
+      }
+    }
+    if (joint.limits) {
+      limits.velocity = joint.limits->velocity;
+      limits.effort = joint.limits->effort;
+    }
+    if (!std::isfinite(limits.velocity) || limits.velocity < 0 || !std::isfinite(limits.effort) || limits.effort < 0) {
+      throw InputError("joint '" + joint.name + "': expected finite, non-negative velocity and effort limits");
+    }
+    if (joint.dynamics) {
+      model_joint.damping = joint.dynamics->damping;
+      model_joint.friction = joint.dynamics->friction;
+    }
+    model.joints_.push_back(model_joint);
+    model.bodies_.emplace_back();
+    model.bodies_.back().name = link.name;
+    X_BL = Eigen::Isometry3d::Identity();
+    foldLinkInto(model.bodies_.back(), link, X_BL, base_dir);
+  }
+  // What hangs off the tip (tools, sensors) through fixed joints moves with the last body.
+  foldFixedSubtree(model.bodies_.back(), *path.back(), X_BL, nullptr, base_dir);
+  model.X_last_body_tip_ = X_BL;
+  if (model.joints_.empty()) throw InputError("no movable joint between root '" + root->name + "' and tip '" + tip + "'");
+  return model;
+}
+
+namespace {
+template <typename Getter>
+Eigen::VectorXd collect(const std::vector<Joint>& joints, Getter getter) {
+  Eigen::VectorXd values(static_cast<Eigen::Index>(joints.size()));
+  for (std::size_t i = 0; i < joints.size(); ++i) values[static_cast<Eigen::Index>(i)] = getter(joints[i].limits);
+  return values;
+}
+}  // namespace
+
+Eigen::VectorXd RobotModel::lowerLimits() const { return collect(joints_, [](const JointLimits& l) { return l.lower; }); }
+Eigen::VectorXd RobotModel::upperLimits() const { return collect(joints_, [](const JointLimits& l) { return l.upper; }); }
+Eigen::VectorXd RobotModel::softLowerLimits() const { return collect(joints_, [](const JointLimits& l) { return l.soft_lower; }); }
+Eigen::VectorXd RobotModel::softUpperLimits() const { return collect(joints_, [](const JointLimits& l) { return l.soft_upper; }); }
+Eigen::VectorXd RobotModel::velocityLimits() const { return collect(joints_, [](const JointLimits& l) { return l.velocity; }); }
+
+Eigen::VectorXd RobotModel::midPosture() const {
+  return collect(joints_, [](const JointLimits& l) {
+    return std::isfinite(l.soft_lower) && std::isfinite(l.soft_upper) ? 0.5 * (l.soft_lower + l.soft_upper) : 0.0;
+  });
+}
+
+void RobotModel::checkPosture(const Eigen::VectorXd& q) const {
+  if (q.size() != dof()) {
+    throw InputError("expected " + std::to_string(dof()) + " joint values, got " + std::to_string(q.size()));
+  }
+  if (!q.allFinite()) throw InputError("joint values must be finite numbers");
+}
+
+}  // namespace flexirob::robot
