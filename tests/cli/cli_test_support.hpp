@@ -1,0 +1,44 @@
+#pragma once
+// Runs the real flexirob-cli binary and captures what a calling program would see.
+#include <array>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+
+namespace flexirob::testing {
+
+struct CliResult {
+  int exit_code = -1;
+  std::string out;  ///< stdout
+  std::string err;  ///< stderr
+  nlohmann::json json() const { return nlohmann::json::parse(out); }
+};
+
+/// Runs `flexirob-cli <arguments>` through the shell; arguments are passed as written.
+inline CliResult runCliBinary(const std::string& arguments) {
+  char err_template[] = "/tmp/flexirob-cli-stderr-XXXXXX";
+  const int err_fd = mkstemp(err_template);
+  if (err_fd >= 0) close(err_fd);
+  const std::string err_file = err_template;
+  const std::string command = std::string(FLEXIROB_CLI_EXECUTABLE) + " " + arguments + " 2>" + err_file;
+  CliResult result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 4096> buffer{};
+  std::size_t read = 0;
+  while ((read = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.out.append(buffer.data(), read);
+  const int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (FILE* err = std::fopen(err_file.c_str(), "r")) {
+    while ((read = std::fread(buffer.data(), 1, buffer.size(), err)) > 0) result.err.append(buffer.data(), read);
+    std::fclose(err);
+  }
+  std::remove(err_file.c_str());
+  return result;
+}
+
+}  // namespace flexirob::testing

@@ -1,0 +1,92 @@
+// The command-line contract of `robot info` and `fk` (DESIGN section 6), exercised through the
+// real binary as other programs use it.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <numbers>
+
+#include "cli_test_support.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/resources.hpp"
+
+namespace flexirob {
+namespace {
+
+using testing::runCliBinary;
+
+TEST(RobotCli, InfoListsJointsWithLimitsAndTheUrdfItRead) {
+  const auto result = runCliBinary("robot info --robot lwr4");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = result.json();
+  EXPECT_EQ(json["name"], "lwr4");
+  EXPECT_EQ(json["dof"], 7);
+  EXPECT_EQ(json["base_link"], "base_link");
+  EXPECT_EQ(json["tip_link"], "flange");
+  EXPECT_NE(json["urdf"].get<std::string>().find("lwr4.urdf"), std::string::npos);
+  ASSERT_EQ(json["joints"].size(), 7U);
+  EXPECT_EQ(json["joints"][0]["name"], "A1");
+  EXPECT_NEAR(json["joints"][1]["upper"].get<double>(), 120.0 * std::numbers::pi / 180.0, 1e-6);
+  EXPECT_NEAR(json["joints"][4]["velocity"].get<double>(), 204.0 * std::numbers::pi / 180.0, 1e-6);
+}
+
+TEST(RobotCli, FkPrintsPoseAndAWorldAlignedJacobianOfTheTip) {
+  const auto result = runCliBinary("fk --robot arm9 --q 0.1,-0.4,0.3,1.1,-0.2,0.5,0.7,-0.9,0.2");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = result.json();
+  Eigen::VectorXd q(9);
+  q << 0.1, -0.4, 0.3, 1.1, -0.2, 0.5, 0.7, -0.9, 0.2;
+  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath("arm9"));
+  robot::Kinematics kinematics(model);
+  kinematics.update(q);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(json["position"][i].get<double>(), kinematics.p_WT()[i], 1e-12);
+  const Eigen::Quaterniond expected(kinematics.X_WT().linear());
+  const Eigen::Quaterniond printed(json["quaternion"][0].get<double>(), json["quaternion"][1].get<double>(),
+                                   json["quaternion"][2].get<double>(), json["quaternion"][3].get<double>());
+  EXPECT_NEAR(std::abs(expected.dot(printed)), 1.0, 1e-12) << "[w,x,y,z] order";
+  EXPECT_GE(json["quaternion"][0].get<double>(), 0.0);
+  ASSERT_EQ(json["jacobian"].size(), 6U);
+  ASSERT_EQ(json["jacobian"][0].size(), 9U);
+  robot::Matrix6Xd J;
+  kinematics.tipJacobian(J);
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 9; ++c) EXPECT_NEAR(json["jacobian"][r][c].get<double>(), J(r, c), 1e-12);
+  }
+}
+
+TEST(RobotCli, AcceptsNegativeFirstJointValue) {
+  const auto result = runCliBinary("fk --robot lwr4 --q -0.5,0.3,0,0,0,0,0");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+}
+
+struct BadInvocation {
+  const char* arguments;
+  const char* fragment;
+};
+
+class CliRefuses : public ::testing::TestWithParam<BadInvocation> {};
+
+TEST_P(CliRefuses, WithExitCode2AndOneLine) {
+  const auto result = runCliBinary(GetParam().arguments);
+  EXPECT_EQ(result.exit_code, 2) << result.out;
+  EXPECT_TRUE(result.out.empty()) << "nothing on stdout: " << result.out;
+  ASSERT_FALSE(result.err.empty());
+  EXPECT_EQ(result.err.find('\n'), result.err.size() - 1) << "one line: " << result.err;
+  EXPECT_NE(result.err.find(GetParam().fragment), std::string::npos) << result.err;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    BadInput, CliRefuses,
+    ::testing::Values(BadInvocation{"fk --robot lwr4 --q 1,2,3", "expected 7 values, got 3"},
+                      BadInvocation{"fk --robot lwr4 --q 1,2,3,4,5,6,nan", "not a finite number"},
+                      BadInvocation{"fk --robot lwr4 --q 1,,3,4,5,6,7", "empty entry"},
+                      BadInvocation{"fk --robot lwr4 --q 1,2,3,4,5,6,7,8", "expected 7 values"},
+                      BadInvocation{"fk --robot lwr4 --q 1e999,0,0,0,0,0,0", "not a finite number"},
+                      BadInvocation{"fk --robot lwr4 --q abc", "not a finite number"},
+                      BadInvocation{"fk --robot /nonexistent.urdf --q 0", "neither a built-in robot"},
+                      BadInvocation{"fk --robot /etc/hostname --q 0", "invalid URDF"},
+                      BadInvocation{"robot info --robot lwr4 --tip nowhere", "tip link 'nowhere'"},
+                      BadInvocation{"fk --robot lwr4", "--q is required"},
+                      BadInvocation{"no-such-command", "error"}));
+
+}  // namespace
+}  // namespace flexirob

@@ -1,0 +1,265 @@
+#include "robot/robot_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "robot/errors.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/resources.hpp"
+#include "test_urdf.hpp"
+
+namespace flexirob::robot {
+namespace {
+
+using flexirob::testing::TempDir;
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+std::string twoJointArm(const std::string& extra_links = "", const std::string& tail_joint_type = "revolute") {
+  return R"(<?xml version="1.0"?>
+<robot name="two">
+  <link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" velocity="2" effort="10"/></joint>
+  <link name="l1"><inertial><origin xyz="0 0 0.25"/><mass value="2"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="j2" type=")" + tail_joint_type + R"("><parent link="l1"/><child link="l2"/>
+    <origin xyz="0 0 0.5"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="3" effort="5"/></joint>
+  <link name="l2"/>
+  <joint name="tool_joint" type="fixed"><parent link="l2"/><child link="tool"/><origin xyz="0.3 0 0"/></joint>
+  <link name="tool"><inertial><origin xyz="0 0 0"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+)" + extra_links + "</robot>\n";
+}
+
+TEST(RobotModel, ReadsTheLwr4JointsAndLimitsFromItsUrdf) {
+  const auto model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  ASSERT_EQ(model.dof(), 7);
+  EXPECT_EQ(model.baseLink(), "base_link");
+  EXPECT_EQ(model.tipLink(), "flange");
+  const double hardware[7] = {170, 120, 170, 120, 170, 120, 170};
+  const double velocity[7] = {110, 110, 128, 128, 204, 184, 184};
+  const double effort[7] = {176, 176, 100, 100, 100, 38, 38};
+  for (int j = 0; j < 7; ++j) {
+    const auto& limits = model.joints()[static_cast<std::size_t>(j)].limits;
+    EXPECT_NEAR(limits.upper, hardware[j] * kDeg, 1e-5) << "joint " << j;
+    EXPECT_NEAR(limits.lower, -hardware[j] * kDeg, 1e-5) << "joint " << j;
+    EXPECT_LT(limits.soft_upper, limits.upper) << "software limits are tighter";
+    EXPECT_GT(limits.soft_lower, limits.lower);
+    EXPECT_NEAR(limits.velocity, velocity[j] * kDeg, 1e-5);
+    EXPECT_DOUBLE_EQ(limits.effort, effort[j]);
+  }
+  // The thesis' prototype kept A6 within +-115 deg.
+  EXPECT_NEAR(model.joints()[5].limits.soft_upper, 115 * kDeg, 1e-5);
+}
+
+TEST(RobotModel, Arm9DuplicatesTheA3A4SegmentOfTheLwr4) {
+  const auto lwr = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  const auto arm9 = RobotModel::fromUrdfFile(resolveRobotPath("arm9"));
+  ASSERT_EQ(arm9.dof(), 9);
+  // Chain order A1 A2 A3 A4 A3' A4' A5 A6 A7: each joint copies the limits of its original.
+  const int original[9] = {0, 1, 2, 3, 2, 3, 4, 5, 6};
+  for (int j = 0; j < 9; ++j) {
+    EXPECT_DOUBLE_EQ(arm9.joints()[static_cast<std::size_t>(j)].limits.upper,
+                     lwr.joints()[static_cast<std::size_t>(original[j])].limits.upper);
+    EXPECT_DOUBLE_EQ(arm9.bodies()[static_cast<std::size_t>(j + 1)].mass,
+                     lwr.bodies()[static_cast<std::size_t>(original[j] + 1)].mass);
+  }
+}
+
+TEST(RobotModel, EveryLinkOfOurRobotsHasVisualAndCollisionGeometry) {
+  for (const auto& name : builtinRobotNames()) {
+    const auto model = RobotModel::fromUrdfFile(resolveRobotPath(name));
+    for (const auto& body : model.bodies()) {
+      EXPECT_FALSE(body.visuals.empty()) << name << ": " << body.name;
+      EXPECT_FALSE(body.collisions.empty()) << name << ": " << body.name;
+      for (const auto& visual : body.visuals) {
+        EXPECT_TRUE(std::filesystem::is_regular_file(visual.mesh_file)) << visual.mesh_file;
+      }
+    }
+    double mass = 0;
+    for (const auto& body : model.bodies()) mass += body.mass;
+    EXPECT_GT(mass, 10.0) << name;
+  }
+}
+
+TEST(RobotModel, FoldsFixedJointsIntoTheirMovableParent) {
+  TempDir dir;
+  const auto model = RobotModel::fromUrdfFile(dir.write("two.urdf", twoJointArm()));
+  ASSERT_EQ(model.dof(), 2);
+  EXPECT_EQ(model.tipLink(), "tool") << "default tip is the end of the longest chain, past fixed joints";
+  EXPECT_TRUE(model.X_LastBodyTip().translation().isApprox(Eigen::Vector3d(0.3, 0, 0)));
+  // The tool's 1 kg at (0.3, 0, 0) is the last body's whole mass.
+  EXPECT_DOUBLE_EQ(model.bodies()[2].mass, 1.0);
+  EXPECT_TRUE(model.bodies()[2].p_BCom.isApprox(Eigen::Vector3d(0.3, 0, 0)));
+  EXPECT_EQ(model.bodies()[2].folded_links, std::vector<std::string>{"tool"});
+}
+
+TEST(RobotModel, CombinesInertiaOfFoldedLinksWithTheParallelAxisTheorem) {
+  TempDir dir;
+  // Two point-like masses of 1 kg, 0.2 m apart along x, folded into one body.
+  const std::string urdf = R"(<robot name="fold">
+    <link name="base"/>
+    <joint name="j" type="continuous"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/></joint>
+    <link name="a"><inertial><origin xyz="-0.1 0 0"/><mass value="1"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+    <joint name="f" type="fixed"><parent link="a"/><child link="b"/><origin xyz="0.1 0 0"/></joint>
+    <link name="b"><inertial><origin xyz="0 0 0"/><mass value="1"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+  </robot>)";
+  const auto model = RobotModel::fromUrdfString(urdf, dir.path());
+  const Body& body = model.bodies()[1];
+  EXPECT_DOUBLE_EQ(body.mass, 2.0);
+  EXPECT_NEAR(body.p_BCom.norm(), 0.0, 1e-12);
+  // Two 1 kg points at +-0.1 m along x: Iyy = Izz = 2 * 1 * 0.01, Ixx = 0.
+  EXPECT_NEAR(body.I_BCom(0, 0), 0.0, 1e-12);
+  EXPECT_NEAR(body.I_BCom(1, 1), 0.02, 1e-12);
+  EXPECT_NEAR(body.I_BCom(2, 2), 0.02, 1e-12);
+  EXPECT_TRUE(std::isinf(model.joints()[0].limits.upper)) << "continuous joints are unbounded";
+}
+
+TEST(RobotModel, AcceptsAnExplicitTipInsideTheChain) {
+  TempDir dir;
+  const auto model = RobotModel::fromUrdfFile(dir.write("two.urdf", twoJointArm()), "l1");
+  EXPECT_EQ(model.dof(), 1);
+  EXPECT_EQ(model.tipLink(), "l1");
+}
+
+TEST(RobotModel, SupportsPrismaticJoints) {
+  TempDir dir;
+  const auto model = RobotModel::fromUrdfFile(dir.write("p.urdf", twoJointArm("", "prismatic")));
+  ASSERT_EQ(model.joints()[1].type, JointType::kPrismatic);
+  Eigen::VectorXd q(2);
+  q << 0.0, 0.25;
+  // The prismatic axis is y in l1's frame: the tool moves 0.25 m along world y.
+  EXPECT_TRUE(tipPose(model, q).translation().isApprox(Eigen::Vector3d(0.3, 0.25, 0.6)));
+}
+
+TEST(RobotModel, ReadsSoftLimitsFromTheSafetyController) {
+  TempDir dir;
+  const std::string urdf = R"(<robot name="soft"><link name="base"/>
+    <joint name="j" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/>
+      <limit lower="-2" upper="2" velocity="1" effort="1"/>
+      <safety_controller soft_lower_limit="-1.5" soft_upper_limit="3" k_position="1" k_velocity="1"/></joint>
+    <link name="a"/></robot>)";
+  const auto model = RobotModel::fromUrdfString(urdf, dir.path());
+  EXPECT_DOUBLE_EQ(model.joints()[0].limits.soft_lower, -1.5);
+  EXPECT_DOUBLE_EQ(model.joints()[0].limits.soft_upper, 2.0) << "never wider than the hardware limit";
+  EXPECT_DOUBLE_EQ(model.midPosture()[0], 0.25);
+}
+
+// Every malformed description is refused with a one-line InputError naming the problem.
+struct BrokenUrdf {
+  const char* label;
+  std::string xml;
+  std::string tip;
+  const char* expected_fragment;
+};
+
+void PrintTo(const BrokenUrdf& broken, std::ostream* out) { *out << broken.label; }
+
+class RefusesBrokenUrdf : public ::testing::TestWithParam<BrokenUrdf> {};
+
+TEST_P(RefusesBrokenUrdf, WithAOneLineReason) {
+  TempDir dir;
+  const auto& broken = GetParam();
+  try {
+    RobotModel::fromUrdfFile(dir.write("broken.urdf", broken.xml), broken.tip);
+    FAIL() << "accepted " << broken.label;
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find(broken.expected_fragment), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, RefusesBrokenUrdf,
+    ::testing::Values(
+        BrokenUrdf{"malformed XML", "<robot name='x'><link name='a'>", "", "invalid URDF"},
+        BrokenUrdf{"not XML", std::string("\x00\x01\x02garbage", 10), "", "invalid URDF"},
+        BrokenUrdf{"empty file", "", "", "invalid URDF"},
+        BrokenUrdf{"missing tip link", twoJointArm(), "nonexistent", "tip link 'nonexistent'"},
+        BrokenUrdf{"joint to a missing link",
+                   "<robot name='x'><link name='a'/><joint name='j' type='revolute'><parent link='a'/>"
+                   "<child link='ghost'/><axis xyz='0 0 1'/><limit lower='-1' upper='1' velocity='1' effort='1'/></joint></robot>",
+                   "", "invalid URDF"},
+        BrokenUrdf{"floating joint on the chain",
+                   "<robot name='x'><link name='a'/><joint name='free' type='floating'><parent link='a'/>"
+                   "<child link='b'/></joint><link name='b'/></robot>",
+                   "b", "floating joints are not supported"},
+        BrokenUrdf{"planar joint on the chain",
+                   "<robot name='x'><link name='a'/><joint name='p' type='planar'><parent link='a'/>"
+                   "<child link='b'/><axis xyz='0 0 1'/></joint><link name='b'/></robot>",
+                   "b", "planar joints are not supported"},
+        BrokenUrdf{"two equally long chains",
+                   "<robot name='x'><link name='a'/>"
+                   "<joint name='l' type='continuous'><parent link='a'/><child link='left'/><axis xyz='0 0 1'/></joint><link name='left'/>"
+                   "<joint name='r' type='continuous'><parent link='a'/><child link='right'/><axis xyz='0 0 1'/></joint><link name='right'/>"
+                   "</robot>",
+                   "", "not a serial chain"},
+        BrokenUrdf{"missing mesh file",
+                   twoJointArm("<link name='deco'><visual><geometry><mesh filename='package://nowhere/m.stl'/></geometry></visual></link>"
+                               "<joint name='d' type='fixed'><parent link='tool'/><child link='deco'/></joint>"),
+                   "", "mesh file 'package://nowhere/m.stl' not found"},
+        BrokenUrdf{"no movable joint",
+                   "<robot name='x'><link name='a'/><joint name='f' type='fixed'><parent link='a'/><child link='b'/></joint><link name='b'/></robot>",
+                   "", "no movable joint"},
+        BrokenUrdf{"revolute joint without limits",
+                   "<robot name='x'><link name='a'/><joint name='j' type='revolute'><parent link='a'/><child link='b'/>"
+                   "<axis xyz='0 0 1'/></joint><link name='b'/></robot>",
+                   "", "invalid URDF"},
+        BrokenUrdf{"inverted limits",
+                   "<robot name='x'><link name='a'/><joint name='j' type='revolute'><parent link='a'/><child link='b'/>"
+                   "<axis xyz='0 0 1'/><limit lower='1' upper='-1' velocity='1' effort='1'/></joint><link name='b'/></robot>",
+                   "", "lower <= upper"},
+        BrokenUrdf{"non-finite origin",
+                   "<robot name='x'><link name='a'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/>"
+                   "<origin xyz='nan 0 0'/><axis xyz='0 0 1'/></joint><link name='b'/></robot>",
+                   "", "invalid URDF"},
+        BrokenUrdf{"zero axis",
+                   "<robot name='x'><link name='a'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/>"
+                   "<axis xyz='0 0 0'/></joint><link name='b'/></robot>",
+                   "", "axis"}),
+    [](const ::testing::TestParamInfo<BrokenUrdf>& param_info) {
+      std::string name = param_info.param.label;
+      for (char& c : name) {
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      }
+      return name;
+    });
+
+TEST(RobotModel, ResolvesPackageAndRelativeMeshUris) {
+  TempDir dir;
+  dir.write("my_robot/meshes/part.stl", "solid x\nendsolid x\n");
+  dir.write("my_robot/urdf/local.stl", "solid x\nendsolid x\n");
+  const auto urdf = dir.write(
+      "my_robot/urdf/robot.urdf",
+      twoJointArm("<link name='deco'><visual><geometry><mesh filename='package://my_robot/meshes/part.stl'/></geometry></visual>"
+                  "<collision><geometry><mesh filename='local.stl' scale='0.001 0.001 0.001'/></geometry></collision></link>"
+                  "<joint name='d' type='fixed'><parent link='tool'/><child link='deco'/><origin xyz='0 0 0.1'/></joint>"));
+  const auto model = RobotModel::fromUrdfFile(urdf);
+  const Body& last = model.bodies().back();
+  ASSERT_EQ(last.visuals.size(), 1U);
+  EXPECT_EQ(last.visuals[0].mesh_file.filename(), "part.stl");
+  EXPECT_EQ(last.visuals[0].source_link, "deco");
+  // deco hangs 0.1 m above the tool, which is 0.3 m along x of l2.
+  EXPECT_TRUE(last.visuals[0].X_BG.translation().isApprox(Eigen::Vector3d(0.3, 0, 0.1)));
+  ASSERT_EQ(last.collisions.size(), 1U);
+  EXPECT_EQ(last.collisions[0].mesh_file.filename(), "local.stl");
+  EXPECT_DOUBLE_EQ(last.collisions[0].mesh_scale.x(), 0.001);
+}
+
+TEST(RobotModel, RefusesANonexistentFileAndUnknownRobotName) {
+  EXPECT_THROW(RobotModel::fromUrdfFile("/nonexistent/robot.urdf"), InputError);
+  EXPECT_THROW(resolveRobotPath("not_a_robot"), InputError);
+}
+
+TEST(RobotModel, ChecksPostureSizeAndFiniteness) {
+  const auto model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  EXPECT_THROW(model.checkPosture(Eigen::VectorXd::Zero(6)), InputError);
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(7);
+  EXPECT_NO_THROW(model.checkPosture(q));
+  q[3] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(model.checkPosture(q), InputError);
+}
+
+}  // namespace
+}  // namespace flexirob::robot
