@@ -1,1 +1,0 @@
-namespace flexirob::planning { int placeholder() { return 0; } }
