@@ -1,0 +1,38 @@
+#pragma once
+// The ITM's own file format (versioned, little-endian binary, checksummed). Layout, version 1:
+//
+//   char[8]  magic "FLXITM\r\n"
+//   u32      version (1)
+//   u32      variant (0 plain, 1 hybrid)      u32 task space (0 position, 1 pose)
+//   u32      joint count N (1..64)
+//   f64 x 5  e_max, d_theta_max, d_c_max, eta, alpha      i32 delta
+//   u64      node count V, edge count E, kept real-sample count S
+//   i64      real samples seen, bootstrapped samples processed
+//   V x      { f64 x M' prototype (M' = 3 or 7), f64 x N joints, u8 bootstrapped }
+//   E x      { u32 a, u32 b }  (indices into the node list, a != b, no duplicates)
+//   S x      { f64 x 3 }       kept real-sample positions (bootstrapping error)
+//   u64      FNV-1a 64 checksum of every preceding byte
+//
+// Loading checks sizes against the file length before allocating anything and refuses
+// anything malformed with an ItmFileError naming the file and the defect.
+#include <filesystem>
+#include <stdexcept>
+
+#include "planning/itm.hpp"
+
+namespace flexirob::planning {
+
+class ItmFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+inline constexpr std::uint32_t kItmFileVersion = 1;
+
+/// Writes graph to path (through a temporary file renamed into place). Node ids are compacted.
+void saveItm(const Itm& graph, const std::filesystem::path& path);
+
+/// Reads a graph written by saveItm.
+Itm loadItm(const std::filesystem::path& path);
+
+}  // namespace flexirob::planning

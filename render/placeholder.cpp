@@ -1,1 +1,0 @@
-namespace flexirob::render { int placeholder() { return 0; } }
