@@ -1,1 +1,0 @@
-namespace flexirob::learning { int placeholder() { return 0; } }
