@@ -1,0 +1,48 @@
+#include "robot/parameters.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "robot/errors.hpp"
+
+namespace flexirob::robot {
+
+ParameterSet::ParameterSet(std::span<const ParameterDeclaration> declarations)
+    : declarations_(declarations.begin(), declarations.end()) {
+  for (const auto& declaration : declarations_) values_[declaration.name] = declaration.default_value;
+}
+
+const ParameterDeclaration& ParameterSet::find(const std::string& name) const {
+  for (const auto& declaration : declarations_) {
+    if (name == declaration.name) return declaration;
+  }
+  throw InputError("unknown parameter '" + name + "'");
+}
+
+double ParameterSet::get(const std::string& name) const {
+  find(name);
+  return values_.at(name);
+}
+
+void ParameterSet::set(const std::string& name, double value) {
+  const ParameterDeclaration& declaration = find(name);
+  if (!std::isfinite(value) || value < declaration.min_value || value > declaration.max_value) {
+    std::ostringstream message;
+    message << "parameter '" << name << "': expected a value in [" << declaration.min_value << ", "
+            << declaration.max_value << "] " << declaration.unit << ", got " << value;
+    throw InputError(message.str());
+  }
+  values_[name] = value;
+}
+
+int ParameterSet::applyOverrides(const std::map<std::string, double>& overrides) {
+  int applied = 0;
+  for (const auto& [name, value] : overrides) {
+    if (values_.count(name) == 0) continue;
+    set(name, value);
+    ++applied;
+  }
+  return applied;
+}
+
+}  // namespace flexirob::robot

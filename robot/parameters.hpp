@@ -1,0 +1,40 @@
+#pragma once
+// Declared parameters: every tunable value of the control stack has a name, a default, a range
+// and a unit, so that the GUI can list them and scenes can override them by name (DESIGN §2).
+#include <map>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace flexirob::robot {
+
+struct ParameterDeclaration {
+  const char* name;         ///< unique, dotted ("hierarchical.kappa_x")
+  double default_value;
+  double min_value;         ///< inclusive
+  double max_value;         ///< inclusive
+  const char* unit;         ///< SI unit ("1/s", "Nm/rad", "" for ratios)
+  const char* description;  ///< one line for tooltips
+};
+
+/// Values of a set of declared parameters. Construction gives the defaults; set() checks the
+/// name and range and throws InputError("parameter 'x': expected a value in [a, b], got c").
+class ParameterSet {
+ public:
+  explicit ParameterSet(std::span<const ParameterDeclaration> declarations);
+
+  double get(const std::string& name) const;
+  bool has(const std::string& name) const { return values_.count(name) != 0; }
+  void set(const std::string& name, double value);
+  /// Applies the entries of `overrides` whose names are declared here; other names are ignored
+  /// (a scene overrides parameters of several components at once). Returns how many applied.
+  int applyOverrides(const std::map<std::string, double>& overrides);
+  const std::vector<ParameterDeclaration>& declarations() const { return declarations_; }
+
+ private:
+  const ParameterDeclaration& find(const std::string& name) const;
+  std::vector<ParameterDeclaration> declarations_;
+  std::map<std::string, double> values_;
+};
+
+}  // namespace flexirob::robot

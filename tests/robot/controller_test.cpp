@@ -1,0 +1,239 @@
+// Hierarchical controller (Eq. 2.11) and command limiter: convergence, null-space motion that
+// leaves the tip in place, limits under hostile inputs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "robot/controllers.hpp"
+#include "robot/errors.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/resources.hpp"
+
+namespace flexirob::robot {
+namespace {
+
+constexpr double kDt = 1e-3;
+
+const RobotModel& lwr4() {
+  static const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  return model;
+}
+
+const RobotModel& arm9() {
+  static const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("arm9"));
+  return model;
+}
+
+ParameterSet controlParameters() {
+  std::vector<ParameterDeclaration> all(hierarchicalParameters().begin(), hierarchicalParameters().end());
+  all.insert(all.end(), limiterParameters().begin(), limiterParameters().end());
+  return ParameterSet(all);
+}
+
+Eigen::VectorXd randomPosture(const RobotModel& model, std::mt19937& rng, double margin) {
+  const Eigen::VectorXd lower = model.softLowerLimits();
+  const Eigen::VectorXd upper = model.softUpperLimits();
+  Eigen::VectorXd q(model.dof());
+  for (int i = 0; i < model.dof(); ++i) {
+    std::uniform_real_distribution<double> uniform(lower[i] + margin, upper[i] - margin);
+    q[i] = uniform(rng);
+  }
+  return q;
+}
+
+// Runs controller + limiter kinematically (perfect tracking) and returns the final posture.
+Eigen::VectorXd runPipeline(const RobotModel& model, const ParameterSet& parameters, const Eigen::VectorXd& q0,
+                            const Eigen::Vector3d& p_des, const Eigen::VectorXd& q_c, int steps,
+                            double* max_tip_deviation = nullptr) {
+  HierarchicalController controller(model, parameters);
+  CommandLimiter limiter(model, parameters, kDt);
+  limiter.reset(q0);
+  Kinematics kinematics(model);
+  Eigen::VectorXd qd(model.dof());
+  for (int k = 0; k < steps; ++k) {
+    controller.velocity(limiter.command(), p_des, q_c, qd, &limiter);
+    limiter.updateVelocity(qd);
+    if (max_tip_deviation != nullptr) {
+      kinematics.update(limiter.command());
+      *max_tip_deviation = std::max(*max_tip_deviation, (kinematics.p_WT() - p_des).norm());
+    }
+  }
+  return limiter.command();
+}
+
+TEST(HierarchicalController, TaskErrorConvergesWhateverTheNullSpaceTarget) {
+  for (const RobotModel* model : {&lwr4(), &arm9()}) {
+    const ParameterSet parameters = controlParameters();
+    std::mt19937 rng(7);
+    for (int trial = 0; trial < 6; ++trial) {
+      // Reachable by construction: the tip position of a random posture.
+      const Eigen::VectorXd q_goal = randomPosture(*model, rng, 0.3);
+      const Eigen::Vector3d p_des = tipPose(*model, q_goal).translation();
+      const Eigen::VectorXd q_start = randomPosture(*model, rng, 0.3);
+      const Eigen::VectorXd q_c = randomPosture(*model, rng, 0.0);
+      const Eigen::VectorXd q_final = runPipeline(*model, parameters, q_start, p_des, q_c, 8000);
+      const double error = (tipPose(*model, q_final).translation() - p_des).norm();
+      EXPECT_LE(error, 1e-4) << model->name() << " trial " << trial;
+    }
+  }
+}
+
+TEST(HierarchicalController, NullSpaceTermMovesJointsButNotTheTip) {
+  const RobotModel& model = lwr4();
+  const ParameterSet parameters = controlParameters();
+  Eigen::VectorXd q0(7);
+  q0 << 0.3, 0.6, -0.2, -1.2, 0.4, 0.8, 0.1;
+  const Eigen::Vector3d p_des = tipPose(model, q0).translation();
+  Eigen::VectorXd q_c = q0;
+  q_c[0] += 0.8;  // ask for another elbow position
+  q_c[2] -= 1.0;
+  double max_deviation = 0.0;
+  const Eigen::VectorXd q_final = runPipeline(model, parameters, q0, p_des, q_c, 4000, &max_deviation);
+  EXPECT_LE(max_deviation, 1e-4);
+  EXPECT_GT((q_final - q0).norm(), 0.3);
+  // The elbow (origin of body 4) moved: a real self-motion, not a standstill.
+  Kinematics before(model), after(model);
+  before.update(q0);
+  after.update(q_final);
+  EXPECT_GT((after.X_WB(4).translation() - before.X_WB(4).translation()).norm(), 0.05);
+}
+
+TEST(HierarchicalController, TaskVelocityMatchesFiniteDifferencesOfTheForwardKinematics) {
+  const RobotModel& model = lwr4();
+  const ParameterSet parameters = controlParameters();
+  HierarchicalController controller(model, parameters);
+  Eigen::VectorXd q(7);
+  q << -0.4, 0.7, 0.3, -1.0, -0.2, 0.9, 0.5;
+  const Eigen::Vector3d p = tipPose(model, q).translation();
+  const Eigen::Vector3d p_des = p + Eigen::Vector3d(0.01, -0.02, 0.015);
+  const Eigen::VectorXd q_c = q + 0.5 * Eigen::VectorXd::Unit(7, 2);
+  Eigen::VectorXd qd(7);
+  ASSERT_EQ(controller.velocity(q, p_des, q_c, qd), HierarchicalController::Status::kOk);
+  // ẋ = J q̇ = κ_x (x_des − x): the null-space part contributes nothing (exact J⁺ away from
+  // singularities). Checked on the forward kinematics, not on the Jacobian.
+  const double h = 1e-7;
+  const Eigen::Vector3d xdot = (tipPose(model, q + h * qd).translation() - tipPose(model, q - h * qd).translation()) / (2 * h);
+  EXPECT_LT((xdot - controller.kappaX() * (p_des - p)).norm(), 1e-6);
+  EXPECT_EQ(controller.damping(), 0.0);
+}
+
+TEST(HierarchicalController, StaysBoundedAtTheStretchedSingularity) {
+  const RobotModel& model = lwr4();
+  const ParameterSet parameters = controlParameters();
+  HierarchicalController controller(model, parameters);
+  const Eigen::VectorXd q = Eigen::VectorXd::Zero(7);  // arm straight up: J has rank 2
+  Eigen::VectorXd qd(7);
+  ASSERT_EQ(controller.velocity(q, Eigen::Vector3d(0.3, 0.0, 1.5), q, qd), HierarchicalController::Status::kOk);
+  EXPECT_TRUE(qd.allFinite());
+  EXPECT_LT(controller.smallestSingularValue(), 1e-6);
+  EXPECT_GT(controller.damping(), 0.0);
+  EXPECT_TRUE((qd.array().abs() <= model.velocityLimits().array() * (1 + 1e-12)).all());
+}
+
+TEST(HierarchicalController, RejectsNonFiniteTargetsWithZeroVelocity) {
+  const RobotModel& model = lwr4();
+  HierarchicalController controller(model, controlParameters());
+  const Eigen::VectorXd q = Eigen::VectorXd::Constant(7, 0.3);
+  Eigen::VectorXd qd = Eigen::VectorXd::Ones(7);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(controller.velocity(q, Eigen::Vector3d(nan, 0, 0.5), q, qd), HierarchicalController::Status::kRejectedTarget);
+  EXPECT_TRUE(qd.isZero());
+  Eigen::VectorXd q_c = q;
+  q_c[3] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(controller.velocity(q, Eigen::Vector3d(0.3, 0, 0.5), q_c, qd), HierarchicalController::Status::kRejectedTarget);
+  EXPECT_EQ(controller.counters().rejected, 2U);
+}
+
+TEST(CommandLimiter, NoCommandLeavesTheLimitsForTenThousandHostileInputs) {
+  const RobotModel& model = lwr4();
+  const ParameterSet parameters = controlParameters();
+  HierarchicalController controller(model, parameters);
+  CommandLimiter limiter(model, parameters, kDt);
+  limiter.reset(model.midPosture());
+  const Eigen::VectorXd lower = model.softLowerLimits();
+  const Eigen::VectorXd upper = model.softUpperLimits();
+  const Eigen::VectorXd v_max = limiter.velocityLimit();
+  const double a_max = limiter.accelerationLimit();
+  std::mt19937 rng(42);
+  std::uniform_int_distribution<int> kind(0, 9);
+  std::uniform_real_distribution<double> wide(-10.0, 10.0);
+  std::uniform_real_distribution<double> huge(-1e300, 1e300);
+  const double specials[] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+                             -std::numeric_limits<double>::infinity()};
+  std::uint64_t non_finite_inputs = 0;
+  Eigen::VectorXd q_target(7), previous = limiter.command(), previous_velocity = Eigen::VectorXd::Zero(7);
+  for (int k = 0; k < 10000; ++k) {
+    const int input = kind(rng);
+    Eigen::Vector3d p_des(wide(rng) * 0.2, wide(rng) * 0.2, wide(rng) * 0.2);
+    Eigen::VectorXd q_c = randomPosture(model, rng, -1.0);  // partly outside the limits
+    bool finite = true;
+    if (input == 0) {
+      p_des[k % 3] = specials[k % 3];
+      finite = false;
+    } else if (input == 1) {
+      q_c[k % 7] = specials[(k / 3) % 3];
+      finite = false;
+    } else if (input == 2) {
+      p_des = Eigen::Vector3d(huge(rng), huge(rng), huge(rng));
+    }
+    const Eigen::VectorXd* result = nullptr;
+    if (input <= 2 || input >= 6) {
+      Eigen::VectorXd qd(7);
+      controller.velocity(limiter.command(), p_des, q_c, qd, input == 6 ? nullptr : &limiter);
+      if (input == 7) qd *= 1e6;  // absurd velocity requests
+      result = &limiter.updateVelocity(qd);
+    } else if (input == 3) {
+      for (int i = 0; i < 7; ++i) q_target[i] = huge(rng);  // raw targets straight to the limiter
+    } else {
+      q_target = q_c;
+      if (input == 5) {
+        q_target[k % 7] = specials[k % 3];
+        finite = false;
+      }
+    }
+    if (!finite) ++non_finite_inputs;
+    if (result == nullptr) result = &limiter.update(q_target);
+    const Eigen::VectorXd& q_cmd = *result;
+    ASSERT_TRUE(q_cmd.allFinite()) << "step " << k;
+    ASSERT_TRUE((q_cmd.array() >= lower.array()).all() && (q_cmd.array() <= upper.array()).all()) << "step " << k;
+    const Eigen::VectorXd velocity = (q_cmd - previous) / kDt;
+    ASSERT_TRUE((velocity.array().abs() <= v_max.array() * (1 + 1e-9)).all()) << "step " << k;
+    ASSERT_TRUE(((velocity - previous_velocity).array().abs() <= a_max * kDt * (1 + 1e-6) + 1e-9).all())
+        << "step " << k << " acceleration " << ((velocity - previous_velocity) / kDt).transpose();
+    previous = q_cmd;
+    previous_velocity = velocity;
+  }
+  // Every non-finite input was refused by the controller or by the limiter, and counted.
+  EXPECT_EQ(controller.counters().rejected + limiter.counters().rejected, non_finite_inputs);
+  EXPECT_GT(limiter.counters().position, 0U);
+  EXPECT_GT(limiter.counters().velocity + limiter.counters().acceleration, 0U);
+}
+
+TEST(CommandLimiter, ReachesAStepTargetWithoutOvershoot) {
+  const RobotModel& model = lwr4();
+  CommandLimiter limiter(model, controlParameters(), kDt);
+  limiter.reset(Eigen::VectorXd::Zero(7));
+  Eigen::VectorXd target = Eigen::VectorXd::Constant(7, 0.5);
+  for (int k = 0; k < 3000; ++k) {
+    limiter.update(target);
+    ASSERT_TRUE((limiter.command().array() <= 0.5 + 1e-9).all()) << k << ": " << limiter.command().transpose() - target.transpose();
+  }
+  EXPECT_LT((limiter.command() - target).norm(), 1e-9);
+  EXPECT_TRUE(limiter.velocity().isZero(1e-9));
+}
+
+TEST(Parameters, RefusesValuesOutsideTheDeclaredRange) {
+  ParameterSet parameters = controlParameters();
+  EXPECT_THROW(parameters.set("hierarchical.kappa_x", -1.0), InputError);
+  EXPECT_THROW(parameters.set("hierarchical.kappa_x", std::numeric_limits<double>::quiet_NaN()), InputError);
+  EXPECT_THROW(parameters.set("no.such.parameter", 1.0), InputError);
+  parameters.set("hierarchical.kappa_x", 30.0);
+  EXPECT_EQ(parameters.get("hierarchical.kappa_x"), 30.0);
+  EXPECT_EQ(parameters.applyOverrides({{"hierarchical.kappa_q", 4.0}, {"other.component", 1.0}}), 1);
+  EXPECT_EQ(parameters.get("hierarchical.kappa_q"), 4.0);
+}
+
+}  // namespace
+}  // namespace flexirob::robot
