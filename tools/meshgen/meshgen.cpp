@@ -48,7 +48,8 @@ constexpr double kUpperArm = 0.4;      // A4 in link3
 constexpr double kForearm = 0.39;      // A6 in link5
 constexpr double kFlangeZ = 0.078;     // flange frame in link7
 // Appearance: radii and where the axial joints split the segments (the LWR IV's A3 and A5
-// interfaces sit about half-way along the upper arm and forearm).
+// interfaces sit about half-way along the upper arm and forearm). A3 and A5 split at the same
+// distance so that the 9-DoF arm's duplicated link3 meets the link4 before it without a gap.
 constexpr double kBaseRadius = 0.08;
 constexpr double kBaseHeight = 0.11;
 constexpr double kLink1Radius = 0.07;
@@ -56,7 +57,7 @@ constexpr double kUpperArmRadius = 0.065;
 constexpr double kForearmRadius = 0.056;
 constexpr double kHandRadius = 0.045;
 constexpr double kA3Split = 0.20;   // along link3's z (from the shoulder)
-constexpr double kA5Split = 0.195;  // along link5's z (from the elbow)
+constexpr double kA5Split = 0.20;   // along link5's z (from the elbow)
 constexpr double kA7Split = 0.060;  // along link7's z (from the wrist)
 constexpr double kLink7Top = 0.070;
 constexpr double kFlangeRadius = 0.0315;  // ISO 9409-1-A50 flange, 63 mm
