@@ -210,10 +210,13 @@ std::map<fs::path, CacheEntry> cache;
 
 std::shared_ptr<const TriangleMesh> loadMeshCached(const fs::path& file) {
   std::error_code error;
-  const fs::path key = fs::weakly_canonical(fs::absolute(file, error), error);
+  fs::path key = fs::absolute(file, error);
+  if (!error) key = fs::weakly_canonical(key, error);
+  if (error || !fs::is_regular_file(key, error)) throw InputError("mesh file '" + file.string() + "' not found");
   const std::uintmax_t bytes = fs::file_size(key, error);
+  if (error) throw InputError("cannot read mesh file '" + file.string() + "'");
   const fs::file_time_type modified = fs::last_write_time(key, error);
-  if (error) throw InputError("mesh file '" + file.string() + "' not found");
+  if (error) throw InputError("cannot read mesh file '" + file.string() + "'");
   {
     const std::lock_guard lock(cache_mutex);
     if (const auto it = cache.find(key); it != cache.end() && it->second.bytes == bytes && it->second.modified == modified) {
