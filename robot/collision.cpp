@@ -1,0 +1,333 @@
+#include "robot/collision.hpp"
+
+#include <btBulletCollisionCommon.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "robot/errors.hpp"
+
+namespace flexirob::robot {
+namespace {
+
+btVector3 toBt(const Eigen::Vector3d& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); }
+Eigen::Vector3d toEigen(const btVector3& v) { return Eigen::Vector3d(double(v.x()), double(v.y()), double(v.z())); }
+
+btTransform toBt(const Eigen::Isometry3d& X) {
+  const Eigen::Quaterniond rotation(X.linear());
+  return btTransform(btQuaternion(btScalar(rotation.x()), btScalar(rotation.y()), btScalar(rotation.z()), btScalar(rotation.w())),
+                     toBt(Eigen::Vector3d(X.translation())));
+}
+
+// A pose whose z axis points from a to b (for capsules and cylinders along a segment).
+Eigen::Isometry3d segmentPose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.translation() = 0.5 * (a + b);
+  const Eigen::Vector3d direction = b - a;
+  if (direction.norm() > 1e-12) {
+    X.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), direction.normalized()).toRotationMatrix();
+  }
+  return X;
+}
+
+constexpr double kDefaultRadius = 0.05;  // [m] for links without mass
+
+// Radius of a solid cylinder with the body's mass and smallest principal inertia.
+double capsuleRadius(const Body& body) {
+  if (!(body.mass > 1e-6)) return kDefaultRadius;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(body.I_BCom, Eigen::EigenvaluesOnly);
+  const double i_min = eigen.eigenvalues()[0];
+  if (!(i_min > 0.0)) return kDefaultRadius;
+  return std::clamp(std::sqrt(2.0 * i_min / body.mass), 0.01, 0.25);
+}
+
+}  // namespace
+
+struct CollisionWorld::Impl {
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+  btDbvtBroadphase broadphase;
+  btCollisionWorld world{&dispatcher, &broadphase, &configuration};
+  std::vector<std::unique_ptr<btCollisionShape>> shapes;  // owns every shape, children included
+  std::vector<std::unique_ptr<btCollisionObject>> body_objects;      // index = body
+  std::vector<std::unique_ptr<btCollisionObject>> obstacle_objects;  // index = obstacle
+  std::vector<std::string> shape_source;
+  std::vector<char> checked_pairs;  // bodies × bodies
+  int bodies = 0;
+  Kinematics kinematics;
+  std::vector<Contact> contacts;
+
+  explicit Impl(const RobotModel& model) : kinematics(model) {}
+
+  template <typename Shape, typename... Args>
+  Shape* make(Args&&... args) {
+    auto shape = std::make_unique<Shape>(std::forward<Args>(args)...);
+    Shape* raw = shape.get();
+    shapes.push_back(std::move(shape));
+    return raw;
+  }
+
+  // Primitive shape of a size given as in the URDF / the scene; nullptr for unusable sizes.
+  btCollisionShape* primitive(Geometry::Kind kind, const Eigen::Vector3d& size) {
+    switch (kind) {
+      case Geometry::Kind::kBox:
+        if ((size.array() <= 0).any()) return nullptr;
+        return make<btBoxShape>(toBt(Eigen::Vector3d(0.5 * size)));
+      case Geometry::Kind::kCylinder:
+        if (size[0] <= 0 || size[1] <= 0) return nullptr;
+        return make<btCylinderShapeZ>(btVector3(btScalar(size[0]), btScalar(size[0]), btScalar(0.5 * size[1])));
+      case Geometry::Kind::kSphere:
+        if (size[0] <= 0) return nullptr;
+        return make<btSphereShape>(btScalar(size[0]));
+      case Geometry::Kind::kMesh: return nullptr;
+    }
+    return nullptr;
+  }
+};
+
+CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
+    : model_(&model), impl_(std::make_unique<Impl>(model)) {
+  Impl& impl = *impl_;
+  const auto& bodies = model.bodies();
+  impl.bodies = static_cast<int>(bodies.size());
+  // Robot links: group 1 collides with obstacles (group 2) and links; the base (group 4)
+  // collides with links only.
+  for (int b = 0; b < impl.bodies; ++b) {
+    const Body& body = bodies[static_cast<std::size_t>(b)];
+    auto* compound = impl.make<btCompoundShape>();
+    std::string source = "urdf";
+    for (const Geometry& geometry : body.collisions) {
+      if (btCollisionShape* child = impl.primitive(geometry.kind, geometry.size)) {
+        compound->addChildShape(toBt(geometry.X_BG), child);
+      }
+    }
+    if (compound->getNumChildShapes() == 0) {
+      // A capsule from this body's joint to the next joint (or the tip); a link whose joints
+      // coincide reaches to twice its centre of mass instead.
+      source = "capsule";
+      const Eigen::Vector3d a = Eigen::Vector3d::Zero();
+      Eigen::Vector3d b_end = Eigen::Vector3d::Zero();
+      if (b < model.dof()) {
+        b_end = model.joints()[static_cast<std::size_t>(b)].X_PJ.translation();
+      } else {
+        b_end = model.X_LastBodyTip().translation();
+      }
+      const double radius = capsuleRadius(body);
+      if ((b_end - a).norm() < radius) b_end = 2.0 * body.p_BCom;
+      const double length = (b_end - a).norm();
+      btCollisionShape* child = nullptr;
+      if (length < 1e-6) {
+        child = impl.make<btSphereShape>(btScalar(radius));
+      } else {
+        child = impl.make<btCapsuleShapeZ>(btScalar(radius), btScalar(length));
+      }
+      compound->addChildShape(toBt(segmentPose(a, b_end)), child);
+    }
+    auto object = std::make_unique<btCollisionObject>();
+    object->setCollisionShape(compound);
+    object->setUserIndex(b);
+    object->setUserIndex2(-1);
+    const int group = b == 0 ? 4 : 1;
+    const int mask = b == 0 ? 1 : (1 | 2 | 4);
+    impl.world.addCollisionObject(object.get(), group, mask);
+    impl.body_objects.push_back(std::move(object));
+    impl.shape_source.push_back(source);
+  }
+  // Obstacles: static, group 2, collide with links only.
+  for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
+    const Obstacle& obstacle = scene.obstacles[k];
+    btCollisionShape* shape = nullptr;
+    switch (obstacle.shape) {
+      case Obstacle::Shape::kBox: shape = impl.primitive(Geometry::Kind::kBox, obstacle.size); break;
+      case Obstacle::Shape::kCylinder: shape = impl.primitive(Geometry::Kind::kCylinder, obstacle.size); break;
+      case Obstacle::Shape::kSphere: shape = impl.primitive(Geometry::Kind::kSphere, obstacle.size); break;
+      case Obstacle::Shape::kMesh: break;
+    }
+    if (shape == nullptr) {
+      throw InputError("obstacle '" + obstacle.name + "': unsupported shape or non-positive size");
+    }
+    auto object = std::make_unique<btCollisionObject>();
+    object->setCollisionShape(shape);
+    object->setWorldTransform(toBt(obstacle.X_WO));
+    object->setUserIndex(-1);
+    object->setUserIndex2(static_cast<int>(k));
+    impl.world.addCollisionObject(object.get(), 2, 1);
+    impl.obstacle_objects.push_back(std::move(object));
+    obstacle_names_.push_back(obstacle.name);
+  }
+  impl.contacts.reserve(64);
+
+  // Self-collision pairs: not adjacent, and apart at the reference posture.
+  impl.checked_pairs.assign(static_cast<std::size_t>(impl.bodies * impl.bodies), 0);
+  for (int a = 0; a < impl.bodies; ++a) {
+    for (int b = a + 2; b < impl.bodies; ++b) {
+      impl.checked_pairs[static_cast<std::size_t>(a * impl.bodies + b)] = 1;
+      impl.checked_pairs[static_cast<std::size_t>(b * impl.bodies + a)] = 1;
+    }
+  }
+  update(model.midPosture());
+  for (const Contact& contact : contacts()) {
+    if (!contact.isSelfCollision()) continue;
+    impl.checked_pairs[static_cast<std::size_t>(contact.body * impl.bodies + contact.other_body)] = 0;
+    impl.checked_pairs[static_cast<std::size_t>(contact.other_body * impl.bodies + contact.body)] = 0;
+  }
+}
+
+CollisionWorld::~CollisionWorld() {
+  if (!impl_) return;
+  for (auto& object : impl_->body_objects) impl_->world.removeCollisionObject(object.get());
+  for (auto& object : impl_->obstacle_objects) impl_->world.removeCollisionObject(object.get());
+}
+
+const std::string& CollisionWorld::bodyName(int body) const { return model_->bodies()[static_cast<std::size_t>(body)].name; }
+
+bool CollisionWorld::selfPairChecked(int body_a, int body_b) const {
+  if (body_a < 0 || body_b < 0 || body_a >= impl_->bodies || body_b >= impl_->bodies) return false;
+  return impl_->checked_pairs[static_cast<std::size_t>(body_a * impl_->bodies + body_b)] != 0;
+}
+
+const std::string& CollisionWorld::bodyShapeSource(int body) const {
+  return impl_->shape_source[static_cast<std::size_t>(body)];
+}
+
+const std::string& CollisionWorld::otherName(const Contact& contact) const {
+  return contact.isSelfCollision() ? bodyName(contact.other_body) : obstacleName(contact.obstacle);
+}
+
+void CollisionWorld::update(const Eigen::VectorXd& q) {
+  impl_->kinematics.update(q);
+  for (int b = 0; b < impl_->bodies; ++b) {
+    impl_->body_objects[static_cast<std::size_t>(b)]->setWorldTransform(toBt(impl_->kinematics.X_WB(b)));
+  }
+  impl_->world.updateAabbs();
+}
+
+namespace {
+
+// Collects penetrating pairs of one robot body.
+struct ContactCollector : btCollisionWorld::ContactResultCallback {
+  const CollisionWorld* world = nullptr;
+  std::vector<Contact>* contacts = nullptr;
+  int body = -1;
+
+  btScalar addSingleResult(btManifoldPoint& point, const btCollisionObjectWrapper* a, int, int,
+                           const btCollisionObjectWrapper* b, int, int) override {
+    if (point.getDistance() >= 0) return 0;
+    const bool a_is_body = a->getCollisionObject()->getUserIndex() == body;
+    const btCollisionObject* other = (a_is_body ? b : a)->getCollisionObject();
+    Contact contact;
+    contact.body = body;
+    contact.depth = -double(point.getDistance());
+    contact.p_W = toEigen(a_is_body ? point.getPositionWorldOnA() : point.getPositionWorldOnB());
+    if (other->getUserIndex() >= 0) {
+      contact.other_body = other->getUserIndex();
+      // Each self pair once (from the lower index), and only pairs that are checked.
+      if (contact.other_body <= body || !world->selfPairChecked(body, contact.other_body)) return 0;
+    } else {
+      contact.obstacle = other->getUserIndex2();
+    }
+    for (Contact& existing : *contacts) {
+      if (existing.body == contact.body && existing.other_body == contact.other_body &&
+          existing.obstacle == contact.obstacle) {
+        if (contact.depth > existing.depth) existing = contact;
+        return 0;
+      }
+    }
+    contacts->push_back(contact);
+    return 0;
+  }
+};
+
+struct ClosestCollector : btCollisionWorld::ContactResultCallback {
+  double distance = std::numeric_limits<double>::infinity();
+  btVector3 on_first, on_second;
+  const btCollisionObject* first = nullptr;
+  btScalar addSingleResult(btManifoldPoint& point, const btCollisionObjectWrapper* a, int, int,
+                           const btCollisionObjectWrapper*, int, int) override {
+    if (double(point.getDistance()) < distance) {
+      distance = double(point.getDistance());
+      const bool a_first = a->getCollisionObject() == first;
+      on_first = a_first ? point.getPositionWorldOnA() : point.getPositionWorldOnB();
+      on_second = a_first ? point.getPositionWorldOnB() : point.getPositionWorldOnA();
+    }
+    return 0;
+  }
+};
+
+}  // namespace
+
+const std::vector<Contact>& CollisionWorld::contacts() {
+  impl_->contacts.clear();
+  ContactCollector collector;
+  collector.world = this;
+  collector.contacts = &impl_->contacts;
+  for (int b = 0; b < impl_->bodies; ++b) {
+    collector.body = b;
+    btCollisionObject* object = impl_->body_objects[static_cast<std::size_t>(b)].get();
+    collector.m_collisionFilterGroup = object->getBroadphaseHandle()->m_collisionFilterGroup;
+    collector.m_collisionFilterMask = object->getBroadphaseHandle()->m_collisionFilterMask;
+    impl_->world.contactTest(object, collector);
+  }
+  return impl_->contacts;
+}
+
+double CollisionWorld::distance(int body, int obstacle, double max_distance) {
+  if (body <= 0 || body >= impl_->bodies || obstacle < 0 || obstacle >= obstacleCount()) {
+    return std::numeric_limits<double>::infinity();
+  }
+  ClosestCollector collector;
+  collector.m_closestDistanceThreshold = btScalar(max_distance);
+  collector.first = impl_->body_objects[static_cast<std::size_t>(body)].get();
+  impl_->world.contactPairTest(impl_->body_objects[static_cast<std::size_t>(body)].get(),
+                               impl_->obstacle_objects[static_cast<std::size_t>(obstacle)].get(), collector);
+  return collector.distance;
+}
+
+Clearance CollisionWorld::clearance(double max_distance) {
+  Clearance best;
+  best.distance = std::numeric_limits<double>::infinity();
+  for (int b = 1; b < impl_->bodies; ++b) {
+    for (int k = 0; k < obstacleCount(); ++k) {
+      ClosestCollector collector;
+      collector.m_closestDistanceThreshold = btScalar(max_distance);
+      collector.first = impl_->body_objects[static_cast<std::size_t>(b)].get();
+      impl_->world.contactPairTest(impl_->body_objects[static_cast<std::size_t>(b)].get(),
+                                   impl_->obstacle_objects[static_cast<std::size_t>(k)].get(), collector);
+      if (collector.distance < best.distance) {
+        best.distance = collector.distance;
+        best.body = b;
+        best.obstacle = k;
+        best.p_body_W = toEigen(collector.on_first);
+        best.p_obstacle_W = toEigen(collector.on_second);
+      }
+    }
+  }
+  return best;
+}
+
+// ---------------------------------------------------------------------------------------------
+void CollisionMonitor::observe(const std::vector<Contact>& contacts, double time) {
+  next_.clear();
+  for (const Contact& contact : contacts) {
+    const std::pair<int, int> key{contact.body, contact.isSelfCollision() ? contact.other_body : -(contact.obstacle + 1)};
+    next_.push_back(key);
+    if (std::find(touching_.begin(), touching_.end(), key) == touching_.end()) {
+      ++event_count_;
+      if (log_.size() < 1000) log_.push_back(Event{time, contact});
+    }
+  }
+  if (!contacts.empty()) ++colliding_steps_;
+  touching_.swap(next_);
+}
+
+void CollisionMonitor::reset() {
+  touching_.clear();
+  next_.clear();
+  log_.clear();
+  event_count_ = 0;
+  colliding_steps_ = 0;
+}
+
+}  // namespace flexirob::robot

@@ -1,0 +1,295 @@
+#include "robot/sim/simulation.hpp"
+
+#include <BulletDynamics/Featherstone/btMultiBody.h>
+#include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
+#include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
+#include <BulletDynamics/Featherstone/btMultiBodyJointLimitConstraint.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <Eigen/Eigenvalues>
+#include <array>
+#include <cmath>
+
+#include "robot/errors.hpp"
+
+namespace flexirob::robot {
+namespace {
+
+constexpr std::array kSimulationParameters{
+    ParameterDeclaration{"sim.substeps", 4.0, 1.0, 64.0, "",
+                         "physics steps per 1 ms control cycle (the impedance law is evaluated in each)"},
+    ParameterDeclaration{"sim.gravity", 9.81, 0.0, 20.0, "m/s^2", "gravitational acceleration along -z"},
+    ParameterDeclaration{"sim.drift_damping", 0.5, 0.0, 50.0, "Nms/rad",
+                         "added joint damping so that a released arm comes to rest"},
+    ParameterDeclaration{"sim.stiffness", 300.0, 0.0, 5000.0, "Nm/rad",
+                         "joint stiffness until the first command (hierarchical control, Tab. A.1)"},
+    ParameterDeclaration{"sim.damping", 0.95, 0.0, 1.0, "",
+                         "normalized joint damping until the first command (Tab. A.1)"},
+};
+
+// Bullet needs positive masses and inertias; links the URDF leaves without inertia get a token one.
+constexpr double kMinMass = 1e-3;      // [kg]
+constexpr double kMinInertia = 1e-6;   // [kg m²]
+
+btVector3 toBt(const Eigen::Vector3d& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); }
+
+btQuaternion toBt(const Eigen::Matrix3d& R) {
+  const Eigen::Quaterniond q(R);
+  return btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w()));
+}
+
+// Principal axes (a rotation, columns) and moments of an inertia tensor.
+void principalAxes(const Eigen::Matrix3d& I, Eigen::Matrix3d& R, Eigen::Vector3d& moments) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 * (I + I.transpose()));
+  R = eigen.eigenvectors();
+  if (R.determinant() < 0) R.col(2) = -R.col(2);
+  moments = eigen.eigenvalues().cwiseMax(kMinInertia);
+}
+
+}  // namespace
+
+std::span<const ParameterDeclaration> simulationParameters() { return kSimulationParameters; }
+
+struct Simulation::Impl {
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+  btDbvtBroadphase broadphase;
+  btMultiBodyConstraintSolver solver;
+  btMultiBodyDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+  std::unique_ptr<btMultiBody> body;
+  std::vector<std::unique_ptr<btMultiBodyJointLimitConstraint>> limits;
+
+  ~Impl() {
+    for (auto& limit : limits) world.removeMultiBodyConstraint(limit.get());
+    if (body) world.removeMultiBody(body.get());
+  }
+};
+
+Simulation::Simulation(const RobotModel& model, const Scene* scene, const ParameterSet& parameters)
+    : model_(&model),
+      cycle_time_(1e-3),
+      substeps_(static_cast<int>(parameters.get("sim.substeps"))),
+      gravity_(parameters.get("sim.gravity")),
+      drift_damping_(parameters.get("sim.drift_damping")),
+      impl_(std::make_unique<Impl>()),
+      kinematics_(model),
+      jacobian_(3, model.dof()) {
+  const int n = model.dof();
+  q_.setZero(n);
+  qd_.setZero(n);
+  tau_.setZero(n);
+  tau_ext_.setZero(n);
+  gravity_torque_.setZero(n);
+  inertia_diagonal_.setZero(n);
+  effort_.setZero(n);
+  for (int j = 0; j < n; ++j) effort_[j] = model.joints()[static_cast<std::size_t>(j)].limits.effort;
+  command_.resize(n);
+  command_.stiffness.setConstant(parameters.get("sim.stiffness"));
+  command_.damping.setConstant(parameters.get("sim.damping"));
+
+  // Each Bullet link frame sits at the body's centre of mass, turned to its principal axes.
+  const auto& bodies = model.bodies();
+  std::vector<Eigen::Matrix3d> R_BL(bodies.size());
+  std::vector<Eigen::Vector3d> moments(bodies.size());
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const Body& body = bodies[b];
+    const bool massless = !(body.mass > kMinMass);
+    masses_.push_back(massless ? kMinMass : body.mass);
+    coms_.push_back(body.p_BCom);
+    principalAxes(massless ? Eigen::Matrix3d(Eigen::Matrix3d::Identity() * kMinInertia) : body.I_BCom, R_BL[b], moments[b]);
+    inertias_.push_back(R_BL[b] * moments[b].asDiagonal() * R_BL[b].transpose());
+  }
+  impl_->body = std::make_unique<btMultiBody>(n, btScalar(masses_[0]), toBt(moments[0]), true, false);
+  btMultiBody& mb = *impl_->body;
+  mb.setBaseWorldTransform(btTransform(toBt(R_BL[0]), toBt(coms_[0])));
+  for (int j = 0; j < n; ++j) {
+    const Joint& joint = model.joints()[static_cast<std::size_t>(j)];
+    const std::size_t parent = static_cast<std::size_t>(j);
+    const std::size_t child = static_cast<std::size_t>(j + 1);
+    // Vectors in the parent link frame to vectors in this link frame, at q = 0.
+    const Eigen::Matrix3d R_child_parent = R_BL[child].transpose() * joint.X_PJ.linear().transpose() * R_BL[parent];
+    const Eigen::Vector3d axis_L = R_BL[child].transpose() * joint.axis_J;
+    const Eigen::Vector3d parent_com_to_pivot = R_BL[parent].transpose() * (joint.X_PJ.translation() - coms_[parent]);
+    const Eigen::Vector3d pivot_to_com = R_BL[child].transpose() * coms_[child];
+    if (joint.type == JointType::kPrismatic) {
+      mb.setupPrismatic(j, btScalar(masses_[child]), toBt(moments[child]), j - 1, toBt(R_child_parent), toBt(axis_L),
+                        toBt(parent_com_to_pivot), toBt(pivot_to_com), true);
+    } else {
+      mb.setupRevolute(j, btScalar(masses_[child]), toBt(moments[child]), j - 1, toBt(R_child_parent), toBt(axis_L),
+                       toBt(parent_com_to_pivot), toBt(pivot_to_com), true);
+    }
+  }
+  mb.finalizeMultiDof();
+  mb.setLinearDamping(0);
+  mb.setAngularDamping(0);
+  mb.setCanSleep(false);
+  mb.setHasSelfCollision(false);
+  mb.setMaxCoordinateVelocity(btScalar(100));
+  impl_->world.setGravity(btVector3(0, 0, btScalar(-gravity_)));
+  impl_->world.addMultiBody(&mb);
+  // The hardware limits stop the joints (the soft limits are the controllers' business).
+  for (int j = 0; j < n; ++j) {
+    const JointLimits& limits = model.joints()[static_cast<std::size_t>(j)].limits;
+    if (!std::isfinite(limits.lower) || !std::isfinite(limits.upper)) continue;
+    auto constraint = std::make_unique<btMultiBodyJointLimitConstraint>(&mb, j, btScalar(limits.lower), btScalar(limits.upper));
+    impl_->world.addMultiBodyConstraint(constraint.get());
+    impl_->limits.push_back(std::move(constraint));
+  }
+
+  const Scene empty;
+  collision_ = std::make_unique<CollisionWorld>(model, scene != nullptr ? *scene : empty);
+  contacts_.reserve(64);
+  reset(model.midPosture());
+}
+
+Simulation::~Simulation() = default;
+
+void Simulation::reset(const Eigen::VectorXd& q) {
+  model_->checkPosture(q);
+  const Eigen::VectorXd lower = model_->lowerLimits();
+  const Eigen::VectorXd upper = model_->upperLimits();
+  for (int j = 0; j < model_->dof(); ++j) {
+    if (q[j] < lower[j] - 1e-9 || q[j] > upper[j] + 1e-9) {
+      throw InputError("joint '" + model_->joints()[static_cast<std::size_t>(j)].name + "': start value " +
+                       std::to_string(q[j]) + " is outside the limits [" + std::to_string(lower[j]) + ", " +
+                       std::to_string(upper[j]) + "]");
+    }
+    impl_->body->setJointPos(j, btScalar(q[j]));
+    impl_->body->setJointVel(j, 0);
+  }
+  impl_->body->clearForcesAndTorques();
+  readJoints();
+  command_.q_cmd = q_;
+  computeModelTerms();
+  time_ = 0.0;
+  steps_ = 0;
+  torque_saturations_ = 0;
+  monitor_.reset();
+  collision_->update(q_);
+  contacts_ = collision_->contacts();
+  monitor_.observe(contacts_, time_);
+}
+
+void Simulation::readJoints() {
+  for (int j = 0; j < model_->dof(); ++j) {
+    q_[j] = double(impl_->body->getJointPos(j));
+    qd_[j] = double(impl_->body->getJointVel(j));
+  }
+}
+
+void Simulation::computeModelTerms() {
+  kinematics_.update(q_);
+  const int n = model_->dof();
+  gravity_torque_.setZero();
+  inertia_diagonal_.setZero();
+  for (int j = 0; j < n; ++j) {
+    const Eigen::Vector3d axis = kinematics_.axis_W(j);
+    const Eigen::Vector3d origin = kinematics_.X_WB(j + 1).translation();
+    const bool prismatic = model_->joints()[static_cast<std::size_t>(j)].type == JointType::kPrismatic;
+    for (int b = j + 1; b <= n; ++b) {
+      const Eigen::Isometry3d& X_WB = kinematics_.X_WB(b);
+      const Eigen::Vector3d c_W = X_WB * coms_[static_cast<std::size_t>(b)];
+      const double m = masses_[static_cast<std::size_t>(b)];
+      // ∂c/∂q_j: the velocity of the body's centre of mass for a unit joint velocity.
+      const Eigen::Vector3d v = prismatic ? axis : Eigen::Vector3d(axis.cross(c_W - origin));
+      gravity_torque_[j] += m * gravity_ * v.z();
+      inertia_diagonal_[j] += m * v.squaredNorm();
+      if (!prismatic) {
+        inertia_diagonal_[j] += axis.dot(X_WB.linear() * inertias_[static_cast<std::size_t>(b)] * X_WB.linear().transpose() * axis);
+      }
+    }
+  }
+}
+
+CommandStatus Simulation::writeCommand(const JointImpedanceCommand& command) {
+  const int n = model_->dof();
+  if (command.q_cmd.size() != n || command.stiffness.size() != n || command.damping.size() != n ||
+      !command.q_cmd.allFinite() || !command.stiffness.allFinite() || !command.damping.allFinite() ||
+      (command.stiffness.array() < 0).any() || (command.damping.array() < 0).any()) {
+    return CommandStatus::kRejected;
+  }
+  for (int j = 0; j < n; ++j) {
+    const JointLimits& limits = model_->joints()[static_cast<std::size_t>(j)].limits;
+    if (command.q_cmd[j] < limits.lower || command.q_cmd[j] > limits.upper) return CommandStatus::kRejected;
+  }
+  command_.q_cmd = command.q_cmd;
+  command_.stiffness = command.stiffness;
+  command_.damping = command.damping;
+  return CommandStatus::kAccepted;
+}
+
+void Simulation::setHandForce(int body, const Eigen::Vector3d& p_W, const Eigen::Vector3d& F_W) {
+  if (body < 1 || body > model_->dof()) {
+    throw InputError("hand: expected a body index in [1, " + std::to_string(model_->dof()) + "], got " + std::to_string(body));
+  }
+  if (!p_W.allFinite() || !F_W.allFinite()) throw InputError("hand: point and force must be finite");
+  hand_body_ = body;
+  hand_p_B_ = kinematics_.X_WB(body).inverse() * p_W;
+  hand_F_W_ = F_W;
+}
+
+void Simulation::clearHandForce() {
+  hand_body_ = -1;
+  hand_F_W_.setZero();
+}
+
+void Simulation::step() {
+  const int n = model_->dof();
+  const double h = cycle_time_ / substeps_;
+  btMultiBody& mb = *impl_->body;
+  for (int s = 0; s < substeps_; ++s) {
+    if (s > 0) {
+      readJoints();
+      computeModelTerms();
+    }
+    mb.clearForcesAndTorques();
+    // The joint impedance law, gravity compensated (App. A.3).
+    for (int j = 0; j < n; ++j) {
+      const double k = command_.stiffness[j];
+      const double d = 2.0 * command_.damping[j] * std::sqrt(k * inertia_diagonal_[j]) + drift_damping_;
+      double tau = gravity_torque_[j] + k * (command_.q_cmd[j] - q_[j]) - d * qd_[j];
+      if (effort_[j] > 0.0 && std::abs(tau) > effort_[j]) {
+        tau = std::copysign(effort_[j], tau);
+        ++torque_saturations_;
+      }
+      tau_[j] = tau;
+      mb.addJointTorque(j, btScalar(tau));
+    }
+    // The hand pushes at its point: a force at the centre of mass plus its moment.
+    if (hand_body_ > 0) {
+      const Eigen::Isometry3d& X_WB = kinematics_.X_WB(hand_body_);
+      const Eigen::Vector3d p_W = X_WB * hand_p_B_;
+      const Eigen::Vector3d c_W = X_WB * coms_[static_cast<std::size_t>(hand_body_)];
+      mb.addLinkForce(hand_body_ - 1, toBt(hand_F_W_));
+      mb.addLinkTorque(hand_body_ - 1, toBt(Eigen::Vector3d((p_W - c_W).cross(hand_F_W_))));
+    }
+    impl_->world.stepSimulation(btScalar(h), 0, btScalar(h));
+  }
+  readJoints();
+  computeModelTerms();
+  time_ += cycle_time_;
+  ++steps_;
+  collision_->update(q_);
+  const std::vector<Contact>& contacts = collision_->contacts();
+  contacts_.assign(contacts.begin(), contacts.end());
+  monitor_.observe(contacts_, time_);
+}
+
+void Simulation::readState(RobotState& state) const {
+  const int n = model_->dof();
+  if (state.q.size() != n) state.resize(n);
+  state.time = time_;
+  state.q = q_;
+  state.qd = qd_;
+  state.q_cmd = command_.q_cmd;
+  state.X_WT = kinematics_.X_WT();
+  // τ_ext as the robot estimates it: the hand's force mapped through the contact's Jacobian.
+  if (hand_body_ > 0) {
+    kinematics_.pointJacobian(hand_body_, kinematics_.X_WB(hand_body_) * hand_p_B_, jacobian_);
+    state.tau_ext.noalias() = jacobian_.transpose() * hand_F_W_;
+  } else {
+    state.tau_ext.setZero();
+  }
+}
+
+}  // namespace flexirob::robot

@@ -1,0 +1,157 @@
+// Collision world: contacts with the right link and obstacle, self-collision, distances.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "robot/collision.hpp"
+#include "robot/controllers.hpp"
+#include "robot/resources.hpp"
+#include "robot/sim/simulation.hpp"
+
+namespace flexirob::robot {
+namespace {
+
+// Three links of 0.4, 0.4 and 0.45 m with cylinder collision geometry (radius 0.05 m): j1 turns
+// about z, j2 and j3 about y, so at j2 = 90° the second link points along +x at z = 0.4 m.
+constexpr const char* kPlanarArm = R"(<?xml version="1.0"?>
+<robot name="three_link">
+  <link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="link1"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" velocity="2" effort="200"/></joint>
+  <link name="link1">
+    <inertial><origin xyz="0 0 0.2"/><mass value="2"/><inertia ixx="0.03" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.0025"/></inertial>
+    <collision><origin xyz="0 0 0.2"/><geometry><cylinder radius="0.05" length="0.4"/></geometry></collision>
+  </link>
+  <joint name="j2" type="revolute"><parent link="link1"/><child link="link2"/>
+    <origin xyz="0 0 0.4"/><axis xyz="0 1 0"/><limit lower="-2.8" upper="2.8" velocity="2" effort="200"/></joint>
+  <link name="link2">
+    <inertial><origin xyz="0 0 0.2"/><mass value="2"/><inertia ixx="0.03" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.0025"/></inertial>
+    <collision><origin xyz="0 0 0.2"/><geometry><cylinder radius="0.05" length="0.4"/></geometry></collision>
+  </link>
+  <joint name="j3" type="revolute"><parent link="link2"/><child link="link3"/>
+    <origin xyz="0 0 0.4"/><axis xyz="0 1 0"/><limit lower="-2.8" upper="2.8" velocity="2" effort="200"/></joint>
+  <link name="link3">
+    <inertial><origin xyz="0 0 0.225"/><mass value="1"/><inertia ixx="0.017" ixy="0" ixz="0" iyy="0.017" iyz="0" izz="0.001"/></inertial>
+    <collision><origin xyz="0 0 0.225"/><geometry><cylinder radius="0.05" length="0.45"/></geometry></collision>
+  </link>
+  <joint name="tip_joint" type="fixed"><parent link="link3"/><child link="tip"/><origin xyz="0 0 0.45"/></joint>
+  <link name="tip"/>
+</robot>)";
+
+const RobotModel& threeLinkArm() {
+  static const RobotModel model = RobotModel::fromUrdfString(kPlanarArm, ".");
+  return model;
+}
+
+Obstacle box(const std::string& name, const Eigen::Vector3d& centre, const Eigen::Vector3d& size) {
+  Obstacle obstacle;
+  obstacle.name = name;
+  obstacle.shape = Obstacle::Shape::kBox;
+  obstacle.X_WO.translation() = centre;
+  obstacle.size = size;
+  return obstacle;
+}
+
+TEST(CollisionWorld, ReportsABoxAcrossTheArmsPathWithTheLinkThatHitsIt) {
+  Scene scene;
+  // A bar across the path of link2 when j2 swings it down towards +x.
+  scene.obstacles.push_back(box("crossbar", Eigen::Vector3d(0.25, 0.0, 0.4), Eigen::Vector3d(0.06, 0.5, 0.06)));
+  ParameterSet parameters(simulationParameters());
+  Simulation sim(threeLinkArm(), &scene, parameters);
+  sim.reset(Eigen::Vector3d(0.0, 0.0, 0.0));
+  EXPECT_TRUE(sim.contacts().empty());
+  ParameterSet limits(limiterParameters());
+  CommandLimiter limiter(threeLinkArm(), limits, sim.cycleTime());
+  limiter.reset(Eigen::Vector3d::Zero());
+  JointImpedanceCommand command;
+  command.resize(3);
+  command.stiffness.setConstant(300.0);
+  command.damping.setConstant(0.95);
+  const Eigen::Vector3d goal(0.0, std::numbers::pi / 2, 0.0);
+  double first_contact_angle = -1.0;
+  for (int k = 0; k < 3000; ++k) {
+    command.q_cmd = limiter.update(goal);
+    sim.writeCommand(command);
+    sim.step();
+    if (first_contact_angle < 0 && !sim.contacts().empty()) {
+      RobotState state;
+      sim.readState(state);
+      first_contact_angle = state.q[1];
+    }
+  }
+  ASSERT_GE(sim.collisions().events(), 1U);
+  const auto& event = sim.collisions().eventLog().front();
+  EXPECT_EQ(sim.collisionWorld()->bodyName(event.contact.body), "link2");
+  EXPECT_EQ(sim.collisionWorld()->otherName(event.contact), "crossbar");
+  EXPECT_FALSE(event.contact.isSelfCollision());
+  // First touch when the bar's upper near edge (x = 0.22, z = 0.43, i.e. (0.22, 0.03) from
+  // the pivot) comes within the cylinder's radius of link2's axis (sin θ, cos θ):
+  // 0.22·cos θ − 0.03·sin θ = 0.05, solved by bisection.
+  double low = 0.5, high = std::numbers::pi / 2;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (low + high);
+    (0.22 * std::cos(mid) - 0.03 * std::sin(mid) > 0.05 ? low : high) = mid;
+  }
+  EXPECT_GT(first_contact_angle, low - 2e-3);
+  EXPECT_LT(first_contact_angle, low + 1e-2);  // detected within a few cycles of the touch
+  EXPECT_GT(sim.collisions().collidingSteps(), 100U);
+}
+
+TEST(CollisionWorld, DistanceToASphereMatchesTheGeometry) {
+  Scene scene;
+  Obstacle ball;
+  ball.name = "ball";
+  ball.shape = Obstacle::Shape::kSphere;
+  ball.size = Eigen::Vector3d(0.1, 0, 0);
+  ball.X_WO.translation() = Eigen::Vector3d(0.4, 0.0, 0.2);
+  scene.obstacles.push_back(ball);
+  CollisionWorld world(threeLinkArm(), scene);
+  world.update(Eigen::Vector3d::Zero());
+  // link1's axis is the z axis: distance = 0.4 − 0.1 (ball) − 0.05 (cylinder).
+  EXPECT_NEAR(world.distance(1, 0), 0.25, 1e-3);
+  const Clearance clearance = world.clearance();
+  EXPECT_EQ(clearance.body, 1);
+  EXPECT_NEAR(clearance.distance, 0.25, 1e-3);
+  EXPECT_TRUE(world.contacts().empty());
+}
+
+TEST(CollisionWorld, ReportsSelfCollisionButNeverAdjacentLinks) {
+  CollisionWorld world(threeLinkArm(), Scene{});
+  EXPECT_FALSE(world.selfPairChecked(1, 2));
+  EXPECT_FALSE(world.selfPairChecked(2, 3));
+  EXPECT_TRUE(world.selfPairChecked(1, 3));
+  // Fold link3 back onto link1: at j2 = 90°, j3 = 2.7 rad link3 points down and back across the z axis.
+  world.update(Eigen::Vector3d(0.0, std::numbers::pi / 2, 2.7));
+  const auto& contacts = world.contacts();
+  ASSERT_EQ(contacts.size(), 1U);
+  EXPECT_TRUE(contacts[0].isSelfCollision());
+  EXPECT_EQ(world.bodyName(contacts[0].body), "link1");
+  EXPECT_EQ(world.otherName(contacts[0]), "link3");
+}
+
+TEST(CollisionWorld, LinksWithoutCollisionGeometryGetCapsules) {
+  const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  CollisionWorld world(model, Scene{});
+  // The arm at its reference posture does not collide with itself.
+  world.update(model.midPosture());
+  EXPECT_TRUE(world.contacts().empty());
+  // A box around the elbow at a bent posture collides with a link next to the elbow.
+  Eigen::VectorXd q(7);
+  q << 0.0, 0.8, 0.0, -1.2, 0.0, 0.5, 0.0;
+  Kinematics kinematics(model);
+  kinematics.update(q);
+  Scene scene;
+  const Eigen::Vector3d wrist = kinematics.X_WB(6).translation();
+  const Eigen::Vector3d elbow = kinematics.X_WB(4).translation();
+  scene.obstacles.push_back(box("block", elbow + 0.75 * (wrist - elbow), Eigen::Vector3d(0.02, 0.02, 0.02)));
+  CollisionWorld with_box(model, scene);
+  with_box.update(q);
+  const auto& contacts = with_box.contacts();
+  ASSERT_FALSE(contacts.empty());
+  EXPECT_EQ(with_box.bodyName(contacts[0].body), "link5");
+  EXPECT_EQ(with_box.otherName(contacts[0]), "block");
+}
+
+}  // namespace
+}  // namespace flexirob::robot
