@@ -13,6 +13,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <string>
 #include <system_error>
 
@@ -74,6 +75,24 @@ void precheckStl(const fs::path& file, std::uintmax_t file_bytes, const MeshLimi
   throw InputError("mesh '" + file.string() + "' is truncated or corrupt: the binary STL header declares " +
                    std::to_string(count) + " triangles (" + std::to_string(expected) + " bytes), the file has " +
                    std::to_string(file_bytes) + " bytes");
+}
+
+// A PLY header declares its element counts up front; absurd ones are refused before assimp
+// reserves memory for them.
+void precheckPly(const fs::path& file, const MeshLimits& limits) {
+  std::ifstream in(file, std::ios::binary);
+  std::string line;
+  for (int lines = 0; lines < 1000 && std::getline(in, line); ++lines) {
+    if (line.rfind("end_header", 0) == 0) return;
+    std::istringstream words(line);
+    std::string keyword, element;
+    std::uintmax_t count = 0;
+    if (words >> keyword >> element >> count && keyword == "element" && (element == "vertex" || element == "face") &&
+        count > limits.max_vertices) {
+      throw InputError("mesh '" + file.string() + "' declares " + std::to_string(count) + " " + element +
+                       " elements, more than the limit of " + std::to_string(limits.max_vertices));
+    }
+  }
 }
 
 // Vertices the merged mesh will hold: every mesh counted once per node that instances it.
@@ -159,6 +178,7 @@ TriangleMesh loadMesh(const fs::path& file, const MeshLimits& limits) {
   if (bytes == 0) throw InputError("mesh file '" + file.string() + "' is empty");
   const std::string ext = lowerExtension(file);
   if (ext == ".stl") precheckStl(file, bytes, limits);
+  if (ext == ".ply") precheckPly(file, limits);
 
   Assimp::Importer importer;
   // Points and lines are not surfaces; STL facet normals are flat, so smooth ones are

@@ -315,6 +315,26 @@ TEST(MeshLoader, EnforcesFileSizeAndVertexLimits) {
   fs::remove_all(dir);
 }
 
+TEST(MeshLoader, RefusesHeadersThatDeclareAbsurdCountsWithoutAllocating) {
+  const fs::path dir = scratchDir();
+  {
+    std::ofstream ply(dir / "huge.ply", std::ios::binary);
+    ply << "ply\nformat binary_little_endian 1.0\nelement vertex 3000000000\nproperty float x\n"
+           "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+           "end_header\n"
+        << std::string(64, '\0');
+  }
+  expectOneLineInputError([&] { loadMesh(dir / "huge.ply"); }, "declares 3000000000 vertex elements");
+  // A COLLADA array that claims more values than it holds is refused by the parser.
+  std::string dae = "<?xml version=\"1.0\"?><COLLADA xmlns=\"http://www.collada.org/2005/11/COLLADASchema\" "
+                    "version=\"1.4.1\"><library_geometries><geometry id=\"g\"><mesh><source id=\"p\">"
+                    "<float_array id=\"a\" count=\"3000000000\">0 0 0 1 0 0 0 1 0</float_array></source>"
+                    "</mesh></geometry></library_geometries></COLLADA>";
+  std::ofstream(dir / "huge.dae") << dae;
+  expectOneLineInputError([&] { loadMesh(dir / "huge.dae"); }, "huge.dae");
+  fs::remove_all(dir);
+}
+
 TEST(MeshLoader, CachesByPathUntilTheFileChanges) {
   clearMeshCache();
   const fs::path dir = scratchDir();
