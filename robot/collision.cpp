@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "robot/errors.hpp"
+#include "robot/mesh.hpp"
 
 namespace flexirob::robot {
 namespace {
@@ -51,6 +52,10 @@ struct CollisionWorld::Impl {
   btDbvtBroadphase broadphase;
   btCollisionWorld world{&dispatcher, &broadphase, &configuration};
   std::vector<std::unique_ptr<btCollisionShape>> shapes;  // owns every shape, children included
+  // Triangle data of concave obstacle meshes (Bullet keeps pointers into it).
+  std::vector<std::unique_ptr<btTriangleIndexVertexArray>> mesh_interfaces;
+  std::vector<std::vector<btScalar>> mesh_vertices;
+  std::vector<std::vector<int>> mesh_indices;
   std::vector<std::unique_ptr<btCollisionObject>> body_objects;      // index = body
   std::vector<std::unique_ptr<btCollisionObject>> obstacle_objects;  // index = obstacle
   std::vector<std::string> shape_source;
@@ -85,6 +90,35 @@ struct CollisionWorld::Impl {
     }
     return nullptr;
   }
+
+  // A link mesh as its convex hull (scale applied in the mesh's own frame).
+  btCollisionShape* convexHull(const std::filesystem::path& file, const Eigen::Vector3d& scale) {
+    const TriangleMesh mesh = transformedMesh(*loadMeshCached(file), Eigen::Isometry3d::Identity(), scale);
+    if (mesh.empty()) return nullptr;
+    auto* hull = make<btConvexHullShape>();
+    for (const Eigen::Vector3f& v : mesh.vertices) hull->addPoint(btVector3(v.x(), v.y(), v.z()), false);
+    hull->recalcLocalAabb();
+    hull->optimizeConvexHull();
+    hull->setMargin(0);
+    return hull;
+  }
+
+  // An obstacle mesh as it is (concave allowed), for a static object.
+  btCollisionShape* triangleMesh(const std::filesystem::path& file, const Eigen::Vector3d& scale) {
+    const TriangleMesh mesh = transformedMesh(*loadMeshCached(file), Eigen::Isometry3d::Identity(), scale);
+    if (mesh.empty()) return nullptr;
+    auto& vertices = mesh_vertices.emplace_back();
+    auto& indices = mesh_indices.emplace_back();
+    vertices.reserve(mesh.vertices.size() * 3);
+    for (const Eigen::Vector3f& v : mesh.vertices) vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
+    indices.assign(mesh.indices.begin(), mesh.indices.end());
+    auto array = std::make_unique<btTriangleIndexVertexArray>(
+        static_cast<int>(mesh.triangleCount()), indices.data(), static_cast<int>(3 * sizeof(int)),
+        static_cast<int>(mesh.vertices.size()), vertices.data(), static_cast<int>(3 * sizeof(btScalar)));
+    btCollisionShape* shape = make<btBvhTriangleMeshShape>(array.get(), true);
+    mesh_interfaces.push_back(std::move(array));
+    return shape;
+  }
 };
 
 CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
@@ -99,9 +133,9 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
     auto* compound = impl.make<btCompoundShape>();
     std::string source = "urdf";
     for (const Geometry& geometry : body.collisions) {
-      if (btCollisionShape* child = impl.primitive(geometry.kind, geometry.size)) {
-        compound->addChildShape(toBt(geometry.X_BG), child);
-      }
+      btCollisionShape* child = geometry.kind == Geometry::Kind::kMesh ? impl.convexHull(geometry.mesh_file, geometry.mesh_scale)
+                                                                       : impl.primitive(geometry.kind, geometry.size);
+      if (child != nullptr) compound->addChildShape(toBt(geometry.X_BG), child);
     }
     if (compound->getNumChildShapes() == 0) {
       // A capsule from this body's joint to the next joint (or the tip); a link whose joints
@@ -143,7 +177,7 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
       case Obstacle::Shape::kBox: shape = impl.primitive(Geometry::Kind::kBox, obstacle.size); break;
       case Obstacle::Shape::kCylinder: shape = impl.primitive(Geometry::Kind::kCylinder, obstacle.size); break;
       case Obstacle::Shape::kSphere: shape = impl.primitive(Geometry::Kind::kSphere, obstacle.size); break;
-      case Obstacle::Shape::kMesh: break;
+      case Obstacle::Shape::kMesh: shape = impl.triangleMesh(obstacle.mesh_file, obstacle.mesh_scale); break;
     }
     if (shape == nullptr) {
       throw InputError("obstacle '" + obstacle.name + "': unsupported shape or non-positive size");

@@ -6,13 +6,14 @@
 // Only the simulator and the simulated tutor may use this class: it reads the scene's obstacle
 // geometry, which controllers and learners never see (the method is model-free).
 //
-// Link shapes: the URDF's collision geometry (boxes, cylinders, spheres; meshes as convex
+// Link shapes: the URDF's collision geometry (boxes, cylinders, spheres; meshes as their convex
 // hulls) where a link has some, else a capsule around the link derived from its joint frames
 // (from its joint to the next one) with the radius of a solid cylinder of the link's mass and
 // smallest principal inertia, r = sqrt(2·I_min/m). Link pairs joined by a joint, and pairs
 // already touching at the robot's reference posture (all joints at the centre of their limits,
 // MoveIt's "default" rule), are not checked against each other. The base does not collide with
-// obstacles (it stands on them), only with the robot's own links.
+// obstacles (it stands on them), only with the robot's own links. Obstacle meshes are used as
+// they are (concave allowed).
 // Frames: world W = the robot's base frame; metres.
 #include <Eigen/Geometry>
 #include <memory>

@@ -131,12 +131,38 @@ TEST(CollisionWorld, ReportsSelfCollisionButNeverAdjacentLinks) {
 }
 
 TEST(CollisionWorld, LinksWithoutCollisionGeometryGetCapsules) {
+  std::string bare = kPlanarArm;
+  for (std::size_t start; (start = bare.find("<collision>")) != std::string::npos;) {
+    bare.erase(start, bare.find("</collision>", start) + std::string("</collision>").size() - start);
+  }
+  const RobotModel model = RobotModel::fromUrdfString(bare, ".");
+  Scene scene;
+  // 1 cm beside link2's capsule surface when the arm is straight up: the capsule radius comes
+  // from the link's inertia, r = sqrt(2·0.0025/2) = 0.05 m.
+  Obstacle ball;
+  ball.name = "ball";
+  ball.shape = Obstacle::Shape::kSphere;
+  ball.size = Eigen::Vector3d(0.05, 0, 0);
+  ball.X_WO.translation() = Eigen::Vector3d(0.11, 0.0, 0.6);
+  scene.obstacles.push_back(ball);
+  CollisionWorld world(model, scene);
+  EXPECT_EQ(world.bodyShapeSource(2), "capsule");
+  world.update(Eigen::Vector3d::Zero());
+  EXPECT_NEAR(world.distance(2, 0), 0.01, 1e-3);
+  EXPECT_TRUE(world.contacts().empty());
+  world.update(Eigen::Vector3d(0.0, 0.05, 0.0));  // lean link2 towards the ball
+  ASSERT_FALSE(world.contacts().empty());
+  EXPECT_EQ(world.bodyName(world.contacts()[0].body), "link2");
+}
+
+TEST(CollisionWorld, UsesTheLwr4CollisionMeshes) {
   const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
   CollisionWorld world(model, Scene{});
+  for (int b = 1; b <= model.dof(); ++b) EXPECT_EQ(world.bodyShapeSource(b), "urdf") << b;
   // The arm at its reference posture does not collide with itself.
   world.update(model.midPosture());
   EXPECT_TRUE(world.contacts().empty());
-  // A box around the elbow at a bent posture collides with a link next to the elbow.
+  // A small block in the middle of the forearm at a bent posture touches the forearm link.
   Eigen::VectorXd q(7);
   q << 0.0, 0.8, 0.0, -1.2, 0.0, 0.5, 0.0;
   Kinematics kinematics(model);
@@ -144,7 +170,7 @@ TEST(CollisionWorld, LinksWithoutCollisionGeometryGetCapsules) {
   Scene scene;
   const Eigen::Vector3d wrist = kinematics.X_WB(6).translation();
   const Eigen::Vector3d elbow = kinematics.X_WB(4).translation();
-  scene.obstacles.push_back(box("block", elbow + 0.75 * (wrist - elbow), Eigen::Vector3d(0.02, 0.02, 0.02)));
+  scene.obstacles.push_back(box("block", elbow + 0.6 * (wrist - elbow), Eigen::Vector3d(0.02, 0.02, 0.02)));
   CollisionWorld with_box(model, scene);
   with_box.update(q);
   const auto& contacts = with_box.contacts();
