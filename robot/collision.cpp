@@ -46,6 +46,25 @@ double capsuleRadius(const Body& body) {
 
 }  // namespace
 
+// Keeps unchecked self-collision pairs (adjacent, or touching at the reference posture) out of
+// the broadphase, so that no narrow-phase work is spent on them.
+struct PairFilter : btOverlapFilterCallback {
+  const std::vector<char>* checked = nullptr;
+  int bodies = 0;
+  bool needBroadphaseCollision(btBroadphaseProxy* a, btBroadphaseProxy* b) const override {
+    if ((a->m_collisionFilterGroup & b->m_collisionFilterMask) == 0 ||
+        (b->m_collisionFilterGroup & a->m_collisionFilterMask) == 0) {
+      return false;
+    }
+    const auto* object_a = static_cast<const btCollisionObject*>(a->m_clientObject);
+    const auto* object_b = static_cast<const btCollisionObject*>(b->m_clientObject);
+    const int body_a = object_a->getUserIndex();
+    const int body_b = object_b->getUserIndex();
+    if (body_a < 0 || body_b < 0) return true;
+    return (*checked)[static_cast<std::size_t>(body_a * bodies + body_b)] != 0;
+  }
+};
+
 struct CollisionWorld::Impl {
   btDefaultCollisionConfiguration configuration;
   btCollisionDispatcher dispatcher{&configuration};
@@ -61,6 +80,7 @@ struct CollisionWorld::Impl {
   std::vector<std::string> shape_source;
   std::vector<char> checked_pairs;  // bodies × bodies
   int bodies = 0;
+  PairFilter filter;
   Kinematics kinematics;
   std::vector<Contact> contacts;
 
@@ -126,6 +146,18 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
   Impl& impl = *impl_;
   const auto& bodies = model.bodies();
   impl.bodies = static_cast<int>(bodies.size());
+  // Self-collision pairs: first every non-adjacent pair; those touching at the reference
+  // posture are dropped below.
+  impl.checked_pairs.assign(static_cast<std::size_t>(impl.bodies * impl.bodies), 0);
+  for (int a = 0; a < impl.bodies; ++a) {
+    for (int b = a + 2; b < impl.bodies; ++b) {
+      impl.checked_pairs[static_cast<std::size_t>(a * impl.bodies + b)] = 1;
+      impl.checked_pairs[static_cast<std::size_t>(b * impl.bodies + a)] = 1;
+    }
+  }
+  impl.filter.checked = &impl.checked_pairs;
+  impl.filter.bodies = impl.bodies;
+  impl.world.getPairCache()->setOverlapFilterCallback(&impl.filter);
   // Robot links: group 1 collides with obstacles (group 2) and links; the base (group 4)
   // collides with links only.
   for (int b = 0; b < impl.bodies; ++b) {
@@ -193,19 +225,23 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
   }
   impl.contacts.reserve(64);
 
-  // Self-collision pairs: not adjacent, and apart at the reference posture.
-  impl.checked_pairs.assign(static_cast<std::size_t>(impl.bodies * impl.bodies), 0);
-  for (int a = 0; a < impl.bodies; ++a) {
-    for (int b = a + 2; b < impl.bodies; ++b) {
-      impl.checked_pairs[static_cast<std::size_t>(a * impl.bodies + b)] = 1;
-      impl.checked_pairs[static_cast<std::size_t>(b * impl.bodies + a)] = 1;
-    }
-  }
   update(model.midPosture());
+  bool dropped = false;
   for (const Contact& contact : contacts()) {
     if (!contact.isSelfCollision()) continue;
     impl.checked_pairs[static_cast<std::size_t>(contact.body * impl.bodies + contact.other_body)] = 0;
     impl.checked_pairs[static_cast<std::size_t>(contact.other_body * impl.bodies + contact.body)] = 0;
+    dropped = true;
+  }
+  if (dropped) {
+    // Re-adding the links rebuilds their broadphase pairs through the filter.
+    for (int b = 0; b < impl.bodies; ++b) {
+      btCollisionObject* object = impl.body_objects[static_cast<std::size_t>(b)].get();
+      const int group = object->getBroadphaseHandle()->m_collisionFilterGroup;
+      const int mask = object->getBroadphaseHandle()->m_collisionFilterMask;
+      impl.world.removeCollisionObject(object);
+      impl.world.addCollisionObject(object, group, mask);
+    }
   }
 }
 
@@ -240,40 +276,6 @@ void CollisionWorld::update(const Eigen::VectorXd& q) {
 
 namespace {
 
-// Collects penetrating pairs of one robot body.
-struct ContactCollector : btCollisionWorld::ContactResultCallback {
-  const CollisionWorld* world = nullptr;
-  std::vector<Contact>* contacts = nullptr;
-  int body = -1;
-
-  btScalar addSingleResult(btManifoldPoint& point, const btCollisionObjectWrapper* a, int, int,
-                           const btCollisionObjectWrapper* b, int, int) override {
-    if (point.getDistance() >= 0) return 0;
-    const bool a_is_body = a->getCollisionObject()->getUserIndex() == body;
-    const btCollisionObject* other = (a_is_body ? b : a)->getCollisionObject();
-    Contact contact;
-    contact.body = body;
-    contact.depth = -double(point.getDistance());
-    contact.p_W = toEigen(a_is_body ? point.getPositionWorldOnA() : point.getPositionWorldOnB());
-    if (other->getUserIndex() >= 0) {
-      contact.other_body = other->getUserIndex();
-      // Each self pair once (from the lower index), and only pairs that are checked.
-      if (contact.other_body <= body || !world->selfPairChecked(body, contact.other_body)) return 0;
-    } else {
-      contact.obstacle = other->getUserIndex2();
-    }
-    for (Contact& existing : *contacts) {
-      if (existing.body == contact.body && existing.other_body == contact.other_body &&
-          existing.obstacle == contact.obstacle) {
-        if (contact.depth > existing.depth) existing = contact;
-        return 0;
-      }
-    }
-    contacts->push_back(contact);
-    return 0;
-  }
-};
-
 struct ClosestCollector : btCollisionWorld::ContactResultCallback {
   double distance = std::numeric_limits<double>::infinity();
   btVector3 on_first, on_second;
@@ -293,16 +295,45 @@ struct ClosestCollector : btCollisionWorld::ContactResultCallback {
 }  // namespace
 
 const std::vector<Contact>& CollisionWorld::contacts() {
+  // Cached pair algorithms and manifolds make repeated queries cheap.
+  impl_->world.performDiscreteCollisionDetection();
   impl_->contacts.clear();
-  ContactCollector collector;
-  collector.world = this;
-  collector.contacts = &impl_->contacts;
-  for (int b = 0; b < impl_->bodies; ++b) {
-    collector.body = b;
-    btCollisionObject* object = impl_->body_objects[static_cast<std::size_t>(b)].get();
-    collector.m_collisionFilterGroup = object->getBroadphaseHandle()->m_collisionFilterGroup;
-    collector.m_collisionFilterMask = object->getBroadphaseHandle()->m_collisionFilterMask;
-    impl_->world.contactTest(object, collector);
+  btDispatcher& dispatcher = *impl_->world.getDispatcher();
+  for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+    const btPersistentManifold* manifold = dispatcher.getManifoldByIndexInternal(m);
+    int deepest = -1;
+    for (int p = 0; p < manifold->getNumContacts(); ++p) {
+      if (manifold->getContactPoint(p).getDistance() < 0 &&
+          (deepest < 0 || manifold->getContactPoint(p).getDistance() < manifold->getContactPoint(deepest).getDistance())) {
+        deepest = p;
+      }
+    }
+    if (deepest < 0) continue;
+    const btManifoldPoint& point = manifold->getContactPoint(deepest);
+    const btCollisionObject* a = manifold->getBody0();
+    const btCollisionObject* b = manifold->getBody1();
+    // The robot side first; for two links, the lower index first.
+    bool swap = a->getUserIndex() < 0 || (b->getUserIndex() >= 0 && b->getUserIndex() < a->getUserIndex());
+    if (swap) std::swap(a, b);
+    Contact contact;
+    contact.body = a->getUserIndex();
+    contact.depth = -double(point.getDistance());
+    contact.p_W = toEigen(swap ? point.getPositionWorldOnB() : point.getPositionWorldOnA());
+    if (b->getUserIndex() >= 0) {
+      contact.other_body = b->getUserIndex();
+      if (!selfPairChecked(contact.body, contact.other_body)) continue;
+    } else {
+      contact.obstacle = b->getUserIndex2();
+    }
+    bool merged = false;
+    for (Contact& existing : impl_->contacts) {
+      if (existing.body == contact.body && existing.other_body == contact.other_body && existing.obstacle == contact.obstacle) {
+        if (contact.depth > existing.depth) existing = contact;
+        merged = true;
+        break;
+      }
+    }
+    if (!merged) impl_->contacts.push_back(contact);
   }
   return impl_->contacts;
 }
