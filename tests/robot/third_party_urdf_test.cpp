@@ -6,11 +6,15 @@
 
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <numbers>
 #include <random>
 #include <string>
+
+#include <unistd.h>
 
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
@@ -77,6 +81,19 @@ double signedVolume(const TriangleMesh& mesh) {
 // Volume of the 24-gon prism the fixture's cylinders are made of.
 double prismVolume(double radius, double height, int sides) {
   return 0.5 * sides * radius * radius * std::sin(2 * kPi / sides) * height;
+}
+
+void expectOneLineInputError(const std::function<void()>& action, const std::string& fragment) {
+  try {
+    action();
+    ADD_FAILURE() << "expected InputError containing '" << fragment << "'";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(fragment), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "expected InputError, got " << e.what();
+  }
 }
 
 TEST(ThirdPartyUrdf, LoadsWithToolZeroAsDefaultTipAndFoldsFixedLinks) {
@@ -174,6 +191,35 @@ TEST(ThirdPartyUrdf, ResolvesPackageAndRelativeMeshUris) {
   }
 }
 
+TEST(ThirdPartyUrdf, ResolvesPackageUrisThroughRosPackagePathWhenTheUrdfLivesElsewhere) {
+  // A URDF generated outside its package (as xacro output often is) finds the package through
+  // ROS_PACKAGE_PATH, and only through it.
+  const fs::path dir = fs::temp_directory_path() / ("flexirob_third_party_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  fs::copy_file(kArm, dir / "arm.urdf", fs::copy_options::overwrite_existing);
+  const char* previous = std::getenv("ROS_PACKAGE_PATH");
+  const std::string saved = previous != nullptr ? previous : "";
+  ::unsetenv("ROS_PACKAGE_PATH");
+  expectOneLineInputError([&] { RobotModel::fromUrdfFile(dir / "arm.urdf"); }, "not found");
+  ::setenv("ROS_PACKAGE_PATH", ("/nonexistent:" + kPackage.parent_path().string()).c_str(), 1);
+  {
+    // Link 2's relative URI cannot resolve from there: name the package instead.
+    std::string xml(static_cast<std::size_t>(fs::file_size(kArm)), '\0');
+    std::ifstream(kArm, std::ios::binary).read(xml.data(), static_cast<std::streamsize>(xml.size()));
+    const std::string relative = "../meshes/visual/segment.dae";
+    xml.replace(xml.find(relative), relative.size(), "package://iiwa_like_description/meshes/visual/segment.dae");
+    std::ofstream(dir / "arm.urdf") << xml;
+  }
+  const RobotModel model = RobotModel::fromUrdfFile(dir / "arm.urdf");
+  EXPECT_EQ(model.bodies()[1].visuals.at(0).mesh_file, fs::weakly_canonical(kPackage / "meshes" / "visual" / "segment.dae"));
+  if (previous != nullptr) {
+    ::setenv("ROS_PACKAGE_PATH", saved.c_str(), 1);
+  } else {
+    ::unsetenv("ROS_PACKAGE_PATH");
+  }
+  fs::remove_all(dir);
+}
+
 TEST(ThirdPartyUrdf, LoadsColladaObjAndStlMeshesInMetres) {
   const fs::path visual = kPackage / "meshes" / "visual";
   const fs::path collision = kPackage / "meshes" / "collision";
@@ -203,19 +249,6 @@ TEST(ThirdPartyUrdf, LoadsColladaObjAndStlMeshesInMetres) {
   const TriangleMesh segment_m = transformedMesh(segment_mm, Eigen::Isometry3d::Identity(), Eigen::Vector3d::Constant(0.001));
   EXPECT_NEAR(segment_m.bounds().max().z(), 0.2, 1e-6);
   EXPECT_NEAR(signedVolume(segment_m), prismVolume(0.065, 0.2, 12), 1e-7);
-}
-
-void expectOneLineInputError(const std::function<void()>& action, const std::string& fragment) {
-  try {
-    action();
-    ADD_FAILURE() << "expected InputError containing '" << fragment << "'";
-  } catch (const InputError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find(fragment), std::string::npos) << what;
-    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "expected InputError, got " << e.what();
-  }
 }
 
 TEST(ThirdPartyUrdf, BrokenVariantsFailWithOneLineInputError) {
