@@ -76,7 +76,7 @@ struct Triangle {
 using Mesh = std::vector<Triangle>;
 
 // A profile point in the half-plane of the axis: rho >= 0 the distance from the axis, h the
-// height along it, n the outward normal of the surface there in (rho, h).
+// height along it.
 struct ProfilePoint {
   double rho;
   double h;
@@ -84,9 +84,9 @@ struct ProfilePoint {
 
 // Turns a profile about the z axis of frame X_LA (given in the link frame L) and appends the
 // triangles. The profile either runs from a pole on the axis (rho = 0) to another pole, or is a
-// closed loop (last point joined to the first) that stays off the axis. `outward` gives the
-// outward normal direction in (rho, h) of segment k; it decides the winding so that every
-// triangle faces outwards whatever the profile's direction.
+// closed loop (last point joined to the first) that stays off the axis. interior_rho_h is a
+// point inside the profile's region: each segment's outward normal points away from it, and
+// each triangle is wound to face that way, whatever the profile's direction.
 void revolve(Mesh& mesh, const Isometry3d& X_LA, const std::vector<ProfilePoint>& profile, bool closed_loop,
              int around, const Vector2d& interior_rho_h) {
   const auto point = [&](const ProfilePoint& p, int j) {
