@@ -26,12 +26,19 @@ struct Obstacle {
   Eigen::Vector4f rgba{0.55F, 0.6F, 0.65F, 1.0F};
 };
 
-/// A region where the tutor demonstrates a redundancy resolution (Sect. 3.1, 4.1).
+/// A region where the tutor demonstrates a redundancy resolution (Sect. 3.1, 4.1), or where
+/// the robot is meant to work.
 struct Area {
   std::string name;
   Eigen::Vector3d p_WA = Eigen::Vector3d::Zero();  ///< centre [m]
   double radius = 0.05;                            ///< extent of the demonstrated motion [m]
   std::optional<Eigen::VectorXd> posture;          ///< suggested q_fixed [rad], if the scene gives one
+  /// Edge lengths [m] of the axis-aligned box around p_WA that bounds the area (where
+  /// evaluations draw their points); unset: the ball of `radius` around p_WA.
+  std::optional<Eigen::Vector3d> box;
+  /// True if p_W (world frame, metres) lies in the box, or in the ball if there is no box;
+  /// the boundary counts as inside.
+  bool contains(const Eigen::Vector3d& p_W) const;
 };
 
 /// An axis-aligned evaluation grid (Sect. 3.3.2: G = [-0.9, 0] x [-0.55, 0.55] x [0.05, 0.8] m).
@@ -39,13 +46,19 @@ struct EvaluationGrid {
   Eigen::Vector3d lower = Eigen::Vector3d(-0.9, -0.55, 0.05);
   Eigen::Vector3d upper = Eigen::Vector3d(0.0, 0.55, 0.8);
   double spacing = 0.05;  ///< [m]
+  double tolerance = 0.01;  ///< a target counts as reached within this distance [m] (Sect. 3.3.2)
+  /// Points lower + spacing * (i, j, k) inside [lower, upper] (upper inclusive up to 1e-9 m),
+  /// x fastest.
   std::vector<Eigen::Vector3d> points() const;
+  /// Number of points() per axis.
+  Eigen::Vector3i counts() const;
 };
 
 /// A target trajectory in task space: waypoints joined by straight segments.
 struct Trajectory {
   std::string name;
-  std::vector<Eigen::Vector3d> waypoints;
+  std::string group;  ///< evaluation group, e.g. "left", "right", "interpolation" (Tab. 3.2); may be empty
+  std::vector<Eigen::Vector3d> waypoints;  ///< [m], at least one
 };
 
 struct Scene {
@@ -63,12 +76,26 @@ struct Scene {
   std::map<std::string, double> parameters;  ///< overrides of declared parameters, by name
 };
 
+/// True if p_W (world frame, metres) lies inside the obstacle or within `margin` [m] of its
+/// surface. Primitive shapes only: a mesh never contains a point here (the simulator tests
+/// meshes with its own collision engine).
+bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, double margin = 0.0);
+
 /// Built-in scene names: empty, setup_A .. setup_D, setup_I, setup_II, harting, arm9_areas.
 const std::vector<std::string>& builtinSceneNames();
 
 /// Reads a scene file. Throws InputError with a one-line reason (file, and where possible the
 /// line) for malformed YAML, unknown keys, wrong types, non-finite numbers, missing meshes.
 Scene loadSceneFile(const std::filesystem::path& file);
+
+/// Parses scene text as loadSceneFile does; relative mesh and robot paths are resolved against
+/// base_dir, and errors name `origin` (e.g. a file name) instead of a file.
+Scene parseScene(const std::string& yaml_text, const std::filesystem::path& base_dir,
+                 const std::string& origin);
+
+/// The scene as scene-file text that parseScene reads back to an equal scene (numbers with 17
+/// significant digits, rotations as quaternions, mesh and robot paths as stored).
+std::string sceneToYaml(const Scene& scene);
 
 /// A built-in name (see builtinSceneNames) or a path to a scene file; "" or "empty" is the
 /// empty scene.

@@ -1,0 +1,742 @@
+// Scene files: every element read and written back, the built-in thesis scenes load and are
+// geometrically sensible for their robot, and broken or hostile files are refused with a
+// one-line InputError naming the file.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <set>
+#include <string>
+
+#include "robot/errors.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/scene.hpp"
+
+namespace flexirob::robot {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kPi = std::numbers::pi;
+
+// A fresh folder per test under the system's temp dir, removed afterwards.
+class SceneFileTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    static std::atomic<int> counter{0};
+    dir_ = fs::temp_directory_path() /
+           ("flexirob_scene_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+
+  fs::path write(const std::string& name, const std::string& text) const {
+    const fs::path file = dir_ / name;
+    fs::create_directories(file.parent_path());
+    std::ofstream(file, std::ios::binary) << text;
+    return file;
+  }
+
+  // Loads `text` as a scene file and returns the error message; fails the test if it loads.
+  std::string refusal(const std::string& text, const std::string& name = "broken.yaml") const {
+    const fs::path file = write(name, text);
+    try {
+      loadSceneFile(file);
+    } catch (const InputError& error) {
+      return error.what();
+    }
+    ADD_FAILURE() << "accepted:\n" << text.substr(0, 400);
+    return {};
+  }
+
+  fs::path dir_;
+};
+
+// A refusal is one line that names the file.
+void expectOneLineNamingFile(const std::string& message, const std::string& file_name) {
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  EXPECT_NE(message.find(file_name), std::string::npos) << message;
+  EXPECT_LT(message.size(), 400U) << message;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading every element
+
+constexpr const char* kFullScene = R"(# every element once
+version: 1
+name: workcell
+description: A test cell with every kind of element.
+robot: lwr4
+home_posture: {unit: deg, values: [0, 30, 0, -90, 0, 60, 0]}
+obstacles:
+  - name: table_leg
+    shape: box
+    size: [0.1, 0.2, 0.3]
+    position: [-0.5, 0.25, 0.15]
+    rotation: {rpy: [0, 0, 90], unit: deg}
+    colour: [0.1, 0.2, 0.3]
+  - name: pipe
+    shape: cylinder
+    radius: 0.05
+    length: 0.6
+    position: [0.4, 0, 0.3]
+    rotation: {quaternion: [0.7071067811865476, 0.7071067811865476, 0, 0]}
+    color: [1, 0, 0, 0.5]
+  - name: ball
+    shape: sphere
+    radius: 0.07
+    position: [-0.3, -0.4, 0.5]
+  - name: fixture
+    shape: mesh
+    file: meshes/fixture.stl
+    scale: 0.001
+    position: [0, 0.6, 0]
+    rotation: {rpy: [0, 0, 1.5707963267948966]}
+  - shape: mesh
+    file: meshes/fixture.stl
+    scale: [1, 2, 3]
+training_areas:
+  - name: left
+    centre: [-0.55, 0.37, 0.3]
+    radius: 0.1
+    box: [0.2, 0.2, 0.2]
+    posture: [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]
+  - center: [-0.55, -0.37, 0.3]
+    posture: {unit: rad, values: [-0.1, 0.2, -0.3, 0.4, -0.5, 0.6, -0.7]}
+working_areas:
+  - name: interpolation
+    centre: [-0.55, 0, 0.3]
+    radius: 0.2
+grid:
+  lower: [-0.9, -0.55, 0.05]
+  upper: [0, 0.55, 0.8]
+  spacing: 0.05
+  tolerance: 0.01
+targets:
+  - [-0.5, 0, 0.4]
+  - [-0.4, 0.1, +0.2]
+trajectories:
+  - name: sweep
+    group: interpolation
+    waypoints: [[-0.5, 0.3, 0.3], [-0.5, -0.3, 0.3], [-0.6, -0.3, 0.2]]
+  - waypoints:
+      - [-0.4, 0, 0.5]
+      - [-0.4, 0, 0.2]
+parameters:
+  hierarchical.kappa_q: 4
+  sim.gravity: 9.81
+)";
+
+TEST_F(SceneFileTest, ReadsEveryElementWithUnitsAndDefaults) {
+  write("meshes/fixture.stl", "solid empty\nendsolid empty\n");
+  const fs::path file = write("cell/../workcell.yaml", kFullScene);
+  const Scene scene = loadSceneFile(file);
+
+  EXPECT_EQ(scene.name, "workcell");
+  EXPECT_EQ(scene.description, "A test cell with every kind of element.");
+  EXPECT_EQ(scene.robot, "lwr4");
+  EXPECT_EQ(scene.source, file);
+  ASSERT_TRUE(scene.home_posture.has_value());
+  ASSERT_EQ(scene.home_posture->size(), 7);
+  EXPECT_NEAR((*scene.home_posture)[1], kPi / 6.0, 1e-15);
+  EXPECT_NEAR((*scene.home_posture)[3], -kPi / 2.0, 1e-15);
+
+  ASSERT_EQ(scene.obstacles.size(), 5U);
+  const Obstacle& box = scene.obstacles[0];
+  EXPECT_EQ(box.shape, Obstacle::Shape::kBox);
+  EXPECT_TRUE(box.size.isApprox(Eigen::Vector3d(0.1, 0.2, 0.3)));
+  EXPECT_TRUE(box.X_WO.translation().isApprox(Eigen::Vector3d(-0.5, 0.25, 0.15)));
+  // Yaw 90 deg turns the box's x axis onto the world's y axis.
+  EXPECT_TRUE((box.X_WO.linear() * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-12));
+  EXPECT_TRUE(box.rgba.isApprox(Eigen::Vector4f(0.1F, 0.2F, 0.3F, 1.0F)));
+
+  const Obstacle& pipe = scene.obstacles[1];
+  EXPECT_EQ(pipe.shape, Obstacle::Shape::kCylinder);
+  EXPECT_DOUBLE_EQ(pipe.size.x(), 0.05);
+  EXPECT_DOUBLE_EQ(pipe.size.y(), 0.6);
+  // 90 deg about x: the cylinder's axis (z) points along -y.
+  EXPECT_TRUE((pipe.X_WO.linear() * Eigen::Vector3d::UnitZ()).isApprox(-Eigen::Vector3d::UnitY(), 1e-12));
+  EXPECT_FLOAT_EQ(pipe.rgba[3], 0.5F);
+
+  EXPECT_EQ(scene.obstacles[2].shape, Obstacle::Shape::kSphere);
+  EXPECT_DOUBLE_EQ(scene.obstacles[2].size.x(), 0.07);
+  EXPECT_TRUE(scene.obstacles[2].X_WO.linear().isIdentity());
+  EXPECT_TRUE(scene.obstacles[2].rgba.isApprox(Obstacle{}.rgba));
+
+  const Obstacle& mesh = scene.obstacles[3];
+  EXPECT_EQ(mesh.shape, Obstacle::Shape::kMesh);
+  EXPECT_TRUE(fs::equivalent(mesh.mesh_file, dir_ / "meshes" / "fixture.stl"));
+  EXPECT_TRUE(mesh.mesh_scale.isApprox(Eigen::Vector3d::Constant(0.001)));
+  EXPECT_EQ(scene.obstacles[4].name, "obstacle_4");
+  EXPECT_TRUE(scene.obstacles[4].mesh_scale.isApprox(Eigen::Vector3d(1, 2, 3)));
+
+  ASSERT_EQ(scene.training_areas.size(), 2U);
+  EXPECT_EQ(scene.training_areas[0].name, "left");
+  ASSERT_TRUE(scene.training_areas[0].box.has_value());
+  EXPECT_TRUE(scene.training_areas[0].box->isApprox(Eigen::Vector3d::Constant(0.2)));
+  EXPECT_EQ(scene.training_areas[1].name, "area_2");
+  EXPECT_DOUBLE_EQ(scene.training_areas[1].radius, Area{}.radius);
+  EXPECT_FALSE(scene.training_areas[1].box.has_value());
+  EXPECT_TRUE(scene.training_areas[1].p_WA.isApprox(Eigen::Vector3d(-0.55, -0.37, 0.3)));
+  EXPECT_DOUBLE_EQ((*scene.training_areas[1].posture)[6], -0.7);
+  ASSERT_EQ(scene.working_areas.size(), 1U);
+  EXPECT_DOUBLE_EQ(scene.working_areas[0].radius, 0.2);
+
+  ASSERT_TRUE(scene.grid.has_value());
+  EXPECT_DOUBLE_EQ(scene.grid->tolerance, 0.01);
+  ASSERT_EQ(scene.targets.size(), 2U);
+  EXPECT_DOUBLE_EQ(scene.targets[1].z(), 0.2);
+  ASSERT_EQ(scene.trajectories.size(), 2U);
+  EXPECT_EQ(scene.trajectories[0].group, "interpolation");
+  EXPECT_EQ(scene.trajectories[0].waypoints.size(), 3U);
+  EXPECT_EQ(scene.trajectories[1].name, "trajectory_2");
+  EXPECT_TRUE(scene.trajectories[1].group.empty());
+  EXPECT_EQ(scene.parameters.size(), 2U);
+  EXPECT_DOUBLE_EQ(scene.parameters.at("hierarchical.kappa_q"), 4.0);
+}
+
+void expectScenesEqual(const Scene& a, const Scene& b) {
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.description, b.description);
+  EXPECT_EQ(a.robot, b.robot);
+  ASSERT_EQ(a.home_posture.has_value(), b.home_posture.has_value());
+  if (a.home_posture) {
+    EXPECT_EQ(*a.home_posture, *b.home_posture);
+  }
+  ASSERT_EQ(a.obstacles.size(), b.obstacles.size());
+  for (std::size_t i = 0; i < a.obstacles.size(); ++i) {
+    const Obstacle& p = a.obstacles[i];
+    const Obstacle& q = b.obstacles[i];
+    EXPECT_EQ(p.name, q.name);
+    EXPECT_EQ(p.shape, q.shape);
+    EXPECT_EQ(p.size, q.size);
+    EXPECT_EQ(p.X_WO.translation(), q.X_WO.translation());
+    // Rotations travel as quaternions: equal up to rounding.
+    EXPECT_TRUE(p.X_WO.linear().isApprox(q.X_WO.linear(), 1e-14)) << p.name;
+    EXPECT_EQ(p.mesh_file, q.mesh_file);
+    EXPECT_EQ(p.mesh_scale, q.mesh_scale);
+    EXPECT_EQ(p.rgba, q.rgba);
+  }
+  for (const auto areas : {&Scene::training_areas, &Scene::working_areas}) {
+    const auto& x = a.*areas;
+    const auto& y = b.*areas;
+    ASSERT_EQ(x.size(), y.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      EXPECT_EQ(x[i].name, y[i].name);
+      EXPECT_EQ(x[i].p_WA, y[i].p_WA);
+      EXPECT_EQ(x[i].radius, y[i].radius);
+      EXPECT_TRUE(x[i].box == y[i].box) << x[i].name;
+      EXPECT_TRUE(x[i].posture == y[i].posture) << x[i].name;
+    }
+  }
+  ASSERT_EQ(a.grid.has_value(), b.grid.has_value());
+  if (a.grid) {
+    EXPECT_EQ(a.grid->lower, b.grid->lower);
+    EXPECT_EQ(a.grid->upper, b.grid->upper);
+    EXPECT_EQ(a.grid->spacing, b.grid->spacing);
+    EXPECT_EQ(a.grid->tolerance, b.grid->tolerance);
+  }
+  EXPECT_EQ(a.targets, b.targets);
+  ASSERT_EQ(a.trajectories.size(), b.trajectories.size());
+  for (std::size_t i = 0; i < a.trajectories.size(); ++i) {
+    EXPECT_EQ(a.trajectories[i].name, b.trajectories[i].name);
+    EXPECT_EQ(a.trajectories[i].group, b.trajectories[i].group);
+    EXPECT_EQ(a.trajectories[i].waypoints, b.trajectories[i].waypoints);
+  }
+  EXPECT_EQ(a.parameters, b.parameters);
+}
+
+TEST_F(SceneFileTest, WritesEveryElementBackToAnEqualScene) {
+  write("meshes/fixture.stl", "solid empty\nendsolid empty\n");
+  const Scene original = loadSceneFile(write("workcell.yaml", kFullScene));
+  const std::string text = sceneToYaml(original);
+  const Scene again = loadSceneFile(write("again/workcell.yaml", text));
+  expectScenesEqual(original, again);
+  EXPECT_NE(text.find("quaternion"), std::string::npos);
+}
+
+TEST_F(SceneFileTest, RandomScenesSurviveAWriteReadCycleExactly) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  std::uniform_real_distribution<double> size(0.001, 2.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    Scene scene;
+    scene.name = "random_" + std::to_string(trial);
+    scene.description = "line one: with a colon, 'quotes' and #hash";
+    scene.home_posture = Eigen::VectorXd::NullaryExpr(7, [&] { return coordinate(rng) * kPi; });
+    for (int i = 0; i < 6; ++i) {
+      Obstacle obstacle;
+      obstacle.name = "o" + std::to_string(i);
+      obstacle.shape = static_cast<Obstacle::Shape>(i % 3);
+      obstacle.size = Eigen::Vector3d(size(rng), size(rng), size(rng));
+      if (obstacle.shape == Obstacle::Shape::kCylinder) obstacle.size.z() = 0.0;
+      if (obstacle.shape == Obstacle::Shape::kSphere) obstacle.size.tail<2>().setZero();
+      obstacle.X_WO.translation() = Eigen::Vector3d(coordinate(rng), coordinate(rng), coordinate(rng));
+      obstacle.X_WO.linear() =
+          Eigen::Quaterniond(coordinate(rng), coordinate(rng), coordinate(rng), coordinate(rng)).normalized().toRotationMatrix();
+      obstacle.rgba = Eigen::Vector4f(0.25F, 0.5F, 0.125F, 1.0F / 3.0F);
+      scene.obstacles.push_back(obstacle);
+    }
+    Area area;
+    area.name = "a";
+    area.p_WA = Eigen::Vector3d(coordinate(rng), coordinate(rng), coordinate(rng));
+    area.radius = size(rng);
+    area.posture = Eigen::VectorXd::NullaryExpr(9, [&] { return coordinate(rng); });
+    scene.training_areas.push_back(area);
+    scene.targets.emplace_back(coordinate(rng), coordinate(rng), coordinate(rng));
+    scene.trajectories.push_back({"t", "g", {scene.targets.front(), area.p_WA}});
+    scene.parameters["sim.gravity"] = coordinate(rng);
+    const Scene again = parseScene(sceneToYaml(scene), dir_, "generated");
+    expectScenesEqual(scene, again);
+  }
+}
+
+TEST_F(SceneFileTest, ResolvesRelativeMeshAndRobotPathsAgainstTheSceneFolder) {
+  write("cell/parts/clamp.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  write("cell/robots/arm.urdf", "<robot name='x'/>\n");
+  const fs::path file = write("cell/scene.yaml",
+                              "robot: robots/arm.urdf\n"
+                              "obstacles:\n  - {shape: mesh, file: parts/clamp.obj}\n");
+  // Loading from another working directory must not matter.
+  const Scene scene = loadSceneFile(file);
+  EXPECT_TRUE(fs::equivalent(scene.obstacles.at(0).mesh_file, dir_ / "cell" / "parts" / "clamp.obj"));
+  EXPECT_TRUE(fs::equivalent(scene.robot, dir_ / "cell" / "robots" / "arm.urdf"));
+  EXPECT_EQ(scene.name, "scene");  // no name given: the file's stem
+}
+
+TEST(EvaluationGrid, SpansTheThesisGridWithItsUpperBoundsIncluded) {
+  EvaluationGrid grid;  // the defaults are G of Sect. 3.3.2
+  grid.spacing = 0.05;
+  const Eigen::Vector3i n = grid.counts();
+  // 0.9 / 0.05 + 1 = 19, 1.1 / 0.05 + 1 = 23, 0.75 / 0.05 + 1 = 16.
+  EXPECT_EQ(n, Eigen::Vector3i(19, 23, 16));
+  const auto points = grid.points();
+  ASSERT_EQ(points.size(), 19U * 23U * 16U);
+  EXPECT_TRUE(points.front().isApprox(grid.lower));
+  EXPECT_NEAR((points.back() - grid.upper).norm(), 0.0, 1e-12);
+  for (const auto& p : points) {
+    EXPECT_TRUE((p.array() >= grid.lower.array() - 1e-12).all() && (p.array() <= grid.upper.array() + 1e-9).all());
+  }
+  grid.spacing = 0.01;
+  EXPECT_EQ(grid.counts(), Eigen::Vector3i(91, 111, 76));
+}
+
+TEST(ObstacleGeometry, ContainsPointsInsideAndWithinTheMarginOnly) {
+  Obstacle box;
+  box.size = Eigen::Vector3d(0.2, 0.4, 0.8);
+  box.X_WO.translation() = Eigen::Vector3d(1, 0, 0.4);
+  box.X_WO.linear() = Eigen::AngleAxisd(kPi / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  // Turned by 90 deg the box spans 0.4 m along x and 0.2 m along y.
+  EXPECT_TRUE(obstacleContains(box, Eigen::Vector3d(1.19, 0.0, 0.4)));
+  EXPECT_FALSE(obstacleContains(box, Eigen::Vector3d(1.0, 0.11, 0.4)));
+  EXPECT_TRUE(obstacleContains(box, Eigen::Vector3d(1.0, 0.11, 0.4), 0.02));
+  Obstacle cylinder;
+  cylinder.shape = Obstacle::Shape::kCylinder;
+  cylinder.size = Eigen::Vector3d(0.1, 1.0, 0.0);
+  EXPECT_TRUE(obstacleContains(cylinder, Eigen::Vector3d(0.07, 0.07, 0.49)));
+  EXPECT_FALSE(obstacleContains(cylinder, Eigen::Vector3d(0.08, 0.08, 0.0)));
+  EXPECT_FALSE(obstacleContains(cylinder, Eigen::Vector3d(0.0, 0.0, 0.51)));
+  Obstacle sphere;
+  sphere.shape = Obstacle::Shape::kSphere;
+  sphere.size = Eigen::Vector3d(0.3, 0, 0);
+  EXPECT_TRUE(obstacleContains(sphere, Eigen::Vector3d(0.2, 0.2, 0.0)));
+  EXPECT_FALSE(obstacleContains(sphere, Eigen::Vector3d(0.3, 0.3, 0.0)));
+  Area area;
+  area.radius = 0.1;
+  EXPECT_TRUE(area.contains(Eigen::Vector3d(0.06, 0.06, 0.0)));
+  EXPECT_FALSE(area.contains(Eigen::Vector3d(0.08, 0.08, 0.0)));
+  area.box = Eigen::Vector3d(0.2, 0.2, 0.2);
+  EXPECT_TRUE(area.contains(Eigen::Vector3d(0.09, 0.09, 0.09)));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Refusing broken and hostile files
+
+TEST_F(SceneFileTest, RefusesMalformedYamlNamingTheLine) {
+  const std::string message = refusal("name: x\nobstacles:\n  - {shape: box, size: [1, 2, 3]\n");
+  expectOneLineNamingFile(message, "broken.yaml");
+  EXPECT_NE(message.find("malformed YAML"), std::string::npos) << message;
+  const std::string tab_message = refusal("name: x\n\tdescription: tab\n");
+  expectOneLineNamingFile(tab_message, "broken.yaml");
+}
+
+TEST_F(SceneFileTest, RefusesUnknownKeysNamingKeyAndLine) {
+  const std::string message = refusal("name: x\nobstacles:\n  - shape: box\n    size: [1, 1, 1]\n    posiiton: [0, 0, 0]\n");
+  expectOneLineNamingFile(message, "broken.yaml:5");
+  EXPECT_NE(message.find("posiiton"), std::string::npos) << message;
+  EXPECT_NE(message.find("obstacles[0]"), std::string::npos) << message;
+  expectOneLineNamingFile(refusal("name: x\nobstacle: []\n"), "broken.yaml:2");
+  expectOneLineNamingFile(refusal("grid: {lower: [0, 0, 0], upper: [1, 1, 1], step: 0.1}\n"), "broken.yaml:1");
+  // A key given twice is as suspicious as a misspelt one.
+  expectOneLineNamingFile(refusal("name: x\nname: y\n"), "broken.yaml:2");
+}
+
+TEST_F(SceneFileTest, RefusesValuesOfTheWrongType) {
+  for (const char* text : {
+           "name: [a, b]\n",
+           "obstacles: {shape: box}\n",
+           "obstacles:\n  - {shape: box, size: 0.2}\n",
+           "obstacles:\n  - {shape: box, size: [0.2, 0.2]}\n",
+           "obstacles:\n  - {shape: box, size: [0.2, 0.2, abc]}\n",
+           "obstacles:\n  - {shape: box, size: [0.2, 0.2, '0.2']}\n",
+           "obstacles:\n  - {shape: box, size: [0.2, 0.2, 0.2x]}\n",
+           "obstacles:\n  - {shape: pyramid, size: [1, 1, 1]}\n",
+           "obstacles:\n  - {shape: box, radius: 1, size: [1, 1, 1]}\n",
+           "obstacles:\n  - {size: [1, 1, 1]}\n",
+           "obstacles:\n  - {shape: cylinder, radius: 0.1}\n",
+           "obstacles:\n  - {shape: box, size: [1, 1, 1], rotation: {rpy: [0, 0, 0], quaternion: [1, 0, 0, 0]}}\n",
+           "obstacles:\n  - {shape: box, size: [1, 1, 1], rotation: {quaternion: [1, 1, 0, 0]}}\n",
+           "obstacles:\n  - {shape: box, size: [1, 1, 1], rotation: {rpy: [0, 0, 90], unit: grad}}\n",
+           "obstacles:\n  - {shape: box, size: [1, 1, 1], colour: [0, 2, 0]}\n",
+           "obstacles:\n  - {shape: box, size: [1, 1, 1], colour: [0, 0, 0], color: [0, 0, 0]}\n",
+           "obstacles:\n  - {name: a, shape: sphere, radius: 1}\n  - {name: a, shape: sphere, radius: 1}\n",
+           "home_posture: 0.5\n",
+           "home_posture: {unit: deg}\n",
+           "home_posture: []\n",
+           "training_areas:\n  - {radius: 0.1}\n",
+           "training_areas:\n  - {centre: [0, 0, 0], center: [0, 0, 0]}\n",
+           "trajectories:\n  - {waypoints: [[0, 0, 0]]}\n",
+           "parameters: {'bad name': 1}\n",
+           "parameters: {sim.gravity: [1]}\n",
+           "version: 2\n",
+           "robot: no_such_robot\n",
+           "grid: {lower: [0, 0, 1], upper: [1, 1, 0]}\n",
+       }) {
+    SCOPED_TRACE(text);
+    expectOneLineNamingFile(refusal(text), "broken.yaml");
+  }
+}
+
+TEST_F(SceneFileTest, RefusesNonFiniteNumbers) {
+  for (const char* value : {".nan", ".NaN", ".inf", "-.inf", "nan", "inf", "1e999", "-1e400"}) {
+    SCOPED_TRACE(value);
+    const std::string message = refusal(std::string("targets:\n  - [0, 0, ") + value + "]\n");
+    expectOneLineNamingFile(message, "broken.yaml:2");
+    EXPECT_NE(message.find("finite"), std::string::npos) << message;
+  }
+  expectOneLineNamingFile(refusal("parameters: {sim.gravity: .nan}\n"), "broken.yaml:1");
+  expectOneLineNamingFile(refusal("home_posture: [0, .inf]\n"), "broken.yaml:1");
+}
+
+TEST_F(SceneFileTest, RefusesNegativeZeroAndAbsurdSizes) {
+  for (const char* text : {
+           "obstacles:\n  - {shape: box, size: [0.2, -0.2, 0.2]}\n",
+           "obstacles:\n  - {shape: box, size: [0.2, 0, 0.2]}\n",
+           "obstacles:\n  - {shape: sphere, radius: -1}\n",
+           "obstacles:\n  - {shape: cylinder, radius: 0.1, length: -0.5}\n",
+           "obstacles:\n  - {shape: box, size: [1e6, 1, 1]}\n",
+           "obstacles:\n  - {shape: box, size: [1, 1, 1], position: [0, 5000, 0]}\n",
+           "training_areas:\n  - {centre: [0, 0, 0], radius: -0.1}\n",
+           "training_areas:\n  - {centre: [0, 0, 0], box: [0.1, -0.1, 0.1]}\n",
+           "grid: {spacing: 0}\n",
+           "grid: {spacing: 0.0001}\n",  // 10^10 points
+       }) {
+    SCOPED_TRACE(text);
+    expectOneLineNamingFile(refusal(text), "broken.yaml");
+  }
+}
+
+TEST_F(SceneFileTest, RefusesMissingMeshFiles) {
+  const std::string message = refusal("obstacles:\n  - {shape: mesh, file: meshes/nowhere.stl}\n");
+  expectOneLineNamingFile(message, "broken.yaml:2");
+  EXPECT_NE(message.find("nowhere.stl"), std::string::npos) << message;
+  fs::create_directories(dir_ / "folder.stl");
+  expectOneLineNamingFile(refusal("obstacles:\n  - {shape: mesh, file: folder.stl}\n"), "broken.yaml");
+}
+
+TEST_F(SceneFileTest, RefusesEmptyAndBinaryFiles) {
+  expectOneLineNamingFile(refusal(""), "broken.yaml");
+  expectOneLineNamingFile(refusal("# only a comment\n"), "broken.yaml");
+  expectOneLineNamingFile(refusal("just a string\n"), "broken.yaml");
+  expectOneLineNamingFile(refusal("- a\n- list\n"), "broken.yaml");
+  expectOneLineNamingFile(refusal("name: a\n---\nname: b\n"), "broken.yaml");
+  std::string garbage(4096, '\0');
+  std::mt19937 rng(3);
+  for (auto& c : garbage) c = static_cast<char>(rng() & 0xFFU);
+  const std::string message = refusal(garbage, "garbage.yaml");
+  expectOneLineNamingFile(message, "garbage.yaml");
+  EXPECT_NE(message.find("not a text file"), std::string::npos) << message;
+  expectOneLineNamingFile(refusal("name: \xC3\x28\n"), "broken.yaml");  // invalid UTF-8
+}
+
+TEST_F(SceneFileTest, RefusesHugeCountsQuickly) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string many = "obstacles:\n";
+  for (int i = 0; i < 100001; ++i) many += "- {shape: sphere, radius: 1}\n";
+  const std::string message = refusal(many);
+  expectOneLineNamingFile(message, "broken.yaml");
+  EXPECT_NE(message.find("too many"), std::string::npos) << message;
+
+  // 100 000 obstacles is the limit, not a refusal.
+  many = "obstacles:\n";
+  for (int i = 0; i < 100000; ++i) many += "- {shape: sphere, radius: 1}\n";
+  EXPECT_EQ(loadSceneFile(write("many.yaml", many)).obstacles.size(), 100000U);
+
+  // Aliases repeat one list of 10 001 waypoints in 10 000 trajectories: 400 kB of text that
+  // would expand to 10^8 waypoints.
+  std::string bomb = "trajectories:\n  - {name: t0, waypoints: &p [";
+  for (int i = 0; i < 10000; ++i) bomb += "[0, 0, 0], ";
+  bomb += "[0, 0, 0]]}\n";
+  for (int i = 1; i < 10000; ++i) bomb += "  - {name: t" + std::to_string(i) + ", waypoints: *p}\n";
+  const std::string bomb_message = refusal(bomb);
+  expectOneLineNamingFile(bomb_message, "broken.yaml");
+  EXPECT_NE(bomb_message.find("waypoints"), std::string::npos) << bomb_message;
+  // More YAML values than any scene needs are refused while parsing, before they take memory.
+  std::string values = "targets: [";
+  values.reserve(6'100'000);
+  for (int i = 0; i < 3'000'000; ++i) values += "0,";
+  values += "0]\n";
+  const std::string values_message = refusal(values);
+  expectOneLineNamingFile(values_message, "broken.yaml:1");
+  EXPECT_NE(values_message.find("YAML values"), std::string::npos) << values_message;
+
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(seconds, 40.0);
+}
+
+TEST_F(SceneFileTest, RefusesDeeplyNestedInputWithoutCrashing) {
+  const std::string open(100000, '[');
+  expectOneLineNamingFile(refusal("targets: " + open + "\n"), "broken.yaml");
+  expectOneLineNamingFile(refusal("targets: " + open + std::string(100000, ']') + "\n"), "broken.yaml");
+  std::string maps;
+  for (int i = 0; i < 20000; ++i) maps += "{a: ";
+  expectOneLineNamingFile(refusal("grid: " + maps + "\n"), "broken.yaml");
+}
+
+TEST_F(SceneFileTest, RefusesFilesLargerThan16Megabytes) {
+  const fs::path file = dir_ / "large.yaml";
+  { std::ofstream(file) << "name: large\n"; }
+  fs::resize_file(file, 16U * 1024U * 1024U + 1U);  // sparse: costs no disk space
+  try {
+    loadSceneFile(file);
+    ADD_FAILURE() << "a 16 MB + 1 byte file was accepted";
+  } catch (const InputError& error) {
+    expectOneLineNamingFile(error.what(), "large.yaml");
+    EXPECT_NE(std::string(error.what()).find("16 MB"), std::string::npos) << error.what();
+  }
+}
+
+TEST_F(SceneFileTest, RefusesMissingFilesAndUnknownSceneNames) {
+  EXPECT_THROW(loadSceneFile(dir_ / "absent.yaml"), InputError);
+  EXPECT_THROW(loadSceneFile(dir_), InputError);
+  try {
+    loadScene("setup_Z");
+    ADD_FAILURE() << "an unknown scene name was accepted";
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("setup_Z"), std::string::npos);
+    EXPECT_NE(message.find("setup_A"), std::string::npos) << "the message lists the built-in scenes";
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Built-in scenes
+
+TEST(BuiltinScenes, AllLoadUnderTheirNames) {
+  for (const auto& name : builtinSceneNames()) {
+    SCOPED_TRACE(name);
+    const Scene scene = loadScene(name);
+    EXPECT_EQ(scene.name, name);
+    EXPECT_FALSE(scene.description.empty());
+    EXPECT_TRUE(fs::equivalent(scene.source, resourceDir() / "scenes" / (name + ".yaml")));
+    // Writing and reading back a shipped scene loses nothing.
+    expectScenesEqual(scene, parseScene(sceneToYaml(scene), scene.source.parent_path(), name));
+  }
+}
+
+TEST(BuiltinScenes, NoNameAndEmptyAreTheSameEmptyScene) {
+  const Scene none = loadScene("");
+  const Scene empty = loadScene("empty");
+  EXPECT_TRUE(none.source.empty());
+  expectScenesEqual(none, empty);
+  EXPECT_TRUE(empty.obstacles.empty());
+  EXPECT_TRUE(empty.training_areas.empty());
+}
+
+// What the thesis fixes about each setup (Sect. 3.3, 4.3, 8.2, App. B).
+TEST(BuiltinScenes, HoldWhatTheThesisStates) {
+  for (const char* name : {"setup_A", "setup_B", "setup_C", "setup_D"}) {
+    SCOPED_TRACE(name);
+    const Scene scene = loadScene(name);
+    ASSERT_GE(scene.training_areas.size(), 2U);
+    // Left and right training areas about 0.74 m apart (Sect. 3.3.1).
+    EXPECT_NEAR((scene.training_areas[0].p_WA - scene.training_areas[1].p_WA).norm(), 0.74, 0.03);
+    // Tab. 3.2: 100 straight trajectories, 25 left, 25 right, 50 in the interpolation area, each
+    // inside the area it evaluates.
+    std::map<std::string, int> per_group;
+    const Area* interpolation = nullptr;
+    for (const auto& area : scene.working_areas) {
+      if (area.name == "interpolation") interpolation = &area;
+    }
+    ASSERT_NE(interpolation, nullptr);
+    for (const auto& trajectory : scene.trajectories) {
+      ++per_group[trajectory.group];
+      EXPECT_EQ(trajectory.waypoints.size(), 2U);
+      const Area& area = trajectory.group == "left"    ? scene.training_areas[0]
+                         : trajectory.group == "right" ? scene.training_areas[1]
+                                                       : *interpolation;
+      for (const auto& p : trajectory.waypoints) EXPECT_TRUE(area.contains(p)) << trajectory.name;
+    }
+    EXPECT_EQ(scene.trajectories.size(), 100U);
+    EXPECT_EQ(per_group["left"], 25);
+    EXPECT_EQ(per_group["right"], 25);
+    EXPECT_EQ(per_group["interpolation"], 50);
+  }
+  // D* adds a third area in the former interpolation area.
+  const Scene d = loadScene("setup_D");
+  ASSERT_EQ(d.training_areas.size(), 3U);
+  EXPECT_TRUE(d.working_areas.front().contains(d.training_areas[2].p_WA));
+
+  const Scene one = loadScene("setup_I");
+  const Scene two = loadScene("setup_II");
+  EXPECT_EQ(one.training_areas.size(), 12U);  // sweeps 1, 2, 4, 6, 12 (Tab. 3.3)
+  EXPECT_EQ(two.training_areas.size(), 21U);  // sweeps 1, 2, 4, 6, 21
+  for (const Scene* scene : {&one, &two}) {
+    ASSERT_TRUE(scene->grid.has_value());
+    EXPECT_TRUE(scene->grid->lower.isApprox(Eigen::Vector3d(-0.9, -0.55, 0.05)));
+    EXPECT_TRUE(scene->grid->upper.isApprox(Eigen::Vector3d(0.0, 0.55, 0.8)));
+    EXPECT_DOUBLE_EQ(scene->grid->tolerance, 0.01);
+  }
+  // Setup I: one 0.2 x 0.2 x 0.8 m box and a board at z = 0.55 m.
+  int tall_boxes = 0;
+  bool board = false;
+  for (const auto& o : one.obstacles) {
+    if (o.size.isApprox(Eigen::Vector3d(0.2, 0.2, 0.8))) ++tall_boxes;
+    if (std::abs(o.X_WO.translation().z() - 0.55) < 0.011 && o.size.z() < 0.05) board = true;
+  }
+  EXPECT_EQ(tall_boxes, 1);
+  EXPECT_TRUE(board);
+  // Setup II: two such boxes, one on each side, leaving about 5 cm beside the elbow housing
+  // (radius 0.065 m) on each side.
+  ASSERT_EQ(two.obstacles.size(), 2U);
+  double gap = 0.0;
+  for (const auto& o : two.obstacles) {
+    EXPECT_TRUE(o.size.isApprox(Eigen::Vector3d(0.2, 0.2, 0.8)));
+    gap += std::abs(o.X_WO.translation().y()) - 0.5 * o.size.y();
+  }
+  EXPECT_LT(two.obstacles[0].X_WO.translation().y() * two.obstacles[1].X_WO.translation().y(), 0.0);
+  EXPECT_NEAR(gap - 2 * 0.065, 2 * 0.05, 0.02);
+
+  const Scene harting = loadScene("harting");
+  EXPECT_EQ(harting.training_areas.size(), 2U);
+  const auto parcours = std::find_if(harting.trajectories.begin(), harting.trajectories.end(),
+                                     [](const Trajectory& t) { return t.name == "parcours"; });
+  ASSERT_NE(parcours, harting.trajectories.end());
+  EXPECT_GE(parcours->waypoints.size(), 3U);
+
+  const Scene arm9 = loadScene("arm9_areas");
+  EXPECT_EQ(arm9.robot, "arm9");
+  ASSERT_EQ(arm9.working_areas.size(), 3U);
+  EXPECT_EQ(arm9.working_areas[0].name, "A1");
+  EXPECT_EQ(arm9.working_areas[1].name, "A2");
+  EXPECT_EQ(arm9.working_areas[2].name, "A3");
+  EXPECT_EQ(arm9.training_areas.size(), 8U);  // K = 8 (Sect. 8.3)
+}
+
+// Loads a built-in robot; skips the calling test while its meshes have not been generated.
+std::optional<RobotModel> loadRobotOrNull(const std::string& robot, std::string& why) {
+  try {
+    return RobotModel::fromUrdfFile(resolveRobotPath(robot));
+  } catch (const InputError& error) {
+    why = error.what();
+    if (why.find("mesh") == std::string::npos) throw;
+    return std::nullopt;
+  }
+}
+
+// Points along the kinematic skeleton (joint origins joined by straight lines, up to the tip)
+// at most 1 cm apart. The links' surfaces lie at least 4.5 cm (the hand's radius) around it.
+std::vector<Eigen::Vector3d> skeleton(const Kinematics& kinematics, int first_body) {
+  std::vector<Eigen::Vector3d> corners;
+  for (int b = first_body; b <= kinematics.model().dof(); ++b) corners.push_back(kinematics.X_WB(b).translation());
+  corners.push_back(kinematics.p_WT());
+  std::vector<Eigen::Vector3d> points;
+  for (std::size_t i = 0; i + 1 < corners.size(); ++i) {
+    const int steps = std::max(1, static_cast<int>(std::ceil((corners[i + 1] - corners[i]).norm() / 0.01)));
+    for (int k = 0; k <= steps; ++k) points.push_back(corners[i] + (corners[i + 1] - corners[i]) * (static_cast<double>(k) / steps));
+  }
+  return points;
+}
+
+// A posture must lie within the URDF's limits and keep the arm's axis 3 cm clear of every
+// obstacle and above the table (z = 0), beyond the shoulder.
+void expectPostureClear(const RobotModel& model, const Scene& scene, const Eigen::VectorXd& q,
+                        const std::string& what) {
+  ASSERT_EQ(q.size(), model.dof()) << what;
+  EXPECT_TRUE((q.array() >= model.lowerLimits().array()).all() && (q.array() <= model.upperLimits().array()).all())
+      << what << ": outside the joint limits: " << q.transpose();
+  Kinematics kinematics(model);
+  kinematics.update(q);
+  for (const auto& p : skeleton(kinematics, 2)) {
+    EXPECT_GT(p.z(), 0.03) << what << " reaches into the table at " << p.transpose();
+    for (const auto& obstacle : scene.obstacles) {
+      EXPECT_FALSE(obstacleContains(obstacle, p, 0.03)) << what << " runs into " << obstacle.name << " at " << p.transpose();
+    }
+  }
+}
+
+TEST(BuiltinScenes, AreGeometricallySensibleForTheirRobot) {
+  for (const auto& name : builtinSceneNames()) {
+    SCOPED_TRACE(name);
+    const Scene scene = loadScene(name);
+    std::string why;
+    const auto model = loadRobotOrNull(scene.robot, why);
+    if (!model) GTEST_SKIP() << "robot meshes not generated yet: " << why;
+    Kinematics kinematics(*model);
+    kinematics.update(Eigen::VectorXd::Zero(model->dof()));
+    // Joint 2 (the shoulder) is the first joint off the vertical axis; the arm's reach is the
+    // stretched length from there to the tip, which q = 0 (straight up) realizes for the LWR
+    // IV and its 9-DoF variant.
+    const Eigen::Vector3d p_WShoulder = kinematics.X_WB(2).translation();
+    const double reach = (kinematics.p_WT() - p_WShoulder).norm();
+    ASSERT_GT(reach, 0.5);
+
+    // No obstacle touches the robot's base: a 9 cm cylinder (base radius 8 cm plus collision
+    // margin) up to the shoulder.
+    for (double z = 0.0; z <= p_WShoulder.z(); z += 0.01) {
+      for (const auto& obstacle : scene.obstacles) {
+        EXPECT_FALSE(obstacleContains(obstacle, Eigen::Vector3d(0, 0, z), 0.09)) << obstacle.name << " at the base";
+      }
+    }
+    // Every area centre lies outside every obstacle and within reach, with some room.
+    for (const auto* areas : {&scene.training_areas, &scene.working_areas}) {
+      for (const auto& area : *areas) {
+        for (const auto& obstacle : scene.obstacles) {
+          EXPECT_FALSE(obstacleContains(obstacle, area.p_WA, 0.03)) << area.name << " inside " << obstacle.name;
+        }
+        EXPECT_LT((area.p_WA - p_WShoulder).norm(), reach - 0.05) << area.name << " out of reach";
+        EXPECT_GT(area.p_WA.z(), 0.0) << area.name << " below the table";
+        if (area.posture) {
+          expectPostureClear(*model, scene, *area.posture, area.name + "'s posture");
+          // The suggested posture puts the flange into its area.
+          kinematics.update(*area.posture);
+          EXPECT_LE((kinematics.p_WT() - area.p_WA).norm(), area.radius) << area.name;
+        }
+      }
+    }
+    if (scene.home_posture) expectPostureClear(*model, scene, *scene.home_posture, "home posture");
+    for (const auto& trajectory : scene.trajectories) {
+      for (const auto& p : trajectory.waypoints) {
+        EXPECT_LT((p - p_WShoulder).norm(), reach - 0.05) << trajectory.name;
+        for (const auto& obstacle : scene.obstacles) {
+          EXPECT_FALSE(obstacleContains(obstacle, p, 0.02)) << trajectory.name << " runs into " << obstacle.name;
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace flexirob::robot
