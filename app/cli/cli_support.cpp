@@ -82,6 +82,7 @@ int runCli(int argc, const char* const* argv) {
   registerLearnCommands(app, runner);
   registerItmCommands(app, runner);
   registerBenchCommand(app, runner);
+  registerReachCommand(app, runner);
   try {
     app.parse(argc, argv);
     if (!runner.hasAction()) throw InputError("no command given; see --help");

@@ -31,6 +31,7 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner);   // render
 void registerLearnCommands(CLI::App& app, CommandRunner& runner);   // learn fit|predict
 void registerItmCommands(CLI::App& app, CommandRunner& runner);     // itm build|path
 void registerBenchCommand(CLI::App& app, CommandRunner& runner);    // bench
+void registerReachCommand(CLI::App& app, CommandRunner& runner);    // reach
 
 /// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.
 /// Returns the process exit code (0 success, 2 bad input).

@@ -176,3 +176,48 @@ TEST(Simulation, ReleasedArmComesToRestUnderLowStiffness) {
 
 }  // namespace
 }  // namespace flexirob::robot
+
+// Reaching in simulation (the `reach` command's engine).
+#include "robot/sim/reach.hpp"
+
+namespace flexirob::robot {
+namespace {
+
+TEST(Reach, ConvergesToReachableTargetsWhateverThePosture) {
+  const std::vector<ParameterDeclaration> declarations = reachParameters();
+  const ParameterSet parameters(declarations);
+  Eigen::VectorXd start(7), elbow_up(7), elbow_turned(7);
+  start << 0.0, 0.5, 0.0, -1.2, 0.0, 0.6, 0.0;
+  elbow_up << 0.5, 0.6, -1.0, -1.4, 0.3, 0.4, 0.0;
+  elbow_turned << -0.6, 0.4, 1.2, -1.0, -0.5, 0.8, 0.3;
+  for (const Eigen::VectorXd& posture : {start, elbow_up, elbow_turned}) {
+    ReachRequest request;
+    request.start = start;
+    request.posture = posture;
+    request.target = Eigen::Vector3d(-0.45, 0.25, 0.45);
+    const ReachResult result = reach(lwr4(), nullptr, parameters, request);
+    EXPECT_EQ(result.status, "reached");
+    EXPECT_LE(result.error_m, 1e-4);
+    EXPECT_LE((tipPose(lwr4(), result.q).translation() - request.target).norm(), 1e-4);
+    EXPECT_EQ(result.rejected_commands, 0U);
+    EXPECT_EQ(result.collisions, 0U);
+  }
+}
+
+TEST(Reach, ReportsATargetOutOfTheWorkspaceWithTheBestError) {
+  const std::vector<ParameterDeclaration> declarations = reachParameters();
+  const ParameterSet parameters(declarations);
+  ReachRequest request;
+  request.start = bentPosture();
+  request.target = Eigen::Vector3d(1.5, 0.0, 0.4);  // the arm is 1.18 m long
+  const ReachResult result = reach(lwr4(), nullptr, parameters, request);
+  EXPECT_EQ(result.status, "unreachable");
+  // The closest the arm gets: stretched towards the target from the shoulder at z = 0.3105.
+  const double shoulder_to_target = (request.target - Eigen::Vector3d(0, 0, 0.3105)).norm();
+  EXPECT_NEAR(result.best_error_m, shoulder_to_target - (0.4 + 0.39 + 0.078), 0.02);
+  EXPECT_LT(result.time_s, request.max_time);
+  EXPECT_NEAR(result.error_m, result.best_error_m, 1e-3);
+}
+
+}  // namespace
+}  // namespace flexirob::robot

@@ -1,0 +1,98 @@
+// `reach`: drive the tip of a simulated robot to a target with the hierarchical controller
+// (Eq. 2.11), the null space pulled towards a posture, and report accuracy, collisions and
+// clamps (DESIGN §6).
+#include <cmath>
+#include <memory>
+#include <optional>
+
+#include "app/cli/cli_support.hpp"
+#include "robot/errors.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/scene.hpp"
+#include "robot/sim/reach.hpp"
+
+namespace flexirob::cli {
+namespace {
+
+struct ReachOptions {
+  std::string robot = "lwr4";
+  std::string tip;
+  std::string scene;
+  std::string target;
+  std::string posture;
+  std::string from;
+  double tolerance = 1e-4;
+  double max_time = 30.0;
+};
+
+Json runReach(const ReachOptions& options) {
+  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(options.robot), options.tip);
+  const Eigen::Vector3d target = parseNumberList(options.target, "--target", 3);
+  std::optional<robot::Scene> scene;
+  if (!options.scene.empty()) scene = robot::loadScene(options.scene);
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  if (scene) parameters.applyOverrides(scene->parameters);
+
+  robot::ReachRequest request;
+  request.target = target;
+  if (!options.from.empty()) {
+    request.start = parseNumberList(options.from, "--from", model.dof());
+  } else if (scene && scene->home_posture && scene->home_posture->size() == model.dof()) {
+    request.start = *scene->home_posture;
+  }
+  if (!options.posture.empty()) request.posture = parseNumberList(options.posture, "--posture", model.dof());
+  if (!(options.tolerance > 0.0) || !std::isfinite(options.tolerance)) throw InputError("--tolerance: expected a positive number");
+  if (!(options.max_time > 0.0) || !(options.max_time <= 3600.0)) throw InputError("--max-time: expected a value in (0, 3600] s");
+  request.tolerance = options.tolerance;
+  request.max_time = options.max_time;
+
+  const robot::ReachResult result = robot::reach(model, scene ? &*scene : nullptr, parameters, request);
+  Json events = Json::array();
+  for (const auto& event : result.collision_events) {
+    events.push_back({{"time_s", event.time}, {"link", event.link}, {"other", event.other}, {"self", event.self_collision}});
+  }
+  return {{"robot", model.name()},
+          {"scene", scene ? scene->name : std::string("empty")},
+          {"status", result.status},
+          {"reached", result.status == "reached"},
+          {"error_m", result.error_m},
+          {"best_error_m", result.best_error_m},
+          {"steps", result.steps},
+          {"time_s", result.time_s},
+          {"collisions", result.collisions},
+          {"colliding_steps", result.colliding_steps},
+          {"collision_events", events},
+          {"clamped", result.clamps.total()},
+          {"clamps",
+           {{"position", result.clamps.position},
+            {"velocity", result.clamps.velocity},
+            {"acceleration", result.clamps.acceleration},
+            {"rejected", result.clamps.rejected}}},
+          {"null_space_scaled", result.null_space_scaled},
+          {"torque_saturations", result.torque_saturations},
+          {"rejected_commands", result.rejected_commands},
+          {"target", toJson(target)},
+          {"position", toJson(result.position)},
+          {"q", toJson(result.q)},
+          {"posture_error_rad", result.posture_error_rad}};
+}
+
+}  // namespace
+
+void registerReachCommand(CLI::App& app, CommandRunner& runner) {
+  auto* command = app.add_subcommand("reach", "drive the simulated tip to a target with the hierarchical controller");
+  auto options = std::make_shared<ReachOptions>();
+  command->add_option("--robot", options->robot, "built-in robot (lwr4, arm9) or a URDF file")->capture_default_str();
+  command->add_option("--tip", options->tip, "tip link (default: the last link of the longest serial chain)");
+  command->add_option("--scene", options->scene, "built-in scene name or a scene file (default: empty)");
+  command->add_option("--target", options->target, "tip target x,y,z [m] in the base frame")->required();
+  command->add_option("--posture", options->posture, "null-space posture q1,...,qN [rad] (default: the start)");
+  command->add_option("--from", options->from, "start posture q1,...,qN [rad] (default: the scene's home, else mid-range)");
+  command->add_option("--tolerance", options->tolerance, "task error counted as reached [m]")->capture_default_str();
+  command->add_option("--max-time", options->max_time, "simulated time limit [s]")->capture_default_str();
+  command->callback([&runner, options] { runner.select([options] { return runReach(*options); }); });
+}
+
+}  // namespace flexirob::cli

@@ -1,0 +1,103 @@
+#include "robot/sim/reach.hpp"
+
+#include <cmath>
+
+#include "robot/errors.hpp"
+#include "robot/sim/simulation.hpp"
+
+namespace flexirob::robot {
+
+std::vector<ParameterDeclaration> reachParameters() {
+  std::vector<ParameterDeclaration> all;
+  for (auto declarations : {hierarchicalParameters(), limiterParameters(), simulationParameters()}) {
+    all.insert(all.end(), declarations.begin(), declarations.end());
+  }
+  return all;
+}
+
+ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSet& parameters,
+                  const ReachRequest& request) {
+  if (!request.target.allFinite()) throw InputError("target: expected three finite numbers");
+  const Eigen::VectorXd start = request.start.size() == 0 ? model.midPosture() : request.start;
+  model.checkPosture(start);
+  const Eigen::VectorXd posture = request.posture.size() == 0 ? start : request.posture;
+  model.checkPosture(posture);
+  if (!(request.tolerance > 0.0) || !(request.max_time > 0.0) || !(request.stall_time > 0.0)) {
+    throw InputError("reach: tolerance, max_time and stall_time must be positive");
+  }
+
+  Simulation sim(model, scene, parameters);
+  sim.reset(start);
+  HierarchicalController controller(model, parameters);
+  CommandLimiter limiter(model, parameters, sim.cycleTime());
+  limiter.reset(start);
+
+  // Hierarchical control gains of Tab. A.1: 300 Nm/rad, damping 0.95.
+  JointImpedanceCommand command;
+  command.resize(model.dof());
+  command.stiffness.setConstant(300.0);
+  command.damping.setConstant(0.95);
+  RobotState state;
+  state.resize(model.dof());
+  Eigen::VectorXd qd(model.dof());
+
+  ReachResult result;
+  result.best_error_m = std::numeric_limits<double>::infinity();
+  double progress_error = std::numeric_limits<double>::infinity();  // best reference error at the last progress
+  double progress_time = 0.0;
+  double reached_since = -1.0;
+  const auto max_steps = static_cast<std::uint64_t>(std::ceil(request.max_time / sim.cycleTime()));
+  result.status = "timeout";
+  for (std::uint64_t k = 0; k < max_steps; ++k) {
+    // Eq. 2.11 integrated on the previous command, smoothed and clamped (Sect. 8.1).
+    controller.velocity(limiter.command(), request.target, posture, qd, &limiter);
+    command.q_cmd = limiter.updateVelocity(qd);
+    if (sim.writeCommand(command) != CommandStatus::kAccepted) ++result.rejected_commands;
+    sim.step();
+    sim.readState(state);
+    const double error = (state.p_WT() - request.target).norm();
+    result.best_error_m = std::min(result.best_error_m, error);
+    // Progress of the controller's own reference (its task error at the command).
+    const double reference_error = controller.taskError();
+    if (k == 0 || reference_error < progress_error - std::max(1e-6, 0.01 * progress_error)) {
+      progress_error = reference_error;
+      progress_time = state.time;
+    }
+    const bool at_rest = limiter.velocity().norm() < 1e-3 && state.qd.norm() < 1e-3;
+    if (error <= request.tolerance) {
+      if (reached_since < 0) reached_since = state.time;
+      // Done once the null-space motion has settled too, or the tip has held for a while.
+      if (at_rest || state.time - reached_since > 1.0) {
+        result.status = "reached";
+        break;
+      }
+    } else {
+      reached_since = -1.0;
+      if (reference_error > request.tolerance && state.time - progress_time > request.stall_time) {
+        result.status = "unreachable";
+        break;
+      }
+    }
+  }
+  result.steps = sim.steps();
+  result.time_s = sim.time();
+  result.q = state.q;
+  result.position = state.p_WT();
+  result.error_m = (state.p_WT() - request.target).norm();
+  result.posture_error_rad = (state.q - posture).norm();
+  result.collisions = sim.collisions().events();
+  result.colliding_steps = sim.collisions().collidingSteps();
+  const CollisionWorld& world = *sim.collisionWorld();
+  for (const auto& event : sim.collisions().eventLog()) {
+    if (result.collision_events.size() >= 20) break;
+    result.collision_events.push_back(
+        {event.time, world.bodyName(event.contact.body), world.otherName(event.contact), event.contact.isSelfCollision()});
+  }
+  result.clamps = controller.counters();
+  result.clamps += limiter.counters();
+  result.null_space_scaled = controller.nullSpaceScaled();
+  result.torque_saturations = sim.torqueSaturations();
+  return result;
+}
+
+}  // namespace flexirob::robot
