@@ -83,6 +83,7 @@ int runCli(int argc, const char* const* argv) {
   registerItmCommands(app, runner);
   registerBenchCommand(app, runner);
   registerReachCommand(app, runner);
+  registerFriCommands(app, runner);
   try {
     app.parse(argc, argv);
     if (!runner.hasAction()) throw InputError("no command given; see --help");

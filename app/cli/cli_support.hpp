@@ -32,6 +32,7 @@ void registerLearnCommands(CLI::App& app, CommandRunner& runner);   // learn fit
 void registerItmCommands(CLI::App& app, CommandRunner& runner);     // itm build|path
 void registerBenchCommand(CLI::App& app, CommandRunner& runner);    // bench
 void registerReachCommand(CLI::App& app, CommandRunner& runner);    // reach
+void registerFriCommands(CLI::App& app, CommandRunner& runner);     // fri probe|simulate
 
 /// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.
 /// Returns the process exit code (0 success, 2 bad input).
