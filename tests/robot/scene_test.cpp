@@ -314,6 +314,8 @@ TEST_F(SceneFileTest, ResolvesRelativeMeshAndRobotPathsAgainstTheSceneFolder) {
   EXPECT_TRUE(fs::equivalent(scene.obstacles.at(0).mesh_file, dir_ / "cell" / "parts" / "clamp.obj"));
   EXPECT_TRUE(fs::equivalent(scene.robot, dir_ / "cell" / "robots" / "arm.urdf"));
   EXPECT_EQ(scene.name, "scene");  // no name given: the file's stem
+  // A path that is not a built-in name loads as a file.
+  EXPECT_EQ(loadScene(file.string()).obstacles.size(), 1U);
 }
 
 TEST(EvaluationGrid, SpansTheThesisGridWithItsUpperBoundsIncluded) {
