@@ -672,12 +672,14 @@ std::vector<Eigen::Vector3d> skeleton(const Kinematics& kinematics, int first_bo
   return points;
 }
 
-// A posture must lie within the URDF's limits and keep the arm's axis 3 cm clear of every
-// obstacle and above the table (z = 0), beyond the shoulder.
+// A posture must lie within the URDF's software limits (the ones controllers keep to, inside the
+// hardware limits) and keep the arm's axis 3 cm clear of every obstacle and above the table
+// (z = 0), beyond the shoulder.
 void expectPostureClear(const RobotModel& model, const Scene& scene, const Eigen::VectorXd& q,
                         const std::string& what) {
   ASSERT_EQ(q.size(), model.dof()) << what;
-  EXPECT_TRUE((q.array() >= model.lowerLimits().array()).all() && (q.array() <= model.upperLimits().array()).all())
+  EXPECT_TRUE((q.array() >= model.softLowerLimits().array()).all() &&
+              (q.array() <= model.softUpperLimits().array()).all())
       << what << ": outside the joint limits: " << q.transpose();
   Kinematics kinematics(model);
   kinematics.update(q);
