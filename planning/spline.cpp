@@ -165,11 +165,14 @@ double CubicSplineTrajectory::segmentMaxAcceleration(int segment) const {
 double CubicSplineTrajectory::segmentMaxSpeed(int segment) const {
   const auto& c = coefficients_[static_cast<std::size_t>(segment)];
   const double h = durations_[static_cast<std::size_t>(segment)];
-  const auto v = [&](double tau) -> Eigen::VectorXd { return c.col(1) + tau * (2.0 * c.col(2) + 3.0 * tau * c.col(3)); };
-  const auto a = [&](double tau) -> Eigen::VectorXd { return 2.0 * c.col(2) + 6.0 * tau * c.col(3); };
-  // d|v|^2/dt = 2 v . a: the speed peaks where v . a falls through zero (or at an end).
-  const auto slope = [&](double tau) { return v(tau).dot(a(tau)); };
-  double best = std::max(v(0.0).norm(), v(h).norm());
+  // v(tau) = A + B tau + C tau^2 with A = c1, B = 2 c2, C = 3 c3, so |v|^2 is the quartic
+  // AA + 2AB tau + (BB + 2AC) tau^2 + 2BC tau^3 + CC tau^4, evaluated from five dot products.
+  const Eigen::VectorXd A = c.col(1), B = 2.0 * c.col(2), C = 3.0 * c.col(3);
+  const double k0 = A.dot(A), k1 = 2.0 * A.dot(B), k2 = B.dot(B) + 2.0 * A.dot(C), k3 = 2.0 * B.dot(C), k4 = C.dot(C);
+  const auto speedSquared = [&](double t) { return k0 + t * (k1 + t * (k2 + t * (k3 + t * k4))); };
+  // d|v|^2/dt: the speed peaks where it falls through zero (or at an end).
+  const auto slope = [&](double t) { return k1 + t * (2.0 * k2 + t * (3.0 * k3 + t * 4.0 * k4)); };
+  double best = std::max(speedSquared(0.0), speedSquared(h));
   constexpr int kBrackets = 64;
   double t0 = 0.0, f0 = slope(0.0);
   for (int k = 1; k <= kBrackets; ++k) {
@@ -181,13 +184,13 @@ double CubicSplineTrajectory::segmentMaxSpeed(int segment) const {
         const double mid = 0.5 * (lo + hi);
         (slope(mid) > 0.0 ? lo : hi) = mid;
       }
-      best = std::max(best, v(0.5 * (lo + hi)).norm());
+      best = std::max(best, speedSquared(0.5 * (lo + hi)));
     }
-    best = std::max(best, v(t1).norm());
+    best = std::max(best, speedSquared(t1));
     t0 = t1;
     f0 = f1;
   }
-  return best;
+  return std::sqrt(std::max(best, 0.0));
 }
 
 double CubicSplineTrajectory::maxSpeed() const {

@@ -2,6 +2,7 @@
 // Synthetic tutor streams for the ITM tests: correlated samples in time order, as a person
 // moving the arm produces them.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
 #include <random>
