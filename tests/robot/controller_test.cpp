@@ -237,3 +237,139 @@ TEST(Parameters, RefusesValuesOutsideTheDeclaredRange) {
 
 }  // namespace
 }  // namespace flexirob::robot
+
+// Interaction controllers (Sect. 4.1, 5.1, 6.1, 8.1) on the simulated arm.
+#include "robot/interaction.hpp"
+#include "robot/sim/simulation.hpp"
+
+namespace flexirob::robot {
+namespace {
+
+struct InteractionRig {
+  const RobotModel& model = lwr4();
+  Simulation sim{model, nullptr, ParameterSet(simulationParameters())};
+  std::vector<ParameterDeclaration> declarations = interactionControllerParameters();
+  InteractionController controller{model, ParameterSet(declarations), 1e-3};
+  RobotState state;
+  JointImpedanceCommand command;
+
+  explicit InteractionRig(const Eigen::VectorXd& q0, InteractionMode mode) {
+    sim.reset(q0);
+    sim.readState(state);
+    controller.start(mode, state);
+  }
+  void run(int steps) {
+    for (int k = 0; k < steps; ++k) {
+      controller.update(state, command);
+      ASSERT_EQ(sim.writeCommand(command), CommandStatus::kAccepted);
+      sim.step();
+      sim.readState(state);
+    }
+  }
+};
+
+Eigen::VectorXd restPosture() {
+  Eigen::VectorXd q(7);
+  q << 0.2, 0.7, -0.3, -1.1, 0.4, 0.6, -0.2;
+  return q;
+}
+
+TEST(InteractionControllers, GravityCompensationFollowsTheHandAndStopsWhenReleased) {
+  InteractionRig rig(restPosture(), InteractionMode::kGravityCompensation);
+  EXPECT_EQ(rig.command.stiffness.size(), 0);
+  rig.sim.setHandForce(7, rig.state.p_WT(), Eigen::Vector3d(0.0, 10.0, 0.0));
+  rig.run(1000);
+  EXPECT_DOUBLE_EQ(rig.command.stiffness[0], 20.0);  // Tab. A.1
+  EXPECT_DOUBLE_EQ(rig.command.damping[0], 0.7);
+  const Eigen::Vector3d pushed_to = rig.state.p_WT();
+  EXPECT_GT(pushed_to.y() - tipPose(rig.model, restPosture()).translation().y(), 0.05);
+  rig.sim.clearHandForce();
+  rig.run(3000);
+  // At rest where it was left, not sprung back, and the command sits on the arm.
+  EXPECT_LT(rig.state.qd.norm(), 1e-3);
+  EXPECT_LT((rig.state.q - rig.state.q_cmd).norm(), 1e-3);
+  EXPECT_GT((rig.state.q - restPosture()).norm(), 0.05);
+}
+
+TEST(InteractionControllers, CompliantRecordingSpringsBackToTheFixedPosture) {
+  InteractionRig rig(restPosture(), InteractionMode::kCompliantRecording);
+  rig.controller.setFixedPosture(restPosture());
+  rig.sim.setHandForce(7, rig.state.p_WT(), Eigen::Vector3d(8.0, 0.0, 0.0));
+  rig.run(1000);
+  EXPECT_GT((rig.state.q - restPosture()).norm(), 0.02);  // deflected locally
+  EXPECT_LT((rig.state.q - restPosture()).norm(), 0.5);
+  rig.sim.clearHandForce();
+  rig.run(3000);
+  EXPECT_LT((rig.state.q - restPosture()).cwiseAbs().maxCoeff(), 1e-3);
+}
+
+TEST(InteractionControllers, AssistedGravityCompensationMovesTheTipAndResolvesTheNullSpace) {
+  InteractionRig rig(restPosture(), InteractionMode::kAssistedGravityCompensation);
+  Eigen::VectorXd q_c = restPosture();
+  q_c[0] += 0.5;  // the taught elbow lies elsewhere
+  q_c[2] -= 0.6;
+  FixedPosture map(q_c);
+  rig.controller.setRedundancyMap(&map);
+  const Eigen::Vector3d start = rig.state.p_WT();
+  rig.sim.setHandForce(7, start, Eigen::Vector3d(0.0, 0.0, -10.0));
+  rig.run(1500);
+  rig.sim.clearHandForce();
+  rig.run(4000);
+  // The tutor moved the tip down; released, it stays there.
+  EXPECT_LT(rig.state.p_WT().z(), start.z() - 0.03);
+  EXPECT_LT(rig.state.qd.norm(), 2e-3);
+  // The posture satisfies q_c as far as the null space allows: the null-space part of
+  // (q_c − q) is gone, checked with an SVD-based projector independent of the controller.
+  Kinematics kinematics(rig.model);
+  kinematics.update(rig.state.q);
+  Matrix3Xd J;
+  kinematics.tipPositionJacobian(J);
+  const Eigen::MatrixXd P = Eigen::MatrixXd::Identity(7, 7) - J.completeOrthogonalDecomposition().pseudoInverse() * J;
+  EXPECT_LT((P * (q_c - rig.state.q)).norm(), 0.05);
+  EXPECT_GT((P * (q_c - restPosture())).norm(), 0.3);
+}
+
+TEST(InteractionControllers, AssistanceBlendingFollowsEquationSixTwo) {
+  Eigen::VectorXd q_c = restPosture();
+  q_c[2] += 0.8;
+  FixedPosture map(q_c);
+  for (double c : {0.0, 1.0}) {
+    InteractionRig rig(restPosture(), InteractionMode::kAssistanceBlending);
+    ConstantConfidence confidence(c);
+    rig.controller.setRedundancyMap(&map);
+    rig.controller.setConfidence(&confidence);
+    rig.run(3000);
+    EXPECT_DOUBLE_EQ(rig.controller.alpha(), c);
+    if (c == 0.0) {
+      // α = 0: pure gravity compensation, the untouched arm stays where it is; pushed, it follows.
+      EXPECT_LT((rig.state.q - restPosture()).norm(), 1e-3);
+      rig.sim.setHandForce(7, rig.state.p_WT(), Eigen::Vector3d(0.0, 10.0, 0.0));
+      rig.run(1000);
+      rig.sim.clearHandForce();
+      rig.run(2000);
+      EXPECT_GT(rig.state.p_WT().y() - tipPose(rig.model, restPosture()).translation().y(), 0.03);
+      EXPECT_LT(rig.state.qd.norm(), 2e-3);
+    } else {
+      // α = 1: the null space is pulled to q_c, the tip stays.
+      EXPECT_GT((rig.state.q - restPosture()).norm(), 0.2);
+      EXPECT_LT((rig.state.p_WT() - tipPose(rig.model, restPosture()).translation()).norm(), 2e-3);
+    }
+  }
+}
+
+TEST(InteractionControllers, KeyboardStepsMoveTheTipAndTheNullSpaceSeparately) {
+  InteractionRig rig(restPosture(), InteractionMode::kGravityCompensation);
+  rig.controller.setKeyboardMode(true);
+  const Eigen::Vector3d start = rig.state.p_WT();
+  for (int press = 0; press < 10; ++press) rig.controller.nudgeTask(Eigen::Vector3d(0.005, 0.0, 0.0));
+  rig.run(4000);
+  EXPECT_LT((rig.state.p_WT() - (start + Eigen::Vector3d(0.05, 0, 0))).norm(), 1e-4);
+  const Eigen::VectorXd before = rig.state.q;
+  rig.controller.nudgeJoints(0.4 * Eigen::VectorXd::Unit(7, 0));
+  rig.run(5000);
+  EXPECT_GT((rig.state.q - before).norm(), 0.1);
+  EXPECT_LT((rig.state.p_WT() - (start + Eigen::Vector3d(0.05, 0, 0))).norm(), 1e-4);
+}
+
+}  // namespace
+}  // namespace flexirob::robot

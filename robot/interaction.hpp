@@ -1,0 +1,128 @@
+#pragma once
+// Interaction controllers of the teaching workflow (thesis Sect. 4.1, 5.1, 6.1, 8.1, App. A.3):
+// each turns the measured robot state into a joint impedance command once per 1 ms cycle.
+//
+//   gravity compensation π_q        the commanded posture follows the arm where the tutor
+//                                   pushes it (joint-space admittance: virtual inertia and
+//                                   damping driven by the spring's deflection torque), so the
+//                                   arm moves freely and stops when released (Sect. 4.1);
+//   compliant recording π_rec       q_cmd = q_fixed: the arm springs back (Sect. 4.1);
+//   hierarchical control            q_cmd from Eq. 2.11 towards x_des with q_c(x_des);
+//   assisted gravity compensation   the tip target x_des follows the tip (task-space admittance,
+//                                   Cartesian damping), the null space follows q_c(x_des) (5.1);
+//   assistance blending             q_des (an admittance driven by τ_ext) blended with
+//                                   q_c(x_des) by α = C(x_des), Eq. 6.2, x_des = K_fwd(q_des),
+//                                   fed to the hierarchical controller (Sect. 6.1);
+//   keyboard tele-operation         Δx_des and Δq_des steps fused by the hierarchical
+//                                   controller, as π_q, π_rec or assisted (Sect. 8.1).
+// Stiffness, damping and inertia per mode: Tab. A.1. All commands pass the CommandLimiter.
+// Allocation-free after construction.
+#include <Eigen/Core>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "robot/backend.hpp"
+#include "robot/controllers.hpp"
+#include "robot/parameters.hpp"
+
+namespace flexirob::robot {
+
+enum class InteractionMode {
+  kGravityCompensation,
+  kCompliantRecording,
+  kHierarchicalControl,
+  kAssistedGravityCompensation,
+  kAssistanceBlending,
+};
+
+const char* toString(InteractionMode mode);
+
+/// Tab. A.1: joint stiffness [Nm/rad], normalized damping, and the virtual inertia of the
+/// mode's admittance (joint space [kg m²] or task space [kg]; 0 where the mode has none).
+struct ModeGains {
+  double stiffness;
+  double damping;
+  double inertia;
+};
+ModeGains modeGains(InteractionMode mode);
+
+/// The robot's confidence in its learned map, C(x) ∈ [0, 1] (Eq. 6.1). Must not allocate.
+class ConfidenceMap {
+ public:
+  virtual ~ConfidenceMap() = default;
+  virtual double confidence(const Eigen::Vector3d& p_W) const = 0;
+};
+
+/// C(x) = c everywhere (c = 0 before anything is learned, Sect. 6.1).
+class ConstantConfidence final : public ConfidenceMap {
+ public:
+  explicit ConstantConfidence(double c) : c_(c) {}
+  double confidence(const Eigen::Vector3d&) const override { return c_; }
+
+ private:
+  double c_;
+};
+
+/// Declared parameters of the interaction controllers ("interaction.*"), to be combined with
+/// hierarchicalParameters() and limiterParameters().
+std::span<const ParameterDeclaration> interactionParameters();
+
+/// Everything the interaction controllers read: interaction.*, hierarchical.*, limits.*.
+std::vector<ParameterDeclaration> interactionControllerParameters();
+
+class InteractionController {
+ public:
+  /// parameters must declare interactionControllerParameters(). The map (and confidence) must
+  /// outlive the controller; confidence may be null (C ≡ 0).
+  InteractionController(const RobotModel& model, const ParameterSet& parameters, double cycle_time);
+
+  /// Switches mode and starts it from the measured state (no jump: the command starts at q).
+  void start(InteractionMode mode, const RobotState& state);
+  InteractionMode mode() const { return mode_; }
+
+  void setRedundancyMap(const RedundancyMap* map) { map_ = map; }
+  void setConfidence(const ConfidenceMap* confidence) { confidence_ = confidence; }
+  /// π_rec's posture (and the null-space target of hierarchical control without a map).
+  void setFixedPosture(const Eigen::VectorXd& q_fixed);
+  /// Target of hierarchical control [m, W].
+  void setTaskTarget(const Eigen::Vector3d& p_des) { p_des_ = p_des; }
+
+  /// Keyboard tele-operation (Sect. 8.1): moves the task target by Δx [m] and, in
+  /// gravity compensation, the null-space target by Δq [rad]. Non-finite steps are ignored.
+  void nudgeTask(const Eigen::Vector3d& dx);
+  void nudgeJoints(const Eigen::VectorXd& dq);
+  /// Keyboard mode: the tutor commands x_des and q_c by steps instead of pushing the arm
+  /// (the simulated 9-DoF arm of Sect. 8.1 has no hand to feel).
+  void setKeyboardMode(bool keyboard) { keyboard_ = keyboard; }
+
+  /// One cycle: writes q_cmd, stiffness and damping for the current mode.
+  void update(const RobotState& state, JointImpedanceCommand& command);
+
+  const Eigen::Vector3d& taskTarget() const { return p_des_; }
+  const Eigen::VectorXd& nullSpaceTarget() const { return q_c_; }
+  /// α of the last assistance-blending cycle.
+  double alpha() const { return alpha_; }
+  const CommandLimiter& limiter() const { return limiter_; }
+  const HierarchicalController& hierarchical() const { return controller_; }
+
+ private:
+  const RobotModel* model_;
+  double dt_;
+  double joint_damping_;     // admittance damping [Nms/rad]
+  double cartesian_stiffness_, cartesian_damping_;
+  HierarchicalController controller_;
+  CommandLimiter limiter_;
+  Kinematics kinematics_;
+  const RedundancyMap* map_ = nullptr;
+  const ConfidenceMap* confidence_ = nullptr;
+  InteractionMode mode_ = InteractionMode::kHierarchicalControl;
+  ModeGains gains_{};
+  bool keyboard_ = false;
+  Eigen::VectorXd q_fixed_, q_c_, q_des_, qd_des_, qd_, q_map_;
+  Eigen::Vector3d p_des_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d pd_des_ = Eigen::Vector3d::Zero();
+  double alpha_ = 0.0;
+};
+
+}  // namespace flexirob::robot

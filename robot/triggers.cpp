@@ -1,0 +1,58 @@
+#include "robot/triggers.hpp"
+
+#include <array>
+
+namespace flexirob::robot {
+namespace {
+
+constexpr std::array kTriggerParameters{
+    ParameterDeclaration{"triggers.torque_threshold", 1.5, 0.0, 100.0, "Nm",
+                         "on_affected: max |tau_ext| above this while the robot is still (App. A.3)"},
+    ParameterDeclaration{"triggers.still_velocity", 0.05, 1e-6, 1.0, "rad/s",
+                         "joint speed below which the robot counts as not moving (a hand pressing a "
+                         "stiffly held arm deflects it slowly)"},
+    ParameterDeclaration{"triggers.converged_time", 2.0, 0.0, 60.0, "s",
+                         "on_converged: not moving for this long after on_affected (App. A.3)"},
+};
+
+}  // namespace
+
+std::span<const ParameterDeclaration> triggerParameters() { return kTriggerParameters; }
+
+const char* toString(TriggerKind kind) {
+  return kind == TriggerKind::kOnAffected ? "on_affected" : "on_converged";
+}
+
+InteractionTriggers::InteractionTriggers(const ParameterSet& parameters)
+    : torque_threshold_(parameters.get("triggers.torque_threshold")),
+      still_velocity_(parameters.get("triggers.still_velocity")),
+      converged_time_(parameters.get("triggers.converged_time")) {}
+
+void InteractionTriggers::reset() {
+  affected_ = false;
+  armed_ = true;
+  last_moving_time_ = 0.0;
+}
+
+std::optional<TriggerEvent> InteractionTriggers::update(const RobotState& state) {
+  const bool finite = state.qd.allFinite() && state.tau_ext.allFinite();
+  const bool moving = !finite || (state.qd.size() > 0 && state.qd.cwiseAbs().maxCoeff() > still_velocity_);
+  const bool touched = finite && state.tau_ext.size() > 0 && state.tau_ext.cwiseAbs().maxCoeff() > torque_threshold_;
+  if (moving) last_moving_time_ = state.time;
+  if (!touched) armed_ = true;
+  if (touched && !moving && armed_ && !affected_) {
+    affected_ = true;
+    armed_ = false;
+    last_moving_time_ = state.time;  // stillness is counted from the touch on
+    ++affected_count_;
+    return TriggerEvent{TriggerKind::kOnAffected, state.time};
+  }
+  if (affected_ && !moving && state.time - last_moving_time_ >= converged_time_ - 1e-9) {
+    affected_ = false;
+    ++converged_count_;
+    return TriggerEvent{TriggerKind::kOnConverged, state.time};
+  }
+  return std::nullopt;
+}
+
+}  // namespace flexirob::robot

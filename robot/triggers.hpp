@@ -1,0 +1,48 @@
+#pragma once
+// The physical interaction triggers of App. A.3: `on_affected` fires when max |τ_ext| exceeds
+// 1.5 Nm while the robot is not moving; `on_converged` fires when, after `on_affected`, the
+// robot has not moved for 2 s. Events carry the robot's time stamps. Allocation-free.
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <span>
+
+#include "robot/backend.hpp"
+#include "robot/parameters.hpp"
+
+namespace flexirob::robot {
+
+/// "triggers.*": torque threshold, still velocity, convergence time.
+std::span<const ParameterDeclaration> triggerParameters();
+
+enum class TriggerKind { kOnAffected, kOnConverged };
+const char* toString(TriggerKind kind);
+
+struct TriggerEvent {
+  TriggerKind kind = TriggerKind::kOnAffected;
+  double time = 0.0;  ///< [s] of the state that fired it
+};
+
+class InteractionTriggers {
+ public:
+  explicit InteractionTriggers(const ParameterSet& parameters);
+
+  /// Feeds one measurement; returns the event it fires, if any. "Moving" means some joint
+  /// faster than triggers.still_velocity. After on_affected, the torque must fall below the
+  /// threshold again before on_affected can fire anew (one touch, one event).
+  std::optional<TriggerEvent> update(const RobotState& state);
+  void reset();
+
+  bool affected() const { return affected_; }
+  std::uint64_t count(TriggerKind kind) const { return kind == TriggerKind::kOnAffected ? affected_count_ : converged_count_; }
+
+ private:
+  double torque_threshold_, still_velocity_, converged_time_;
+  bool affected_ = false;
+  bool armed_ = true;  // torque has been below the threshold since the last on_affected
+  double last_moving_time_ = 0.0;
+  std::uint64_t affected_count_ = 0;
+  std::uint64_t converged_count_ = 0;
+};
+
+}  // namespace flexirob::robot
