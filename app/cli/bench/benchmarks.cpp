@@ -9,6 +9,7 @@ void registerAllBenchmarks() {
   // One line per module.
   registerKinematicsBenchmarks();
   registerPlanningBenchmarks();
+  registerRenderBenchmarks();
 }
 
 }  // namespace flexirob::bench

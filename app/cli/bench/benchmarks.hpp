@@ -6,6 +6,7 @@ namespace flexirob::bench {
 
 void registerKinematicsBenchmarks();
 void registerPlanningBenchmarks();
+void registerRenderBenchmarks();
 // Each module adds its register function here and calls it from registerAllBenchmarks().
 
 /// Registers every benchmark of the product once.

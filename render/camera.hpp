@@ -1,0 +1,39 @@
+#pragma once
+// A perspective camera described by what a person would say: where the eye is, what it looks
+// at, which way is up and how wide the view is. Both the offscreen renderer and the GUI turn it
+// into OpenSceneGraph matrices; projectToPixel() computes the same projection with Eigen alone,
+// so tests and tools can find where a world point lands in an image without asking OSG.
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+
+namespace flexirob::render {
+
+struct CameraPose {
+  Eigen::Vector3d eye_W{-2.0, -1.5, 1.2};     ///< eye position in the world frame W [m]
+  Eigen::Vector3d center_W{0.0, 0.0, 0.5};    ///< point looked at, in W [m]
+  Eigen::Vector3d up_W{0.0, 0.0, 1.0};        ///< approximate up direction in W (z up)
+  double fovy_deg = 35.0;                     ///< vertical field of view [degrees]
+};
+
+/// Frames a sphere (centre in W, radius in metres) from the front-left of the robot, slightly
+/// above: the robot faces -x (its workspace, Sect. 3.3.2), so the eye sits at -x, -y, +z of
+/// the centre, far enough that the whole sphere fits the narrower of the two fields of view.
+CameraPose frameSphere(const Eigen::Vector3d& center_W, double radius, double aspect);
+
+/// Frames an axis-aligned box (corners in W, metres) from the same direction as frameSphere,
+/// looking at its centre from the nearest distance at which every corner lies inside the image
+/// with `margin` (a fraction of the image size) to spare.
+CameraPose frameBox(const Eigen::Vector3d& lower_W, const Eigen::Vector3d& upper_W, double aspect,
+                    double margin = 0.05);
+
+/// Pixel coordinates (x right, y down, origin at the top-left corner of the image, pixel
+/// centres at +0.5) of the world point p_W for an image of width x height pixels. Returns
+/// nothing for points behind the eye.
+std::optional<Eigen::Vector2d> projectToPixel(const CameraPose& camera, int width, int height,
+                                              const Eigen::Vector3d& p_W);
+
+/// Parses "ex,ey,ez,cx,cy,cz[,fovy_deg]" (eye and centre in W, metres). Throws InputError.
+CameraPose parseCamera(const std::string& text);
+
+}  // namespace flexirob::render
