@@ -231,6 +231,75 @@ TEST(FriBackend, RejectsCommandsOutsideTheSoftwareLimits) {
   EXPECT_LT((link.controller->stats().q_desired - q).cwiseAbs().maxCoeff(), 1e-6);
 }
 
+TEST(FriBackend, EveryAcceptedCommandKeepsTheLimitsForRandomInput) {
+  Link link(simConfig(5e-3, true), backendConfig(50));
+  ASSERT_TRUE(link.stepUntil([&] { return link.backend->status().link == FriLink::kCommanding; }, 400));
+  const RobotModel& model = lwr4();
+  const double dt = link.backend->cycleTime();
+  Eigen::VectorXd last_sent = link.backend->heldPosture();
+  std::mt19937 random(42);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int accepted = 0;
+  for (int i = 0; i < 200; ++i) {
+    // Steps of up to twice the velocity limit, stiffness and damping partly out of range.
+    Eigen::VectorXd q = last_sent;
+    for (int j = 0; j < 7; ++j) q[j] += 0.8 * noise(random) * model.velocityLimits()[j] * dt;
+    const double stiffness = unit(random) < 0.1 ? -10.0 : 2000.0 * unit(random);
+    const double damping = unit(random) < 0.1 ? 1.2 : unit(random);
+    if (link.backend->writeCommand(impedance(q, stiffness, damping)) == CommandStatus::kAccepted) {
+      ++accepted;
+      // Checked independently: inside the soft limits, no joint faster than its limit.
+      for (int j = 0; j < 7; ++j) {
+        EXPECT_GE(q[j], model.softLowerLimits()[j]);
+        EXPECT_LE(q[j], model.softUpperLimits()[j]);
+        EXPECT_LE(std::abs(q[j] - last_sent[j]), model.velocityLimits()[j] * dt * (1.0 + 1e-6));
+      }
+      EXPECT_GE(stiffness, 0.0);
+      EXPECT_LE(damping, 1.0);
+      last_sent = q;
+    }
+    link.backend->step();
+  }
+  EXPECT_GT(accepted, 20);
+  EXPECT_LT(accepted, 200);
+  link.steps(3);
+  EXPECT_EQ(link.controller->stats().commands_refused, 0U);
+  EXPECT_LT((link.controller->stats().q_desired - last_sent).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+TEST(FriBackend, KeepsOnlyTheNewestMeasurementUnderLossDelayAndReordering) {
+  FriSimulatedControllerConfig sim = simConfig(5e-3, false);
+  sim.loss = 0.05;
+  sim.reorder = 0.2;
+  sim.delay = 2e-3;
+  sim.seed = 11;
+  Link link(sim, backendConfig(50));
+  std::uint16_t last = 0;
+  bool first = true;
+  int backwards = 0;
+  for (int i = 0; i < 150; ++i) {
+    link.backend->step();
+    if (!link.backend->hasMeasurement()) continue;
+    const std::uint16_t seq = link.backend->status().last_measurement_seq;
+    if (!first && fri::sequenceDistance(seq, last) < 0) ++backwards;
+    first = false;
+    last = seq;
+  }
+  const FriSimulatedControllerStats stats = link.controller->stats();
+  const FriStatus& status = link.backend->status();
+  EXPECT_GT(stats.measurements_lost, 0U);
+  EXPECT_GT(stats.measurements_reordered, 0U);
+  EXPECT_EQ(backwards, 0);  // the mirror never steps back in time
+  // Every overtaken measurement arrives after its successor and is dropped (the last pair may
+  // still be in flight).
+  EXPECT_LE(status.counters.out_of_order_dropped, stats.measurements_reordered);
+  EXPECT_GE(status.counters.out_of_order_dropped + 1, stats.measurements_reordered);
+  EXPECT_GE(status.counters.lost_measurements, 1U);
+  EXPECT_GE(status.statistics.latency, 2e-3F);  // the injected delay shows in the KRC's statistics
+  EXPECT_EQ(status.link, FriLink::kMonitoring);
+}
+
 TEST(FriBackend, WatchdogStopsCommandingAfterThreeLostMeasurementsUntilConfirmed) {
   Link link(simConfig(10e-3, true), backendConfig(3));
   ASSERT_TRUE(link.stepUntil([&] { return link.backend->status().link == FriLink::kCommanding; }, 300));
