@@ -57,6 +57,25 @@ KMeansResult kMeans(const Eigen::MatrixXd& points, const Eigen::MatrixXd& initia
   return result;
 }
 
+std::vector<int> inferAreas(const Eigen::MatrixXd& X, double radius) {
+  if (!(radius > 0.0) || !std::isfinite(radius)) throw std::invalid_argument("inferAreas: radius must be > 0");
+  const Eigen::Index rows = std::min<Eigen::Index>(3, X.rows());
+  std::vector<Eigen::Index> leaders;  // first sample of each area
+  std::vector<int> labels(static_cast<std::size_t>(X.cols()));
+  for (Eigen::Index l = 0; l < X.cols(); ++l) {
+    int label = -1;
+    for (std::size_t k = 0; k < leaders.size() && label < 0; ++k) {
+      if ((X.col(l).head(rows) - X.col(leaders[k]).head(rows)).norm() <= radius) label = static_cast<int>(k);
+    }
+    if (label < 0) {
+      label = static_cast<int>(leaders.size());
+      leaders.push_back(l);
+    }
+    labels[static_cast<std::size_t>(l)] = label;
+  }
+  return labels;
+}
+
 Eigen::MatrixXd pairwiseDistances(const Eigen::MatrixXd& points) {
   const Eigen::Index L = points.cols();
   Eigen::MatrixXd distances(L, L);

@@ -19,6 +19,12 @@ struct KMeansResult {
 /// keeps its previous centre.
 KMeansResult kMeans(const Eigen::MatrixXd& points, const Eigen::MatrixXd& initial_centres, int max_iterations = 100);
 
+/// Groups samples into training areas when the data carries no area labels ("leader"
+/// clustering in sample order): a sample joins the first area whose first sample lies within
+/// `radius` (Euclidean, over the first min(3, D) rows: positions [m]), else it starts a new
+/// area. Returns one label per column of X (D x L), 0, 1, ... in order of first appearance.
+std::vector<int> inferAreas(const Eigen::MatrixXd& X, double radius);
+
 /// Euclidean distances between the columns of `points` (D x L), L x L.
 Eigen::MatrixXd pairwiseDistances(const Eigen::MatrixXd& points);
 

@@ -1,6 +1,7 @@
 #include "learning/elm.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -167,9 +168,28 @@ void Elm::fit(const TrainingSet& data, const InputNormalization& normalization, 
   requireData(data, input_dim_, output_dim_, "ELM fit");
   cancel.throwIfCancelled();
   RandomFeatures features(input_dim_, params_, normalization);
-  const Eigen::MatrixXd H = features.computeColumns(data.X);
-  cancel.throwIfCancelled();
-  Eigen::MatrixXd W_out = ridgeReadout(H, data.Y, params_.epsilon);
+  const Eigen::Index R = params_.hidden;
+  const Eigen::Index L = data.size();
+  Eigen::MatrixXd W_out;
+  if (L < R) {
+    W_out = ridgeReadout(features.computeColumns(data.X), data.Y, params_.epsilon);
+  } else {
+    // Eq. 3.13 with H Hᵀ and H Yᵀ accumulated over blocks of samples: memory stays O(R²)
+    // however long the recording, and cancellation is polled between blocks.
+    constexpr Eigen::Index kBlock = 2048;
+    Eigen::MatrixXd A = Eigen::MatrixXd::Identity(R, R) * params_.epsilon;
+    Eigen::MatrixXd HYt = Eigen::MatrixXd::Zero(R, output_dim_);
+    for (Eigen::Index begin = 0; begin < L; begin += kBlock) {
+      cancel.throwIfCancelled();
+      const Eigen::Index count = std::min(kBlock, L - begin);
+      const Eigen::MatrixXd H = features.computeColumns(data.X.middleCols(begin, count));
+      A.selfadjointView<Eigen::Lower>().rankUpdate(H);
+      HYt.noalias() += H * data.Y.middleCols(begin, count).transpose();
+    }
+    cancel.throwIfCancelled();
+    const Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> solver(A);
+    W_out = solver.solve(HYt).transpose();
+  }
   if (!W_out.allFinite()) throw std::runtime_error("ELM fit: the ridge system is numerically singular; increase epsilon");
   features_ = std::move(features);
   W_out_ = std::move(W_out);

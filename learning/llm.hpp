@@ -21,7 +21,7 @@ double thalesWidth(const Eigen::MatrixXd& centres);
 struct LlmParams {
   double eta = 0.1;           ///< learning rate η of Eq. 3.19 (thesis default)
   int max_epochs = 1000;      ///< N_E, as for the BPDC in Sect. 3.3.1
-  double tolerance = 1e-4;    ///< relative MSE improvement that counts as progress
+  double tolerance = 1e-3;    ///< relative MSE improvement that counts as progress
   int patience = 10;          ///< epochs without progress before stopping
   double target_mse = 1e-10;  ///< [rad²] stop as soon as the fit is this good
   std::uint64_t seed = 1;     ///< presentation order of the samples

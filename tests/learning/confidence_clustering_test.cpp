@@ -141,6 +141,17 @@ TEST(KMeans, KeepsTheCentreOfAClusterThatGetsNoPoints) {
   EXPECT_THROW(kMeans(points, Eigen::MatrixXd::Zero(2, 2)), std::invalid_argument);
 }
 
+TEST(InferAreas, GroupsSamplesAroundTheFirstSampleOfEachArea) {
+  // Two areas visited alternately; a third far away; a sample just outside the radius of the
+  // first area's leader starts its own area.
+  Eigen::MatrixXd X(3, 6);
+  X << 0.0, 1.0, 0.05, 1.04, 5.0, 0.16,  //
+      0.0, 0.0, 0.0, 0.0, 0.0, 0.0,      //
+      0.0, 0.0, 0.0, 0.0, 0.0, 0.0;
+  EXPECT_EQ(inferAreas(X, 0.15), (std::vector<int>{0, 1, 0, 1, 2, 3}));
+  EXPECT_THROW(inferAreas(X, 0.0), std::invalid_argument);
+}
+
 TEST(Mds, RecoversPairwiseDistancesOfPlanarPointsEmbeddedInSixDimensions) {
   UniformRandom random(3);
   Eigen::MatrixXd planar(2, 25);

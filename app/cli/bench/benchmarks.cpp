@@ -8,6 +8,7 @@ void registerAllBenchmarks() {
   registered = true;
   // One line per module.
   registerKinematicsBenchmarks();
+  registerLearningBenchmarks();
   registerPlanningBenchmarks();
   registerRenderBenchmarks();
 }

@@ -5,6 +5,7 @@
 namespace flexirob::bench {
 
 void registerKinematicsBenchmarks();
+void registerLearningBenchmarks();
 void registerPlanningBenchmarks();
 void registerRenderBenchmarks();
 // Each module adds its register function here and calls it from registerAllBenchmarks().
