@@ -209,8 +209,9 @@ class SessionRecorder {
   RecorderStatus status() const;
   const std::filesystem::path& file() const { return file_; }
 
-  /// Writes a complete copy of the recording (file or in-memory) to `target` (SQLite online
-  /// backup). Use it after a disk failure to keep the session. Throws InputError on failure.
+  /// Closes the recorder, then writes a complete copy of the recording (file or in-memory) to
+  /// `target` (SQLite online backup). Use it after a disk failure to keep the session.
+  /// Throws InputError on failure.
   void saveCopy(const std::filesystem::path& target);
 
  private:
