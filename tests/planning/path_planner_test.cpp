@@ -91,5 +91,25 @@ TEST(PathPlanner, PoseGraphAcceptsPositionOnlyQueries) {
   EXPECT_EQ(path.orientations.col(3), Eigen::Vector4d(0, 0, 0, 1));
 }
 
+TEST(PathPlanner, PlansBetweenAnyTwoSamplesWhileTheMapGrows) {
+  // Any-time use: after every 200 samples of a random walk, a path from the first sample's place
+  // to the latest one exists and follows edges that respect the joint criterion.
+  const auto stream = testing::randomWalk(Eigen::Vector3d(-0.6, -0.6, 0.1), Eigen::Vector3d(0.6, 0.6, 0.9), 4000, 0.005, 7, 21);
+  Itm itm(ItmParameters{}, 7);
+  int plans = 0;
+  for (std::size_t k = 0; k < stream.size(); ++k) {
+    itm.insert(stream[k].x, stream[k].q);
+    if (k % 200 != 199) continue;
+    const PlannedPath path = planPath(itm, stream.front().x, stream[k].x);
+    ASSERT_TRUE(path.found) << "after " << k + 1 << " samples";
+    ++plans;
+    for (std::size_t i = 1; i < path.nodes.size(); ++i) {
+      ASSERT_TRUE(itm.hasEdge(path.nodes[i - 1], path.nodes[i]));
+      EXPECT_LT(itm.jointDistance(path.nodes[i - 1], path.nodes[i]), 2.5);
+    }
+  }
+  EXPECT_EQ(plans, 20);
+}
+
 }  // namespace
 }  // namespace flexirob::planning
