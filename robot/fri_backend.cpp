@@ -201,8 +201,10 @@ bool FriBackend::accept(const fri::MeasurementDatagram& measurement, int gap) {
   const bool was_command_state =
       has_measurement_ && measurement_.intf.state == static_cast<std::uint16_t>(fri::InterfaceState::kCommand);
   measurement_ = measurement;
+  const auto previous_time = last_measurement_time_;
+  const auto now = Clock::now();
   has_measurement_ = true;
-  last_measurement_time_ = Clock::now();
+  last_measurement_time_ = now;
 
   const double krc_cycle = static_cast<double>(measurement.intf.desired_msr_sample_time);
   if (plausibleCycle(krc_cycle)) cycle_ = krc_cycle;
@@ -215,11 +217,16 @@ bool FriBackend::accept(const fri::MeasurementDatagram& measurement, int gap) {
                       static_cast<double>(measurement.data.cmd_jnt_pos_fri_offset[i]);
     state_.tau_ext[j] = static_cast<double>(measurement.data.est_ext_jnt_trq[i]);
   }
-  if (gap > 0 && status_.counters.measurements_accepted > 0) {
+  if (gap > 0) {
     state_.qd = (state_.q - previous_q_) / (gap * cycle_);
     cycles_since_start_ += static_cast<std::uint64_t>(gap);
   } else {
+    // No sequence to go by: no velocity estimate; the clock advances by the wall-clock gap.
     state_.qd.setZero();
+    if (status_.counters.measurements_accepted > 0) {
+      const double silence = std::chrono::duration<double>(now - previous_time).count();
+      cycles_since_start_ += static_cast<std::uint64_t>(std::max(1.0, std::round(silence / cycle_)));
+    }
   }
   previous_q_ = state_.q;
   state_.time = static_cast<double>(cycles_since_start_) * cycle_;
@@ -258,6 +265,7 @@ bool FriBackend::drainSocket() {
   std::optional<fri::MeasurementDatagram> newest;
   UdpEndpoint newest_from;
   int newest_gap = 0;
+  bool resync = false;  // a measurement without a sequence to go by was among them
   int valid_count = 0;
   fri::MeasurementDatagram candidate;
   while (auto received = socket_.receive(receive_buffer_)) {
@@ -284,7 +292,8 @@ bool FriBackend::drainSocket() {
       continue;
     }
     // Sequence: repeated or older datagrams (reordering, duplicates) are dropped; gaps are losses.
-    int gap = 1;
+    // gap 0: unknown (first measurement, or a resync after a silence).
+    int gap = 0;
     if (has_sequence_) {
       gap = fri::sequenceDistance(candidate.header.send_seq, last_sequence_);
       if (gap <= 0) {
@@ -297,6 +306,7 @@ bool FriBackend::drainSocket() {
     has_sequence_ = true;
     last_sequence_ = candidate.header.send_seq;
     newest_gap += gap;
+    resync = resync || gap == 0;
     ++valid_count;
     newest = candidate;
     newest_from = received->from;
@@ -307,7 +317,7 @@ bool FriBackend::drainSocket() {
   counters.stale_skipped += static_cast<std::uint64_t>(valid_count - 1);
   if (skipped >= config_.watchdog_cycles && has_measurement_) tripWatchdog(FriFault::kControlLoopLate);
   reply_to_ = newest_from;  // answer where the measurement came from (the checked robot)
-  return accept(*newest, newest_gap);
+  return accept(*newest, resync ? 0 : newest_gap);
 }
 
 void FriBackend::step() {

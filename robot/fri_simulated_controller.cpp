@@ -76,6 +76,29 @@ FriSimulatedController::FriSimulatedController(RobotModel model, FriSimulatedCon
   stats_.stiffness = stiffness_;
 }
 
+FriSimulatedController::FriSimulatedController(RobotModel model, FriSimulatedControllerConfig config,
+                                               std::unique_ptr<RobotBackend> arm)
+    : FriSimulatedController(std::move(model), std::move(config)) {
+  if (!arm || arm->model().dof() != model_.dof()) {
+    throw InputError("simulated controller: the arm model must be a 7-joint robot backend");
+  }
+  const double ratio = config_.cycle / arm->cycleTime();
+  arm_steps_per_cycle_ = static_cast<int>(std::lround(ratio));
+  if (arm_steps_per_cycle_ < 1 || std::abs(ratio - arm_steps_per_cycle_) > 1e-6) {
+    throw InputError("simulated controller: the cycle " + std::to_string(config_.cycle) +
+                     " s is no whole multiple of the arm's cycle " + std::to_string(arm->cycleTime()) + " s");
+  }
+  arm_ = std::move(arm);
+  arm_state_.resize(model_.dof());
+  arm_command_.resize(model_.dof());
+  arm_->readState(arm_state_);
+  q_ = arm_state_.q;
+  q_desired_ = q_;
+  krl_q_ = q_;
+  stats_.q = q_;
+  stats_.q_desired = q_desired_;
+}
+
 FriSimulatedController::~FriSimulatedController() { stop(); }
 
 void FriSimulatedController::start() {
@@ -309,6 +332,19 @@ void FriSimulatedController::applyCommand(const fri::CommandDatagram& command) {
 }
 
 void FriSimulatedController::integrate(double dt) {
+  if (arm_) {
+    // The external arm runs its own joint impedance law around the command in force.
+    arm_command_.q_cmd = q_desired_;
+    arm_command_.stiffness = stiffness_;
+    arm_command_.damping = damping_;
+    arm_->writeCommand(arm_command_);
+    for (int k = 0; k < arm_steps_per_cycle_; ++k) arm_->step();
+    arm_->readState(arm_state_);
+    q_ = arm_state_.q;
+    qd_ = arm_state_.qd;
+    tau_ext_ = arm_state_.tau_ext;
+    return;
+  }
   const int substeps = std::max(1, static_cast<int>(std::ceil(dt / kMaxSubstep)));
   const double h = dt / substeps;
   const double m = config_.joint_inertia;

@@ -20,12 +20,14 @@
 #include <Eigen/Core>
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <random>
 #include <thread>
 #include <vector>
 
+#include "robot/backend.hpp"
 #include "robot/fri_protocol.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/robot_model.hpp"
@@ -81,6 +83,12 @@ class FriSimulatedController {
   /// Binds 127.0.0.1:port. Throws InputError if the peer is not a loopback address, the model
   /// is not 7-DoF, or a parameter is out of range.
   FriSimulatedController(RobotModel model, FriSimulatedControllerConfig config);
+  /// As above, with the arm simulated by another backend, e.g. the Bullet Simulation of
+  /// robot/sim/, instead of the built-in per-joint model: every cycle the controller hands it
+  /// the joint impedance command in force and steps it cycle / arm->cycleTime() times (the
+  /// cycle must be a whole multiple). The arm starts where it is (config.q_initial is not used)
+  /// and reports τ_ext itself (setExternalTorque() has no effect then).
+  FriSimulatedController(RobotModel model, FriSimulatedControllerConfig config, std::unique_ptr<RobotBackend> arm);
   ~FriSimulatedController();
   FriSimulatedController(const FriSimulatedController&) = delete;
   FriSimulatedController& operator=(const FriSimulatedController&) = delete;
@@ -144,6 +152,12 @@ class FriSimulatedController {
   std::vector<Outgoing> outgoing_;
   std::optional<Outgoing> held_back_;  // a measurement waiting to be overtaken
   std::array<std::uint8_t, 2048> buffer_{};
+
+  // An external arm model (optional).
+  std::unique_ptr<RobotBackend> arm_;
+  int arm_steps_per_cycle_ = 1;
+  RobotState arm_state_;
+  JointImpedanceCommand arm_command_;
 
   mutable std::mutex mutex_;  // guards stats_, injected_, external_torque_
   FriSimulatedControllerStats stats_;

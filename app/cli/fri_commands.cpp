@@ -11,8 +11,10 @@
 #include "robot/errors.hpp"
 #include "robot/fri_backend.hpp"
 #include "robot/fri_simulated_controller.hpp"
+#include "robot/parameters.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
+#include "robot/sim/simulation.hpp"
 
 namespace flexirob::cli {
 namespace {
@@ -40,6 +42,7 @@ struct SimulateOptions {
   std::uint64_t seed = 1;
   bool monitor_only = false;
   std::string q;  // initial posture, empty: the middle of the software limits
+  std::string arm = "bullet";
 };
 
 robot::RobotModel loadLwr4() { return robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4")); }
@@ -143,7 +146,23 @@ Json simulate(const SimulateOptions& options) {
   config.enter_command_mode = !options.monitor_only;
   robot::RobotModel model = loadLwr4();
   if (!options.q.empty()) config.q_initial = parseNumberList(options.q, "--q", model.dof());
-  robot::FriSimulatedController controller(std::move(model), config);
+  // The arm: the Bullet simulation (robot/sim/), or the controller's built-in joint model.
+  // `model` must outlive the Bullet arm, which keeps a reference to it.
+  std::unique_ptr<robot::FriSimulatedController> controller_owner;
+  std::string arm_model;
+  if (options.arm == "bullet") {
+    const robot::ParameterSet parameters(robot::simulationParameters());
+    auto simulation = std::make_unique<robot::Simulation>(model, nullptr, parameters);
+    if (config.q_initial.size() > 0) simulation->reset(config.q_initial);
+    controller_owner = std::make_unique<robot::FriSimulatedController>(model, config, std::move(simulation));
+    arm_model = "bullet simulation (robot/sim), joint impedance with gravity compensation";
+  } else if (options.arm == "impedance") {
+    controller_owner = std::make_unique<robot::FriSimulatedController>(model, config);
+    arm_model = "per-joint spring-damper (FRI joint impedance law), nominal inertia";
+  } else {
+    throw InputError("--arm: expected bullet or impedance, got '" + options.arm + "'");
+  }
+  robot::FriSimulatedController& controller = *controller_owner;
   std::cerr << "fri simulate: robot controller on " << controller.localEndpoint().toString() << ", PC at "
             << config.peer.toString() << std::endl;
   controller.runFor(options.seconds);
@@ -152,7 +171,7 @@ Json simulate(const SimulateOptions& options) {
           {"peer", config.peer.toString()},
           {"seconds", options.seconds},
           {"cycle_s", config.cycle},
-          {"arm_model", "per-joint spring-damper (FRI joint impedance law), nominal inertia"},
+          {"arm_model", arm_model},
           {"cycles", s.cycles},
           {"measurements_sent", s.measurements_sent},
           {"measurements_lost", s.measurements_lost},
@@ -221,6 +240,8 @@ void registerFriCommands(CLI::App& app, CommandRunner& runner) {
         ->capture_default_str();
     command->add_option("--seed", options->seed, "random seed of the fault injection")->capture_default_str();
     command->add_option("--q", options->q, "initial joint posture q1,...,q7 [rad]");
+    command->add_option("--arm", options->arm, "arm model: bullet (robot/sim) or impedance (built-in)")
+        ->capture_default_str();
     command->add_flag("--monitor-only", options->monitor_only, "stay in monitor mode (never switch to command)");
     command->callback([&runner, options] { runner.select([options] { return simulate(*options); }); });
   }

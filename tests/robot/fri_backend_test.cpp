@@ -16,7 +16,9 @@
 #include "robot/fri_simulated_controller.hpp"
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
+#include "robot/parameters.hpp"
 #include "robot/resources.hpp"
+#include "robot/sim/simulation.hpp"
 
 namespace flexirob::robot {
 namespace {
@@ -39,11 +41,13 @@ struct Link {
   std::unique_ptr<FriSimulatedController> controller;
   std::unique_ptr<FriBackend> backend;
 
-  explicit Link(FriSimulatedControllerConfig sim = {}, FriBackendConfig config = {}) {
+  explicit Link(FriSimulatedControllerConfig sim = {}, FriBackendConfig config = {},
+                std::unique_ptr<RobotBackend> arm = nullptr) {
     UdpSocket socket("127.0.0.1", 0);
     sim.peer = socket.localEndpoint();
     if (sim.q_initial.size() == 0) sim.q_initial = testPosture();
-    controller = std::make_unique<FriSimulatedController>(lwr4(), sim);
+    controller = arm ? std::make_unique<FriSimulatedController>(lwr4(), sim, std::move(arm))
+                     : std::make_unique<FriSimulatedController>(lwr4(), sim);
     config.robot = controller->localEndpoint();
     backend = std::make_unique<FriBackend>(lwr4(), config, std::move(socket));
     controller->start();
@@ -187,6 +191,32 @@ TEST(FriBackend, CommandsMoveTheArmOnlyInCommandMode) {
   EXPECT_NEAR(state.q[0], q_cmd[0], 0.02);      // the arm followed the ramp
   EXPECT_GT(state.q[0], q0[0] + 0.5 * speed * dt * 40);
   EXPECT_GE(link.backend->status().counters.commands_sent, 90U);
+}
+
+TEST(FriBackend, CommandsTheBulletSimulatedArmThroughTheControllerStandIn) {
+  const ParameterSet parameters(simulationParameters());
+  auto simulation = std::make_unique<Simulation>(lwr4(), nullptr, parameters);
+  simulation->reset(testPosture());
+  Link link(simConfig(2e-3, true), backendConfig(50), std::move(simulation));
+  ASSERT_TRUE(link.stepUntil([&] { return link.backend->status().link == FriLink::kCommanding; }, 400));
+  RobotState state;
+  state.resize(7);
+  link.backend->readState(state);
+  EXPECT_LT((state.q - testPosture()).cwiseAbs().maxCoeff(), 1e-3);  // at rest where it was put
+
+  // Move joint 4 by 0.1 rad at a quarter of its velocity limit, then hold.
+  const double dt = link.backend->cycleTime();
+  Eigen::VectorXd q_cmd = link.backend->heldPosture();
+  const double target = q_cmd[3] + 0.1;
+  const double step = 0.25 * lwr4().velocityLimits()[3] * dt;
+  for (int i = 0; i < 400; ++i) {
+    q_cmd[3] = std::min(target, q_cmd[3] + step);
+    ASSERT_EQ(link.backend->writeCommand(impedance(q_cmd, 300.0, 0.95)), CommandStatus::kAccepted);
+    link.backend->step();
+  }
+  link.backend->readState(state);
+  EXPECT_NEAR(state.q[3], target, 0.01);
+  EXPECT_EQ(link.controller->stats().commands_refused, 0U);
 }
 
 TEST(FriBackend, RejectsCommandsOutsideTheSoftwareLimits) {
