@@ -50,6 +50,16 @@ const char* toString(FriRejection rejection) {
   return "unknown";
 }
 
+FriBackendConfig friConfigFromUri(const std::string& uri) {
+  const std::string scheme = "fri://";
+  if (uri.rfind(scheme, 0) != 0 || uri.size() == scheme.size()) {
+    throw InputError("backend: expected fri://HOST[:PORT], got '" + uri + "'");
+  }
+  FriBackendConfig config;
+  config.robot = UdpEndpoint::parse(uri.substr(scheme.size()), 0, "backend " + uri);
+  return config;
+}
+
 FriBackend::FriBackend(RobotModel model, FriBackendConfig config)
     : FriBackend(std::move(model), config, UdpSocket(config.local_address, config.local_port)) {}
 

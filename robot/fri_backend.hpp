@@ -60,6 +60,11 @@ struct FriBackendConfig {
   double velocity_tolerance = 1e-6;
 };
 
+/// The backend choice "fri://HOST[:PORT]" (the GUI's and flexirob's --backend) as a
+/// configuration: HOST[:PORT] is the robot controller (without a port, any source port of that
+/// host); everything else keeps its default. Throws InputError for anything else.
+FriBackendConfig friConfigFromUri(const std::string& uri);
+
 /// Link condition as the operator sees it.
 enum class FriLink {
   kWaiting,     ///< no measurement from the robot yet

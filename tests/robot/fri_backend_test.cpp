@@ -501,6 +501,16 @@ TEST(FriBackend, RefusesModelsWithoutSevenJointsAndMissingRobotAddress) {
   EXPECT_THROW(make(arm9), InputError);
 }
 
+TEST(FriBackend, ReadsTheBackendChoiceUri) {
+  const FriBackendConfig config = friConfigFromUri("fri://127.0.0.1:49939");
+  EXPECT_EQ(config.robot, (UdpEndpoint{0x7F000001, 49939}));
+  EXPECT_EQ(config.local_port, fri::kDefaultPcPort);
+  EXPECT_EQ(friConfigFromUri("fri://127.0.0.1").robot.port, 0);
+  EXPECT_THROW(friConfigFromUri("sim"), InputError);
+  EXPECT_THROW(friConfigFromUri("fri://"), InputError);
+  EXPECT_THROW(friConfigFromUri("udp://127.0.0.1:5"), InputError);
+}
+
 TEST(FriBackend, ParsesRobotAddresses) {
   const UdpEndpoint a = UdpEndpoint::parse("127.0.0.1:49939", 0, "robot");
   EXPECT_EQ(a.address, 0x7F000001U);
