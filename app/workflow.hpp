@@ -1,0 +1,291 @@
+#pragma once
+// The teaching workflow (thesis Sect. 2.3, Fig. 2.5 and 2.8, App. A.3): stages, sub-stages,
+// the four buttons and the two interaction triggers, the interaction controller of each
+// sub-stage, training areas, learning of q_c(x) and the ITM of the configuration stage.
+//
+// Stages and sub-stages (IDLE between stages):
+//   CONFIGURATION: WAITING (robot held) --on_affected--> APPROACHING (gravity compensation π_q)
+//                  --on_converged--> POSED (compliant recording π_rec around q_fixed = q)
+//                  --on_affected--> RECORDING (samples (x, q) recorded)
+//                  --on_converged--> WAITING (area created; on_affected starts the next APPROACHING)
+//   PROGRAMMING:   WAITING --on_affected--> APPROACHING (assisted gravity compensation)
+//                  --on_converged--> POSED (held at x_start) --on_affected--> TEACH-IN
+//                  (trajectory recorded) --on_converged--> WAITING
+//   EXECUTION:     hierarchical control (Eq. 2.11) with the learned q_c along queued waypoints.
+// Buttons: start_configuration (IDLE, EXECUTION -> CONFIGURATION), finished_configuration
+// (CONFIGURATION, not while recording, >= 1 area -> IDLE, learning starts), start_programming
+// (IDLE, EXECUTION with a learned map -> PROGRAMMING), finished_programming (PROGRAMMING, not
+// during TEACH-IN -> EXECUTION). Anything else is refused with a reason; nothing changes then.
+//
+// Pure logic over a RobotBackend: no Qt, no OSG. One thread (the control thread) calls
+// update()/step() and the requests; batch learning runs on its own thread and its result is
+// taken over in update() without blocking. Frames: task space = tip position p_WT in the base
+// frame W [m]; joint space [rad].
+#include <Eigen/Core>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "learning/confidence.hpp"
+#include "learning/elm.hpp"
+#include "learning/learner.hpp"
+#include "learning/llm.hpp"
+#include "planning/itm.hpp"
+#include "robot/backend.hpp"
+#include "robot/collision.hpp"
+#include "robot/controllers.hpp"
+#include "robot/parameters.hpp"
+#include "robot/scene.hpp"
+
+namespace flexirob::app {
+
+enum class Stage { kIdle, kConfiguration, kProgramming, kExecution };
+enum class SubStage { kNone, kWaiting, kApproaching, kPosed, kRecording, kTeachIn };
+enum class Button { kStartConfiguration, kFinishedConfiguration, kStartProgramming, kFinishedProgramming };
+enum class Trigger { kOnAffected, kOnConverged };
+
+/// The joint impedance controllers of the workflow (DESIGN §3, Tab. A.1).
+enum class InteractionController {
+  kHold,                        ///< hierarchical control / holding a posture: 300 Nm/rad, 0.95
+  kGravityCompensation,         ///< π_q: 20 Nm/rad, 0.7
+  kCompliantRecording,          ///< π_rec: 80 Nm/rad, 0.7, spring towards q_fixed
+  kAssistedGravityCompensation, ///< 50 Nm/rad, 0.7, null space pulled towards q_c(x)
+  kAssistanceBlending,          ///< 50 Nm/rad, 0.7, Eq. 6.2 with α = C(x) (OS-ELM, Chap. 6)
+};
+
+enum class LearnerKind { kElm, kOsElm, kLlm };
+
+const char* toString(Stage stage);
+const char* toString(SubStage sub_stage);
+const char* toString(Button button);
+const char* toString(Trigger trigger);
+const char* toString(InteractionController controller);
+const char* toString(LearnerKind kind);
+/// "elm", "oselm", "llm"; throws InputError otherwise.
+LearnerKind learnerKindFromString(const std::string& name);
+
+struct ImpedanceGains {
+  double stiffness = 0.0;  ///< [Nm/rad]
+  double damping = 0.0;    ///< normalized damping (FRI jntDamping)
+};
+/// DESIGN §3 / Tab. A.1 gains of each controller.
+ImpedanceGains gainsOf(InteractionController controller);
+
+/// One record of what happened, for the session recorder and the GUI.
+struct WorkflowEvent {
+  enum class Kind { kStage, kButton, kTrigger, kRefused, kAreaCreated, kAreaRemoved, kModelLearned, kWarning, kCheck };
+  double time = 0.0;   ///< [s] backend time
+  Kind kind = Kind::kStage;
+  std::string name;    ///< e.g. "CONFIGURATION/APPROACHING", "start_configuration", "on_affected"
+  std::string detail;  ///< a human-readable line
+  int area = -1;       ///< area index concerned, or -1
+};
+const char* toString(WorkflowEvent::Kind kind);
+
+/// A training area D^(k) (Sect. 3.1): the samples recorded in one RECORDING.
+struct TrainingArea {
+  std::string name;
+  Eigen::VectorXd q_fixed;     ///< posture chosen in APPROACHING [rad]
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< LLM centre c_k = x_init (first sample) [m, W]
+  Eigen::MatrixXd X;           ///< 3 x L tip positions [m, W]
+  Eigen::MatrixXd Q;           ///< N x L postures [rad]
+};
+
+/// Result of a request (button, area removal): refused requests leave the state untouched.
+struct RequestResult {
+  bool accepted = false;
+  std::string reason;  ///< why it was refused (empty if accepted)
+  explicit operator bool() const { return accepted; }
+};
+
+/// The tutor feedback after learning with two or more areas (Sect. 4.3.4, Tab. 4.1): the
+/// straight motion between two area centres executed (kinematically) with the learned map.
+struct TransitionCheck {
+  int from = -1, to = -1;
+  double mean_error_m = 0.0;   ///< mean |x_des − x| along the line [m]
+  double max_error_m = 0.0;
+  double final_error_m = 0.0;
+  double posture_error_rad = 0.0;  ///< |q_end − q_fixed(to)| at the goal
+  int colliding_samples = 0;   ///< samples (every 10 ms) in contact; -1 without a scene
+  bool ok = false;
+};
+
+struct WorkflowOptions {
+  LearnerKind learner = LearnerKind::kElm;
+  learning::ElmParams elm;        ///< also the OS-ELM's
+  learning::LlmParams llm;
+  double confidence_d = 15.0;     ///< Eq. 6.8
+  planning::ItmParameters itm;
+  double affected_torque = 1.5;   ///< [Nm] on_affected threshold on max |τ_ext|
+  double still_velocity = 0.02;   ///< [rad/s] max |q̇| below which the robot counts as not moving
+  double converged_time = 2.0;    ///< [s] still time for on_converged
+  double sample_period = 0.02;    ///< [s] between recorded samples and ITM inputs
+  double limit_warning_margin = 0.17;  ///< [rad] q_fixed closer than this to a soft limit warns
+  bool background_learning = true;     ///< false: fit synchronously in finished_configuration (tests)
+  /// Box for the OS-ELM's fixed input normalization [m, W] (its workspace).
+  Eigen::Vector3d workspace_lower = Eigen::Vector3d(-1.0, -1.0, -0.2);
+  Eigen::Vector3d workspace_upper = Eigen::Vector3d(1.0, 1.0, 1.2);
+  /// Scene for the transition check's collision test (simulation only; the workflow's own
+  /// collision world, never the learner's input). Null: accuracy only.
+  const robot::Scene* check_scene = nullptr;
+  double check_speed = 0.1;        ///< [m/s] along the straight transition
+  double check_tolerance = 0.01;   ///< [m] error that still counts as accurate
+  double execution_speed = 0.1;    ///< [m/s] in EXECUTION
+};
+
+/// on_affected / on_converged from measured torques and motion (App. A.3).
+class InteractionTriggers {
+ public:
+  InteractionTriggers(double affected_torque, double still_velocity, double converged_time)
+      : affected_torque_(affected_torque), still_velocity_(still_velocity), converged_time_(converged_time) {}
+  /// Feeds one measurement; returns the trigger that fired now, if any.
+  std::optional<Trigger> update(const robot::RobotState& state);
+  /// Forgets the current interaction (after a stage change or a keyboard trigger).
+  void reset(bool affected, double time);
+  bool affected() const { return affected_; }
+
+ private:
+  double affected_torque_, still_velocity_, converged_time_;
+  bool affected_ = false;
+  double still_since_ = 0.0;
+  bool was_still_ = false;
+};
+
+class Workflow {
+ public:
+  /// The backend and the robot model must outlive the workflow. `parameters` holds at least
+  /// the hierarchical.* and limits.* parameters (robot::reachParameters() does).
+  Workflow(robot::RobotBackend& backend, const robot::ParameterSet& parameters, WorkflowOptions options = {});
+  ~Workflow();
+  Workflow(const Workflow&) = delete;
+  Workflow& operator=(const Workflow&) = delete;
+
+  /// One control cycle: read the state, evaluate the triggers, record, command the robot.
+  void update();
+  /// update() followed by backend.step().
+  void step();
+
+  RequestResult press(Button button);
+  /// A trigger from another input (keyboard bindings, Sect. 8.1), as if detected.
+  RequestResult fire(Trigger trigger);
+  /// Removes area k (IDLE or CONFIGURATION outside RECORDING). The learned map is dropped and,
+  /// in IDLE, learned again from the remaining areas.
+  RequestResult removeArea(int k);
+  /// The next RECORDING replaces area k instead of adding one (CONFIGURATION, not recording).
+  RequestResult reteachArea(int k);
+  /// EXECUTION: follow these waypoints [m, W] with the hierarchical controller and q_c.
+  RequestResult execute(const std::vector<Eigen::Vector3d>& waypoints);
+
+  Stage stage() const { return stage_; }
+  SubStage subStage() const { return sub_stage_; }
+  InteractionController controller() const { return controller_; }
+  std::string stateName() const;
+  const std::vector<TrainingArea>& areas() const { return areas_; }
+  /// Teach-in trajectories of PROGRAMMING, each 3 x T [m, W].
+  const std::vector<Eigen::MatrixXd>& teachIns() const { return teach_ins_; }
+  /// The learned q_c(x), or null (nothing learned yet / learning in progress).
+  std::shared_ptr<const learning::Learner> model() const { return model_; }
+  bool learning() const { return learning_thread_.joinable(); }
+  /// Blocks until a background fit has finished and takes its result over (tests, CLI).
+  void waitForLearning();
+  const learning::ConfidenceModel& confidence() const { return confidence_; }
+  const planning::Itm& itm() const { return itm_; }
+  const std::vector<TransitionCheck>& transitionChecks() const { return checks_; }
+  bool executionDone() const { return execution_waypoints_.empty(); }
+  const robot::RobotState& state() const { return state_; }
+  const WorkflowOptions& options() const { return options_; }
+
+  /// Every event so far, in time order.
+  const std::vector<WorkflowEvent>& events() const { return events_; }
+  /// Events since the last call (for a recorder draining them).
+  std::vector<WorkflowEvent> takeNewEvents();
+
+  /// The training set of all areas (3 x L, N x L, area labels).
+  learning::TrainingSet trainingSet() const;
+
+ private:
+  struct LearningResult;
+  void setState(Stage stage, SubStage sub_stage);
+  void emit(WorkflowEvent::Kind kind, std::string name, std::string detail, int area = -1);
+  RequestResult refuse(const std::string& request, std::string reason);
+  void onTrigger(Trigger trigger);
+  void finishArea();
+  void checkJointLimits(const Eigen::VectorXd& q_fixed, int area);
+  void startLearning();
+  void collectLearning();
+  void rebuildConfidence();
+  void recordSample();
+  void command();
+  std::unique_ptr<learning::OsElm> makeOnlineLearner() const;
+  void predictPosture(const Eigen::Vector3d& p_W, Eigen::VectorXd& q_c) const;
+
+  robot::RobotBackend* backend_;
+  const robot::RobotModel* model_robot_;
+  WorkflowOptions options_;
+  robot::HierarchicalController hierarchical_;
+  robot::CommandLimiter limiter_;
+  robot::ParameterSet parameters_;
+  InteractionTriggers triggers_;
+  robot::RobotState state_;
+  robot::JointImpedanceCommand command_;
+
+  Stage stage_ = Stage::kIdle;
+  SubStage sub_stage_ = SubStage::kNone;
+  InteractionController controller_ = InteractionController::kHold;
+  Eigen::VectorXd hold_q_;      // posture held in kHold
+  Eigen::VectorXd q_fixed_;     // π_rec target
+  Eigen::VectorXd q_c_, qd_;    // scratch
+  double last_sample_time_ = -1e9;
+
+  std::vector<TrainingArea> areas_;
+  TrainingArea current_;
+  int reteach_index_ = -1;
+  std::vector<Eigen::Vector3d> teach_in_points_;
+  std::vector<Eigen::MatrixXd> teach_ins_;
+
+  std::shared_ptr<learning::Learner> model_;  // used by the control side only
+  std::unique_ptr<learning::OsElm> online_;   // OS-ELM learning during RECORDING
+  learning::ConfidenceModel confidence_;
+  planning::Itm itm_;
+  std::vector<TransitionCheck> checks_;
+
+  std::thread learning_thread_;
+  std::atomic<bool> learning_done_{false};
+  std::unique_ptr<LearningResult> learning_result_;  // written by the learning thread before learning_done_
+  learning::CancellationToken cancel_;
+
+  std::vector<Eigen::Vector3d> execution_waypoints_;
+  Eigen::Vector3d execution_target_ = Eigen::Vector3d::Zero();
+
+  std::vector<WorkflowEvent> events_;
+  std::size_t events_taken_ = 0;
+};
+
+/// Executes the straight line between two area centres kinematically with the hierarchical
+/// controller and the map, from area `from`'s q_fixed (Tab. 4.1 "inconsistent combinations").
+/// `world` may be null (no collision test).
+TransitionCheck checkTransition(const robot::RobotModel& model, const robot::ParameterSet& parameters,
+                                const learning::Learner& map, const TrainingArea& from, const TrainingArea& to,
+                                int from_index, int to_index, robot::CollisionWorld* world, double speed,
+                                double tolerance);
+
+/// Adapts a learner to the controller's RedundancyMap (positions only).
+class LearnedRedundancyMap final : public robot::RedundancyMap {
+ public:
+  explicit LearnedRedundancyMap(const learning::Learner& learner) : learner_(&learner) {}
+  int dof() const override { return learner_->outputDim(); }
+  void predict(const Eigen::Vector3d& p_W, Eigen::VectorXd& q_c) const override { learner_->predict(p_W, q_c); }
+
+ private:
+  const learning::Learner* learner_;
+};
+
+/// A fresh learner of the given kind for 3-D inputs and `dof` outputs.
+std::unique_ptr<learning::Learner> makeLearner(const WorkflowOptions& options, int dof);
+
+}  // namespace flexirob::app

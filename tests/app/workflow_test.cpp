@@ -1,0 +1,293 @@
+// The teaching workflow's state machine driven by buttons and triggers over a stand-in backend
+// whose measured torques and motion the test sets directly.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "app/workflow.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/sim/reach.hpp"
+
+namespace flexirob::app {
+namespace {
+
+const robot::RobotModel& lwr4() {
+  static const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  return model;
+}
+
+// A backend the test moves by hand: q follows what the test sets, τ_ext and q̇ are given.
+class ScriptedBackend final : public robot::RobotBackend {
+ public:
+  explicit ScriptedBackend(const robot::RobotModel& model) : model_(&model), kinematics_(model) {
+    state_.resize(model.dof());
+    state_.q = model.midPosture();
+    state_.q[1] = 0.6;
+    state_.q[3] = -1.4;
+    kinematics_.update(state_.q);
+    state_.X_WT = kinematics_.X_WT();
+  }
+  const robot::RobotModel& model() const override { return *model_; }
+  double cycleTime() const override { return 1e-3; }
+  void readState(robot::RobotState& state) const override { state = state_; }
+  robot::CommandStatus writeCommand(const robot::JointImpedanceCommand& command) override {
+    last_ = command;
+    ++commands_;
+    return robot::CommandStatus::kAccepted;
+  }
+  void step() override { state_.time += cycleTime(); }
+
+  void push(double torque) { state_.tau_ext.setZero(); state_.tau_ext[1] = torque; }
+  void move(const Eigen::VectorXd& q, double speed) {
+    state_.q = q;
+    state_.qd.setConstant(speed);
+    kinematics_.update(q);
+    state_.X_WT = kinematics_.X_WT();
+  }
+  void rest() { state_.qd.setZero(); state_.tau_ext.setZero(); }
+  const robot::JointImpedanceCommand& last() const { return last_; }
+  const robot::RobotState& state() const { return state_; }
+
+ private:
+  const robot::RobotModel* model_;
+  robot::Kinematics kinematics_;
+  robot::RobotState state_;
+  robot::JointImpedanceCommand last_;
+  int commands_ = 0;
+};
+
+struct Fixture {
+  Fixture() : backend(lwr4()), declarations(robot::reachParameters()), parameters(declarations) {}
+  ScriptedBackend backend;
+  std::vector<robot::ParameterDeclaration> declarations;
+  robot::ParameterSet parameters;
+};
+
+WorkflowOptions syncOptions() {
+  WorkflowOptions options;
+  options.background_learning = false;
+  options.elm.hidden = 30;
+  return options;
+}
+
+void run(Workflow& workflow, double seconds) {
+  const int steps = static_cast<int>(std::lround(seconds / 1e-3));
+  for (int i = 0; i < steps; ++i) workflow.step();
+}
+
+// One CONFIGURATION area through the real triggers: touch, move, rest, touch, circle, rest.
+void teachArea(Workflow& workflow, ScriptedBackend& backend, const Eigen::VectorXd& q_fixed) {
+  backend.push(3.0);  // touched at rest: on_affected
+  run(workflow, 0.01);
+  EXPECT_EQ(workflow.subStage(), SubStage::kApproaching);
+  backend.move(q_fixed, 0.0);
+  backend.rest();
+  run(workflow, 2.1);  // still for 2 s: on_converged
+  EXPECT_EQ(workflow.subStage(), SubStage::kPosed);
+  backend.push(3.0);
+  run(workflow, 0.01);
+  EXPECT_EQ(workflow.subStage(), SubStage::kRecording);
+  for (int i = 0; i < 40; ++i) {
+    const Eigen::Index n = q_fixed.size();
+    const Eigen::VectorXd q = q_fixed + 0.05 * std::sin(0.3 * i) * Eigen::VectorXd::Unit(n, 0) +
+                              0.05 * std::cos(0.3 * i) * Eigen::VectorXd::Unit(n, 3);
+    backend.move(q, 0.3);
+    run(workflow, 0.02);
+  }
+  backend.move(q_fixed, 0.0);
+  backend.rest();
+  run(workflow, 2.1);
+  EXPECT_EQ(workflow.subStage(), SubStage::kWaiting);
+}
+
+Eigen::VectorXd posture(double a1) {
+  Eigen::VectorXd q = lwr4().midPosture();
+  q[0] = a1;
+  q[1] = 0.7;
+  q[3] = -1.3;
+  q[5] = 0.8;
+  return q;
+}
+
+TEST(Workflow, RefusesProgrammingBeforeConfigurationWithoutChangingState) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  const auto result = workflow.press(Button::kStartProgramming);
+  EXPECT_FALSE(result.accepted);
+  EXPECT_NE(result.reason.find("configure"), std::string::npos) << result.reason;
+  EXPECT_EQ(workflow.stage(), Stage::kIdle);
+  EXPECT_FALSE(workflow.press(Button::kFinishedConfiguration));
+  EXPECT_FALSE(workflow.press(Button::kFinishedProgramming));
+  EXPECT_FALSE(workflow.fire(Trigger::kOnAffected));
+  EXPECT_FALSE(workflow.removeArea(0));
+  EXPECT_EQ(workflow.stage(), Stage::kIdle);
+  EXPECT_EQ(workflow.subStage(), SubStage::kNone);
+  EXPECT_TRUE(workflow.areas().empty());
+  int refused = 0;
+  for (const auto& event : workflow.events()) refused += event.kind == WorkflowEvent::Kind::kRefused ? 1 : 0;
+  EXPECT_EQ(refused, 5);
+}
+
+TEST(Workflow, FinishingConfigurationNeedsAnAreaAndNoRunningRecording) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  EXPECT_FALSE(workflow.press(Button::kStartConfiguration));
+  EXPECT_FALSE(workflow.press(Button::kFinishedConfiguration));  // no area yet
+  EXPECT_EQ(workflow.stage(), Stage::kConfiguration);
+  ASSERT_TRUE(workflow.fire(Trigger::kOnAffected));
+  ASSERT_TRUE(workflow.fire(Trigger::kOnConverged));
+  ASSERT_TRUE(workflow.fire(Trigger::kOnAffected));
+  ASSERT_EQ(workflow.subStage(), SubStage::kRecording);
+  EXPECT_FALSE(workflow.press(Button::kFinishedConfiguration));
+  EXPECT_EQ(workflow.subStage(), SubStage::kRecording);
+}
+
+TEST(Workflow, TriggersSelectTheInteractionControllerOfEachSubStage) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  EXPECT_EQ(workflow.controller(), InteractionController::kHold);
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  EXPECT_EQ(workflow.controller(), InteractionController::kHold);
+  f.backend.push(2.0);
+  run(workflow, 0.005);
+  EXPECT_EQ(workflow.controller(), InteractionController::kGravityCompensation);
+  workflow.step();
+  EXPECT_DOUBLE_EQ(f.backend.last().stiffness[0], 20.0);
+  EXPECT_DOUBLE_EQ(f.backend.last().damping[0], 0.7);
+  // A torque below 1.5 Nm is no touch; moving without converging keeps APPROACHING.
+  f.backend.rest();
+  f.backend.move(posture(0.3), 0.5);
+  run(workflow, 3.0);
+  EXPECT_EQ(workflow.subStage(), SubStage::kApproaching);
+  f.backend.move(posture(0.3), 0.0);
+  run(workflow, 1.9);
+  EXPECT_EQ(workflow.subStage(), SubStage::kApproaching);
+  run(workflow, 0.2);
+  EXPECT_EQ(workflow.subStage(), SubStage::kPosed);
+  EXPECT_EQ(workflow.controller(), InteractionController::kCompliantRecording);
+  workflow.step();
+  EXPECT_DOUBLE_EQ(f.backend.last().stiffness[0], 80.0);
+  EXPECT_TRUE(f.backend.last().q_cmd.isApprox(posture(0.3), 1e-12));  // springs back to q_fixed
+}
+
+TEST(Workflow, FullSessionCreatesAreasLearnsAndReachesExecution) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  teachArea(workflow, f.backend, posture(-0.5));
+  teachArea(workflow, f.backend, posture(0.5));
+  ASSERT_EQ(workflow.areas().size(), 2U);
+  EXPECT_TRUE(workflow.areas()[0].q_fixed.isApprox(posture(-0.5)));
+  EXPECT_GE(workflow.areas()[0].X.cols(), 30);
+  EXPECT_GT(workflow.itm().nodeCount(), 0);
+  ASSERT_TRUE(workflow.press(Button::kFinishedConfiguration));
+  EXPECT_EQ(workflow.stage(), Stage::kIdle);
+  ASSERT_NE(workflow.model(), nullptr);
+  // Two areas: the transition between them is checked and reported.
+  ASSERT_EQ(workflow.transitionChecks().size(), 1U);
+  // The learned map reproduces each area's posture at its centre.
+  for (const auto& area : workflow.areas()) {
+    EXPECT_LT((workflow.model()->predict(area.centre) - area.q_fixed).norm(), 0.1);
+  }
+  ASSERT_TRUE(workflow.press(Button::kStartProgramming));
+  EXPECT_EQ(workflow.subStage(), SubStage::kWaiting);
+  ASSERT_TRUE(workflow.fire(Trigger::kOnAffected));
+  EXPECT_EQ(workflow.controller(), InteractionController::kAssistedGravityCompensation);
+  ASSERT_TRUE(workflow.fire(Trigger::kOnConverged));
+  ASSERT_TRUE(workflow.fire(Trigger::kOnAffected));
+  EXPECT_EQ(workflow.subStage(), SubStage::kTeachIn);
+  EXPECT_FALSE(workflow.press(Button::kFinishedProgramming));
+  run(workflow, 0.2);
+  ASSERT_TRUE(workflow.fire(Trigger::kOnConverged));
+  ASSERT_EQ(workflow.teachIns().size(), 1U);
+  EXPECT_GE(workflow.teachIns()[0].cols(), 5);
+  ASSERT_TRUE(workflow.press(Button::kFinishedProgramming));
+  EXPECT_EQ(workflow.stage(), Stage::kExecution);
+  EXPECT_TRUE(workflow.execute({workflow.areas()[1].centre}));
+  EXPECT_TRUE(workflow.press(Button::kStartConfiguration));  // back to configuring
+  bool learned = false, created = false;
+  for (const auto& event : workflow.events()) {
+    learned = learned || event.kind == WorkflowEvent::Kind::kModelLearned;
+    created = created || event.kind == WorkflowEvent::Kind::kAreaCreated;
+  }
+  EXPECT_TRUE(learned);
+  EXPECT_TRUE(created);
+}
+
+TEST(Workflow, RemovingAnAreaRelearnsFromTheRest) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  teachArea(workflow, f.backend, posture(-0.5));
+  teachArea(workflow, f.backend, posture(0.5));
+  ASSERT_TRUE(workflow.press(Button::kFinishedConfiguration));
+  ASSERT_TRUE(workflow.removeArea(0));
+  ASSERT_EQ(workflow.areas().size(), 1U);
+  ASSERT_NE(workflow.model(), nullptr);
+  EXPECT_TRUE(workflow.areas()[0].q_fixed.isApprox(posture(0.5)));
+  EXPECT_LT((workflow.model()->predict(workflow.areas()[0].centre) - posture(0.5)).norm(), 0.1);
+  EXPECT_TRUE(workflow.transitionChecks().empty());  // one area: nothing to check
+}
+
+TEST(Workflow, ReteachingReplacesTheArea) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  teachArea(workflow, f.backend, posture(-0.5));
+  teachArea(workflow, f.backend, posture(0.5));
+  EXPECT_FALSE(workflow.reteachArea(2));
+  ASSERT_TRUE(workflow.reteachArea(0));
+  teachArea(workflow, f.backend, posture(-0.8));
+  ASSERT_EQ(workflow.areas().size(), 2U);
+  EXPECT_TRUE(workflow.areas()[0].q_fixed.isApprox(posture(-0.8)));
+}
+
+TEST(Workflow, WarnsWhenThePostureIsNearAJointLimit) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  Eigen::VectorXd q = posture(0.0);
+  q[0] = lwr4().softUpperLimits()[0] - 0.05;
+  teachArea(workflow, f.backend, q);
+  int warnings = 0;
+  for (const auto& event : workflow.events()) {
+    if (event.kind == WorkflowEvent::Kind::kWarning && event.name == "joint_limit") {
+      ++warnings;
+      EXPECT_NE(event.detail.find("joint 1"), std::string::npos) << event.detail;
+    }
+  }
+  EXPECT_EQ(warnings, 1);
+}
+
+TEST(Workflow, OnlineOsElmLearnsDuringRecording) {
+  Fixture f;
+  WorkflowOptions options = syncOptions();
+  options.learner = LearnerKind::kOsElm;
+  Workflow workflow(f.backend, f.parameters, options);
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  teachArea(workflow, f.backend, posture(-0.5));
+  // Second approach: assistance blending, since an online map exists already.
+  f.backend.push(3.0);
+  run(workflow, 0.01);
+  EXPECT_EQ(workflow.controller(), InteractionController::kAssistanceBlending);
+}
+
+TEST(Workflow, BackgroundLearningDoesNotBlockTheControlCycle) {
+  Fixture f;
+  WorkflowOptions options = syncOptions();
+  options.background_learning = true;
+  Workflow workflow(f.backend, f.parameters, options);
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  teachArea(workflow, f.backend, posture(-0.5));
+  teachArea(workflow, f.backend, posture(0.5));
+  ASSERT_TRUE(workflow.press(Button::kFinishedConfiguration));
+  run(workflow, 0.01);  // control continues while learning runs
+  workflow.waitForLearning();
+  EXPECT_NE(workflow.model(), nullptr);
+  EXPECT_TRUE(workflow.press(Button::kStartProgramming));
+}
+
+}  // namespace
+}  // namespace flexirob::app
