@@ -199,7 +199,7 @@ Bpdc Bpdc::read(const ModelReader& reader) {
   p.target_mse = reader.number("target_mse");
   p.tolerance = reader.number("tolerance");
   p.patience = static_cast<int>(reader.integer("patience", 1, 1000000));
-  p.seed = static_cast<std::uint64_t>(reader.integer("seed", 0, std::numeric_limits<std::int64_t>::max()));
+  p.seed = reader.unsignedInteger("seed");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {

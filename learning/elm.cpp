@@ -69,7 +69,7 @@ ElmParams ElmParams::read(const ModelReader& reader) {
   ElmParams params;
   params.hidden = static_cast<int>(reader.integer("hidden", 1, 5000));
   params.epsilon = reader.number("epsilon");
-  params.seed = static_cast<std::uint64_t>(reader.integer("seed", 0, std::numeric_limits<std::int64_t>::max()));
+  params.seed = reader.unsignedInteger("seed");
   params.input_weight_range = reader.number("input_weight_range");
   params.gain_min = reader.number("gain_min");
   params.gain_max = reader.number("gain_max");

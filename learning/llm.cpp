@@ -184,7 +184,7 @@ Llm Llm::read(const ModelReader& reader) {
   params.tolerance = reader.number("tolerance");
   params.patience = static_cast<int>(reader.integer("patience", 1, 1000000));
   params.target_mse = reader.number("target_mse");
-  params.seed = static_cast<std::uint64_t>(reader.integer("seed", 0, std::numeric_limits<std::int64_t>::max()));
+  params.seed = reader.unsignedInteger("seed");
   try {
     params.validate();
   } catch (const std::invalid_argument& e) {

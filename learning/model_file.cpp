@@ -259,6 +259,14 @@ std::int64_t ModelReader::integer(const std::string& key, std::int64_t min_value
   return value;
 }
 
+std::uint64_t ModelReader::unsignedInteger(const std::string& key) const {
+  const std::string value = text(key);
+  std::uint64_t parsed = 0;
+  const auto result = std::from_chars(value.data(), value.data() + value.size(), parsed);
+  if (result.ec != std::errc() || result.ptr != value.data() + value.size()) fail("field '" + key + "' is not an unsigned integer");
+  return parsed;
+}
+
 const Eigen::MatrixXd& ModelReader::matrix(const std::string& name, Eigen::Index rows, Eigen::Index cols) const {
   const auto it = matrices_.find(name);
   if (it == matrices_.end()) fail("missing matrix '" + name + "'");

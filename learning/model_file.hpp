@@ -69,6 +69,8 @@ class ModelReader {
   double number(const std::string& key) const;
   /// An integer in [min_value, max_value].
   std::int64_t integer(const std::string& key, std::int64_t min_value, std::int64_t max_value) const;
+  /// An unsigned 64-bit integer (seeds).
+  std::uint64_t unsignedInteger(const std::string& key) const;
   /// A matrix of exactly rows x cols (a negative expectation means "any").
   const Eigen::MatrixXd& matrix(const std::string& name, Eigen::Index rows, Eigen::Index cols) const;
 

@@ -3,6 +3,7 @@
 
 #include <Eigen/QR>
 #include <cmath>
+#include <limits>
 
 #include "learning/elm.hpp"
 #include "tests/learning/test_maps.hpp"
@@ -81,6 +82,18 @@ TEST(Elm, SameSeedGivesSameModelAndOtherSeedDiffers) {
   Elm other(3, 7, params);
   other.fit(data);
   EXPECT_GT((other.outputWeights() - first.outputWeights()).norm(), 1e-3);
+}
+
+TEST(Elm, ModelWithTheLargestSeedRoundTrips) {
+  ElmParams params;
+  params.seed = std::numeric_limits<std::uint64_t>::max();
+  Elm elm(3, 7, params);
+  elm.fit(helixAreas(sixAreaCentres(), 4, 7));
+  ModelWriter writer("elm");
+  elm.write(writer);
+  const Elm loaded = Elm::read(ModelReader(writer.text(), "seed"));
+  EXPECT_EQ(loaded.params().seed, params.seed);
+  EXPECT_EQ(loaded.outputWeights(), elm.outputWeights());
 }
 
 TEST(OsElm, EqualsBatchRidgeElmWithSameFeaturesAfterSameSamples) {
