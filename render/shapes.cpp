@@ -38,7 +38,9 @@ void applyColor(osg::Node& node, const Eigen::Vector4f& rgba) {
   material->setShininess(osg::Material::FRONT_AND_BACK, 48.0F);
   state->setAttributeAndModes(material, osg::StateAttribute::ON | osg::StateAttribute::OVERRIDE);
   if (rgba[3] < 0.999F) {
-    state->setAttributeAndModes(new osg::BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA));
+    // Blend colours, but keep the framebuffer opaque: a translucent pixel in a PNG or in Qt's
+    // widget buffer would let the desktop or a checkerboard show through.
+    state->setAttributeAndModes(new osg::BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA));
     state->setRenderingHint(osg::StateSet::TRANSPARENT_BIN);
   } else {
     state->removeAttribute(osg::StateAttribute::BLENDFUNC);

@@ -1,0 +1,55 @@
+#pragma once
+// The 3D view: an OpenSceneGraph viewer drawing into a QOpenGLWidget through an embedded
+// graphics window (no window of OSG's own), rendering in paintGL. The mouse orbits (left
+// button), pans (middle, or left with Shift) and zooms (right button, wheel) around the scene.
+#include <QOpenGLWidget>
+#include <osg/ref_ptr>
+#include <osgGA/OrbitManipulator>
+#include <osgViewer/GraphicsWindow>
+#include <osgViewer/Viewer>
+
+#include "render/camera.hpp"
+
+namespace flexirob::ui {
+
+class OsgView : public QOpenGLWidget {
+  Q_OBJECT
+
+ public:
+  explicit OsgView(QWidget* parent = nullptr);
+  ~OsgView() override;
+
+  /// The tree to draw (not owned; must outlive the view or be replaced first).
+  void setSceneRoot(osg::Node* root);
+  /// Makes `camera` the home view and moves there.
+  void setHomeCamera(const render::CameraPose& camera);
+  /// Back to the home view.
+  void resetCamera();
+  /// Where the eye is now and what it looks at (world frame).
+  render::CameraPose currentCamera() const;
+  /// Frames drawn so far (for tests and frame-rate figures).
+  long framesDrawn() const { return frames_; }
+
+ protected:
+  void initializeGL() override;
+  void resizeGL(int width, int height) override;
+  void paintGL() override;
+  void mousePressEvent(QMouseEvent* event) override;
+  void mouseReleaseEvent(QMouseEvent* event) override;
+  void mouseMoveEvent(QMouseEvent* event) override;
+  void mouseDoubleClickEvent(QMouseEvent* event) override;
+  void wheelEvent(QWheelEvent* event) override;
+
+ private:
+  osgGA::EventQueue* events() const { return window_->getEventQueue(); }
+  int osgButton(const QMouseEvent* event) const;
+  double scale() const { return devicePixelRatioF(); }
+
+  osg::ref_ptr<osgViewer::Viewer> viewer_;
+  osg::ref_ptr<osgViewer::GraphicsWindowEmbedded> window_;
+  osg::ref_ptr<osgGA::OrbitManipulator> manipulator_;
+  render::CameraPose home_;
+  long frames_ = 0;
+};
+
+}  // namespace flexirob::ui
