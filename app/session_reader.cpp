@@ -1,0 +1,315 @@
+#include "app/session_reader.hpp"
+
+#include <sqlite3.h>
+
+#include <array>
+#include <cstring>
+#include <fstream>
+#include <set>
+
+#include "app/session_schema.hpp"
+#include "robot/errors.hpp"
+
+namespace flexirob::app {
+
+namespace {
+
+std::uint32_t bigEndian32(const unsigned char* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
+}
+
+// Checks the 100-byte SQLite header against the file's length before SQLite sees the file:
+// SQLite opens a truncated database happily and fails (or reads zeros) only on the missing
+// pages, which could be deep inside a long recording.
+void checkHeader(const std::filesystem::path& file) {
+  const std::string name = file.string();
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) throw InputError("session file " + name + " does not exist");
+  if (!std::filesystem::is_regular_file(file, ec)) throw InputError("session file " + name + " is not a regular file");
+  const auto size = std::filesystem::file_size(file, ec);
+  if (ec) throw InputError("cannot read session file " + name + ": " + ec.message());
+  if (size == 0) throw InputError("session file " + name + " is empty, not a FlexIRob session");
+
+  std::array<unsigned char, 100> header{};
+  std::ifstream in(file, std::ios::binary);
+  in.read(reinterpret_cast<char*>(header.data()), static_cast<std::streamsize>(header.size()));
+  const auto got = static_cast<std::size_t>(in.gcount());
+  static const char kMagic[] = "SQLite format 3";  // 16 bytes with its terminating zero
+  if (got < 16 || std::memcmp(header.data(), kMagic, 16) != 0) {
+    throw InputError("session file " + name + " is not a FlexIRob session (not an SQLite database)");
+  }
+  if (got < header.size()) {
+    throw InputError("session file " + name + " is truncated (" + std::to_string(size) + " bytes, shorter than its header)");
+  }
+  const std::uint32_t raw_page_size = (std::uint32_t{header[16]} << 8) | header[17];
+  const std::uint64_t page_size = raw_page_size == 1 ? 65536 : raw_page_size;
+  const std::uint32_t change_counter = bigEndian32(&header[24]);
+  const std::uint32_t pages = bigEndian32(&header[28]);
+  const std::uint32_t valid_for = bigEndian32(&header[92]);
+  // The in-header page count is valid when version-valid-for matches the change counter.
+  if (page_size >= 512 && pages > 0 && change_counter == valid_for) {
+    const std::uint64_t expected = page_size * pages;
+    if (size < expected) {
+      throw InputError("session file " + name + " is truncated (" + std::to_string(size) + " of " +
+                       std::to_string(expected) + " bytes)");
+    }
+  }
+}
+
+TrajectoryKind trajectoryKindFromName(const std::string& name) {
+  if (name == "teach_in") return TrajectoryKind::TeachIn;
+  if (name == "target") return TrajectoryKind::Target;
+  if (name == "executed") return TrajectoryKind::Executed;
+  throw SqliteError("unknown trajectory kind '" + name + "'", SQLITE_CORRUPT);
+}
+
+const char* kStateColumns = "t,dof,q,q_cmd,tau_ext,p_WT,quat_WT";
+
+StateRecord readState(const SqliteStatement& st) {
+  StateRecord s;
+  s.time = st.columnDouble(0);
+  const auto dof = st.columnInt(1);
+  if (dof < 0 || dof > kMaxRecordedJoints) throw SqliteError("state row with " + std::to_string(dof) + " joints", SQLITE_CORRUPT);
+  s.dof = static_cast<std::int32_t>(dof);
+  const auto copy = [&st](int column, double* out, Eigen::Index expected) {
+    const Eigen::VectorXd v = st.columnDoubles(column);
+    if (v.size() != expected) throw SqliteError("state row with a wrongly sized vector", SQLITE_CORRUPT);
+    std::memcpy(out, v.data(), static_cast<std::size_t>(expected) * sizeof(double));
+  };
+  copy(2, s.q.data(), dof);
+  copy(3, s.q_cmd.data(), dof);
+  copy(4, s.tau_ext.data(), dof);
+  copy(5, s.p_WT.data(), 3);
+  copy(6, s.quat_WT.data(), 4);
+  return s;
+}
+
+}  // namespace
+
+struct SessionReader::Impl {
+  SqliteDatabase db;
+};
+
+SessionReader::SessionReader(const std::filesystem::path& file) : file_(file), impl_(std::make_unique<Impl>()) {
+  checkHeader(file);
+  const std::string name = file.string();
+  try {
+    impl_->db = SqliteDatabase(name, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX);
+    auto& db = impl_->db;
+
+    // Ours? application_id first: a foreign SQLite database is refused before its tables are read.
+    const auto application_id = db.queryInt("PRAGMA application_id");
+    if (application_id != kSessionApplicationId) {
+      throw InputError("session file " + name + " is not a FlexIRob session (an SQLite database of another application)");
+    }
+    schema_version_ = static_cast<int>(db.queryInt("PRAGMA user_version"));
+    if (schema_version_ > kSessionSchemaVersion) {
+      throw InputError("session file " + name + " has schema version " + std::to_string(schema_version_) +
+                       "; this build reads up to version " + std::to_string(kSessionSchemaVersion));
+    }
+    if (schema_version_ < 1) throw InputError("session file " + name + " has no schema version");
+
+    std::set<std::string> tables;
+    SqliteStatement list(db, "SELECT name FROM sqlite_master WHERE type='table'");
+    while (list.step()) tables.insert(list.columnText(0));
+    for (const auto& table : requiredSessionTables()) {
+      if (!tables.count(table)) throw InputError("session file " + name + " lacks the table '" + table + "'");
+    }
+
+    SqliteStatement meta(db, "SELECT key, value FROM meta");
+    while (meta.step()) meta_[meta.columnText(0)] = meta.columnText(1);
+    if (this->meta("format") != kSessionFormatName) {
+      throw InputError("session file " + name + " is not a FlexIRob session (meta.format is '" + this->meta("format") + "')");
+    }
+    metadata_.robot_name = this->meta("robot_name");
+    metadata_.robot_urdf = this->meta("robot_urdf");
+    metadata_.tip_link = this->meta("tip_link");
+    metadata_.scene_name = this->meta("scene_name");
+    metadata_.scene_text = this->meta("scene_text");
+    metadata_.parameters = this->meta("parameters");
+    metadata_.software_version = this->meta("software_version");
+    metadata_.participant = this->meta("participant");
+    metadata_.start_time_utc = this->meta("start_time_utc");
+
+    // Ends of the state table: rowids are consecutive (rows are only appended), so the count
+    // is max - min + 1 without a scan; min/max of t come from the index.
+    SqliteStatement ends(db, "SELECT min(id), max(id) FROM state");
+    if (ends.step() && !ends.columnIsNull(0)) state_count_ = ends.columnInt(1) - ends.columnInt(0) + 1;
+    SqliteStatement times(db, "SELECT min(t), max(t) FROM state");
+    if (times.step() && !times.columnIsNull(0)) {
+      start_time_ = times.columnDouble(0);
+      end_time_ = times.columnDouble(1);
+    }
+    // Read the last state row once: a file cut inside its b-tree fails here, not in review.
+    if (state_count_ > 0) stateAt(end_time_);
+  } catch (const SqliteError& e) {
+    throw InputError("session file " + name + " cannot be read: " + e.what());
+  }
+}
+
+SessionReader::~SessionReader() = default;
+SessionReader::SessionReader(SessionReader&&) noexcept = default;
+SessionReader& SessionReader::operator=(SessionReader&&) noexcept = default;
+
+std::string SessionReader::meta(const std::string& key, const std::string& fallback) const {
+  const auto it = meta_.find(key);
+  return it == meta_.end() ? fallback : it->second;
+}
+
+std::vector<StateRecord> SessionReader::states(double t0, double t1, int stride) const {
+  if (stride < 1) stride = 1;
+  std::vector<StateRecord> out;
+  SqliteStatement st(impl_->db, std::string("SELECT ") + kStateColumns + " FROM state WHERE t >= ? AND t <= ? ORDER BY t");
+  st.bind(1, t0).bind(2, t1);
+  int index = 0;
+  while (st.step()) {
+    if (index++ % stride == 0) out.push_back(readState(st));
+  }
+  return out;
+}
+
+std::optional<StateRecord> SessionReader::stateAt(double time) const {
+  SqliteStatement st(impl_->db, std::string("SELECT ") + kStateColumns + " FROM state WHERE t <= ? ORDER BY t DESC LIMIT 1");
+  st.bind(1, time);
+  if (st.step()) return readState(st);
+  SqliteStatement first(impl_->db, std::string("SELECT ") + kStateColumns + " FROM state ORDER BY t LIMIT 1");
+  if (first.step()) return readState(first);
+  return std::nullopt;
+}
+
+std::vector<StageRecord> SessionReader::stages() const {
+  std::vector<StageRecord> out;
+  SqliteStatement st(impl_->db, "SELECT t, stage, sub_stage FROM stage ORDER BY t, id");
+  while (st.step()) out.push_back({st.columnDouble(0), st.columnText(1), st.columnText(2)});
+  return out;
+}
+
+std::vector<SignalRecord> SessionReader::signals() const {
+  std::vector<SignalRecord> out;
+  SqliteStatement st(impl_->db, "SELECT t, kind, name FROM signal ORDER BY t, id");
+  while (st.step()) {
+    out.push_back({st.columnDouble(0), st.columnText(1) == "button" ? SignalKind::Button : SignalKind::Trigger,
+                   st.columnText(2)});
+  }
+  return out;
+}
+
+std::vector<CollisionRecord> SessionReader::collisions(double t0, double t1) const {
+  std::vector<CollisionRecord> out;
+  SqliteStatement st(impl_->db,
+                     "SELECT t, body_a, body_b, depth, p_W FROM collision WHERE t >= ? AND t <= ? ORDER BY t, id");
+  st.bind(1, t0).bind(2, t1);
+  while (st.step()) {
+    CollisionRecord c;
+    c.time = st.columnDouble(0);
+    c.body_a = st.columnText(1);
+    c.body_b = st.columnText(2);
+    c.depth = st.columnDouble(3);
+    const Eigen::VectorXd p = st.columnDoubles(4);
+    if (p.size() != 3) throw InputError("session file " + file_.string() + ": a collision row is damaged");
+    c.p_W = p;
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+std::vector<AreaRecord> SessionReader::areas() const {
+  std::vector<AreaRecord> out;
+  SqliteStatement st(impl_->db, "SELECT area, t, x_init, q_fixed FROM area ORDER BY t, id");
+  while (st.step()) out.push_back({static_cast<int>(st.columnInt(0)), st.columnDouble(1), st.columnDoubles(2), st.columnDoubles(3)});
+  return out;
+}
+
+std::vector<SampleRecord> SessionReader::samples(int area) const {
+  std::vector<SampleRecord> out;
+  SqliteStatement st(impl_->db, area < 0 ? "SELECT t, area, x, q FROM sample ORDER BY id"
+                                         : "SELECT t, area, x, q FROM sample WHERE area = ? ORDER BY id");
+  if (area >= 0) st.bind(1, area);
+  while (st.step()) {
+    out.push_back({st.columnDouble(0), static_cast<int>(st.columnInt(1)), st.columnDoubles(2), st.columnDoubles(3)});
+  }
+  return out;
+}
+
+std::map<int, std::int64_t> SessionReader::sampleCounts() const {
+  std::map<int, std::int64_t> out;
+  SqliteStatement st(impl_->db, "SELECT area, count(*) FROM sample GROUP BY area");
+  while (st.step()) out[static_cast<int>(st.columnInt(0))] = st.columnInt(1);
+  return out;
+}
+
+std::vector<ModelRecord> SessionReader::models() const {
+  std::vector<ModelRecord> out;
+  SqliteStatement st(impl_->db, "SELECT t, learner, samples, train_seconds, bytes FROM model ORDER BY id");
+  while (st.step()) {
+    ModelRecord m;
+    m.time = st.columnDouble(0);
+    m.learner_kind = st.columnText(1);
+    m.samples = static_cast<int>(st.columnInt(2));
+    m.train_seconds = st.columnDouble(3);
+    m.bytes = st.columnBlob(4);
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+std::vector<ItmRecord> SessionReader::itmSnapshots() const {
+  std::vector<ItmRecord> out;
+  SqliteStatement st(impl_->db, "SELECT t, nodes, edges, bytes FROM itm ORDER BY id");
+  while (st.step()) {
+    out.push_back({st.columnDouble(0), static_cast<int>(st.columnInt(1)), static_cast<int>(st.columnInt(2)), st.columnBlob(3)});
+  }
+  return out;
+}
+
+namespace {
+std::vector<TrajectoryRecord> readTrajectories(const SqliteDatabase& db, const std::string& where, std::int64_t arg,
+                                               const std::string& file) {
+  std::vector<TrajectoryRecord> out;
+  SqliteStatement st(db, "SELECT id, kind, name, reference_id, points, dof, times, positions, postures, outcome "
+                         "FROM trajectory " + where + " ORDER BY id");
+  if (!where.empty()) st.bind(1, arg);
+  while (st.step()) {
+    TrajectoryRecord r;
+    r.id = st.columnInt(0);
+    r.kind = trajectoryKindFromName(st.columnText(1));
+    r.name = st.columnText(2);
+    r.reference_id = st.columnIsNull(3) ? -1 : st.columnInt(3);
+    const auto points = st.columnInt(4);
+    const auto dof = st.columnInt(5);
+    r.times = st.columnDoubles(6);
+    const Eigen::VectorXd positions = st.columnDoubles(7);
+    const Eigen::VectorXd postures = st.columnDoubles(8);
+    if (points < 0 || dof < 0 || r.times.size() != points || positions.size() != 3 * points ||
+        postures.size() != dof * points) {
+      throw InputError("session file " + file + ": trajectory " + std::to_string(r.id) + " is damaged");
+    }
+    r.positions = Eigen::Map<const Eigen::MatrixXd>(positions.data(), 3, points);
+    r.postures = Eigen::Map<const Eigen::MatrixXd>(postures.data(), dof, points);
+    r.outcome = st.columnText(9);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+}  // namespace
+
+std::vector<TrajectoryRecord> SessionReader::trajectories() const {
+  return readTrajectories(impl_->db, "", 0, file_.string());
+}
+
+std::vector<TrajectoryRecord> SessionReader::trajectories(TrajectoryKind kind) const {
+  std::vector<TrajectoryRecord> all = trajectories();
+  std::vector<TrajectoryRecord> out;
+  for (auto& r : all) {
+    if (r.kind == kind) out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::optional<TrajectoryRecord> SessionReader::trajectory(std::int64_t id) const {
+  auto found = readTrajectories(impl_->db, "WHERE id = ?", id, file_.string());
+  if (found.empty()) return std::nullopt;
+  return std::move(found.front());
+}
+
+}  // namespace flexirob::app

@@ -1,0 +1,76 @@
+#pragma once
+// Reads a session database written by SessionRecorder (schema in docs/SESSIONS.md).
+//
+// Opening is cheap regardless of the recording's length: it reads the file header, the meta
+// table and the ends of the state index (no table scan), so a 30-minute recording opens in
+// milliseconds. State ranges are read through the index on time.
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/session_recorder.hpp"
+
+namespace flexirob::app {
+
+class SessionReader {
+ public:
+  /// Opens `file` read-only. Throws flexirob::InputError with a one-line reason if the file is
+  /// missing, empty, not SQLite, not a FlexIRob session, of a newer schema, truncated or damaged.
+  explicit SessionReader(const std::filesystem::path& file);
+  ~SessionReader();
+  SessionReader(SessionReader&&) noexcept;
+  SessionReader& operator=(SessionReader&&) noexcept;
+
+  const std::filesystem::path& file() const { return file_; }
+  int schemaVersion() const { return schema_version_; }
+  const SessionMetadata& metadata() const { return metadata_; }
+  /// Every meta key/value (metadata plus free keys such as end_time_utc).
+  const std::map<std::string, std::string>& meta() const { return meta_; }
+  /// A meta value or `fallback`.
+  std::string meta(const std::string& key, const std::string& fallback = "") const;
+
+  // --- Robot state at control rate.
+  std::int64_t stateCount() const { return state_count_; }
+  /// [s] first and last state time (0, 0 without states).
+  double startTime() const { return start_time_; }
+  double endTime() const { return end_time_; }
+  /// States with t0 <= time <= t1 in time order; every `stride`-th row only (stride >= 1), for
+  /// plots of long ranges.
+  std::vector<StateRecord> states(double t0, double t1, int stride = 1) const;
+  /// The last state at or before `time` (the first state if `time` precedes it).
+  std::optional<StateRecord> stateAt(double time) const;
+
+  // --- Events, all in time order.
+  std::vector<StageRecord> stages() const;
+  std::vector<SignalRecord> signals() const;
+  std::vector<CollisionRecord> collisions(double t0 = -1e300, double t1 = 1e300) const;
+  std::vector<AreaRecord> areas() const;
+  /// Samples of one area, or of all areas when area < 0.
+  std::vector<SampleRecord> samples(int area = -1) const;
+  /// Sample count per area index.
+  std::map<int, std::int64_t> sampleCounts() const;
+  /// Models in the order they were recorded (with their bytes).
+  std::vector<ModelRecord> models() const;
+  std::vector<ItmRecord> itmSnapshots() const;
+  /// All trajectories, or those of one kind.
+  std::vector<TrajectoryRecord> trajectories() const;
+  std::vector<TrajectoryRecord> trajectories(TrajectoryKind kind) const;
+  std::optional<TrajectoryRecord> trajectory(std::int64_t id) const;
+
+ private:
+  struct Impl;
+  std::filesystem::path file_;
+  std::unique_ptr<Impl> impl_;
+  int schema_version_ = 0;
+  SessionMetadata metadata_;
+  std::map<std::string, std::string> meta_;
+  std::int64_t state_count_ = 0;
+  double start_time_ = 0.0;
+  double end_time_ = 0.0;
+};
+
+}  // namespace flexirob::app
