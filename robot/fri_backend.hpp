@@ -18,10 +18,10 @@
 //    and quality >= OK, and only if it lies inside the software position limits and moves no
 //    joint faster than its velocity limit over one cycle; anything else is rejected and the
 //    previous posture is held;
-//  - the watchdog: a measurement missing for more than `watchdog_cycles` cycles (lost in
-//    transit, late, or left unanswered because our loop was late) trips it: the backend stops
-//    forwarding commands, answers the KRC with the held posture, and reports the fault until
-//    the operator calls confirmReconnect().
+//  - the watchdog: `watchdog_cycles` measurements in a row missing (lost in transit, none for
+//    (watchdog_cycles + 0.5) cycles, or left unanswered because our loop was late) trip it:
+//    the backend stops forwarding commands, answers the KRC with the held posture, and reports
+//    the fault until the operator calls confirmReconnect().
 // Not thread-safe: one control thread calls step(), readState(), writeCommand() and reads
 // status(); the application publishes status() to the GUI through its snapshot.
 #include <Eigen/Core>
