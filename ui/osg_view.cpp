@@ -1,6 +1,7 @@
 #include "ui/osg_view.hpp"
 
 #include <QMouseEvent>
+#include <QOpenGLContext>
 #include <QWheelEvent>
 
 #include "render/shapes.hpp"
@@ -76,6 +77,8 @@ void OsgView::resizeGL(int width, int height) {
 }
 
 void OsgView::paintGL() {
+  // Platforms without OpenGL (e.g. Qt's offscreen platform) give no context: draw nothing.
+  if (context() == nullptr || !context()->isValid()) return;
   // QOpenGLWidget draws into its own framebuffer object, not into framebuffer 0.
   window_->setDefaultFboId(defaultFramebufferObject());
   viewer_->frame();

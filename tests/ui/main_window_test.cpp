@@ -1,0 +1,149 @@
+// The main window: it builds, its joint sliders pose the robot the view shows, its menus list
+// the built-in robots and scenes.
+#include <QAction>
+#include <QGuiApplication>
+#include <QMenu>
+#include <QSignalSpy>
+#include <QTest>
+
+#include "render/shapes.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/resources.hpp"
+#include "robot/scene.hpp"
+#include "ui/joint_panel.hpp"
+#include "ui/main_window.hpp"
+#include "ui/osg_view.hpp"
+
+using flexirob::ui::MainWindow;
+
+namespace {
+
+QStringList actionNames(const QMenu* menu) {
+  QStringList names;
+  for (const QAction* action : menu->actions()) names << action->data().toString();
+  return names;
+}
+
+QStringList toQStringList(const std::vector<std::string>& names) {
+  QStringList list;
+  for (const auto& name : names) list << QString::fromStdString(name);
+  return list;
+}
+
+// Qt's offscreen platform has no OpenGL: a shown QOpenGLWidget would crash there in Qt itself.
+bool canDraw() { return QGuiApplication::platformName() != QStringLiteral("offscreen"); }
+
+void showIfDrawable(QWidget& window) {
+  if (canDraw()) window.show();
+}
+
+// Largest entry-wise difference between two OSG matrices.
+double maxDifference(const osg::Matrixd& a, const osg::Matrixd& b) {
+  double worst = 0.0;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) worst = std::max(worst, std::abs(a(r, c) - b(r, c)));
+  }
+  return worst;
+}
+
+}  // namespace
+
+class MainWindowTest : public QObject {
+  Q_OBJECT
+
+ private slots:
+  void buildsWithTheDefaultRobotAndScene() {
+    MainWindow window("lwr4", "setup_I");
+    showIfDrawable(window);
+    QVERIFY(window.robotModel() != nullptr);
+    QCOMPARE(window.robotModel()->name(), std::string("lwr4"));
+    QCOMPARE(window.jointPanel()->jointCount(), 7);
+    QCOMPARE(window.scene().name, std::string("setup_I"));
+    QVERIFY(!window.scene().obstacles.empty());
+    // One transform per body in the view's tree.
+    QCOMPARE(window.world().robot()->bodyCount(), static_cast<int>(window.robotModel()->bodies().size()));
+  }
+
+  void movingASliderPosesTheRobotInTheView() {
+    MainWindow window("lwr4", "empty");
+    showIfDrawable(window);
+    flexirob::ui::JointPanel* panel = window.jointPanel();
+    QSignalSpy spy(panel, &flexirob::ui::JointPanel::postureChanged);
+    const Eigen::VectorXd before = panel->posture();
+    const int elbow = 3;  // A4
+    const int last_body = window.world().robot()->bodyCount() - 1;
+    const osg::Matrixd X_before = window.world().robot()->body(last_body)->getMatrix();
+    // A user presses Page Up on the A4 slider: one page step of 10 degrees.
+    flexirob::ui::LimitSlider* slider = panel->slider(elbow);
+    slider->setFocus();
+    QTest::keyClick(slider, Qt::Key_PageUp);
+    QCOMPARE(spy.count(), 1);
+    const Eigen::VectorXd after = panel->posture();
+    QVERIFY(std::abs(std::abs(after[elbow] - before[elbow]) - 10.0 * M_PI / 180.0) < 2e-3);
+    for (int j = 0; j < 7; ++j) {
+      if (j != elbow) QCOMPARE(after[j], before[j]);
+    }
+    // The view's flange body moved, to where an independent forward kinematics puts it.
+    const osg::Matrixd X_after = window.world().robot()->body(last_body)->getMatrix();
+    QVERIFY(maxDifference(X_before, X_after) > 1e-3);
+    flexirob::robot::Kinematics kinematics(*window.robotModel());
+    kinematics.update(after);
+    QVERIFY(maxDifference(X_after, flexirob::render::toOsgMatrix(kinematics.X_WB(last_body))) < 1e-9);
+    QVERIFY((window.kinematics()->p_WT() - kinematics.p_WT()).norm() < 1e-12);
+  }
+
+  void menusListTheBuiltInRobotsAndScenes() {
+    MainWindow window("lwr4", "empty");
+    QCOMPARE(actionNames(window.robotMenu()), toQStringList(flexirob::builtinRobotNames()));
+    QCOMPARE(actionNames(window.sceneMenu()), toQStringList(flexirob::robot::builtinSceneNames()));
+    // Choosing the 9-DoF arm from the menu rebuilds the joint panel.
+    for (QAction* action : window.robotMenu()->actions()) {
+      if (action->data().toString() == QStringLiteral("arm9")) action->trigger();
+    }
+    QCOMPARE(window.jointPanel()->jointCount(), 9);
+    QVERIFY(window.robotMenu()->actions().at(1)->isChecked());
+    for (QAction* action : window.sceneMenu()->actions()) {
+      if (action->data().toString() == QStringLiteral("setup_II")) action->trigger();
+    }
+    QCOMPARE(window.scene().name, std::string("setup_II"));
+  }
+
+  void badChoicesKeepTheCurrentRobotAndScene() {
+    MainWindow window("lwr4", "setup_I");
+    QVERIFY(!window.loadRobot("/nonexistent/robot.urdf"));
+    QVERIFY(!window.loadScene("no_such_scene"));
+    QCOMPARE(window.robotModel()->name(), std::string("lwr4"));
+    QCOMPARE(window.scene().name, std::string("setup_I"));
+    QCOMPARE(window.jointPanel()->jointCount(), 7);
+  }
+
+  void viewDrawsTheRobotWhereItStands() {
+    if (!canDraw()) QSKIP("no OpenGL on Qt's offscreen platform");
+    MainWindow window("lwr4", "empty");
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    const QImage shown = window.view()->grabFramebuffer();
+    if (window.view()->framesDrawn() == 0 || shown.isNull()) QSKIP("no OpenGL context on this platform");
+    // Hide the robot: the pixels that change are the arm's, and they surround the projection of
+    // the elbow (body 4) that the view's camera sees.
+    window.world().robot()->root()->setNodeMask(0);
+    const QImage hidden = window.view()->grabFramebuffer();
+    window.world().robot()->root()->setNodeMask(~0U);
+    QCOMPARE(shown.size(), hidden.size());
+    int changed = 0;
+    for (int y = 0; y < shown.height(); ++y) {
+      for (int x = 0; x < shown.width(); ++x) changed += shown.pixel(x, y) != hidden.pixel(x, y) ? 1 : 0;
+    }
+    QVERIFY2(changed > 1000, qPrintable(QStringLiteral("only %1 pixels show the robot").arg(changed)));
+    const auto camera = window.view()->currentCamera();
+    const auto elbow = flexirob::render::projectToPixel(camera, shown.width(), shown.height(),
+                                                        window.kinematics()->X_WB(4).translation());
+    QVERIFY(elbow.has_value());
+    const QPoint p(static_cast<int>(elbow->x()), static_cast<int>(elbow->y()));
+    QVERIFY(shown.rect().contains(p));
+    QVERIFY2(shown.pixel(p) != hidden.pixel(p), "the elbow is not drawn where the camera projects it");
+  }
+};
+
+QTEST_MAIN(MainWindowTest)
+#include "main_window_test.moc"
