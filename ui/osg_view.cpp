@@ -125,8 +125,9 @@ void OsgView::mouseDoubleClickEvent(QMouseEvent* event) {
 
 void OsgView::wheelEvent(QWheelEvent* event) {
   const int delta = event->angleDelta().y();
+  // Wheel forward zooms in. OSG's orbit manipulator zooms in on SCROLL_DOWN.
   if (delta != 0) {
-    events()->mouseScroll(delta > 0 ? osgGA::GUIEventAdapter::SCROLL_UP : osgGA::GUIEventAdapter::SCROLL_DOWN);
+    events()->mouseScroll(delta > 0 ? osgGA::GUIEventAdapter::SCROLL_DOWN : osgGA::GUIEventAdapter::SCROLL_UP);
   }
   update();
 }

@@ -1,6 +1,9 @@
 // The main window: it builds, its joint sliders pose the robot the view shows, its menus list
 // the built-in robots and scenes.
 #include <QAction>
+#include <QApplication>
+#include <QMouseEvent>
+#include <QWheelEvent>
 #include <QGuiApplication>
 #include <QMenu>
 #include <QSignalSpy>
@@ -142,6 +145,51 @@ class MainWindowTest : public QObject {
     const QPoint p(static_cast<int>(elbow->x()), static_cast<int>(elbow->y()));
     QVERIFY(shown.rect().contains(p));
     QVERIFY2(shown.pixel(p) != hidden.pixel(p), "the elbow is not drawn where the camera projects it");
+  }
+
+  void mouseOrbitsPansAndZooms() {
+    if (!canDraw()) QSKIP("no OpenGL on Qt's offscreen platform");
+    MainWindow window("lwr4", "empty");
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    flexirob::ui::OsgView* view = window.view();
+    view->grabFramebuffer();
+    const auto home = view->currentCamera();
+    const auto send = [view](QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons held,
+                             Qt::KeyboardModifiers modifiers = Qt::NoModifier) {
+      QMouseEvent event(type, at, view->mapToGlobal(at), button, held, modifiers);
+      QApplication::sendEvent(view, &event);
+    };
+    const auto drag = [&](Qt::MouseButton button, Qt::KeyboardModifiers modifiers) {
+      const QPointF start(view->width() / 2.0, view->height() / 2.0);
+      send(QEvent::MouseButtonPress, start, button, button, modifiers);
+      for (int i = 1; i <= 5; ++i) {
+        send(QEvent::MouseMove, start + QPointF(12.0 * i, 4.0 * i), Qt::NoButton, button, modifiers);
+      }
+      send(QEvent::MouseButtonRelease, start + QPointF(60.0, 20.0), button, Qt::NoButton, modifiers);
+      view->grabFramebuffer();  // the viewer handles its events when it draws
+    };
+    // Left drag orbits: the eye moves, the centre stays, the distance stays.
+    drag(Qt::LeftButton, Qt::NoModifier);
+    const auto orbited = view->currentCamera();
+    QVERIFY((orbited.eye_W - home.eye_W).norm() > 0.05);
+    QVERIFY((orbited.center_W - home.center_W).norm() < 1e-6);
+    QVERIFY(std::abs((orbited.eye_W - orbited.center_W).norm() - (home.eye_W - home.center_W).norm()) < 1e-6);
+    // Shift + left drag pans: eye and centre move together.
+    drag(Qt::LeftButton, Qt::ShiftModifier);
+    const auto panned = view->currentCamera();
+    QVERIFY((panned.center_W - orbited.center_W).norm() > 1e-3);
+    QVERIFY(((panned.eye_W - panned.center_W) - (orbited.eye_W - orbited.center_W)).norm() < 1e-6);
+    // The wheel zooms: closer to the centre.
+    QWheelEvent wheel(QPointF(50, 50), view->mapToGlobal(QPointF(50, 50)), QPoint(), QPoint(0, 120), Qt::NoButton,
+                      Qt::NoModifier, Qt::NoScrollPhase, false);
+    QApplication::sendEvent(view, &wheel);
+    view->grabFramebuffer();
+    const auto zoomed = view->currentCamera();
+    QVERIFY((zoomed.eye_W - zoomed.center_W).norm() < (panned.eye_W - panned.center_W).norm() - 1e-3);
+    // A double click goes home.
+    view->resetCamera();
+    QVERIFY((view->currentCamera().eye_W - home.eye_W).norm() < 1e-9);
   }
 };
 
