@@ -1,0 +1,371 @@
+#include "app/simulated_tutor.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <thread>
+
+#include "robot/errors.hpp"
+#include "robot/kinematics.hpp"
+
+namespace flexirob::app {
+namespace {
+
+// The tutor's hands: a joint-space PD realized by forces on several links (a person pushes the
+// upper arm, the elbow and the wrist); the single simulated hand visits the points in turn, each
+// with its share scaled up, so that the mean torque is the PD torque.
+constexpr double kJointStiffness = 36.0;  // [1/s²] times the joint inertia: about 1 Hz
+constexpr double kJointDamping = 12.0;    // [1/s] times the joint inertia: critically damped
+constexpr double kJointIntegral = 60.0;   // [1/s³] times the joint inertia
+constexpr double kMaxPointForce = 150.0;  // [N]
+constexpr double kTipStiffness = 1500.0;  // [N/m] of the hand drawing circles
+constexpr double kTipDamping = 60.0;      // [Ns/m]
+constexpr double kMaxTipForce = 60.0;     // [N]
+
+}  // namespace
+
+SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const robot::Scene& scene,
+                               const robot::ParameterSet& parameters, TutorOptions options)
+    : sim_(&sim),
+      workflow_(&workflow),
+      scene_(&scene),
+      model_(&sim.model()),
+      parameters_(parameters),
+      options_(std::move(options)),
+      world_(std::make_unique<robot::CollisionWorld>(sim.model(), scene)),
+      kinematics_(sim.model()),
+      random_(options_.seed) {
+  if (!(options_.circle_diameter > 0.0) || options_.circle_diameter > 0.5) {
+    throw InputError("tutor: circle diameter must be in (0, 0.5] m");
+  }
+  if (options_.circles < 1 || options_.posture_candidates < 1) throw InputError("tutor: circles and candidates must be >= 1");
+  state_.resize(model_->dof());
+}
+
+SimulatedTutor::~SimulatedTutor() = default;
+
+void SimulatedTutor::tick() {
+  workflow_->step();
+  ++ticks_;
+  if (options_.realtime) {
+    const double now = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    if (wall_start_ < 0.0) wall_start_ = now - sim_->time();
+    const double ahead = sim_->time() - (now - wall_start_);
+    if (ahead > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(ahead));
+  }
+  sim_->readState(state_);
+}
+
+void SimulatedTutor::updateReport() {
+  report_.collisions = sim_->collisions().events();
+  report_.colliding_steps = sim_->collisions().collidingSteps();
+  report_.simulated_time = sim_->time();
+}
+
+double SimulatedTutor::pathClearance(const std::vector<Eigen::VectorXd>& path) {
+  double clearance = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const double length = (path[i + 1] - path[i]).cwiseAbs().maxCoeff();
+    const int samples = std::max(2, static_cast<int>(std::ceil(length / 0.02)));
+    for (int s = 0; s <= samples; ++s) {
+      const Eigen::VectorXd q = path[i] + (path[i + 1] - path[i]) * (static_cast<double>(s) / samples);
+      world_->update(q);
+      if (!world_->contacts().empty()) return -1.0;
+      clearance = std::min(clearance, world_->clearance(0.5).distance);
+    }
+  }
+  return clearance;
+}
+
+PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested) {
+  const int dof = model_->dof();
+  const Eigen::VectorXd lower = model_->softLowerLimits();
+  const Eigen::VectorXd upper = model_->softUpperLimits();
+  robot::HierarchicalController controller(*model_, parameters_);
+  PostureChoice best;
+  best.clearance = -std::numeric_limits<double>::infinity();
+  double best_score = -std::numeric_limits<double>::infinity();
+  Eigen::VectorXd q(dof), q_target(dof);
+  for (int c = 0; c < options_.posture_candidates; ++c) {
+    // Null-space targets: the scene's suggestion, the current posture, then random postures
+    // drawn inside the limits (kept away from them by a fifth of the range).
+    Eigen::VectorXd q_null(dof);
+    if (c == 0 && suggested && suggested->size() == dof) {
+      q_null = *suggested;
+    } else if (c <= 1) {
+      q_null = state_.q.size() == dof ? state_.q : model_->midPosture();
+    } else {
+      for (int j = 0; j < dof; ++j) {
+        const double margin = 0.2 * (upper[j] - lower[j]);
+        q_null[j] = random_.uniform(lower[j] + margin, upper[j] - margin);
+      }
+    }
+    // Kinematic IK with the hierarchical controller (Eq. 2.11), started at the null target.
+    q = q_null.cwiseMax(lower).cwiseMin(upper);
+    for (int it = 0; it < 400; ++it) {
+      controller.target(q, p_W, q_null, 0.02, q_target);
+      q = q_target.cwiseMax(lower).cwiseMin(upper);
+      if (controller.taskError() < 1e-5 && it > 50) break;
+    }
+    kinematics_.update(q);
+    if ((kinematics_.p_WT() - p_W).norm() > 1e-3) continue;
+    world_->update(q);
+    if (!world_->contacts().empty()) continue;
+    const double clearance = world_->clearance(0.5).distance;
+    // Prefer clearance; postures near a joint limit are penalized (they would warn).
+    const double limit_margin = std::min((q - lower).minCoeff(), (upper - q).minCoeff());
+    const double score = std::min(clearance, 0.3) - (limit_margin < 0.2 ? 0.1 : 0.0);
+    if (score > best_score) {
+      best_score = score;
+      best.found = clearance >= options_.min_clearance;
+      best.q = q;
+      best.clearance = clearance;
+    }
+  }
+  return best;
+}
+
+bool SimulatedTutor::waitFor(SubStage sub_stage, double max_time) {
+  sim_->clearHandForce();
+  const double until = sim_->time() + max_time;
+  while (workflow_->subStage() != sub_stage) {
+    if (sim_->time() > until) return false;
+    tick();
+  }
+  return true;
+}
+
+bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) {
+  // A firm touch at the tip while the arm is at rest: on_affected.
+  const double until = sim_->time() + 1.0;
+  while (workflow_->subStage() == sub_stage) {
+    if (sim_->time() > until) {
+      sim_->clearHandForce();
+      return false;
+    }
+    sim_->setHandForce(model_->dof(), state_.p_WT(), 15.0 * direction.normalized());
+    tick();
+  }
+  return true;
+}
+
+bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path) {
+  const int dof = model_->dof();
+  // Points the hands push: every body but the first, 6 cm off the body's origin (alternately
+  // along its x and y axes, so that rotations about any link axis can be pushed).
+  std::vector<int> bodies;
+  for (int b = 2; b <= dof; ++b) bodies.push_back(b);
+  const auto m = static_cast<int>(bodies.size());
+  const auto offset = [](int i) { return i % 2 == 0 ? Eigen::Vector3d(0.06, 0.0, 0.0) : Eigen::Vector3d(0.0, 0.06, 0.0); };
+  std::vector<Eigen::Vector3d> forces(static_cast<std::size_t>(m));
+  std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m));
+  robot::Matrix3Xd Jp(3, dof);
+  Eigen::MatrixXd A(dof, 3 * m);
+  Eigen::VectorXd q_ref = state_.q;
+  Eigen::VectorXd integral = Eigen::VectorXd::Zero(dof);
+  std::size_t next = 1;
+  const double dt = sim_->cycleTime();
+  const double deadline = sim_->time() + options_.max_phase_time;
+  int phase = 0;
+  while (true) {
+    if (sim_->time() > deadline) {
+      sim_->clearHandForce();
+      last_failure_detail_ = "in " + workflow_->stateName() + ", posture error " +
+                             std::to_string((state_.q - q_ref).cwiseAbs().maxCoeff()) + " rad, path point " +
+                             [&] { std::ostringstream o; o << (q_ref - state_.q).transpose() << " | " << integral.transpose(); return o.str(); }() + " " +
+                             std::to_string(next) + "/" + std::to_string(path.size()) + ", speed " +
+                             std::to_string(state_.qd.cwiseAbs().maxCoeff()) + " rad/s";
+      return false;
+    }
+    // Move the reference along the path at the tutor's pace.
+    if (next < path.size()) {
+      const Eigen::VectorXd to = path[next] - q_ref;
+      const double step = options_.approach_speed * dt;
+      if (to.cwiseAbs().maxCoeff() <= step) {
+        q_ref = path[next];
+        ++next;
+      } else {
+        q_ref += to * (step / to.cwiseAbs().maxCoeff());
+      }
+    } else if ((state_.q - q_ref).cwiseAbs().maxCoeff() < 0.005 && state_.qd.cwiseAbs().maxCoeff() < 0.01) {
+      sim_->clearHandForce();
+      return true;
+    }
+    // Every few cycles, the forces that realize the PD torque (minimum norm).
+    if (phase % m == 0) {
+      // Scaled by the joint inertia, as a person pushes a light wrist more gently than the
+      // shoulder (and so that the explicit PD stays stable on light joints).
+      // A person who feels the arm lag pushes harder: an integral term, bounded.
+      const Eigen::VectorXd& inertia = sim_->inertiaDiagonal();
+      const Eigen::VectorXd error = q_ref - state_.q;
+      integral = (integral + error * (dt * m)).cwiseMax(-1.0).cwiseMin(1.0);
+      const Eigen::VectorXd push = inertia.cwiseMax(0.2).cwiseProduct(kJointStiffness * error + kJointIntegral * integral);
+      const Eigen::VectorXd tau = push - inertia.cwiseProduct(kJointDamping * state_.qd);
+      kinematics_.update(state_.q);
+      for (int i = 0; i < m; ++i) {
+        const Eigen::Isometry3d& X_WB = kinematics_.X_WB(bodies[static_cast<std::size_t>(i)]);
+        points[static_cast<std::size_t>(i)] = X_WB * offset(i);
+        kinematics_.pointJacobian(bodies[static_cast<std::size_t>(i)], points[static_cast<std::size_t>(i)], Jp);
+        A.middleCols(3 * i, 3) = Jp.transpose();
+      }
+      const Eigen::MatrixXd AAt = A * A.transpose() + 1e-4 * Eigen::MatrixXd::Identity(dof, dof);
+      const Eigen::VectorXd F = A.transpose() * AAt.ldlt().solve(tau);
+      for (int i = 0; i < m; ++i) {
+        Eigen::Vector3d f = F.segment<3>(3 * i) * m;
+        if (f.norm() > kMaxPointForce) f *= kMaxPointForce / f.norm();
+        forces[static_cast<std::size_t>(i)] = f;
+      }
+    }
+    const auto i = static_cast<std::size_t>(phase % m);
+    kinematics_.update(state_.q);
+    const Eigen::Vector3d p = kinematics_.X_WB(bodies[i]) * offset(static_cast<int>(i));
+    sim_->setHandForce(bodies[i], p, forces[i]);
+    ++phase;
+    tick();
+  }
+}
+
+void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref, double duration) {
+  const double start = sim_->time();
+  Eigen::Vector3d p_last = state_.p_WT();
+  while (sim_->time() - start < duration) {
+    const Eigen::Vector3d p = state_.p_WT();
+    const Eigen::Vector3d v = (p - p_last) / sim_->cycleTime();
+    p_last = p;
+    Eigen::Vector3d F = kTipStiffness * (p_ref(sim_->time() - start) - p) - kTipDamping * v;
+    if (F.norm() > kMaxTipForce) F *= kMaxTipForce / F.norm();
+    sim_->setHandForce(model_->dof(), p, F);
+    tick();
+  }
+  sim_->clearHandForce();
+}
+
+bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested) {
+  const PostureChoice choice = choosePosture(area.target, suggested);
+  area.q_chosen = choice.q;
+  area.clearance = choice.clearance;
+  if (!choice.found) {
+    area.failure = "no collision-free posture with enough clearance";
+    return false;
+  }
+  // The way there: straight in joint space, or over the home posture if that is clearer.
+  std::vector<Eigen::VectorXd> path{state_.q, choice.q};
+  if (pathClearance(path) < options_.min_clearance && scene_->home_posture && scene_->home_posture->size() == model_->dof()) {
+    std::vector<Eigen::VectorXd> via{state_.q, *scene_->home_posture, choice.q};
+    if (pathClearance(via) > pathClearance(path)) path = via;
+  }
+  if (pathClearance(path) < 0.0) {
+    area.failure = "no collision-free way to the posture";
+    return false;
+  }
+  // Touch (on_affected -> APPROACHING), push the links there, let go (on_converged -> POSED).
+  kinematics_.update(choice.q);
+  if (!grab(SubStage::kWaiting, kinematics_.p_WT() - state_.p_WT() + Eigen::Vector3d(0, 0, 1e-3))) {
+    area.failure = "on_affected did not fire";
+    return false;
+  }
+  if (!pushAlong(path)) {
+    area.failure = "the posture was not reached in time (" + last_failure_detail_ + ")";
+    return false;
+  }
+  if (!waitFor(SubStage::kPosed, 6.0)) {
+    area.failure = "on_converged did not fire after the approach";
+    return false;
+  }
+  // Circles around the rest position under π_rec in a random plane; starting off-centre makes
+  // the first touch firm enough for on_affected.
+  const Eigen::Vector3d p0 = state_.p_WT();
+  Eigen::Vector3d normal(random_.uniform(-1, 1), random_.uniform(-1, 1), random_.uniform(-1, 1));
+  if (normal.norm() < 1e-3) normal = Eigen::Vector3d::UnitZ();
+  normal.normalize();
+  const Eigen::Vector3d u = normal.unitOrthogonal();
+  const Eigen::Vector3d w = normal.cross(u);
+  const double radius = 0.5 * options_.circle_diameter;
+  const double omega = 2.0 * std::numbers::pi / options_.circle_period;
+  pushTip([&](double t) { return Eigen::Vector3d(p0 + radius * (std::cos(omega * t) * u + std::sin(omega * t) * w)); },
+          options_.circles * options_.circle_period);
+  if (!waitFor(SubStage::kWaiting, 8.0)) {
+    area.failure = "on_converged did not fire after the recording";
+    return false;
+  }
+  area.taught = true;
+  return true;
+}
+
+TutorReport SimulatedTutor::configure(int area_count) {
+  if (area_count < 1 || area_count > 200) throw InputError("areas: expected 1..200, got " + std::to_string(area_count));
+  sim_->readState(state_);
+  const RequestResult started = workflow_->press(Button::kStartConfiguration);
+  if (!started) throw InputError("tutor: " + started.reason);
+  const robot::EvaluationGrid grid = scene_->grid.value_or(robot::EvaluationGrid{});
+  int listed = 0;
+  int attempts = 0;
+  while (static_cast<int>(workflow_->areas().size()) < area_count && attempts < 4 * area_count + 8) {
+    ++attempts;
+    TutorAreaReport area;
+    std::optional<Eigen::VectorXd> suggested;
+    if (listed < static_cast<int>(scene_->training_areas.size())) {
+      const robot::Area& scene_area = scene_->training_areas[static_cast<std::size_t>(listed++)];
+      area.name = scene_area.name;
+      area.target = scene_area.p_WA;
+      suggested = scene_area.posture;
+    } else {
+      // Chosen automatically: a point of the evaluation grid's box away from the obstacles.
+      area.name = "auto_" + std::to_string(attempts);
+      for (int tries = 0; tries < 100; ++tries) {
+        for (int a = 0; a < 3; ++a) area.target[a] = random_.uniform(grid.lower[a], grid.upper[a]);
+        bool free = true;
+        for (const auto& obstacle : scene_->obstacles) free = free && !robot::obstacleContains(obstacle, area.target, 0.1);
+        if (free) break;
+      }
+    }
+    teachArea(area, suggested);
+    report_.areas.push_back(area);
+    if (options_.progress) options_.progress("teach", static_cast<double>(workflow_->areas().size()) / area_count);
+  }
+  workflow_->press(Button::kFinishedConfiguration);
+  workflow_->waitForLearning();
+  tick();
+  updateReport();
+  return report_;
+}
+
+bool SimulatedTutor::program(const std::vector<Eigen::Vector3d>& waypoints) {
+  if (waypoints.empty()) throw InputError("tutor: a trajectory needs at least one waypoint");
+  sim_->readState(state_);
+  if (!workflow_->press(Button::kStartProgramming)) return false;
+  const double speed = 0.05;  // [m/s] of the tutor's hand
+  auto guide = [&](const std::vector<Eigen::Vector3d>& points) {
+    // Piecewise linear reference from the current tip position through the points.
+    std::vector<Eigen::Vector3d> line{state_.p_WT()};
+    line.insert(line.end(), points.begin(), points.end());
+    std::vector<double> at{0.0};
+    for (std::size_t i = 1; i < line.size(); ++i) at.push_back(at.back() + (line[i] - line[i - 1]).norm() / speed);
+    pushTip(
+        [&](double t) {
+          for (std::size_t i = 1; i < line.size(); ++i) {
+            if (t <= at[i]) return Eigen::Vector3d(line[i - 1] + (line[i] - line[i - 1]) * ((t - at[i - 1]) / std::max(1e-9, at[i] - at[i - 1])));
+          }
+          return line.back();
+        },
+        at.back() + 1.0);
+  };
+  const Eigen::Vector3d first = waypoints.front();
+  bool ok = grab(SubStage::kWaiting, first - state_.p_WT() + Eigen::Vector3d(0, 0, 1e-3));
+  if (ok) guide({first});
+  ok = ok && waitFor(SubStage::kPosed, 6.0);
+  if (ok && waypoints.size() > 1) {
+    ok = grab(SubStage::kPosed, waypoints[1] - state_.p_WT() + Eigen::Vector3d(0, 0, 1e-3));
+    if (ok) guide(std::vector<Eigen::Vector3d>(waypoints.begin() + 1, waypoints.end()));
+    ok = ok && waitFor(SubStage::kWaiting, 6.0);
+  }
+  workflow_->press(Button::kFinishedProgramming);
+  updateReport();
+  return ok;
+}
+
+}  // namespace flexirob::app

@@ -1,0 +1,117 @@
+#pragma once
+// A simulated tutor: plays a person teaching the simulated arm through the same interface a
+// person uses — hand forces on the links (Simulation::setHandForce) and the workflow's buttons.
+// Like a person it sees the scene: for each training area it picks a collision-free posture
+// with good clearance (IK solutions of the hierarchical controller from different null-space
+// targets, scored by the collision world's clearance), approaches it under π_q by pushing the
+// links, lets go and waits for on_converged, draws circular deflections under π_rec, lets go
+// again. In PROGRAMMING it guides the tip along a target trajectory. Seeded and deterministic.
+//
+// Frames: world W = robot base; metres, radians, newtons.
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/workflow.hpp"
+#include "learning/learner.hpp"
+#include "robot/collision.hpp"
+#include "robot/parameters.hpp"
+#include "robot/scene.hpp"
+#include "robot/sim/simulation.hpp"
+
+namespace flexirob::app {
+
+struct TutorOptions {
+  std::uint64_t seed = 1;
+  double circle_diameter = 0.04;   ///< [m] of the deflection circles (participants: 0.02-0.32)
+  int circles = 2;                 ///< circles drawn per area
+  double circle_period = 2.0;      ///< [s] per circle
+  int posture_candidates = 24;     ///< IK solutions tried per area
+  double min_clearance = 0.03;     ///< [m] a posture (and the approach) must keep from obstacles
+  double approach_speed = 0.4;     ///< [rad/s] of the tutor's joint-space reference
+  double max_phase_time = 30.0;    ///< [s] a phase may take before the tutor gives up
+  bool realtime = false;           ///< pace at wall-clock speed
+  /// Progress callback (what, fraction in [0, 1]); may be empty.
+  std::function<void(const std::string&, double)> progress;
+};
+
+/// What the tutor did in one area.
+struct TutorAreaReport {
+  std::string name;
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();  ///< intended area centre [m, W]
+  Eigen::VectorXd q_chosen;                          ///< posture the tutor aimed at [rad]
+  double clearance = 0.0;                            ///< its clearance [m]
+  bool taught = false;
+  std::string failure;                               ///< why not, if not taught
+};
+
+struct TutorReport {
+  std::vector<TutorAreaReport> areas;
+  std::uint64_t collisions = 0;       ///< contact events in the simulation (E_coll)
+  std::uint64_t colliding_steps = 0;
+  double simulated_time = 0.0;        ///< [s]
+};
+
+/// A posture choice for one task-space point.
+struct PostureChoice {
+  bool found = false;
+  Eigen::VectorXd q;
+  double clearance = 0.0;  ///< [m]
+};
+
+class SimulatedTutor {
+ public:
+  /// sim, workflow and scene must outlive the tutor; the workflow drives the same simulation.
+  SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const robot::Scene& scene,
+                 const robot::ParameterSet& parameters, TutorOptions options = {});
+  ~SimulatedTutor();
+
+  /// The whole configuration stage: start_configuration, `area_count` areas (the scene's
+  /// training areas first, then points drawn in the evaluation grid), finished_configuration,
+  /// and the learned map taken over.
+  TutorReport configure(int area_count);
+  /// PROGRAMMING: start_programming, guide the tip to the first waypoint (APPROACHING), then
+  /// along the waypoints (TEACH-IN), let go; finished_programming. Returns false if a phase
+  /// did not complete.
+  bool program(const std::vector<Eigen::Vector3d>& waypoints);
+
+  /// Best collision-free IK posture for p_W (suggested posture tried first).
+  PostureChoice choosePosture(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested);
+
+  const TutorReport& report() const { return report_; }
+
+ private:
+  bool teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested);
+  /// Pushes the links so that the posture follows a joint-space path; false on timeout.
+  bool pushAlong(const std::vector<Eigen::VectorXd>& path);
+  /// Pushes the tip towards a moving reference p_ref(t) for `duration` seconds.
+  void pushTip(const std::function<Eigen::Vector3d(double)>& p_ref, double duration);
+  /// Steps until the workflow reaches `sub_stage` (hands off); false on timeout.
+  bool waitFor(SubStage sub_stage, double max_time);
+  /// Steps with a constant tip force until the workflow leaves `sub_stage`.
+  bool grab(SubStage sub_stage, const Eigen::Vector3d& direction);
+  void tick();
+  double pathClearance(const std::vector<Eigen::VectorXd>& path);
+  void updateReport();
+
+  robot::Simulation* sim_;
+  Workflow* workflow_;
+  const robot::Scene* scene_;
+  const robot::RobotModel* model_;
+  robot::ParameterSet parameters_;
+  TutorOptions options_;
+  std::unique_ptr<robot::CollisionWorld> world_;
+  robot::Kinematics kinematics_;
+  learning::UniformRandom random_;
+  robot::RobotState state_;
+  TutorReport report_;
+  std::uint64_t ticks_ = 0;
+  double wall_start_ = -1.0;
+  std::string last_failure_detail_;
+};
+
+}  // namespace flexirob::app

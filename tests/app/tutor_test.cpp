@@ -1,0 +1,91 @@
+// The simulated tutor teaching the simulated LWR IV in setup A through the workflow.
+#include <gtest/gtest.h>
+
+#include "app/simulated_tutor.hpp"
+#include "app/workflow.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/scene.hpp"
+#include "robot/sim/reach.hpp"
+#include "robot/sim/simulation.hpp"
+
+namespace flexirob::app {
+namespace {
+
+const robot::RobotModel& lwr4() {
+  static const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  return model;
+}
+
+struct TeachRun {
+  TutorReport report;
+  std::vector<TrainingArea> areas;
+  std::shared_ptr<const learning::Learner> model;
+  std::vector<TransitionCheck> checks;
+  int itm_nodes = 0;
+  int warnings = 0;
+};
+
+TeachRun teachSetupA(std::uint64_t seed) {
+  const robot::Scene scene = robot::loadScene("setup_A");
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  robot::Simulation sim(lwr4(), &scene, parameters);
+  sim.reset(*scene.home_posture);
+  WorkflowOptions options;
+  options.check_scene = &scene;
+  options.elm.seed = seed;
+  Workflow workflow(sim, parameters, options);
+  TutorOptions tutor_options;
+  tutor_options.seed = seed;
+  tutor_options.circles = 1;
+  tutor_options.posture_candidates = 8;
+  SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
+  TeachRun run;
+  run.report = tutor.configure(2);
+  run.areas = workflow.areas();
+  run.model = workflow.model();
+  run.checks = workflow.transitionChecks();
+  run.itm_nodes = workflow.itm().nodeCount();
+  for (const auto& event : workflow.events()) run.warnings += event.kind == WorkflowEvent::Kind::kWarning ? 1 : 0;
+  return run;
+}
+
+TEST(SimulatedTutor, TeachesTwoAreasInSetupAWithoutCollisions) {
+  const TeachRun run = teachSetupA(3);
+  for (const auto& area : run.report.areas) {
+    EXPECT_TRUE(area.taught) << area.name << ": " << area.failure << " (clearance " << area.clearance << " m)";
+  }
+  ASSERT_EQ(run.areas.size(), 2U);
+  EXPECT_EQ(run.report.collisions, 0U);
+  // The areas are where the scene puts them (within the approach accuracy and the circles).
+  const robot::Scene scene = robot::loadScene("setup_A");
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_LT((run.areas[k].centre - scene.training_areas[k].p_WA).norm(), 0.05) << k;
+    EXPECT_GE(run.areas[k].X.cols(), 20);
+  }
+  // The learned map reproduces each q_fixed at the area centre, and tells the areas apart.
+  ASSERT_NE(run.model, nullptr);
+  const double apart = (run.areas[0].q_fixed - run.areas[1].q_fixed).norm();
+  for (const auto& area : run.areas) {
+    const double error = (run.model->predict(area.centre) - area.q_fixed).norm();
+    EXPECT_LT(error, 0.1);
+    EXPECT_LT(error, 0.2 * apart);
+  }
+  EXPECT_GT(run.itm_nodes, 2);
+  ASSERT_EQ(run.checks.size(), 1U);
+}
+
+TEST(SimulatedTutor, IsDeterministicForAFixedSeed) {
+  const TeachRun a = teachSetupA(5);
+  const TeachRun b = teachSetupA(5);
+  ASSERT_EQ(a.areas.size(), b.areas.size());
+  for (std::size_t k = 0; k < a.areas.size(); ++k) {
+    EXPECT_EQ(a.areas[k].X, b.areas[k].X);
+    EXPECT_EQ(a.areas[k].Q, b.areas[k].Q);
+  }
+  EXPECT_EQ(a.itm_nodes, b.itm_nodes);
+}
+
+}  // namespace
+}  // namespace flexirob::app
