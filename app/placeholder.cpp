@@ -1,1 +1,0 @@
-namespace flexirob::app { int placeholder() { return 0; } }
