@@ -96,9 +96,12 @@ LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
   const std::size_t outputs = header.size() - output_begin;
   if (inputs > static_cast<std::size_t>(learning::kMaxInputDim)) throw InputError(where + ": too many input columns");
   if (outputs > static_cast<std::size_t>(learning::kMaxOutputDim)) throw InputError(where + ": too many q columns");
+  // Joints numbered q1..qN (q0..qN-1 is accepted too).
+  const std::size_t first_joint = outputs > 0 && header[output_begin] == "q0" ? 0 : 1;
   for (std::size_t j = 0; j < outputs; ++j) {
-    if (header[output_begin + j] != "q" + std::to_string(j + 1)) {
-      throw InputError(where + ": expected column 'q" + std::to_string(j + 1) + "', got '" + header[output_begin + j] + "'");
+    const std::string expected = "q" + std::to_string(j + first_joint);
+    if (header[output_begin + j] != expected) {
+      throw InputError(where + ": expected column '" + expected + "', got '" + header[output_begin + j] + "'");
     }
   }
   if (outputs_required && outputs == 0) throw InputError(where + ": no joint columns q1,...,qN");

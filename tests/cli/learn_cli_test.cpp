@@ -218,6 +218,16 @@ TEST_F(LearnCli, RefusesBrokenOrMismatchedModelFilesWithExitCodeTwoAndOneLine) {
                    "predicts 7 joints");
 }
 
+TEST_F(LearnCli, AcceptsJointsNumberedFromZero) {
+  const fs::path data = write("zero.csv", "x,y,z,q0,q1\n0.1,0.2,0.3,1,2\n0.2,0.2,0.3,1.1,2.1\n");
+  const CliRun fit = invoke("learn fit --learner elm --data " + data.string() + " --out " + path("m").string());
+  ASSERT_EQ(fit.exit_code, 0) << fit.err;
+  EXPECT_EQ(Json::parse(fit.out).at("output_dim"), 2);
+  expectInputError(invoke("learn fit --data " + write("gap.csv", "x,y,z,q0,q2\n0,0,0,1,2\n").string() + " --out " +
+                          path("m").string()),
+                   "expected column 'q1', got 'q2'");
+}
+
 TEST_F(LearnCli, LearnsSixDimensionalInputs) {
   std::ostringstream csv;
   csv << "area,x,y,z,rx,ry,rz,q1,q2,q3,q4,q5,q6,q7,q8,q9\n";
