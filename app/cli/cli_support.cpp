@@ -84,6 +84,8 @@ int runCli(int argc, const char* const* argv) {
   registerBenchCommand(app, runner);
   registerReachCommand(app, runner);
   registerFriCommands(app, runner);
+  registerTeachCommands(app, runner);
+  registerEvalCommands(app, runner);
   try {
     app.parse(argc, argv);
     if (!runner.hasAction()) throw InputError("no command given; see --help");

@@ -33,6 +33,8 @@ void registerItmCommands(CLI::App& app, CommandRunner& runner);     // itm build
 void registerBenchCommand(CLI::App& app, CommandRunner& runner);    // bench
 void registerReachCommand(CLI::App& app, CommandRunner& runner);    // reach
 void registerFriCommands(CLI::App& app, CommandRunner& runner);     // fri probe|simulate
+void registerTeachCommands(CLI::App& app, CommandRunner& runner);   // teach
+void registerEvalCommands(CLI::App& app, CommandRunner& runner);    // eval reachable, plan
 
 /// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.
 /// Returns the process exit code (0 success, 2 bad input).

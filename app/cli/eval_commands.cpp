@@ -1,0 +1,188 @@
+// `eval reachable` (Sect. 3.3.2, Tab. 3.3) and `plan` (Sect. 8.3) on a session written by
+// `teach` (DESIGN §6). The map q_c(x) is learned again from the session's samples with the
+// requested learner; the ITM graph is the session's.
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "app/cli/cli_support.hpp"
+#include "app/evaluation.hpp"
+#include "app/workflow.hpp"
+#include "planning/itm.hpp"
+#include "robot/errors.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/scene.hpp"
+#include "robot/sim/reach.hpp"
+
+namespace flexirob::cli {
+namespace {
+
+Eigen::VectorXd vectorOf(const Json& array, Eigen::Index size, const std::string& what) {
+  if (!array.is_array() || static_cast<Eigen::Index>(array.size()) != size) {
+    throw InputError("session: " + what + ": expected " + std::to_string(size) + " numbers");
+  }
+  Eigen::VectorXd v(size);
+  for (Eigen::Index i = 0; i < size; ++i) {
+    const Json& value = array[static_cast<std::size_t>(i)];
+    if (!value.is_number()) throw InputError("session: " + what + ": expected numbers");
+    v[i] = value.get<double>();
+  }
+  if (!v.allFinite()) throw InputError("session: " + what + ": non-finite number");
+  return v;
+}
+
+struct Session {
+  std::string robot, tip, scene;
+  std::unique_ptr<robot::RobotModel> model;
+  robot::Scene scene_data;
+  learning::TrainingSet data;
+  std::vector<Eigen::VectorXd> q_fixed;
+  std::unique_ptr<planning::Itm> itm;
+};
+
+Session loadSession(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError("--session: cannot read '" + file + "'");
+  Json json;
+  try {
+    json = Json::parse(in);
+  } catch (const std::exception& e) {
+    throw InputError("--session: '" + file + "' is not a session file (" + std::string(e.what()) + ")");
+  }
+  if (!json.is_object() || json.value("format", "") != "flexirob-session-json") {
+    throw InputError("--session: '" + file + "' is not a flexirob session (format flexirob-session-json)");
+  }
+  Session session;
+  try {
+    session.robot = json.at("robot").get<std::string>();
+    session.tip = json.value("tip", "");
+    session.scene = json.at("scene").get<std::string>();
+    session.model = std::make_unique<robot::RobotModel>(
+        robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
+    session.scene_data = robot::loadScene(session.scene);
+    const int n = session.model->dof();
+    std::vector<Eigen::VectorXd> xs, qs;
+    int k = 0;
+    for (const Json& area : json.at("areas")) {
+      session.q_fixed.push_back(vectorOf(area.at("q_fixed"), n, "q_fixed"));
+      const Json& x = area.at("x");
+      const Json& q = area.at("q");
+      if (x.size() != q.size()) throw InputError("session: area samples x and q differ in count");
+      for (std::size_t l = 0; l < x.size(); ++l) {
+        xs.push_back(vectorOf(x[l], 3, "x"));
+        qs.push_back(vectorOf(q[l], n, "q"));
+        session.data.area.push_back(k);
+      }
+      ++k;
+    }
+    if (xs.empty()) throw InputError("session: no training samples");
+    session.data.X.resize(3, static_cast<Eigen::Index>(xs.size()));
+    session.data.Y.resize(n, static_cast<Eigen::Index>(qs.size()));
+    for (std::size_t l = 0; l < xs.size(); ++l) {
+      session.data.X.col(static_cast<Eigen::Index>(l)) = xs[l];
+      session.data.Y.col(static_cast<Eigen::Index>(l)) = qs[l];
+    }
+    session.itm = std::make_unique<planning::Itm>(planning::ItmParameters{}, n);
+    const Json& nodes = json.at("itm").at("nodes");
+    for (const Json& node : nodes) session.itm->addNode(vectorOf(node.at("x"), 3, "itm x"), vectorOf(node.at("q"), n, "itm q"));
+    for (const Json& edge : json.at("itm").at("edges")) {
+      const int a = edge.at(0).get<int>();
+      const int b = edge.at(1).get<int>();
+      if (a < 0 || b < 0 || a >= static_cast<int>(nodes.size()) || b >= static_cast<int>(nodes.size()) || a == b) {
+        throw InputError("session: ITM edge with a bad node index");
+      }
+      if (!session.itm->hasEdge(a, b)) session.itm->addEdge(a, b);
+    }
+  } catch (const Json::exception& e) {
+    throw InputError("--session: malformed session (" + std::string(e.what()) + ")");
+  }
+  return session;
+}
+
+std::unique_ptr<learning::Learner> learnMap(const Session& session, const std::string& learner_name) {
+  app::WorkflowOptions options;
+  options.learner = app::learnerKindFromString(learner_name);
+  std::unique_ptr<learning::Learner> learner = app::makeLearner(options, session.model->dof());
+  learner->fit(session.data);
+  return learner;
+}
+
+Eigen::VectorXd startPosture(const Session& session) {
+  const auto& home = session.scene_data.home_posture;
+  if (home && home->size() == session.model->dof()) return *home;
+  return session.q_fixed.empty() ? session.model->midPosture() : session.q_fixed.front();
+}
+
+struct EvalOptions {
+  std::string session;
+  std::string learner = "elm";
+  double spacing = 0.0;
+  int goals = 10;
+  std::uint64_t seed = 1;
+};
+
+Json runReachable(const EvalOptions& options) {
+  const Session session = loadSession(options.session);
+  const auto learner = learnMap(session, options.learner);
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  parameters.applyOverrides(session.scene_data.parameters);
+  robot::EvaluationGrid grid = session.scene_data.grid.value_or(robot::EvaluationGrid{});
+  if (options.spacing > 0.0) grid.spacing = options.spacing;
+  const app::ReachableResult result =
+      app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
+                             session.data.X, [](double f) { reportProgress("eval reachable", f); });
+  return {{"targets", result.targets},
+          {"reached", result.reached},
+          {"reachable_fraction", result.reachable_fraction},
+          {"explored_fraction", result.explored_fraction},
+          {"collided", result.collided},
+          {"grid_points", result.grid_points},
+          {"spacing_m", grid.spacing},
+          {"tolerance_m", grid.tolerance},
+          {"learner", options.learner},
+          {"areas", session.q_fixed.size()},
+          {"samples", session.data.size()}};
+}
+
+Json runPlan(const EvalOptions& options) {
+  const Session session = loadSession(options.session);
+  const auto learner = learnMap(session, options.learner);
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  parameters.applyOverrides(session.scene_data.parameters);
+  const Eigen::VectorXd start = session.q_fixed.empty() ? startPosture(session) : session.q_fixed.front();
+  const app::PlanningResult result =
+      app::evaluatePlanning(*session.model, session.scene_data, parameters, *learner, *session.itm, start, options.goals,
+                            options.seed, [](double f) { reportProgress("plan", f); });
+  return {{"goals", result.goals},
+          {"found", result.found},
+          {"collision_free", result.collision_free},
+          {"reached_1cm", result.reached_1cm},
+          {"mean_plan_ms", result.mean_plan_ms},
+          {"itm_nodes", session.itm->nodeCount()},
+          {"learner", options.learner}};
+}
+
+}  // namespace
+
+void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
+  auto options = std::make_shared<EvalOptions>();
+  CLI::App* eval = app.add_subcommand("eval", "evaluate a taught session in simulation");
+  eval->require_subcommand(1);
+  CLI::App* reachable = eval->add_subcommand("reachable", "reachable workspace on the evaluation grid (Sect. 3.3.2)");
+  reachable->add_option("--session", options->session, "session file written by teach")->required();
+  reachable->add_option("--learner", options->learner, "elm, oselm or llm");
+  reachable->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(CLI::Range(0.01, 1.0));
+  reachable->callback([&runner, options] { runner.select([options] { return runReachable(*options); }); });
+
+  CLI::App* plan = app.add_subcommand("plan", "plan to random ITM nodes and execute (Sect. 8.3)");
+  plan->add_option("--session", options->session, "session file written by teach")->required();
+  plan->add_option("--goals", options->goals, "number of goals")->check(CLI::Range(1, 10000));
+  plan->add_option("--seed", options->seed, "random seed");
+  plan->add_option("--learner", options->learner, "elm, oselm or llm");
+  plan->callback([&runner, options] { runner.select([options] { return runPlan(*options); }); });
+}
+
+}  // namespace flexirob::cli

@@ -1,0 +1,175 @@
+// `teach`: the simulated tutor teaches a robot in a scene through the workflow (DESIGN §6) and
+// writes the session as JSON: areas with q_fixed and samples, events, ITM nodes and edges.
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+
+#include "app/cli/cli_support.hpp"
+#include "app/simulated_tutor.hpp"
+#include "app/workflow.hpp"
+#include "robot/errors.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/scene.hpp"
+#include "robot/sim/reach.hpp"
+#include "robot/sim/simulation.hpp"
+
+namespace flexirob::cli {
+namespace {
+
+struct TeachOptions {
+  std::string robot = "lwr4";
+  std::string tip;
+  std::string scene = "empty";
+  int areas = 2;
+  std::uint64_t seed = 1;
+  std::string out;
+  bool realtime = false;
+  std::string learner = "elm";
+  double diameter = 0.04;
+  int candidates = 24;
+};
+
+Json matrixColumns(const Eigen::MatrixXd& m) { return toJsonRows(m.transpose()); }
+
+Json runTeach(const TeachOptions& options) {
+  if (options.out.empty()) throw InputError("--out: expected a session file path");
+  const app::LearnerKind learner = app::learnerKindFromString(options.learner);
+  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(options.robot), options.tip);
+  const robot::Scene scene = robot::loadScene(options.scene);
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  parameters.applyOverrides(scene.parameters);
+
+  robot::Simulation sim(model, &scene, parameters);
+  if (scene.home_posture && scene.home_posture->size() == model.dof()) sim.reset(*scene.home_posture);
+
+  app::WorkflowOptions workflow_options;
+  workflow_options.learner = learner;
+  workflow_options.elm.seed = options.seed;
+  workflow_options.llm.seed = options.seed;
+  workflow_options.check_scene = &scene;
+  app::Workflow workflow(sim, parameters, workflow_options);
+
+  app::TutorOptions tutor_options;
+  tutor_options.seed = options.seed;
+  tutor_options.realtime = options.realtime;
+  tutor_options.circle_diameter = options.diameter;
+  tutor_options.posture_candidates = options.candidates;
+  tutor_options.progress = [](const std::string& what, double fraction) { reportProgress(what, fraction); };
+  app::SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
+
+  const auto wall_start = std::chrono::steady_clock::now();
+  const app::TutorReport report = tutor.configure(options.areas);
+  const double wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+
+  // The session file.
+  Json areas = Json::array();
+  Eigen::Index samples = 0;
+  for (const auto& area : workflow.areas()) {
+    samples += area.X.cols();
+    areas.push_back({{"name", area.name},
+                     {"centre", toJson(area.centre)},
+                     {"q_fixed", toJson(area.q_fixed)},
+                     {"x", matrixColumns(area.X)},
+                     {"q", matrixColumns(area.Q)}});
+  }
+  Json events = Json::array();
+  for (const auto& event : workflow.events()) {
+    events.push_back({{"time_s", event.time},
+                      {"kind", app::toString(event.kind)},
+                      {"name", event.name},
+                      {"detail", event.detail},
+                      {"area", event.area}});
+  }
+  const planning::Itm& itm = workflow.itm();
+  Json nodes = Json::array();
+  Json edges = Json::array();
+  std::map<int, int> index;
+  for (const int id : itm.nodeIds()) {
+    index[id] = static_cast<int>(nodes.size());
+    nodes.push_back({{"x", toJson(Eigen::VectorXd(itm.prototype(id)))}, {"q", toJson(Eigen::VectorXd(itm.joints(id)))}});
+  }
+  for (const int id : itm.nodeIds()) {
+    for (const int other : itm.neighbors(id)) {
+      if (other > id) edges.push_back({index[id], index[other]});
+    }
+  }
+  Json checks = Json::array();
+  for (const auto& check : workflow.transitionChecks()) {
+    checks.push_back({{"from", check.from},
+                      {"to", check.to},
+                      {"mean_error_m", check.mean_error_m},
+                      {"max_error_m", check.max_error_m},
+                      {"final_error_m", check.final_error_m},
+                      {"posture_error_rad", check.posture_error_rad},
+                      {"colliding_samples", check.colliding_samples},
+                      {"ok", check.ok}});
+  }
+  Json tutor_areas = Json::array();
+  for (const auto& area : report.areas) {
+    tutor_areas.push_back({{"name", area.name},
+                           {"target", toJson(area.target)},
+                           {"taught", area.taught},
+                           {"clearance_m", area.clearance},
+                           {"failure", area.failure}});
+  }
+  const Json session = {{"format", "flexirob-session-json"},
+                        {"version", 1},
+                        {"robot", options.robot},
+                        {"tip", options.tip},
+                        {"scene", options.scene},
+                        {"seed", options.seed},
+                        {"learner", options.learner},
+                        {"dof", model.dof()},
+                        {"areas", areas},
+                        {"events", events},
+                        {"itm", {{"nodes", nodes}, {"edges", edges}}},
+                        {"transition_checks", checks},
+                        {"tutor", tutor_areas},
+                        {"collisions", report.collisions},
+                        {"simulated_time_s", report.simulated_time}};
+  {
+    std::ofstream file(options.out);
+    if (!file) throw InputError("--out: cannot write '" + options.out + "'");
+    file << session.dump();
+    if (!file) throw InputError("--out: writing '" + options.out + "' failed");
+  }
+  int warnings = 0;
+  for (const auto& event : workflow.events()) warnings += event.kind == app::WorkflowEvent::Kind::kWarning ? 1 : 0;
+  return {{"areas", workflow.areas().size()},
+          {"samples", samples},
+          {"collisions", report.collisions},
+          {"colliding_steps", report.colliding_steps},
+          {"session", options.out},
+          {"learner", options.learner},
+          {"model_learned", workflow.model() != nullptr},
+          {"itm_nodes", itm.nodeCount()},
+          {"itm_edges", itm.edgeCount()},
+          {"transition_checks", checks},
+          {"warnings", warnings},
+          {"tutor", tutor_areas},
+          {"simulated_time_s", report.simulated_time},
+          {"wall_time_s", wall_seconds}};
+}
+
+}  // namespace
+
+void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
+  auto options = std::make_shared<TeachOptions>();
+  CLI::App* teach = app.add_subcommand("teach", "simulated tutor teaches the robot in a scene; writes a session");
+  teach->add_option("--robot", options->robot, "lwr4, arm9 or a URDF path");
+  teach->add_option("--tip", options->tip, "tip link");
+  teach->add_option("--scene", options->scene, "built-in scene name or scene file");
+  teach->add_option("--areas", options->areas, "number of training areas")->check(CLI::Range(1, 200));
+  teach->add_option("--seed", options->seed, "random seed");
+  teach->add_option("--out", options->out, "session file (JSON)")->required();
+  teach->add_flag("--realtime", options->realtime, "pace the simulation at wall-clock speed");
+  teach->add_option("--learner", options->learner, "elm, oselm or llm");
+  teach->add_option("--diameter", options->diameter, "deflection circle diameter [m]")->check(CLI::Range(0.005, 0.5));
+  teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(CLI::Range(1, 1000));
+  teach->callback([&runner, options] { runner.select([options] { return runTeach(*options); }); });
+}
+
+}  // namespace flexirob::cli
