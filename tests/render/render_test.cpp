@@ -199,6 +199,8 @@ TEST(OffscreenRender, ObstacleShowsInItsSceneColourWhereProjected) {
   const auto area_color = image.pixel(static_cast<int>(area_pixel.x()), static_cast<int>(area_pixel.y()));
   EXPECT_GT(area_color[1], area_color[0] + 20) << "expected the area's green tint";
   EXPECT_GT(area_color[1], area_color[2]) << "expected the area's green tint";
+  // Translucent shapes blend their colour but leave the picture opaque.
+  for (std::size_t i = 3; i < image.rgba.size(); i += 4) ASSERT_EQ(image.rgba[i], 255) << "pixel " << i / 4;
 }
 
 TEST(Camera, ProjectionAgreesWithOpenSceneGraphMatrices) {
