@@ -76,6 +76,42 @@ TEST(SimulatedTutor, TeachesTwoAreasInSetupAWithoutCollisions) {
   ASSERT_EQ(run.checks.size(), 1U);
 }
 
+TEST(SimulatedTutor, GuidesATeachInTrajectoryInProgramming) {
+  const robot::Scene scene = robot::loadScene("setup_A");
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  robot::Simulation sim(lwr4(), &scene, parameters);
+  sim.reset(*scene.home_posture);
+  WorkflowOptions options;
+  Workflow workflow(sim, parameters, options);
+  TutorOptions tutor_options;
+  tutor_options.circles = 1;
+  tutor_options.posture_candidates = 8;
+  SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
+  tutor.configure(2);
+  ASSERT_NE(workflow.model(), nullptr);
+  // From the right area's centre over the interpolation area towards the left one.
+  const std::vector<Eigen::Vector3d> waypoints{Eigen::Vector3d(-0.55, -0.3, 0.3), Eigen::Vector3d(-0.55, 0.0, 0.3),
+                                               Eigen::Vector3d(-0.55, 0.2, 0.3)};
+  ASSERT_TRUE(tutor.program(waypoints));
+  EXPECT_EQ(workflow.stage(), Stage::kExecution);
+  ASSERT_EQ(workflow.teachIns().size(), 1U);
+  const Eigen::MatrixXd& path = workflow.teachIns()[0];
+  ASSERT_GE(path.cols(), 10);
+  // The recorded path ends near the last waypoint (the hand's reference tracks it).
+  EXPECT_LT((path.col(path.cols() - 1) - waypoints.back()).norm(), 0.05);
+  // EXECUTION: the hierarchical controller with the learned map drives the tip back.
+  const Eigen::Vector3d goal(-0.55, -0.3, 0.3);
+  ASSERT_TRUE(workflow.execute({goal}));
+  for (int k = 0; k < 8000; ++k) workflow.step();
+  EXPECT_TRUE(workflow.executionDone());
+  robot::RobotState state;
+  state.resize(lwr4().dof());
+  sim.readState(state);
+  EXPECT_LT((state.p_WT() - goal).norm(), 0.01);
+  EXPECT_EQ(sim.collisions().events(), 0U);
+}
+
 TEST(SimulatedTutor, IsDeterministicForAFixedSeed) {
   const TeachRun a = teachSetupA(5);
   const TeachRun b = teachSetupA(5);
