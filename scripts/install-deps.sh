@@ -9,7 +9,7 @@ packages=(
   libeigen3-dev liburdfdom-dev libassimp-dev libbullet-dev libyaml-cpp-dev
   libopenscenegraph-dev libosmesa6-dev
   qt6-base-dev libqt6opengl6-dev qt6-charts-dev
-  libcli11-dev nlohmann-json3-dev libspdlog-dev libsqlite3-dev libnanoflann-dev
+  libcli11-dev nlohmann-json3-dev libspdlog-dev libsqlite3-dev libnanoflann-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
 )
