@@ -58,6 +58,7 @@ void SimulatedTutor::tick() {
     if (ahead > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(ahead));
   }
   sim_->readState(state_);
+  if (options_.on_cycle) options_.on_cycle(state_);
 }
 
 void SimulatedTutor::updateReport() {

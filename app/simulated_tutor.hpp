@@ -35,6 +35,8 @@ struct TutorOptions {
   double approach_speed = 0.4;     ///< [rad/s] of the tutor's joint-space reference
   double max_phase_time = 30.0;    ///< [s] a phase may take before the tutor gives up
   bool realtime = false;           ///< pace at wall-clock speed
+  /// Called with the measured state after every control cycle (a session recorder); may be empty.
+  std::function<void(const robot::RobotState&)> on_cycle;
   /// Progress callback (what, fraction in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
 };

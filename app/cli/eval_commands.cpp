@@ -1,12 +1,16 @@
 // `eval reachable` (Sect. 3.3.2, Tab. 3.3) and `plan` (Sect. 8.3) on a session written by
 // `teach` (DESIGN §6). The map q_c(x) is learned again from the session's samples with the
-// requested learner; the ITM graph is the session's.
+// requested learner; the ITM graph is the session's. Sessions are SQLite recordings (the session
+// recorder) or the JSON files `teach --out F.json` writes.
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <unistd.h>
 
 #include "app/cli/cli_support.hpp"
 #include "app/evaluation.hpp"
+#include "app/session_reader.hpp"
+#include "planning/itm_file.hpp"
 #include "app/workflow.hpp"
 #include "planning/itm.hpp"
 #include "robot/errors.hpp"
@@ -41,9 +45,53 @@ struct Session {
   std::unique_ptr<planning::Itm> itm;
 };
 
+// A session recorded in SQLite by the session recorder.
+Session loadRecordedSession(const std::string& file) {
+  const app::SessionReader reader(file);
+  Session session;
+  session.robot = reader.meta("robot_name");
+  session.tip = reader.meta("tip_link");
+  session.scene = reader.meta("scene_name", "empty");
+  session.model = std::make_unique<robot::RobotModel>(
+      robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
+  session.scene_data = robot::loadScene(session.scene);
+  const int n = session.model->dof();
+  for (const auto& area : reader.areas()) {
+    if (area.q_fixed.size() != n) throw InputError("session: an area's q_fixed has the wrong size");
+    session.q_fixed.push_back(area.q_fixed);
+  }
+  const std::vector<app::SampleRecord> samples = reader.samples();
+  if (samples.empty()) throw InputError("session: no training samples");
+  session.data.X.resize(3, static_cast<Eigen::Index>(samples.size()));
+  session.data.Y.resize(n, static_cast<Eigen::Index>(samples.size()));
+  for (std::size_t l = 0; l < samples.size(); ++l) {
+    if (samples[l].x.size() != 3 || samples[l].q.size() != n) throw InputError("session: a sample has the wrong size");
+    session.data.X.col(static_cast<Eigen::Index>(l)) = samples[l].x;
+    session.data.Y.col(static_cast<Eigen::Index>(l)) = samples[l].q;
+    session.data.area.push_back(samples[l].area);
+  }
+  const std::vector<app::ItmRecord> graphs = reader.itmSnapshots();
+  if (graphs.empty()) throw InputError("session: no ITM graph recorded");
+  const std::filesystem::path scratch =
+      std::filesystem::temp_directory_path() / ("flexirob-eval-itm-" + std::to_string(::getpid()) + ".bin");
+  {
+    std::ofstream out(scratch, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(graphs.back().bytes.data()), static_cast<std::streamsize>(graphs.back().bytes.size()));
+  }
+  try {
+    session.itm = std::make_unique<planning::Itm>(planning::loadItm(scratch));
+  } catch (...) {
+    std::filesystem::remove(scratch);
+    throw;
+  }
+  std::filesystem::remove(scratch);
+  return session;
+}
+
 Session loadSession(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError("--session: cannot read '" + file + "'");
+  if (in.peek() != '{') return loadRecordedSession(file);
   Json json;
   try {
     json = Json::parse(in);

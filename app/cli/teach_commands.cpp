@@ -1,11 +1,16 @@
 // `teach`: the simulated tutor teaches a robot in a scene through the workflow (DESIGN §6) and
-// writes the session as JSON: areas with q_fixed and samples, events, ITM nodes and edges.
+// writes the session through the SQLite session recorder (states at control rate, stages, triggers,
+// buttons, areas, samples, model, ITM), or as JSON when the path ends in .json.
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <sstream>
+#include <unistd.h>
 
 #include "app/cli/cli_support.hpp"
+#include "app/session_recorder.hpp"
+#include "planning/itm_file.hpp"
 #include "app/simulated_tutor.hpp"
 #include "app/workflow.hpp"
 #include "robot/errors.hpp"
@@ -33,6 +38,55 @@ struct TeachOptions {
 
 Json matrixColumns(const Eigen::MatrixXd& m) { return toJsonRows(m.transpose()); }
 
+std::string readText(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::vector<std::uint8_t> readBytes(const std::filesystem::path& file) {
+  const std::string text = readText(file);
+  return std::vector<std::uint8_t>(text.begin(), text.end());
+}
+
+bool endsWith(const std::string& text, const std::string& suffix) {
+  return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// Writes what the workflow holds (stages, triggers, buttons, areas, samples, model, ITM) into
+// the recorder once the run is over; states were recorded during the run.
+void recordOutcome(app::SessionRecorder& recorder, const app::Workflow& workflow, const std::filesystem::path& scratch) {
+  for (const auto& event : workflow.events()) {
+    using K = app::WorkflowEvent::Kind;
+    if (event.kind == K::kStage) {
+      const auto slash = event.name.find('/');
+      recorder.recordStage({event.time, event.name.substr(0, slash),
+                            slash == std::string::npos ? std::string() : event.name.substr(slash + 1)});
+    } else if (event.kind == K::kTrigger) {
+      recorder.recordTrigger(event.time, event.name);
+    } else if (event.kind == K::kButton) {
+      recorder.recordButton(event.time, event.name);
+    }
+  }
+  for (std::size_t k = 0; k < workflow.areas().size(); ++k) {
+    const app::TrainingArea& area = workflow.areas()[k];
+    recorder.recordArea({static_cast<int>(k), 0.0, area.centre, area.q_fixed});
+    for (Eigen::Index l = 0; l < area.X.cols(); ++l) {
+      recorder.recordSample({0.0, static_cast<int>(k), area.X.col(l), area.Q.col(l)});
+    }
+  }
+  if (const auto model = workflow.model()) {
+    const auto file = scratch / "model.bin";
+    model->save(file);
+    recorder.recordModel({workflow.state().time, model->kind(), static_cast<int>(workflow.trainingSet().size()), 0.0,
+                          readBytes(file)});
+  }
+  const auto graph_file = scratch / "itm.bin";
+  planning::saveItm(workflow.itm(), graph_file);
+  recorder.recordItm({workflow.state().time, workflow.itm().nodeCount(), workflow.itm().edgeCount(), readBytes(graph_file)});
+}
+
 Json runTeach(const TeachOptions& options) {
   if (options.out.empty()) throw InputError("--out: expected a session file path");
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);
@@ -58,6 +112,25 @@ Json runTeach(const TeachOptions& options) {
   tutor_options.circle_diameter = options.diameter;
   tutor_options.posture_candidates = options.candidates;
   tutor_options.progress = [](const std::string& what, double fraction) { reportProgress(what, fraction); };
+
+  // The session: SQLite through the session recorder, or JSON for a path ending in .json.
+  const bool json_session = endsWith(options.out, ".json");
+  std::unique_ptr<app::SessionRecorder> recorder;
+  if (!json_session) {
+    app::SessionMetadata metadata;
+    metadata.robot_name = options.robot;
+    metadata.robot_urdf = readText(model.urdfPath());
+    metadata.tip_link = model.tipLink();
+    metadata.scene_name = options.scene;
+    metadata.scene_text = robot::sceneToYaml(scene);
+    metadata.parameters = Json{{"seed", options.seed}, {"learner", options.learner}, {"areas", options.areas},
+                               {"diameter_m", options.diameter}}.dump();
+    app::RecorderOptions recorder_options;
+    recorder_options.overwrite = true;
+    recorder = std::make_unique<app::SessionRecorder>(options.out, metadata, recorder_options);
+    app::SessionRecorder* sink = recorder.get();
+    tutor_options.on_cycle = [sink](const robot::RobotState& state) { sink->recordState(state); };
+  }
   app::SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
 
   const auto wall_start = std::chrono::steady_clock::now();
@@ -130,11 +203,22 @@ Json runTeach(const TeachOptions& options) {
                         {"tutor", tutor_areas},
                         {"collisions", report.collisions},
                         {"simulated_time_s", report.simulated_time}};
-  {
+  std::uint64_t states_dropped = 0;
+  if (json_session) {
     std::ofstream file(options.out);
     if (!file) throw InputError("--out: cannot write '" + options.out + "'");
     file << session.dump();
     if (!file) throw InputError("--out: writing '" + options.out + "' failed");
+  } else {
+    const std::filesystem::path scratch = std::filesystem::temp_directory_path() /
+                                          ("flexirob-teach-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(scratch);
+    recordOutcome(*recorder, workflow, scratch);
+    std::filesystem::remove_all(scratch);
+    recorder->close();
+    const app::RecorderStatus status = recorder->status();
+    states_dropped = status.states_dropped;
+    if (!status.message.empty()) throw InputError("--out: " + status.message);
   }
   int warnings = 0;
   for (const auto& event : workflow.events()) warnings += event.kind == app::WorkflowEvent::Kind::kWarning ? 1 : 0;
@@ -143,6 +227,8 @@ Json runTeach(const TeachOptions& options) {
           {"collisions", report.collisions},
           {"colliding_steps", report.colliding_steps},
           {"session", options.out},
+          {"session_format", json_session ? "json" : "sqlite"},
+          {"states_dropped", states_dropped},
           {"learner", options.learner},
           {"model_learned", workflow.model() != nullptr},
           {"itm_nodes", itm.nodeCount()},
@@ -164,7 +250,7 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   teach->add_option("--scene", options->scene, "built-in scene name or scene file");
   teach->add_option("--areas", options->areas, "number of training areas")->check(CLI::Range(1, 200));
   teach->add_option("--seed", options->seed, "random seed");
-  teach->add_option("--out", options->out, "session file (JSON)")->required();
+  teach->add_option("--out", options->out, "session file (SQLite; JSON if it ends in .json)")->required();
   teach->add_flag("--realtime", options->realtime, "pace the simulation at wall-clock speed");
   teach->add_option("--learner", options->learner, "elm, oselm or llm");
   teach->add_option("--diameter", options->diameter, "deflection circle diameter [m]")->check(CLI::Range(0.005, 0.5));
