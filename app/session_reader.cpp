@@ -133,12 +133,16 @@ SessionReader::SessionReader(const std::filesystem::path& file) : file_(file), i
 
     // Ends of the state table: rowids are consecutive (rows are only appended), so the count
     // is max - min + 1 without a scan; min/max of t come from the index.
-    SqliteStatement ends(db, "SELECT min(id), max(id) FROM state");
-    if (ends.step() && !ends.columnIsNull(0)) state_count_ = ends.columnInt(1) - ends.columnInt(0) + 1;
-    SqliteStatement times(db, "SELECT min(t), max(t) FROM state");
-    if (times.step() && !times.columnIsNull(0)) {
-      start_time_ = times.columnDouble(0);
-      end_time_ = times.columnDouble(1);
+    // One aggregate per query: SQLite answers a lone min() or max() from one end of the
+    // b-tree, but "min(x), max(x)" together scans the whole table.
+    SqliteStatement first_id(db, "SELECT id FROM state ORDER BY id LIMIT 1");
+    SqliteStatement last_id(db, "SELECT id FROM state ORDER BY id DESC LIMIT 1");
+    if (first_id.step() && last_id.step()) state_count_ = last_id.columnInt(0) - first_id.columnInt(0) + 1;
+    SqliteStatement first_t(db, "SELECT t FROM state ORDER BY t LIMIT 1");
+    SqliteStatement last_t(db, "SELECT t FROM state ORDER BY t DESC LIMIT 1");
+    if (first_t.step() && last_t.step()) {
+      start_time_ = first_t.columnDouble(0);
+      end_time_ = last_t.columnDouble(0);
     }
     // Read the last state row once: a file cut inside its b-tree fails here, not in review.
     if (state_count_ > 0) stateAt(end_time_);

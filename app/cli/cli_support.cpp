@@ -84,6 +84,7 @@ int runCli(int argc, const char* const* argv) {
   registerBenchCommand(app, runner);
   registerReachCommand(app, runner);
   registerFriCommands(app, runner);
+  registerReviewCommands(app, runner);
   registerTeachCommands(app, runner);
   registerEvalCommands(app, runner);
   try {

@@ -33,6 +33,7 @@ void registerItmCommands(CLI::App& app, CommandRunner& runner);     // itm build
 void registerBenchCommand(CLI::App& app, CommandRunner& runner);    // bench
 void registerReachCommand(CLI::App& app, CommandRunner& runner);    // reach
 void registerFriCommands(CLI::App& app, CommandRunner& runner);     // fri probe|simulate
+void registerReviewCommands(CLI::App& app, CommandRunner& runner);  // review
 void registerTeachCommands(CLI::App& app, CommandRunner& runner);   // teach
 void registerEvalCommands(CLI::App& app, CommandRunner& runner);    // eval reachable, plan
 

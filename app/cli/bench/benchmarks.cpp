@@ -11,6 +11,7 @@ void registerAllBenchmarks() {
   registerLearningBenchmarks();
   registerPlanningBenchmarks();
   registerRenderBenchmarks();
+  registerSessionBenchmarks();
 }
 
 }  // namespace flexirob::bench

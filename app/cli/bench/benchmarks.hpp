@@ -8,6 +8,7 @@ void registerKinematicsBenchmarks();
 void registerLearningBenchmarks();
 void registerPlanningBenchmarks();
 void registerRenderBenchmarks();
+void registerSessionBenchmarks();
 // Each module adds its register function here and calls it from registerAllBenchmarks().
 
 /// Registers every benchmark of the product once.

@@ -1,0 +1,175 @@
+// `review --session F`: the study metrics of one recorded session (DESIGN §5, §6; thesis
+// Sect. 3.3, 4.3.3, 5.2.2). Fields: duration_s, areas, samples, e_task, e_coll and the details
+// they come from.
+#include <cmath>
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include "app/cli/cli_support.hpp"
+#include "app/session_reader.hpp"
+#include "app/study_metrics.hpp"
+
+namespace flexirob::cli {
+namespace {
+
+using app::SessionReader;
+using app::TrajectoryKind;
+using app::TrajectoryRecord;
+
+const char* kindName(TrajectoryKind kind) {
+  switch (kind) {
+    case TrajectoryKind::TeachIn: return "teach_in";
+    case TrajectoryKind::Target: return "target";
+    case TrajectoryKind::Executed: return "executed";
+  }
+  return "";
+}
+
+Json numberOrNull(const std::optional<double>& value) {
+  return value && std::isfinite(*value) ? Json(*value) : Json(nullptr);
+}
+
+// Shape metrics of a trajectory against its target (Sect. 5.2.2) and its jerk.
+Json trajectoryMetrics(const TrajectoryRecord& trajectory, const TrajectoryRecord* target) {
+  Json entry;
+  entry["id"] = trajectory.id;
+  entry["kind"] = kindName(trajectory.kind);
+  entry["name"] = trajectory.name;
+  entry["points"] = trajectory.times.size();
+  entry["duration_s"] = trajectory.times.size() > 0 ? trajectory.times(trajectory.times.size() - 1) - trajectory.times(0) : 0.0;
+  std::optional<double> jerk_mean;
+  try {
+    jerk_mean = app::jerk(trajectory.times, trajectory.positions).mean;
+  } catch (const std::invalid_argument&) {
+    // Fewer than four points or repeated times: no jerk.
+  }
+  entry["jerk_mean"] = numberOrNull(jerk_mean);
+  if (target && target->positions.cols() > 0 && trajectory.positions.cols() > 0) {
+    entry["reference_id"] = target->id;
+    entry["max_deviation_m"] = app::maxDeviation(trajectory.positions, target->positions);
+    entry["procrustes_m"] = app::procrustesDistance(trajectory.positions, target->positions).distance;
+  }
+  return entry;
+}
+
+Json review(const std::string& file) {
+  const SessionReader reader(file);
+  Json out;
+  out["session"] = file;
+  out["schema_version"] = reader.schemaVersion();
+  out["robot"] = reader.metadata().robot_name;
+  out["scene"] = reader.metadata().scene_name;
+  out["participant"] = reader.metadata().participant;
+  out["software_version"] = reader.metadata().software_version;
+  out["start_time_utc"] = reader.metadata().start_time_utc;
+  // A session closed by its recorder has an end time; a killed one does not.
+  out["closed_cleanly"] = !reader.meta("end_time_utc").empty();
+  out["duration_s"] = reader.endTime() - reader.startTime();
+  out["states"] = reader.stateCount();
+
+  // Training areas and samples.
+  const auto counts = reader.sampleCounts();
+  std::set<int> areas;
+  for (const auto& area : reader.areas()) areas.insert(area.area);
+  std::int64_t samples = 0;
+  Json per_area = Json::object();
+  for (const auto& [area, count] : counts) {
+    areas.insert(area);
+    samples += count;
+    per_area[std::to_string(area)] = count;
+  }
+  out["areas"] = areas.size();
+  out["samples"] = samples;
+  out["samples_per_area"] = per_area;
+
+  // E_task (Eq. 3.20) over every executed motion that names its reference trajectory.
+  const auto trajectories = reader.trajectories();
+  std::map<std::int64_t, const TrajectoryRecord*> by_id;
+  const TrajectoryRecord* first_target = nullptr;
+  for (const auto& t : trajectories) {
+    by_id[t.id] = &t;
+    if (t.kind == TrajectoryKind::Target && !first_target) first_target = &t;
+  }
+  double error_sum = 0.0;
+  std::int64_t error_points = 0;
+  Json executed = Json::array();
+  Json teach_in = Json::array();
+  for (const auto& t : trajectories) {
+    const auto ref = by_id.find(t.reference_id);
+    const TrajectoryRecord* reference = ref == by_id.end() ? nullptr : ref->second;
+    if (t.kind == TrajectoryKind::Executed) {
+      Json entry = trajectoryMetrics(t, reference);
+      entry["outcome"] = t.outcome;
+      if (reference && t.positions.cols() > 0 && reference->positions.cols() > 0) {
+        const double e = app::taskSpaceError(app::targetsForExecution(t, *reference), t.positions);
+        entry["e_task"] = e;
+        error_sum += e * static_cast<double>(t.positions.cols());
+        error_points += t.positions.cols();
+      }
+      const double t0 = t.times.size() > 0 ? t.times(0) : 0.0;
+      const double t1 = t.times.size() > 0 ? t.times(t.times.size() - 1) : -1.0;
+      entry["collisions"] = reader.collisions(t0, t1).size();
+      executed.push_back(entry);
+    } else if (t.kind == TrajectoryKind::TeachIn) {
+      // A teach-in is compared with the target it names, or else the session's first target.
+      teach_in.push_back(trajectoryMetrics(t, reference ? reference : first_target));
+    }
+  }
+  out["e_task"] = error_points > 0 ? Json(error_sum / static_cast<double>(error_points)) : Json(nullptr);
+  // E_coll: collisions recorded during the session (contacts the simulator reported).
+  const auto collisions = reader.collisions();
+  out["e_coll"] = collisions.size();
+  std::int64_t colliding_motions = 0;
+  for (const auto& entry : executed) colliding_motions += entry["collisions"].get<std::int64_t>() > 0 ? 1 : 0;
+  out["colliding_motions"] = colliding_motions;
+  out["executed_motions"] = executed;
+  out["teach_in"] = teach_in;
+
+  // Time per phase (Sect. 4.3.3: efficiency).
+  Json phases = Json::object();
+  for (const auto& [phase, seconds] : app::timePerPhase(reader.stages(), reader.endTime())) phases[phase] = seconds;
+  out["time_per_phase_s"] = phases;
+  std::int64_t triggers = 0;
+  std::int64_t buttons = 0;
+  for (const auto& s : reader.signals()) (s.kind == app::SignalKind::Button ? buttons : triggers) += 1;
+  out["triggers"] = triggers;
+  out["buttons"] = buttons;
+
+  const auto models = reader.models();
+  out["models"] = models.size();
+  if (!models.empty()) {
+    out["last_model"] = {{"learner", models.back().learner_kind},
+                         {"samples", models.back().samples},
+                         {"train_seconds", models.back().train_seconds},
+                         {"bytes", models.back().bytes.size()}};
+  }
+  const auto graphs = reader.itmSnapshots();
+  out["itm_snapshots"] = graphs.size();
+  if (!graphs.empty()) out["itm"] = {{"nodes", graphs.back().nodes}, {"edges", graphs.back().edges}};
+  // Written at close; a killed session has none (null).
+  const auto count = [&reader](const std::string& key) -> Json {
+    const std::string text = reader.meta(key);
+    try {
+      return text.empty() ? Json(nullptr) : Json(std::stoll(text));
+    } catch (const std::exception&) {
+      return Json(nullptr);
+    }
+  };
+  out["recorder_states_dropped"] = count("states_dropped");
+  out["recorder_events_dropped"] = count("events_dropped");
+  return out;
+}
+
+}  // namespace
+
+void registerReviewCommands(CLI::App& app, CommandRunner& runner) {
+  auto* command = app.add_subcommand("review", "Study metrics of a recorded session");
+  auto session = std::make_shared<std::string>();
+  command->add_option("--session", *session, "session database written by teach or the GUI")->required();
+  command->callback([&runner, session] { runner.select([session] { return review(*session); }); });
+}
+
+}  // namespace flexirob::cli
