@@ -145,6 +145,8 @@ std::unique_ptr<learning::Learner> makeLearner(const WorkflowOptions& options, i
 
 struct Workflow::LearningResult {
   std::shared_ptr<learning::Learner> model;
+  std::unique_ptr<learning::OsElm> online;  // OS-ELM only: the refit that keeps learning online
+  Eigen::Index samples = 0;
   std::vector<TransitionCheck> checks;
   double seconds = 0.0;
   std::string error;
@@ -475,10 +477,23 @@ void Workflow::startLearning() {
   learning_result_ = std::make_unique<LearningResult>();
   auto job = [this, data = std::move(data), areas = std::move(areas)]() {
     LearningResult& result = *learning_result_;
+    result.samples = data.size();
     const auto start = std::chrono::steady_clock::now();
     try {
-      std::shared_ptr<learning::Learner> learner = makeLearner(options_, model_robot_->dof());
-      learner->fit(data, cancel_);
+      std::shared_ptr<learning::Learner> learner;
+      if (options_.learner == LearnerKind::kOsElm) {
+        // Refit the online learner on all samples here, not on the control thread.
+        std::unique_ptr<learning::OsElm> online = makeOnlineLearner();
+        for (Eigen::Index l = 0; l < data.size(); ++l) {
+          if (l % 256 == 0) cancel_.throwIfCancelled();
+          online->update(data.X.col(l), data.Y.col(l));
+        }
+        learner = std::make_shared<learning::OsElm>(*online);
+        result.online = std::move(online);
+      } else {
+        learner = makeLearner(options_, model_robot_->dof());
+        learner->fit(data, cancel_);
+      }
       result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       // Tutor feedback with two or more areas: straight motions between the areas.
       if (areas.size() >= 2) {
@@ -519,14 +534,10 @@ void Workflow::collectLearning() {
     return;
   }
   model_ = std::move(result->model);
-  if (options_.learner == LearnerKind::kOsElm) {
-    // Keep learning online from here on, starting from the refit.
-    online_ = makeOnlineLearner();
-    const learning::TrainingSet data = trainingSet();
-    for (Eigen::Index l = 0; l < data.size(); ++l) online_->update(data.X.col(l), data.Y.col(l));
-  }
+  // OS-ELM: keep learning online from the refit on.
+  if (result->online) online_ = std::move(result->online);
   std::ostringstream detail;
-  detail << toString(options_.learner) << " from " << areas_.size() << " areas, " << trainingSet().size()
+  detail << toString(options_.learner) << " from " << areas_.size() << " areas, " << result->samples
          << " samples in " << result->seconds << " s";
   emit(WorkflowEvent::Kind::kModelLearned, toString(options_.learner), detail.str());
   checks_ = std::move(result->checks);

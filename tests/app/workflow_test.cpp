@@ -274,6 +274,25 @@ TEST(Workflow, OnlineOsElmLearnsDuringRecording) {
   EXPECT_EQ(workflow.controller(), InteractionController::kAssistanceBlending);
 }
 
+TEST(Workflow, OsElmRefitAfterConfigurationMatchesTheAreas) {
+  Fixture f;
+  WorkflowOptions options = syncOptions();
+  options.learner = LearnerKind::kOsElm;
+  Workflow workflow(f.backend, f.parameters, options);
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  teachArea(workflow, f.backend, posture(-0.5));
+  teachArea(workflow, f.backend, posture(0.5));
+  ASSERT_TRUE(workflow.press(Button::kFinishedConfiguration));
+  ASSERT_NE(workflow.model(), nullptr);
+  EXPECT_EQ(workflow.model()->kind(), "oselm");
+  for (const auto& area : workflow.areas()) {
+    EXPECT_LT((workflow.model()->predict(area.centre) - area.q_fixed).norm(), 0.1);
+  }
+  ASSERT_TRUE(workflow.removeArea(1));
+  ASSERT_NE(workflow.model(), nullptr);
+  EXPECT_LT((workflow.model()->predict(workflow.areas()[0].centre) - posture(-0.5)).norm(), 0.1);
+}
+
 TEST(Workflow, BackgroundLearningDoesNotBlockTheControlCycle) {
   Fixture f;
   WorkflowOptions options = syncOptions();
