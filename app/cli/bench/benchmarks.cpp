@@ -12,6 +12,7 @@ void registerAllBenchmarks() {
   registerPlanningBenchmarks();
   registerRenderBenchmarks();
   registerSessionBenchmarks();
+  registerControlBenchmarks();
 }
 
 }  // namespace flexirob::bench

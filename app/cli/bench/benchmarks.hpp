@@ -9,6 +9,7 @@ void registerLearningBenchmarks();
 void registerPlanningBenchmarks();
 void registerRenderBenchmarks();
 void registerSessionBenchmarks();
+void registerControlBenchmarks();
 // Each module adds its register function here and calls it from registerAllBenchmarks().
 
 /// Registers every benchmark of the product once.
