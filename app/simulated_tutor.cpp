@@ -154,7 +154,7 @@ bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) 
   return true;
 }
 
-bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path) {
+bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double speed) {
   const int dof = model_->dof();
   // Points the hands push: every body but the first, 6 cm off the body's origin (alternately
   // along its x and y axes, so that rotations about any link axis can be pushed).
@@ -185,7 +185,7 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path) {
     // Move the reference along the path at the tutor's pace.
     if (next < path.size()) {
       const Eigen::VectorXd to = path[next] - q_ref;
-      const double step = options_.approach_speed * dt;
+      const double step = speed * dt;
       if (to.cwiseAbs().maxCoeff() <= step) {
         q_ref = path[next];
         ++next;
@@ -259,17 +259,21 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     std::vector<Eigen::VectorXd> via{state_.q, *scene_->home_posture, choice.q};
     if (pathClearance(via) > pathClearance(path)) path = via;
   }
-  if (pathClearance(path) < 0.0) {
+  // A person moves slowly where the arm passes close to an obstacle, and not at all where it
+  // would touch one.
+  const double path_clearance = pathClearance(path);
+  if (path_clearance < 0.5 * options_.min_clearance) {
     area.failure = "no collision-free way to the posture";
     return false;
   }
+  const double speed = options_.approach_speed * std::clamp(path_clearance / 0.15, 0.1, 1.0);
   // Touch (on_affected -> APPROACHING), push the links there, let go (on_converged -> POSED).
   kinematics_.update(choice.q);
   if (!grab(SubStage::kWaiting, kinematics_.p_WT() - state_.p_WT() + Eigen::Vector3d(0, 0, 1e-3))) {
     area.failure = "on_affected did not fire";
     return false;
   }
-  if (!pushAlong(path)) {
+  if (!pushAlong(path, speed)) {
     area.failure = "the posture was not reached in time (" + last_failure_detail_ + ")";
     return false;
   }

@@ -88,8 +88,9 @@ class SimulatedTutor {
 
  private:
   bool teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested);
-  /// Pushes the links so that the posture follows a joint-space path; false on timeout.
-  bool pushAlong(const std::vector<Eigen::VectorXd>& path);
+  /// Pushes the links so that the posture follows a joint-space path with the reference
+  /// moving at `speed` [rad/s, largest joint]; false on timeout.
+  bool pushAlong(const std::vector<Eigen::VectorXd>& path, double speed);
   /// Pushes the tip towards a moving reference p_ref(t) for `duration` seconds.
   void pushTip(const std::function<Eigen::Vector3d(double)>& p_ref, double duration);
   /// Steps until the workflow reaches `sub_stage` (hands off); false on timeout.

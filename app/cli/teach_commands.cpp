@@ -203,6 +203,18 @@ Json runTeach(const TeachOptions& options) {
                         {"tutor", tutor_areas},
                         {"collisions", report.collisions},
                         {"simulated_time_s", report.simulated_time}};
+  // Contacts during teaching (E_coll): the first events with the bodies involved.
+  Json collision_events = Json::array();
+  robot::CollisionWorld* world = sim.collisionWorld();
+  for (const auto& event : sim.collisions().eventLog()) {
+    if (world == nullptr) break;
+    const std::string body = world->bodyName(event.contact.body);
+    const std::string other = world->otherName(event.contact);
+    if (collision_events.size() < 20) {
+      collision_events.push_back({{"time_s", event.time}, {"link", body}, {"other", other}, {"depth_m", event.contact.depth}});
+    }
+    if (recorder) recorder->recordCollision({event.time, body, other, event.contact.depth, event.contact.p_W});
+  }
   std::uint64_t states_dropped = 0;
   if (json_session) {
     std::ofstream file(options.out);
@@ -226,6 +238,7 @@ Json runTeach(const TeachOptions& options) {
           {"samples", samples},
           {"collisions", report.collisions},
           {"colliding_steps", report.colliding_steps},
+          {"collision_events", collision_events},
           {"session", options.out},
           {"session_format", json_session ? "json" : "sqlite"},
           {"states_dropped", states_dropped},
