@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -14,6 +15,7 @@
 #include "app/session_reader.hpp"
 #include "app/session_recorder.hpp"
 #include "app/session_schema.hpp"
+#include "app/study_metrics.hpp"
 #include "robot/backend.hpp"
 #include "robot/errors.hpp"
 
@@ -237,6 +239,33 @@ TEST_F(SessionTest, RoundTripsEveryRecordType) {
   EXPECT_EQ(collisions[0].depth, collision.depth);
   EXPECT_EQ(collisions[0].p_W, collision.p_W);
   EXPECT_TRUE(reader.collisions(0.0, 7.0).empty());
+}
+
+// E_task (Eq. 3.20) of an executed motion read back from a recording: a motion that follows
+// its target 5 mm off everywhere has E_task = 5 mm, and its maximum deviation is 5 mm too.
+TEST_F(SessionTest, ExecutedMotionReadsBackWithItsTargetForTaskError) {
+  const auto file = path("e_task.flexirob");
+  TrajectoryRecord target;
+  target.kind = TrajectoryKind::Target;
+  target.times = Eigen::VectorXd::LinSpaced(11, 0.0, 1.0);
+  target.positions.resize(3, 11);
+  for (int i = 0; i < 11; ++i) target.positions.col(i) << -0.6 + 0.03 * i, 0.1 * std::sin(0.3 * i), 0.4;
+  TrajectoryRecord executed;
+  executed.kind = TrajectoryKind::Executed;
+  executed.times = target.times.array() + 30.0;
+  executed.positions = target.positions.colwise() + Eigen::Vector3d(0.0, 0.0, 0.005);
+  {
+    SessionRecorder recorder(file, exampleMetadata());
+    executed.reference_id = recorder.recordTrajectory(target);
+    recorder.recordTrajectory(executed);
+  }
+  SessionReader reader(file);
+  const auto motions = reader.trajectories(TrajectoryKind::Executed);
+  ASSERT_EQ(motions.size(), 1u);
+  const auto reference = reader.trajectory(motions[0].reference_id);
+  ASSERT_TRUE(reference.has_value());
+  EXPECT_NEAR(taskSpaceError(targetsForExecution(motions[0], *reference), motions[0].positions), 0.005, 1e-12);
+  EXPECT_NEAR(maxDeviation(motions[0].positions, reference->positions), 0.005, 1e-12);
 }
 
 TEST_F(SessionTest, CopiesRobotStateIncludingTipPose) {
