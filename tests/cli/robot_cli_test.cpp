@@ -63,6 +63,8 @@ struct BadInvocation {
   const char* fragment;
 };
 
+void PrintTo(const BadInvocation& invocation, std::ostream* out) { *out << invocation.arguments; }
+
 class CliRefuses : public ::testing::TestWithParam<BadInvocation> {};
 
 TEST_P(CliRefuses, WithExitCode2AndOneLine) {
@@ -86,7 +88,8 @@ INSTANTIATE_TEST_SUITE_P(
                       BadInvocation{"fk --robot /etc/hostname --q 0", "invalid URDF"},
                       BadInvocation{"robot info --robot lwr4 --tip nowhere", "tip link 'nowhere'"},
                       BadInvocation{"fk --robot lwr4", "--q is required"},
-                      BadInvocation{"no-such-command", "error"}));
+                      BadInvocation{"no-such-command", "error"}),
+    [](const ::testing::TestParamInfo<BadInvocation>& param_info) { return "Case" + std::to_string(param_info.index); });
 
 }  // namespace
 }  // namespace flexirob
