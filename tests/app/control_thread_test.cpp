@@ -107,12 +107,15 @@ TEST(ControlThread, RunsTheSimulationAtOneKilohertzAndTakesRequests) {
 }
 
 // A measurement tool as much as a test: FLEXIROB_CONTROL_SECONDS=60 app_tests
-// --gtest_filter=ControlThread.ReportsCycleStatistics prints a 60 s run's figures.
+// --gtest_filter=ControlThread.ReportsCycleStatistics prints a 60 s run's figures
+// (FLEXIROB_CONTROL_REALTIME=1 asks for SCHED_FIFO).
 TEST(ControlThread, ReportsCycleStatistics) {
   const char* text = std::getenv("FLEXIROB_CONTROL_SECONDS");
   const double seconds = text != nullptr ? std::clamp(std::atof(text), 0.1, 3600.0) : 1.0;
+  ControlThread::Options options;
+  options.realtime_priority = std::getenv("FLEXIROB_CONTROL_REALTIME") != nullptr;  // SCHED_FIFO if permitted
   SimulatedRig rig;
-  ControlThread thread(rig.sim, rig.controller, &rig.triggers, ControlThread::Options{});
+  ControlThread thread(rig.sim, rig.controller, &rig.triggers, options);
   thread.start(robot::InteractionMode::kGravityCompensation);
   std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
   thread.stop();
