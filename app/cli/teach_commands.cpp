@@ -122,6 +122,7 @@ Json runTeach(const TeachOptions& options) {
     metadata.robot_urdf = readText(model.urdfPath());
     metadata.tip_link = model.tipLink();
     metadata.scene_name = options.scene;
+    metadata.software_version = FLEXIROB_VERSION_STRING;
     metadata.scene_text = robot::sceneToYaml(scene);
     metadata.parameters = Json{{"seed", options.seed}, {"learner", options.learner}, {"areas", options.areas},
                                {"diameter_m", options.diameter}}.dump();
