@@ -274,17 +274,6 @@ TransitionCheck checkTransition(const robot::RobotModel& model, const robot::Par
                                 int from_index, int to_index, robot::CollisionWorld* world, double speed,
                                 double tolerance);
 
-/// Adapts a learner to the controller's RedundancyMap (positions only).
-class LearnedRedundancyMap final : public robot::RedundancyMap {
- public:
-  explicit LearnedRedundancyMap(const learning::Learner& learner) : learner_(&learner) {}
-  int dof() const override { return learner_->outputDim(); }
-  void predict(const Eigen::Vector3d& p_W, Eigen::VectorXd& q_c) const override { learner_->predict(p_W, q_c); }
-
- private:
-  const learning::Learner* learner_;
-};
-
 /// A fresh learner of the given kind for 3-D inputs and `dof` outputs.
 std::unique_ptr<learning::Learner> makeLearner(const WorkflowOptions& options, int dof);
 
