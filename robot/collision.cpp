@@ -44,6 +44,27 @@ double capsuleRadius(const Body& body) {
   return std::clamp(std::sqrt(2.0 * i_min / body.mass), 0.01, 0.25);
 }
 
+// Whether the two revolute joints at the ends of `body` (the one into it and the one out of
+// it) have axes that cross in one point, as at the shoulder, elbow and wrist of the LWR IV.
+// The bodies before and after such a body only turn about that point relative to each other;
+// whether they can meet is settled by the joint limits the arm's designers chose, which coarse
+// collision hulls cannot resolve (the LWR's flange would "touch" its forearm hull past
+// |A6| = 92 deg). Pairs folding over a body of non-zero length stay checked.
+bool jointsAroundBodyIntersect(const RobotModel& model, int body) {
+  if (body < 1 || body >= model.dof()) return false;
+  const Joint& in = model.joints()[static_cast<std::size_t>(body - 1)];
+  const Joint& out = model.joints()[static_cast<std::size_t>(body)];
+  if (in.type == JointType::kPrismatic || out.type == JointType::kPrismatic) return false;
+  // In the body's own frame: the incoming axis passes through its origin, the outgoing one
+  // through the next joint's origin.
+  const Eigen::Vector3d u = in.axis_J;
+  const Eigen::Vector3d v = out.X_PJ.linear() * out.axis_J;
+  const Eigen::Vector3d offset = out.X_PJ.translation();
+  const Eigen::Vector3d normal = u.cross(v);
+  if (normal.norm() < 1e-9) return false;  // parallel axes never cross in one point
+  return std::abs(offset.dot(normal.normalized())) < 1e-6;  // coplanar and not parallel: they cross
+}
+
 }  // namespace
 
 // Keeps unchecked self-collision pairs (adjacent, or touching at the reference posture) out of
@@ -151,8 +172,9 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
   impl.checked_pairs.assign(static_cast<std::size_t>(impl.bodies * impl.bodies), 0);
   for (int a = 0; a < impl.bodies; ++a) {
     for (int b = a + 2; b < impl.bodies; ++b) {
-      impl.checked_pairs[static_cast<std::size_t>(a * impl.bodies + b)] = 1;
-      impl.checked_pairs[static_cast<std::size_t>(b * impl.bodies + a)] = 1;
+      const bool unchecked = b == a + 2 && jointsAroundBodyIntersect(model, a + 1);
+      impl.checked_pairs[static_cast<std::size_t>(a * impl.bodies + b)] = unchecked ? 0 : 1;
+      impl.checked_pairs[static_cast<std::size_t>(b * impl.bodies + a)] = unchecked ? 0 : 1;
     }
   }
   impl.filter.checked = &impl.checked_pairs;

@@ -179,5 +179,23 @@ TEST(CollisionWorld, UsesTheLwr4CollisionMeshes) {
   EXPECT_EQ(with_box.otherName(contacts[0]), "block");
 }
 
+TEST(CollisionWorld, LeavesPairsAroundShoulderElbowAndWristToTheJointLimits) {
+  // The LWR IV's A1/A2, A3/A4, A5/A6 and A6/A7 axes cross in one point: the bodies on either
+  // side only turn about it, and the joint limits keep them apart on the real arm.
+  const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  CollisionWorld world(model, Scene{});
+  EXPECT_FALSE(world.selfPairChecked(5, 7)) << "forearm and flange, around the wrist";
+  EXPECT_FALSE(world.selfPairChecked(3, 5)) << "upper arm and forearm, around the elbow";
+  EXPECT_TRUE(world.selfPairChecked(1, 4));
+  EXPECT_TRUE(world.selfPairChecked(2, 7));
+  // The wrist bent to its software limit is not a collision.
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(7);
+  q << 0.0, 0.5, 0.0, -1.2, 0.0, model.joints()[5].limits.soft_upper, 0.0;
+  world.update(q);
+  for (const auto& contact : world.contacts()) {
+    EXPECT_FALSE(contact.isSelfCollision()) << world.bodyName(contact.body) << " / " << world.otherName(contact);
+  }
+}
+
 }  // namespace
 }  // namespace flexirob::robot
