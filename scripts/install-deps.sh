@@ -8,7 +8,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev liburdfdom-dev libassimp-dev libbullet-dev libyaml-cpp-dev
   libopenscenegraph-dev libosmesa6-dev
-  qt6-base-dev libqt6opengl6-dev qt6-charts-dev
+  qt6-base-dev libqt6opengl6-dev qt6-charts-dev qt6-multimedia-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libsqlite3-dev libnanoflann-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
