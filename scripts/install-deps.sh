@@ -10,7 +10,7 @@ packages=(
   libopenscenegraph-dev libosmesa6-dev
   qt6-base-dev libqt6opengl6-dev qt6-charts-dev qt6-multimedia-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libsqlite3-dev libnanoflann-dev zlib1g-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev libbenchmark-dev liborocos-kdl-dev libompl-dev
   xvfb xauth
 )
 
