@@ -42,6 +42,65 @@ class ErrorCollector : public console_bridge::OutputHandler {
   std::string first_error;
 };
 
+// XML nesting deeper than this is refused before urdfdom sees it: its XML parser descends
+// recursively and overflows the stack on a few hundred thousand nested elements (a real URDF
+// nests 5 deep: robot/link/visual/geometry/mesh).
+constexpr int kMaxXmlDepth = 100;
+// Elements in the whole document (a 10000-link arm with visuals, collisions and inertials has
+// well under this); bounds urdfdom's work and memory on absurd files.
+constexpr std::size_t kMaxXmlElements = 1'000'000;
+
+// A linear pre-scan of the XML structure: element depth and count only (comments, CDATA,
+// processing instructions, declarations and quoted attribute values are skipped). Whether the
+// document is well formed is left to urdfdom.
+void checkXmlShape(const std::string& xml) {
+  int depth = 0;
+  std::size_t elements = 0;
+  const auto skipPast = [&xml](std::size_t from, const char* terminator) {
+    const std::size_t at = xml.find(terminator, from);
+    return at == std::string::npos ? xml.size() : at + std::char_traits<char>::length(terminator);
+  };
+  std::size_t i = xml.find('<');
+  while (i < xml.size()) {
+    if (xml.compare(i, 4, "<!--") == 0) {
+      i = skipPast(i + 4, "-->");
+    } else if (xml.compare(i, 9, "<![CDATA[") == 0) {
+      i = skipPast(i + 9, "]]>");
+    } else if (xml.compare(i, 2, "<?") == 0) {
+      i = skipPast(i + 2, "?>");
+    } else if (xml.compare(i, 2, "<!") == 0) {
+      i = skipPast(i + 2, ">");
+    } else if (xml.compare(i, 2, "</") == 0) {
+      --depth;
+      i = skipPast(i + 2, ">");
+    } else {
+      // A start tag: find its end outside quoted attribute values.
+      char quote = 0;
+      std::size_t j = i + 1;
+      for (; j < xml.size(); ++j) {
+        const char c = xml[j];
+        if (quote != 0) {
+          if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+          quote = c;
+        } else if (c == '>') {
+          break;
+        }
+      }
+      if (j >= xml.size()) break;
+      if (xml[j - 1] != '/') ++depth;
+      if (++elements > kMaxXmlElements) {
+        throw InputError("invalid URDF: more than " + std::to_string(kMaxXmlElements) + " XML elements");
+      }
+      if (depth > kMaxXmlDepth) {
+        throw InputError("invalid URDF: XML nested deeper than " + std::to_string(kMaxXmlDepth) + " elements");
+      }
+      i = j + 1;
+    }
+    i = xml.find('<', i);
+  }
+}
+
 std::string oneLine(std::string text) {
   std::replace(text.begin(), text.end(), '\n', ' ');
   while (!text.empty() && (text.back() == ' ' || text.back() == '.')) text.pop_back();
@@ -258,6 +317,7 @@ RobotModel RobotModel::fromUrdfFile(const fs::path& urdf_file, const std::string
 RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& base_dir,
                                       const std::string& tip_link) {
   if (xml.size() > kMaxUrdfBytes) throw InputError("URDF is larger than 64 MB");
+  checkXmlShape(xml);
   ErrorCollector collector;
   console_bridge::OutputHandler* previous = console_bridge::getOutputHandler();
   console_bridge::useOutputHandler(&collector);
