@@ -13,7 +13,9 @@ namespace {
 static_assert(std::endian::native == std::endian::little, "the ITM file format is written as little-endian");
 
 constexpr char kMagic[8] = {'F', 'L', 'X', 'I', 'T', 'M', '\r', '\n'};
-constexpr std::uint64_t kMaxFileBytes = std::uint64_t{1} << 34;  // 16 GiB
+// Refused before reading: a graph of 1 GiB already holds ~9 million pose nodes of a 7-DoF arm,
+// far beyond any teaching session, while reading a hostile 16 GiB file would exhaust memory.
+constexpr std::uint64_t kMaxFileBytes = std::uint64_t{1} << 30;  // 1 GiB
 
 std::uint64_t fnv1a(const char* data, std::size_t size) {
   std::uint64_t hash = 0xcbf29ce484222325ULL;
@@ -125,11 +127,19 @@ Itm loadItm(const std::filesystem::path& path) {
   if (!std::filesystem::is_regular_file(path, error)) throw ItmFileError("ITM graph file '" + name + "' does not exist or is not a file");
   const std::uintmax_t size = std::filesystem::file_size(path, error);
   if (error) throw ItmFileError("cannot read ITM graph file '" + name + "'");
-  if (size > kMaxFileBytes) throw ItmFileError("ITM graph file '" + name + "': larger than 16 GiB");
-  std::vector<char> data(static_cast<std::size_t>(size));
+  if (size > kMaxFileBytes) throw ItmFileError("ITM graph file '" + name + "': larger than 1 GiB");
+  std::vector<char> data;
   {
     std::ifstream file(path, std::ios::binary);
     if (!file) throw ItmFileError("cannot read ITM graph file '" + name + "'");
+    // The magic word first, so that a large foreign file is refused without being read.
+    char magic[sizeof kMagic] = {};
+    file.read(magic, sizeof magic);
+    if (static_cast<std::size_t>(file.gcount()) != sizeof magic || std::memcmp(magic, kMagic, sizeof kMagic) != 0) {
+      throw ItmFileError("ITM graph file '" + name + "': not an ITM graph (bad magic)");
+    }
+    file.seekg(0);
+    data.resize(static_cast<std::size_t>(size));
     file.read(data.data(), static_cast<std::streamsize>(data.size()));
     if (static_cast<std::uintmax_t>(file.gcount()) != size) throw ItmFileError("cannot read ITM graph file '" + name + "'");
   }
