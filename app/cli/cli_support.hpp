@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "app/cli/number_list.hpp"
+
 namespace flexirob::cli {
 
 using Json = nlohmann::ordered_json;
@@ -36,17 +38,11 @@ void registerFriCommands(CLI::App& app, CommandRunner& runner);     // fri probe
 void registerReviewCommands(CLI::App& app, CommandRunner& runner);  // review
 void registerTeachCommands(CLI::App& app, CommandRunner& runner);   // teach
 void registerEvalCommands(CLI::App& app, CommandRunner& runner);    // eval reachable, plan
+void registerSweepCommand(CLI::App& app, CommandRunner& runner);    // sweep
 
 /// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.
 /// Returns the process exit code (0 success, 2 bad input).
 int runCli(int argc, const char* const* argv);
-
-/// Parses "1.0,2,-3e-2" strictly: every entry a finite number, no empty entries, at most
-/// max_count entries. Throws InputError naming `what`.
-Eigen::VectorXd parseNumberList(const std::string& text, const std::string& what,
-                                std::size_t max_count = 4096);
-/// As parseNumberList with exactly `count` entries.
-Eigen::VectorXd parseNumberList(const std::string& text, const std::string& what, int count);
 
 Json toJson(const Eigen::VectorXd& v);
 Json toJsonRows(const Eigen::MatrixXd& m);
