@@ -11,6 +11,7 @@ packages=(
   qt6-base-dev libqt6opengl6-dev qt6-charts-dev qt6-multimedia-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libsqlite3-dev libnanoflann-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev liborocos-kdl-dev libompl-dev
+  libboost-serialization-dev libboost-filesystem-dev libboost-system-dev
   xvfb xauth
   clang-14 libclang-rt-14-dev
 )
