@@ -44,18 +44,6 @@ const char* toString(Button button) {
   return "?";
 }
 
-const char* toString(Trigger trigger) { return trigger == Trigger::kOnAffected ? "on_affected" : "on_converged"; }
-
-const char* toString(InteractionController controller) {
-  switch (controller) {
-    case InteractionController::kHold: return "hierarchical";
-    case InteractionController::kGravityCompensation: return "gravity_compensation";
-    case InteractionController::kCompliantRecording: return "compliant_recording";
-    case InteractionController::kAssistedGravityCompensation: return "assisted_gravity_compensation";
-    case InteractionController::kAssistanceBlending: return "assistance_blending";
-  }
-  return "?";
-}
 
 const char* toString(LearnerKind kind) {
   switch (kind) {
@@ -78,6 +66,8 @@ const char* toString(WorkflowEvent::Kind kind) {
     case K::kModelLearned: return "model_learned";
     case K::kWarning: return "warning";
     case K::kCheck: return "check";
+    case K::kTeachIn: return "teach_in";
+    case K::kExecution: return "execution";
   }
   return "?";
 }
@@ -87,47 +77,6 @@ LearnerKind learnerKindFromString(const std::string& name) {
   if (name == "oselm") return LearnerKind::kOsElm;
   if (name == "llm") return LearnerKind::kLlm;
   throw InputError("learner: expected elm, oselm or llm, got '" + name + "'");
-}
-
-ImpedanceGains gainsOf(InteractionController controller) {
-  switch (controller) {
-    case InteractionController::kHold: return {300.0, 0.95};
-    case InteractionController::kGravityCompensation: return {20.0, 0.7};
-    case InteractionController::kCompliantRecording: return {80.0, 0.7};
-    case InteractionController::kAssistedGravityCompensation: return {50.0, 0.7};
-    case InteractionController::kAssistanceBlending: return {50.0, 0.7};
-  }
-  return {300.0, 0.95};
-}
-
-// ---------------------------------------------------------------------------------------------
-// Triggers (App. A.3): on_affected when max |τ_ext| exceeds the threshold while the robot is
-// not moving; on_converged when, after on_affected, the robot has not moved for converged_time.
-
-std::optional<Trigger> InteractionTriggers::update(const robot::RobotState& state) {
-  const double speed = state.qd.size() > 0 ? state.qd.cwiseAbs().maxCoeff() : 0.0;
-  const double torque = state.tau_ext.size() > 0 ? state.tau_ext.cwiseAbs().maxCoeff() : 0.0;
-  const bool still = speed < still_velocity_;
-  if (still && !was_still_) still_since_ = state.time;
-  was_still_ = still;
-  if (!affected_) {
-    if (still && torque > affected_torque_) {
-      affected_ = true;
-      still_since_ = state.time;
-      return Trigger::kOnAffected;
-    }
-    return std::nullopt;
-  }
-  if (still && state.time - still_since_ >= converged_time_) {
-    affected_ = false;
-    return Trigger::kOnConverged;
-  }
-  return std::nullopt;
-}
-
-void InteractionTriggers::reset(bool affected, double time) {
-  affected_ = affected;
-  still_since_ = time;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -152,27 +101,72 @@ struct Workflow::LearningResult {
   std::string error;
 };
 
+namespace {
+
+/// The interaction controllers' and the triggers' parameters: values from `given` where it
+/// declares them (a scene's overrides), the triggers' from the workflow options.
+robot::ParameterSet workflowParameters(const robot::ParameterSet& given, const WorkflowOptions& options) {
+  std::vector<robot::ParameterDeclaration> declarations = robot::interactionControllerParameters();
+  for (const auto& declaration : robot::triggerParameters()) declarations.push_back(declaration);
+  for (const auto& declaration : given.declarations()) {
+    const bool known = std::any_of(declarations.begin(), declarations.end(),
+                                   [&](const robot::ParameterDeclaration& d) { return d.name == declaration.name; });
+    if (!known) declarations.push_back(declaration);
+  }
+  robot::ParameterSet parameters(declarations);
+  for (const auto& declaration : given.declarations()) parameters.set(declaration.name, given.get(declaration.name));
+  if (options.sample_period <= 0.0 || options.converged_time <= 0.0 || options.affected_torque <= 0.0 ||
+      options.still_velocity <= 0.0 || options.max_recording_time <= 0.0) {
+    throw InputError("workflow: sample period, trigger thresholds, converged time and recording time must be positive");
+  }
+  parameters.set("triggers.torque_threshold", options.affected_torque);
+  parameters.set("triggers.still_velocity", options.still_velocity);
+  parameters.set("triggers.converged_time", options.converged_time);
+  return parameters;
+}
+
+}  // namespace
+
+int Workflow::PostureMap::dof() const { return workflow_->model_robot_->dof(); }
+
+void Workflow::PostureMap::predict(const Eigen::Vector3d& p_W, Eigen::VectorXd& q_c) const {
+  const learning::Learner* learner = workflow_->online_ ? workflow_->online_.get() : workflow_->model_.get();
+  if (learner != nullptr && learner->trained()) {
+    learner->predict(p_W, q_c);
+  } else {
+    q_c = workflow_->hold_q_;
+  }
+}
+
+double Workflow::AreaConfidence::confidence(const Eigen::Vector3d& p_W) const {
+  return model_->areas() > 0 ? model_->evaluate(p_W) : 0.0;
+}
+
 Workflow::Workflow(robot::RobotBackend& backend, const robot::ParameterSet& parameters, WorkflowOptions options)
     : backend_(&backend),
       model_robot_(&backend.model()),
       options_(std::move(options)),
-      hierarchical_(backend.model(), parameters),
-      limiter_(backend.model(), parameters, backend.cycleTime()),
-      parameters_(parameters),
-      triggers_(options_.affected_torque, options_.still_velocity, options_.converged_time),
+      parameters_(workflowParameters(parameters, options_)),
+      interaction_(backend.model(), parameters_, backend.cycleTime()),
+      triggers_(parameters_),
       confidence_(options_.confidence_d),
-      itm_(options_.itm, backend.model().dof()) {
+      itm_(options_.itm, backend.model().dof()),
+      posture_map_(*this),
+      area_confidence_(confidence_) {
   const int dof = model_robot_->dof();
-  if (options_.sample_period <= 0.0 || options_.converged_time <= 0.0 || options_.affected_torque <= 0.0) {
-    throw InputError("workflow: sample period, converged time and affected torque must be positive");
-  }
   state_.resize(dof);
   command_.resize(dof);
-  q_c_.setZero(dof);
-  qd_.setZero(dof);
+  // Room for one whole RECORDING / TEACH-IN: the control cycle never allocates per sample.
+  const auto capacity = static_cast<Eigen::Index>(std::ceil(options_.max_recording_time / options_.sample_period)) + 1;
+  recording_X_.setZero(3, capacity);
+  recording_Q_.setZero(dof, capacity);
+  recording_q_fixed_.setZero(dof);
   backend_->readState(state_);
   hold_q_ = state_.q;
-  limiter_.reset(state_.q);
+  q_fixed_ = state_.q;
+  interaction_.setConfidence(&area_confidence_);
+  setState(Stage::kIdle, SubStage::kNone);
+  events_.clear();  // the initial state is no event
   command();
 }
 
@@ -222,12 +216,14 @@ void Workflow::setState(Stage stage, SubStage sub_stage) {
       break;
     case SubStage::kTeachIn: controller_ = InteractionController::kAssistedGravityCompensation; break;
     case SubStage::kNone:
-    case SubStage::kWaiting: controller_ = InteractionController::kHold; break;
+    case SubStage::kWaiting: controller_ = InteractionController::kHierarchicalControl; break;
   }
-  if (controller_ == InteractionController::kHold) {
-    hold_q_ = state_.q;
-    limiter_.reset(state_.q);
-  }
+  // Holding (IDLE, WAITING) keeps the posture of now; EXECUTION follows q_c(x) of the map.
+  hold_q_ = state_.q;
+  const bool mapped = controller_ != InteractionController::kHierarchicalControl || stage == Stage::kExecution;
+  interaction_.setRedundancyMap(mapped ? &posture_map_ : nullptr);
+  interaction_.setFixedPosture(controller_ == InteractionController::kCompliantRecording ? q_fixed_ : hold_q_);
+  interaction_.start(controller_, state_);
   emit(WorkflowEvent::Kind::kStage, stateName(), std::string("controller ") + toString(controller_));
 }
 
@@ -245,7 +241,7 @@ RequestResult Workflow::press(Button button) {
       if (learning()) return refuse(name, "start_configuration: learning is still running");
       emit(WorkflowEvent::Kind::kButton, name, "");
       execution_waypoints_.clear();
-      triggers_.reset(false, state_.time);
+      triggers_.reset();
       setState(Stage::kConfiguration, SubStage::kWaiting);
       return {true, ""};
     case Button::kFinishedConfiguration:
@@ -269,7 +265,7 @@ RequestResult Workflow::press(Button button) {
       if (!model_) return refuse(name, "start_programming: no learned redundancy resolution");
       emit(WorkflowEvent::Kind::kButton, name, "");
       execution_waypoints_.clear();
-      triggers_.reset(false, state_.time);
+      triggers_.reset();
       setState(Stage::kProgramming, SubStage::kWaiting);
       return {true, ""};
     case Button::kFinishedProgramming:
@@ -281,7 +277,7 @@ RequestResult Workflow::press(Button button) {
       }
       emit(WorkflowEvent::Kind::kButton, name, "");
       setState(Stage::kExecution, SubStage::kNone);
-      execution_target_ = state_.p_WT();
+      execution_target_ = interaction_.taskTarget();
       return {true, ""};
   }
   return refuse(name, "unknown button");
@@ -291,7 +287,11 @@ RequestResult Workflow::fire(Trigger trigger) {
   if (stage_ != Stage::kConfiguration && stage_ != Stage::kProgramming) {
     return refuse(toString(trigger), std::string(toString(trigger)) + ": no interaction in " + stateName());
   }
-  triggers_.reset(trigger == Trigger::kOnAffected, state_.time);
+  if (trigger == Trigger::kOnAffected) {
+    triggers_.markAffected(state_.time);
+  } else {
+    triggers_.reset();
+  }
   onTrigger(trigger);
   return {true, ""};
 }
@@ -314,6 +314,8 @@ RequestResult Workflow::removeArea(int k) {
   online_.reset();
   checks_.clear();
   rebuildConfidence();
+  ++areas_version_;
+  ++model_version_;
   emit(WorkflowEvent::Kind::kAreaRemoved, "area_removed", area_name, k);
   if (options_.learner == LearnerKind::kOsElm && !areas_.empty()) {
     // The online learner cannot forget: refit it on what remains.
@@ -345,7 +347,80 @@ RequestResult Workflow::execute(const std::vector<Eigen::Vector3d>& waypoints) {
   }
   execution_waypoints_ = waypoints;
   std::reverse(execution_waypoints_.begin(), execution_waypoints_.end());  // back() = next
+  execution_target_ = interaction_.taskTarget();
   return {true, ""};
+}
+
+RequestResult Workflow::replayTeachIn(int k) {
+  if (stage_ != Stage::kExecution) return refuse("replay", std::string("replay: not in EXECUTION but ") + stateName());
+  if (k < 0 || k >= static_cast<int>(teach_ins_.size())) {
+    return refuse("replay", "replay: expected a teach-in index in [0, " + std::to_string(teach_ins_.size()) + "), got " +
+                                std::to_string(k));
+  }
+  const Eigen::MatrixXd& trajectory = teach_ins_[static_cast<std::size_t>(k)];
+  std::vector<Eigen::Vector3d> waypoints;
+  waypoints.reserve(static_cast<std::size_t>(trajectory.cols()));
+  for (Eigen::Index i = 0; i < trajectory.cols(); ++i) waypoints.emplace_back(trajectory.col(i));
+  const RequestResult result = execute(waypoints);
+  if (result) emit(WorkflowEvent::Kind::kExecution, "replay", "teach-in " + std::to_string(k), k);
+  return result;
+}
+
+RequestResult Workflow::planTo(const Eigen::Vector3d& goal) {
+  if (stage_ != Stage::kExecution) return refuse("plan", std::string("plan: not in EXECUTION but ") + stateName());
+  if (!goal.allFinite()) return refuse("plan", "plan: the goal must be three finite numbers");
+  if (itm_.nodeCount() == 0) return refuse("plan", "plan: the ITM graph is empty (nothing explored in CONFIGURATION)");
+  const Eigen::Vector3d start = interaction_.taskTarget();
+  auto path = std::make_shared<planning::PlannedPath>(
+      planning::planPath(itm_, Eigen::VectorXd(start), Eigen::VectorXd(goal)));
+  if (!path->found) return refuse("plan", "plan: no path through the ITM graph (start and goal in different components)");
+  if (path->goal_gap > options_.max_goal_gap) {
+    std::ostringstream reason;
+    reason << "plan: the goal is " << path->goal_gap * 1e3 << " mm from the nearest explored position (at most "
+           << options_.max_goal_gap * 1e3 << " mm)";
+    return refuse("plan", reason.str());
+  }
+  std::vector<Eigen::Vector3d> waypoints;
+  for (Eigen::Index i = 0; i < path->waypoints.cols(); ++i) waypoints.emplace_back(path->waypoints.col(i));
+  if (waypoints.empty()) waypoints.push_back(goal);
+  const RequestResult result = execute(waypoints);
+  if (!result) return result;
+  std::ostringstream detail;
+  detail << "to (" << goal.transpose() << ") m through " << path->nodes.size() << " nodes, " << path->length << " m";
+  planned_path_ = std::move(path);
+  ++path_version_;
+  emit(WorkflowEvent::Kind::kExecution, "plan", detail.str());
+  return result;
+}
+
+RequestResult Workflow::nudgeTask(const Eigen::Vector3d& dx) {
+  if (!dx.allFinite()) return refuse("nudge_task", "nudge_task: the step must be three finite numbers");
+  if (!execution_waypoints_.empty()) return refuse("nudge_task", "nudge_task: a motion is being executed");
+  interaction_.nudgeTask(dx);
+  execution_target_ = interaction_.taskTarget();
+  return {true, ""};
+}
+
+RequestResult Workflow::nudgeJoint(int joint, double dq) {
+  if (joint < 0 || joint >= model_robot_->dof() || !std::isfinite(dq)) {
+    return refuse("nudge_joint", "nudge_joint: expected a joint in [0, " + std::to_string(model_robot_->dof()) +
+                                     ") and a finite step");
+  }
+  if (!execution_waypoints_.empty()) return refuse("nudge_joint", "nudge_joint: a motion is being executed");
+  Eigen::VectorXd step = Eigen::VectorXd::Zero(model_robot_->dof());
+  step[joint] = dq;
+  interaction_.nudgeJoints(step);
+  if (controller_ == InteractionController::kHierarchicalControl && stage_ != Stage::kExecution) {
+    // Holding without a map: the held posture is the null-space target (Sect. 8.1).
+    hold_q_ = (hold_q_ + step).cwiseMax(interaction_.limiter().lower()).cwiseMin(interaction_.limiter().upper());
+    interaction_.setFixedPosture(hold_q_);
+  }
+  return {true, ""};
+}
+
+void Workflow::setKeyboardMode(bool keyboard) {
+  keyboard_ = keyboard;
+  interaction_.setKeyboardMode(keyboard);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -371,17 +446,14 @@ void Workflow::onTrigger(Trigger trigger) {
       if (!affected) return;
       emit(WorkflowEvent::Kind::kTrigger, toString(trigger), from);
       if (stage_ == Stage::kConfiguration) {
-        current_ = TrainingArea{};
-        current_.q_fixed = q_fixed_;
-        current_.X.resize(3, 0);
-        current_.Q.resize(model_robot_->dof(), 0);
-        last_sample_time_ = -1e9;
+        recording_q_fixed_ = q_fixed_;
         setState(stage_, SubStage::kRecording);
       } else {
-        teach_in_points_.clear();
-        last_sample_time_ = -1e9;
         setState(stage_, SubStage::kTeachIn);
       }
+      recording_samples_ = 0;
+      recording_full_ = false;
+      last_sample_time_ = -1e9;
       break;
     case SubStage::kRecording:
       if (affected) return;
@@ -392,9 +464,7 @@ void Workflow::onTrigger(Trigger trigger) {
     case SubStage::kTeachIn: {
       if (affected) return;
       emit(WorkflowEvent::Kind::kTrigger, toString(trigger), from);
-      Eigen::MatrixXd trajectory(3, static_cast<Eigen::Index>(teach_in_points_.size()));
-      for (std::size_t i = 0; i < teach_in_points_.size(); ++i) trajectory.col(static_cast<Eigen::Index>(i)) = teach_in_points_[i];
-      teach_ins_.push_back(std::move(trajectory));
+      finishTeachIn();
       setState(stage_, SubStage::kWaiting);
       break;
     }
@@ -416,31 +486,51 @@ void Workflow::checkJointLimits(const Eigen::VectorXd& q_fixed, int area) {
   }
 }
 
+void Workflow::finishTeachIn() {
+  if (recording_samples_ == 0) {
+    emit(WorkflowEvent::Kind::kWarning, "empty_teach_in", "the teach-in held no sample; nothing kept");
+    return;
+  }
+  teach_ins_.emplace_back(recording_X_.leftCols(recording_samples_));
+  ++teach_ins_version_;
+  std::ostringstream detail;
+  detail << "teach-in " << teach_ins_.size() - 1 << ": " << recording_samples_ << " samples";
+  emit(WorkflowEvent::Kind::kTeachIn, "teach_in", detail.str(), static_cast<int>(teach_ins_.size()) - 1);
+}
+
 void Workflow::finishArea() {
-  if (current_.X.cols() == 0) {
+  if (recording_samples_ == 0) {
     emit(WorkflowEvent::Kind::kWarning, "empty_recording", "the recording held no sample; no area created");
     return;
   }
+  // The one allocation of a RECORDING: its samples leave the preallocated buffer.
+  TrainingArea area;
+  area.q_fixed = recording_q_fixed_;
+  area.X = recording_X_.leftCols(recording_samples_);
+  area.Q = recording_Q_.leftCols(recording_samples_);
+  area.centre = area.X.col(0);  // c_k = x_init (Eq. 3.14)
   int index = static_cast<int>(areas_.size());
   if (reteach_index_ >= 0 && reteach_index_ < index) {
     index = reteach_index_;
-    current_.name = areas_[static_cast<std::size_t>(index)].name;
-    areas_[static_cast<std::size_t>(index)] = std::move(current_);
+    area.name = areas_[static_cast<std::size_t>(index)].name;
+    areas_[static_cast<std::size_t>(index)] = std::move(area);
     reteach_index_ = -1;
     model_.reset();
     online_.reset();
     checks_.clear();
     if (options_.learner == LearnerKind::kOsElm) startLearning();  // refit what the online learner cannot forget
   } else {
-    current_.name = "area_" + std::to_string(index + 1);
-    areas_.push_back(std::move(current_));
+    area.name = "area_" + std::to_string(index + 1);
+    areas_.push_back(std::move(area));
   }
-  current_ = TrainingArea{};
+  recording_samples_ = 0;
   rebuildConfidence();
-  const TrainingArea& area = areas_[static_cast<std::size_t>(index)];
+  ++areas_version_;
+  ++model_version_;  // the confidence model changed (and, re-teaching, the map was dropped)
+  const TrainingArea& created = areas_[static_cast<std::size_t>(index)];
   std::ostringstream detail;
-  detail << area.name << ": " << area.X.cols() << " samples, centre (" << area.centre.transpose() << ") m";
-  emit(WorkflowEvent::Kind::kAreaCreated, area.name, detail.str(), index);
+  detail << created.name << ": " << created.X.cols() << " samples, centre (" << created.centre.transpose() << ") m";
+  emit(WorkflowEvent::Kind::kAreaCreated, created.name, detail.str(), index);
 }
 
 void Workflow::rebuildConfidence() {
@@ -474,6 +564,7 @@ void Workflow::startLearning() {
   learning::TrainingSet data = trainingSet();
   std::vector<TrainingArea> areas = areas_;
   learning_done_.store(false, std::memory_order_relaxed);
+  learning_started_ = std::chrono::steady_clock::now();
   learning_result_ = std::make_unique<LearningResult>();
   auto job = [this, data = std::move(data), areas = std::move(areas)]() {
     LearningResult& result = *learning_result_;
@@ -529,11 +620,13 @@ void Workflow::collectLearning() {
   if (!learning_result_ || !learning_done_.load(std::memory_order_acquire)) return;
   if (learning_thread_.joinable()) learning_thread_.join();  // it has finished: no wait
   std::unique_ptr<LearningResult> result = std::move(learning_result_);
+  learning_seconds_ = result->seconds;
   if (!result->error.empty()) {
     emit(WorkflowEvent::Kind::kWarning, "learning_failed", result->error);
     return;
   }
   model_ = std::move(result->model);
+  ++model_version_;
   // OS-ELM: keep learning online from the refit on.
   if (result->online) online_ = std::move(result->online);
   std::ostringstream detail;
@@ -549,6 +642,11 @@ void Workflow::collectLearning() {
     emit(check.ok ? WorkflowEvent::Kind::kCheck : WorkflowEvent::Kind::kWarning,
          check.ok ? "transition_ok" : "transition_inconsistent", line.str(), check.to);
   }
+}
+
+double Workflow::learningSeconds() const {
+  if (learning_result_) return std::chrono::duration<double>(std::chrono::steady_clock::now() - learning_started_).count();
+  return learning_seconds_;
 }
 
 void Workflow::waitForLearning() {
@@ -607,88 +705,48 @@ TransitionCheck checkTransition(const robot::RobotModel& model, const robot::Par
 // ---------------------------------------------------------------------------------------------
 // The control cycle.
 
-void Workflow::predictPosture(const Eigen::Vector3d& p_W, Eigen::VectorXd& q_c) const {
-  const learning::Learner* learner = online_ ? online_.get() : model_.get();
-  if (learner != nullptr && learner->trained()) {
-    learner->predict(p_W, q_c);
-  } else {
-    q_c = state_.q;
-  }
-}
-
 void Workflow::recordSample() {
   if (state_.time - last_sample_time_ < options_.sample_period - 1e-9) return;
   last_sample_time_ = state_.time;
   const Eigen::Vector3d p = state_.p_WT();
   // Every position of the configuration stage feeds the ITM (DESIGN §3, Chap. 7).
-  if (stage_ == Stage::kConfiguration) itm_.insert(p, state_.q);
-  if (sub_stage_ == SubStage::kRecording) {
-    const Eigen::Index l = current_.X.cols();
-    if (l == 0) current_.centre = p;  // c_k = x_init (Eq. 3.14)
-    current_.X.conservativeResize(3, l + 1);
-    current_.Q.conservativeResize(current_.Q.rows(), l + 1);
-    current_.X.col(l) = p;
-    current_.Q.col(l) = state_.q;
-    if (options_.learner == LearnerKind::kOsElm) {
-      // Online learning during RECORDING (Chap. 6, Eq. 6.4-6.5).
-      if (!online_) {
-        online_ = makeOnlineLearner();
-      }
-      online_->update(p, state_.q);
+  if (stage_ == Stage::kConfiguration) {
+    itm_.insert(p, state_.q);
+    ++itm_version_;
+  }
+  if (sub_stage_ != SubStage::kRecording && sub_stage_ != SubStage::kTeachIn) return;
+  if (recording_samples_ >= recording_X_.cols()) {
+    if (!recording_full_) {
+      recording_full_ = true;
+      emit(WorkflowEvent::Kind::kWarning, "recording_full",
+           "the recording is longer than max_recording_time; later samples are not kept");
     }
-  } else if (sub_stage_ == SubStage::kTeachIn) {
-    teach_in_points_.push_back(p);
+    return;
+  }
+  recording_X_.col(recording_samples_) = p;
+  recording_Q_.col(recording_samples_) = state_.q;
+  ++recording_samples_;
+  if (sub_stage_ == SubStage::kRecording && options_.learner == LearnerKind::kOsElm) {
+    // Online learning during RECORDING (Chap. 6, Eq. 6.4-6.5).
+    if (!online_) online_ = makeOnlineLearner();
+    online_->update(p, state_.q);
   }
 }
 
 void Workflow::command() {
-  const ImpedanceGains gains = gainsOf(controller_);
-  command_.stiffness.setConstant(gains.stiffness);
-  command_.damping.setConstant(gains.damping);
-  switch (controller_) {
-    case InteractionController::kHold:
-      if (stage_ == Stage::kExecution && model_) {
-        // Eq. 2.11 with the learned q_c, the target moving along the waypoints.
-        if (!execution_waypoints_.empty()) {
-          const Eigen::Vector3d to = execution_waypoints_.back() - execution_target_;
-          const double step = options_.execution_speed * backend_->cycleTime();
-          if (to.norm() <= step) {
-            execution_target_ = execution_waypoints_.back();
-            execution_waypoints_.pop_back();
-          } else {
-            execution_target_ += to.normalized() * step;
-          }
-        }
-        predictPosture(execution_target_, q_c_);
-        hierarchical_.velocity(limiter_.command(), execution_target_, q_c_, qd_, &limiter_);
-        command_.q_cmd = limiter_.updateVelocity(qd_);
-      } else {
-        command_.q_cmd = limiter_.update(hold_q_);
-      }
-      break;
-    case InteractionController::kGravityCompensation:
-      // π_q: the inner loop compensates gravity; the spring is centred on the measured posture.
-      command_.q_cmd = state_.q;
-      break;
-    case InteractionController::kCompliantRecording: command_.q_cmd = q_fixed_; break;
-    case InteractionController::kAssistedGravityCompensation:
-    case InteractionController::kAssistanceBlending: {
-      // The tip is free (the command agrees with the measured tip position); the null space is
-      // pulled towards q_c(x): q_cmd = q + α (I − J⁺J)(q_c(x) − q), with α = 1 for assisted
-      // gravity compensation and α = C(x) for assistance blending (Eq. 6.2 in the null space).
-      const Eigen::Vector3d p = state_.p_WT();
-      predictPosture(p, q_c_);
-      hierarchical_.velocity(state_.q, p, q_c_, qd_);
-      double alpha = 1.0;
-      if (controller_ == InteractionController::kAssistanceBlending) alpha = confidence_.areas() > 0 ? confidence_.evaluate(p) : 0.0;
-      const double kappa_q = hierarchical_.kappaQ() > 0.0 ? hierarchical_.kappaQ() : 1.0;
-      command_.q_cmd = state_.q + (alpha / kappa_q) * qd_;
-      break;
+  if (stage_ == Stage::kExecution && !execution_waypoints_.empty()) {
+    // Eq. 2.11 with the learned q_c, the target moving along the waypoints at execution_speed.
+    const Eigen::Vector3d to = execution_waypoints_.back() - execution_target_;
+    const double step = options_.execution_speed * backend_->cycleTime();
+    if (to.norm() <= step) {
+      execution_target_ = execution_waypoints_.back();
+      execution_waypoints_.pop_back();
+    } else {
+      execution_target_ += to.normalized() * step;
     }
+    interaction_.setTaskTarget(execution_target_);
   }
-  // Keep inside the software limits (the robot rejects commands beyond its limits).
-  command_.q_cmd = command_.q_cmd.cwiseMax(limiter_.lower()).cwiseMin(limiter_.upper());
-  if (controller_ != InteractionController::kHold) limiter_.reset(state_.q);
+  interaction_.update(state_, command_);
   backend_->writeCommand(command_);
 }
 
@@ -702,7 +760,7 @@ void Workflow::update() {
   backend_->readState(state_);
   collectLearning();
   if (stage_ == Stage::kConfiguration || stage_ == Stage::kProgramming) {
-    if (const auto trigger = triggers_.update(state_)) onTrigger(*trigger);
+    if (const auto event = triggers_.update(state_)) onTrigger(event->kind);
     recordSample();
   }
   command();

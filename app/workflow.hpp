@@ -23,6 +23,7 @@
 // frame W [m]; joint space [rad].
 #include <Eigen/Core>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -36,49 +37,43 @@
 #include "learning/learner.hpp"
 #include "learning/llm.hpp"
 #include "planning/itm.hpp"
+#include "planning/path_planner.hpp"
 #include "robot/backend.hpp"
 #include "robot/collision.hpp"
 #include "robot/controllers.hpp"
+#include "robot/interaction.hpp"
 #include "robot/parameters.hpp"
 #include "robot/scene.hpp"
+#include "robot/triggers.hpp"
 
 namespace flexirob::app {
 
 enum class Stage { kIdle, kConfiguration, kProgramming, kExecution };
 enum class SubStage { kNone, kWaiting, kApproaching, kPosed, kRecording, kTeachIn };
 enum class Button { kStartConfiguration, kFinishedConfiguration, kStartProgramming, kFinishedProgramming };
-enum class Trigger { kOnAffected, kOnConverged };
+/// The interaction triggers are the robot core's (robot/triggers.hpp, App. A.3).
+using Trigger = robot::TriggerKind;
 
-/// The joint impedance controllers of the workflow (DESIGN §3, Tab. A.1).
-enum class InteractionController {
-  kHold,                        ///< hierarchical control / holding a posture: 300 Nm/rad, 0.95
-  kGravityCompensation,         ///< π_q: 20 Nm/rad, 0.7
-  kCompliantRecording,          ///< π_rec: 80 Nm/rad, 0.7, spring towards q_fixed
-  kAssistedGravityCompensation, ///< 50 Nm/rad, 0.7, null space pulled towards q_c(x)
-  kAssistanceBlending,          ///< 50 Nm/rad, 0.7, Eq. 6.2 with α = C(x) (OS-ELM, Chap. 6)
-};
+/// The workflow's interaction controllers are the robot core's (robot/interaction.hpp, Tab. A.1):
+/// hierarchical control holds a posture or follows the execution target, π_q, π_rec, assisted
+/// gravity compensation and assistance blending (Eq. 6.2) drive the teaching sub-stages.
+using InteractionController = robot::InteractionMode;
 
 enum class LearnerKind { kElm, kOsElm, kLlm };
 
 const char* toString(Stage stage);
 const char* toString(SubStage sub_stage);
 const char* toString(Button button);
-const char* toString(Trigger trigger);
-const char* toString(InteractionController controller);
+/// The robot core's names of the controllers ("hierarchical_control", "gravity_compensation",
+/// ...) and triggers ("on_affected", "on_converged"), also as app::toString.
+using robot::toString;
 const char* toString(LearnerKind kind);
 /// "elm", "oselm", "llm"; throws InputError otherwise.
 LearnerKind learnerKindFromString(const std::string& name);
 
-struct ImpedanceGains {
-  double stiffness = 0.0;  ///< [Nm/rad]
-  double damping = 0.0;    ///< normalized damping (FRI jntDamping)
-};
-/// DESIGN §3 / Tab. A.1 gains of each controller.
-ImpedanceGains gainsOf(InteractionController controller);
-
 /// One record of what happened, for the session recorder and the GUI.
 struct WorkflowEvent {
-  enum class Kind { kStage, kButton, kTrigger, kRefused, kAreaCreated, kAreaRemoved, kModelLearned, kWarning, kCheck };
+  enum class Kind { kStage, kButton, kTrigger, kRefused, kAreaCreated, kAreaRemoved, kModelLearned, kWarning, kCheck, kTeachIn, kExecution };
   double time = 0.0;   ///< [s] backend time
   Kind kind = Kind::kStage;
   std::string name;    ///< e.g. "CONFIGURATION/APPROACHING", "start_configuration", "on_affected"
@@ -125,6 +120,9 @@ struct WorkflowOptions {
   double still_velocity = 0.02;   ///< [rad/s] max |q̇| below which the robot counts as not moving
   double converged_time = 2.0;    ///< [s] still time for on_converged
   double sample_period = 0.02;    ///< [s] between recorded samples and ITM inputs
+  /// [s] of samples preallocated for one RECORDING or TEACH-IN, so that recording never
+  /// allocates in the control cycle; longer recordings keep their first samples and warn.
+  double max_recording_time = 600.0;
   double limit_warning_margin = 0.17;  ///< [rad] q_fixed closer than this to a soft limit warns
   bool background_learning = true;     ///< false: fit synchronously in finished_configuration (tests)
   /// Box for the OS-ELM's fixed input normalization [m, W] (its workspace).
@@ -136,24 +134,8 @@ struct WorkflowOptions {
   double check_speed = 0.1;        ///< [m/s] along the straight transition
   double check_tolerance = 0.01;   ///< [m] error that still counts as accurate
   double execution_speed = 0.1;    ///< [m/s] in EXECUTION
-};
-
-/// on_affected / on_converged from measured torques and motion (App. A.3).
-class InteractionTriggers {
- public:
-  InteractionTriggers(double affected_torque, double still_velocity, double converged_time)
-      : affected_torque_(affected_torque), still_velocity_(still_velocity), converged_time_(converged_time) {}
-  /// Feeds one measurement; returns the trigger that fired now, if any.
-  std::optional<Trigger> update(const robot::RobotState& state);
-  /// Forgets the current interaction (after a stage change or a keyboard trigger).
-  void reset(bool affected, double time);
-  bool affected() const { return affected_; }
-
- private:
-  double affected_torque_, still_velocity_, converged_time_;
-  bool affected_ = false;
-  double still_since_ = 0.0;
-  bool was_still_ = false;
+  /// [m] planTo() refuses goals farther than this from every ITM node (unexplored space).
+  double max_goal_gap = 0.05;
 };
 
 class Workflow {
@@ -180,6 +162,19 @@ class Workflow {
   RequestResult reteachArea(int k);
   /// EXECUTION: follow these waypoints [m, W] with the hierarchical controller and q_c.
   RequestResult execute(const std::vector<Eigen::Vector3d>& waypoints);
+  /// EXECUTION: replay teach-in k (straight to its first point, then along it).
+  RequestResult replayTeachIn(int k);
+  /// EXECUTION: plan from the tip to `goal` [m, W] through the ITM graph of the configuration
+  /// stage (Sect. 7.4) and execute the path. Refused when the graph holds no path or the goal
+  /// lies farther than max_goal_gap from every explored position.
+  RequestResult planTo(const Eigen::Vector3d& goal);
+  /// Keyboard tele-operation (Sect. 8.1): moves the task target by dx [m, W]; moves the
+  /// null-space target of joint `joint` by dq [rad]. Refused while a motion is executed.
+  RequestResult nudgeTask(const Eigen::Vector3d& dx);
+  RequestResult nudgeJoint(int joint, double dq);
+  /// Keyboard mode: the interaction controllers follow the nudges instead of the hand.
+  void setKeyboardMode(bool keyboard);
+  bool keyboardMode() const { return keyboard_; }
 
   Stage stage() const { return stage_; }
   SubStage subStage() const { return sub_stage_; }
@@ -191,14 +186,32 @@ class Workflow {
   /// The learned q_c(x), or null (nothing learned yet / learning in progress).
   std::shared_ptr<const learning::Learner> model() const { return model_; }
   bool learning() const { return learning_thread_.joinable(); }
+  /// [s] wall time since the running fit started (or the last fit took); 0 before any.
+  double learningSeconds() const;
   /// Blocks until a background fit has finished and takes its result over (tests, CLI).
   void waitForLearning();
   const learning::ConfidenceModel& confidence() const { return confidence_; }
   const planning::Itm& itm() const { return itm_; }
   const std::vector<TransitionCheck>& transitionChecks() const { return checks_; }
   bool executionDone() const { return execution_waypoints_.empty(); }
+  /// The last planned path (null before the first accepted planTo()).
+  std::shared_ptr<const planning::PlannedPath> plannedPath() const { return planned_path_; }
+  /// The interaction controller's task target x_des [m, W] and α of assistance blending.
+  const Eigen::Vector3d& taskTarget() const { return interaction_.taskTarget(); }
+  double alpha() const { return interaction_.alpha(); }
+  /// The command written in the last cycle.
+  const robot::JointImpedanceCommand& lastCommand() const { return command_; }
+  /// Change counters: each increases when its data changes (areas incl. removal, teach-ins,
+  /// the learned map, the ITM graph, the planned path). Cheap to poll every cycle.
+  std::uint64_t areasVersion() const { return areas_version_; }
+  std::uint64_t teachInsVersion() const { return teach_ins_version_; }
+  std::uint64_t modelVersion() const { return model_version_; }
+  std::uint64_t itmVersion() const { return itm_version_; }
+  std::uint64_t pathVersion() const { return path_version_; }
   const robot::RobotState& state() const { return state_; }
   const WorkflowOptions& options() const { return options_; }
+  const robot::RobotModel& robotModel() const { return *model_robot_; }
+  robot::RobotBackend& backend() { return *backend_; }
 
   /// Every event so far, in time order.
   const std::vector<WorkflowEvent>& events() const { return events_; }
@@ -210,11 +223,33 @@ class Workflow {
 
  private:
   struct LearningResult;
+  /// q_c(x) of the control side: the online learner while it learns, else the learned map,
+  /// else the posture held when the sub-stage began.
+  class PostureMap final : public robot::RedundancyMap {
+   public:
+    explicit PostureMap(const Workflow& workflow) : workflow_(&workflow) {}
+    int dof() const override;
+    void predict(const Eigen::Vector3d& p_W, Eigen::VectorXd& q_c) const override;
+
+   private:
+    const Workflow* workflow_;
+  };
+  /// C(x) of assistance blending (Eq. 6.1) from the areas' confidence Gaussians.
+  class AreaConfidence final : public robot::ConfidenceMap {
+   public:
+    explicit AreaConfidence(const learning::ConfidenceModel& model) : model_(&model) {}
+    double confidence(const Eigen::Vector3d& p_W) const override;
+
+   private:
+    const learning::ConfidenceModel* model_;
+  };
+
   void setState(Stage stage, SubStage sub_stage);
   void emit(WorkflowEvent::Kind kind, std::string name, std::string detail, int area = -1);
   RequestResult refuse(const std::string& request, std::string reason);
   void onTrigger(Trigger trigger);
   void finishArea();
+  void finishTeachIn();
   void checkJointLimits(const Eigen::VectorXd& q_fixed, int area);
   void startLearning();
   void collectLearning();
@@ -222,30 +257,30 @@ class Workflow {
   void recordSample();
   void command();
   std::unique_ptr<learning::OsElm> makeOnlineLearner() const;
-  void predictPosture(const Eigen::Vector3d& p_W, Eigen::VectorXd& q_c) const;
 
   robot::RobotBackend* backend_;
   const robot::RobotModel* model_robot_;
   WorkflowOptions options_;
-  robot::HierarchicalController hierarchical_;
-  robot::CommandLimiter limiter_;
   robot::ParameterSet parameters_;
-  InteractionTriggers triggers_;
+  robot::InteractionController interaction_;
+  robot::InteractionTriggers triggers_;
   robot::RobotState state_;
   robot::JointImpedanceCommand command_;
 
   Stage stage_ = Stage::kIdle;
   SubStage sub_stage_ = SubStage::kNone;
-  InteractionController controller_ = InteractionController::kHold;
-  Eigen::VectorXd hold_q_;      // posture held in kHold
+  InteractionController controller_ = InteractionController::kHierarchicalControl;
+  Eigen::VectorXd hold_q_;      // posture held in WAITING / IDLE (null-space target without a map)
   Eigen::VectorXd q_fixed_;     // π_rec target
-  Eigen::VectorXd q_c_, qd_;    // scratch
   double last_sample_time_ = -1e9;
 
   std::vector<TrainingArea> areas_;
-  TrainingArea current_;
+  // The running RECORDING / TEACH-IN, preallocated for max_recording_time (no allocation per sample).
+  Eigen::VectorXd recording_q_fixed_;
+  Eigen::MatrixXd recording_X_, recording_Q_;
+  Eigen::Index recording_samples_ = 0;
+  bool recording_full_ = false;
   int reteach_index_ = -1;
-  std::vector<Eigen::Vector3d> teach_in_points_;
   std::vector<Eigen::MatrixXd> teach_ins_;
 
   std::shared_ptr<learning::Learner> model_;  // used by the control side only
@@ -253,14 +288,21 @@ class Workflow {
   learning::ConfidenceModel confidence_;
   planning::Itm itm_;
   std::vector<TransitionCheck> checks_;
+  PostureMap posture_map_;
+  AreaConfidence area_confidence_;
 
   std::thread learning_thread_;
+  std::chrono::steady_clock::time_point learning_started_{};
+  double learning_seconds_ = 0.0;  // of the last finished fit
   std::atomic<bool> learning_done_{false};
   std::unique_ptr<LearningResult> learning_result_;  // written by the learning thread before learning_done_
   learning::CancellationToken cancel_;
 
   std::vector<Eigen::Vector3d> execution_waypoints_;
   Eigen::Vector3d execution_target_ = Eigen::Vector3d::Zero();
+  std::shared_ptr<const planning::PlannedPath> planned_path_;
+  bool keyboard_ = false;
+  std::uint64_t areas_version_ = 0, teach_ins_version_ = 0, model_version_ = 0, itm_version_ = 0, path_version_ = 0;
 
   std::vector<WorkflowEvent> events_;
   std::size_t events_taken_ = 0;

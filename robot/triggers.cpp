@@ -34,6 +34,12 @@ void InteractionTriggers::reset() {
   last_moving_time_ = 0.0;
 }
 
+void InteractionTriggers::markAffected(double time) {
+  affected_ = true;
+  armed_ = false;
+  last_moving_time_ = time;
+}
+
 std::optional<TriggerEvent> InteractionTriggers::update(const RobotState& state) {
   const bool finite = state.qd.allFinite() && state.tau_ext.allFinite();
   const bool moving = !finite || (state.qd.size() > 0 && state.qd.cwiseAbs().maxCoeff() > still_velocity_);

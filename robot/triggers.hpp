@@ -32,6 +32,10 @@ class InteractionTriggers {
   /// threshold again before on_affected can fire anew (one touch, one event).
   std::optional<TriggerEvent> update(const RobotState& state);
   void reset();
+  /// A touch reported by another input (a keyboard trigger, Sect. 8.1) at `time`: the robot
+  /// counts as affected from then on, so on_converged follows once it has been still for
+  /// triggers.converged_time; the touch must end before on_affected can fire again.
+  void markAffected(double time);
 
   bool affected() const { return affected_; }
   std::uint64_t count(TriggerKind kind) const { return kind == TriggerKind::kOnAffected ? affected_count_ : converged_count_; }

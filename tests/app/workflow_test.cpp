@@ -147,9 +147,9 @@ TEST(Workflow, FinishingConfigurationNeedsAnAreaAndNoRunningRecording) {
 TEST(Workflow, TriggersSelectTheInteractionControllerOfEachSubStage) {
   Fixture f;
   Workflow workflow(f.backend, f.parameters, syncOptions());
-  EXPECT_EQ(workflow.controller(), InteractionController::kHold);
+  EXPECT_EQ(workflow.controller(), InteractionController::kHierarchicalControl);
   ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
-  EXPECT_EQ(workflow.controller(), InteractionController::kHold);
+  EXPECT_EQ(workflow.controller(), InteractionController::kHierarchicalControl);
   f.backend.push(2.0);
   run(workflow, 0.005);
   EXPECT_EQ(workflow.controller(), InteractionController::kGravityCompensation);
