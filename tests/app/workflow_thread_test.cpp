@@ -1,0 +1,178 @@
+// The teaching workflow running in the real-time control thread: requests through the queue,
+// snapshots out of the triple buffer, the hand of the GUI pushing the simulated arm.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstring>
+#include <functional>
+#include <string>
+#include <thread>
+
+#include "app/workflow_thread.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/sim/reach.hpp"
+#include "robot/sim/simulation.hpp"
+
+namespace flexirob::app {
+namespace {
+
+const robot::RobotModel& lwr4() {
+  static const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  return model;
+}
+
+struct Rig {
+  Rig() : declarations(robot::reachParameters()), parameters(declarations), sim(lwr4(), nullptr, parameters) {
+    Eigen::VectorXd q = lwr4().midPosture();
+    q[1] = 0.6;
+    q[3] = -1.4;
+    q[5] = 0.7;
+    sim.reset(q);
+  }
+  WorkflowOptions options() const {
+    WorkflowOptions options;
+    options.background_learning = false;
+    options.elm.hidden = 30;
+    return options;
+  }
+  std::vector<robot::ParameterDeclaration> declarations;
+  robot::ParameterSet parameters;
+  robot::Simulation sim;
+};
+
+WorkflowThread::Options fast() {
+  WorkflowThread::Options options;
+  options.paced = false;  // the simulation as fast as the machine allows
+  return options;
+}
+
+/// Reads snapshots until `done` holds for one (or the wall-clock timeout passes); returns it.
+WorkflowSnapshot waitFor(WorkflowThread& thread, const std::function<bool(const WorkflowSnapshot&)>& done,
+                         double timeout_s = 60.0) {
+  const auto start = std::chrono::steady_clock::now();
+  while (true) {
+    const WorkflowSnapshot& snapshot = thread.snapshot();
+    if (done(snapshot) || snapshot.failed) return snapshot;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > timeout_s) return snapshot;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+}
+
+WorkflowSnapshot handled(WorkflowThread& thread, std::uint64_t id) {
+  return waitFor(thread, [id](const WorkflowSnapshot& s) { return s.last_request_id >= id; });
+}
+
+bool hasEvent(const WorkflowSnapshot& snapshot, const std::string& name) {
+  for (const auto& event : snapshot.events) {
+    if (event.sequence > 0 && name == event.name.data()) return true;
+  }
+  return false;
+}
+
+TEST(WorkflowThread, ButtonsThroughTheQueueDriveTheStages) {
+  Rig rig;
+  Workflow workflow(rig.sim, rig.parameters, rig.options());
+  WorkflowThread thread(workflow, &rig.sim, fast());
+  thread.start();
+  const std::uint64_t id = thread.post(WorkflowRequest::press(Button::kStartConfiguration));
+  ASSERT_GT(id, 0U);
+  WorkflowSnapshot s = handled(thread, id);
+  EXPECT_TRUE(s.last_request_accepted);
+  EXPECT_EQ(s.stage, Stage::kConfiguration);
+  EXPECT_EQ(s.sub_stage, SubStage::kWaiting);
+  EXPECT_TRUE(hasEvent(s, "start_configuration"));
+
+  // Keyboard triggers: APPROACHING under π_q, then POSED under π_rec.
+  handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnAffected)));
+  s = handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnConverged)));
+  EXPECT_EQ(s.sub_stage, SubStage::kPosed);
+  EXPECT_EQ(s.controller, InteractionController::kCompliantRecording);
+  thread.stop();
+  EXPECT_EQ(workflow.subStage(), SubStage::kPosed);
+}
+
+TEST(WorkflowThread, RefusedRequestsCarryTheReasonAndChangeNothing) {
+  Rig rig;
+  Workflow workflow(rig.sim, rig.parameters, rig.options());
+  WorkflowThread thread(workflow, &rig.sim, fast());
+  thread.start();
+  const WorkflowSnapshot s = handled(thread, thread.post(WorkflowRequest::press(Button::kStartProgramming)));
+  EXPECT_FALSE(s.last_request_accepted);
+  EXPECT_NE(std::string(s.last_request_reason.data()).find("configure"), std::string::npos) << s.last_request_reason.data();
+  EXPECT_EQ(s.stage, Stage::kIdle);
+  const WorkflowSnapshot p = handled(thread, thread.post(WorkflowRequest::planTo(Eigen::Vector3d(0.4, 0.0, 0.5))));
+  EXPECT_FALSE(p.last_request_accepted);
+  EXPECT_EQ(p.last_request_kind, WorkflowRequest::Kind::kPlanTo);
+  const WorkflowSnapshot h = handled(thread, thread.post(WorkflowRequest::handForce(0, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX())));
+  EXPECT_FALSE(h.last_request_accepted);  // the base cannot be pushed
+  EXPECT_FALSE(h.hand_active);
+  EXPECT_EQ(h.stage, Stage::kIdle);
+  EXPECT_EQ(h.areas, 0);
+}
+
+TEST(WorkflowThread, SnapshotsAreConsistentWhileTheLoopRuns) {
+  Rig rig;
+  Workflow workflow(rig.sim, rig.parameters, rig.options());
+  WorkflowThread thread(workflow, &rig.sim, fast());
+  robot::Kinematics kinematics(lwr4());
+  const double t0 = rig.sim.time();
+  thread.start();
+  // A hand pushes the arm so that q changes every cycle.
+  thread.post(WorkflowRequest::press(Button::kStartConfiguration));
+  thread.post(WorkflowRequest::fire(Trigger::kOnAffected));
+  thread.post(WorkflowRequest::handForce(4, Eigen::Vector3d::Zero(), Eigen::Vector3d(0.0, 15.0, 0.0)));
+  std::uint64_t last_cycle = 0;
+  int checked = 0;
+  Eigen::VectorXd q(lwr4().dof());
+  for (int i = 0; i < 2000; ++i) {
+    const WorkflowSnapshot& s = thread.snapshot();
+    ASSERT_FALSE(s.failed) << s.failure.data();
+    ASSERT_GE(s.cycle, last_cycle);
+    if (s.cycle > last_cycle && s.cycle > 0) {
+      // One cycle's values together: the tip is the kinematics of the published posture and
+      // the state of cycle c was measured after c - 1 periods.
+      for (int j = 0; j < q.size(); ++j) q[j] = s.q[static_cast<std::size_t>(j)];
+      kinematics.update(q);
+      const Eigen::Vector3d p(s.p_WT[0], s.p_WT[1], s.p_WT[2]);
+      ASSERT_LT((kinematics.p_WT() - p).norm(), 1e-9) << "cycle " << s.cycle;
+      ASSERT_NEAR(s.time - t0, static_cast<double>(s.cycle - 1) * 1e-3, 1e-6);
+      ++checked;
+    }
+    last_cycle = s.cycle;
+    std::this_thread::sleep_for(std::chrono::microseconds(50));
+  }
+  thread.stop();
+  EXPECT_GT(checked, 100);
+}
+
+TEST(WorkflowThread, AHandOnALinkTeachesAnAreaThroughTheTriggers) {
+  Rig rig;
+  Workflow workflow(rig.sim, rig.parameters, rig.options());
+  WorkflowThread thread(workflow, &rig.sim, fast());
+  thread.start();
+  handled(thread, thread.post(WorkflowRequest::press(Button::kStartConfiguration)));
+  // Push link 4 sideways: on_affected, APPROACHING under π_q, the arm moves.
+  const Eigen::Vector3d push(0.0, 20.0, 0.0);
+  thread.post(WorkflowRequest::handForce(4, Eigen::Vector3d(0.0, 0.0, 0.1), push));
+  WorkflowSnapshot s = waitFor(thread, [](const WorkflowSnapshot& x) { return x.sub_stage == SubStage::kApproaching; });
+  ASSERT_EQ(s.sub_stage, SubStage::kApproaching) << s.last_request_reason.data();
+  EXPECT_EQ(s.controller, InteractionController::kGravityCompensation);
+  EXPECT_TRUE(s.hand_active);
+  const double touched = s.time;
+  s = waitFor(thread, [touched](const WorkflowSnapshot& x) { return x.time > touched + 0.5; });
+  // Let go: the arm comes to rest and after 2 s still on_converged poses it.
+  thread.post(WorkflowRequest::releaseHand());
+  s = waitFor(thread, [](const WorkflowSnapshot& x) { return x.sub_stage == SubStage::kPosed; });
+  ASSERT_EQ(s.sub_stage, SubStage::kPosed) << "at t = " << s.time;
+  EXPECT_EQ(s.on_affected, 1U);
+  EXPECT_EQ(s.on_converged, 1U);
+  EXPECT_TRUE(hasEvent(s, "on_converged"));
+  EXPECT_GT(s.itm_nodes, 0);  // the approach fed the ITM
+  thread.stop();
+  EXPECT_EQ(workflow.subStage(), SubStage::kPosed);
+}
+
+}  // namespace
+}  // namespace flexirob::app
