@@ -6,6 +6,7 @@
 #include <QPushButton>
 #include <QStyleOptionSlider>
 #include <QVBoxLayout>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -58,9 +59,48 @@ void LimitSlider::paintEvent(QPaintEvent* event) {
   if (soft_upper_ < maximum()) painter.fillRect(QRect(QPoint(xOf(soft_upper_), top), QPoint(xOf(maximum()), top + 6)), zone);
 }
 
+LimitDistanceBar::LimitDistanceBar(const robot::JointLimits& limits, QWidget* parent)
+    : QWidget(parent), lower_(limits.soft_lower), upper_(limits.soft_upper) {
+  setMinimumWidth(50);
+  setSizePolicy(QSizePolicy::Preferred, QSizePolicy::Fixed);
+}
+
+void LimitDistanceBar::setValue(double q) {
+  const double distance = std::min(q - lower_, upper_ - q);
+  if (distance == distance_) return;
+  distance_ = distance;
+  setToolTip(tr("%1 to the nearest software limit").arg(QString::number(distance_, 'f', 3)));
+  update();
+}
+
+LimitDistanceBar::Level LimitDistanceBar::level() const {
+  if (!std::isfinite(distance_)) return Level::kOk;
+  if (distance_ < kRedMargin) return Level::kRed;
+  if (distance_ < kAmberMargin) return Level::kAmber;
+  return Level::kOk;
+}
+
+void LimitDistanceBar::paintEvent(QPaintEvent*) {
+  QPainter painter(this);
+  const QRect frame = rect().adjusted(0, 2, -1, -3);
+  painter.fillRect(frame, QColor(0xe4, 0xe4, 0xe4));
+  const double half_range = 0.5 * (upper_ - lower_);
+  const double fraction =
+      std::isfinite(half_range) && half_range > 0.0 ? std::clamp(distance_ / half_range, 0.0, 1.0) : 1.0;
+  QColor colour(0x3a, 0xa0, 0x50);
+  if (level() == Level::kAmber) colour = QColor(0xf0, 0xa0, 0x20);
+  if (level() == Level::kRed) colour = QColor(0xd0, 0x25, 0x25);
+  QRect bar = frame;
+  bar.setWidth(std::max(level() == Level::kOk ? 0 : 3, static_cast<int>(frame.width() * fraction)));
+  painter.fillRect(bar, colour);
+  painter.setPen(QColor(0x88, 0x88, 0x88));
+  painter.drawRect(frame);
+}
+
 JointPanel::JointPanel(QWidget* parent) : QWidget(parent) {
   auto* layout = new QVBoxLayout(this);
-  auto* title = new QLabel(tr("<b>Joints</b> &nbsp; <small>red: beyond the software limits</small>"), this);
+  auto* title = new QLabel(tr("<b>Joints</b> &nbsp; <small>slider red: beyond the software limits; bar: distance to the nearest software limit, amber below 0.35 rad, red below 0.17 rad</small>"), this);
+  title->setWordWrap(true);
   layout->addWidget(title);
   grid_ = new QGridLayout;
   layout->addLayout(grid_);
@@ -68,7 +108,7 @@ JointPanel::JointPanel(QWidget* parent) : QWidget(parent) {
   home->setToolTip(tr("Back to the start posture of robot and scene"));
   connect(home, &QPushButton::clicked, this, [this] {
     setPosture(home_);
-    emit postureChanged(posture());
+    Q_EMIT postureChanged(posture());
   });
   layout->addWidget(home);
   layout->addStretch(1);
@@ -82,6 +122,7 @@ void JointPanel::setRobot(const robot::RobotModel& model, const Eigen::VectorXd&
   }
   sliders_.clear();
   value_labels_.clear();
+  bars_.clear();
   prismatic_.clear();
   home_ = q;
   for (int j = 0; j < model.dof(); ++j) {
@@ -108,12 +149,15 @@ void JointPanel::setRobot(const robot::RobotModel& model, const Eigen::VectorXd&
     grid_->addWidget(slider, j, 1);
     grid_->addWidget(value, j, 2);
     grid_->addWidget(limits, j, 3);
+    auto* bar = new LimitDistanceBar(joint.limits, this);
+    grid_->addWidget(bar, j, 4);
+    bars_.push_back(bar);
     sliders_.push_back(slider);
     value_labels_.push_back(value);
     prismatic_.push_back(prismatic);
     connect(slider, &QSlider::valueChanged, this, [this, j] {
       updateValueLabel(j);
-      if (!updating_) emit postureChanged(posture());
+      if (!updating_) Q_EMIT postureChanged(posture());
     });
   }
   grid_->setColumnStretch(1, 1);
@@ -129,6 +173,10 @@ void JointPanel::setPosture(const Eigen::VectorXd& q) {
   updating_ = false;
 }
 
+void JointPanel::setReadOnly(bool read_only) {
+  for (LimitSlider* slider : sliders_) slider->setEnabled(!read_only);
+}
+
 Eigen::VectorXd JointPanel::posture() const {
   Eigen::VectorXd q(jointCount());
   for (int j = 0; j < jointCount(); ++j) q[j] = sliders_[static_cast<std::size_t>(j)]->valueSi();
@@ -138,6 +186,7 @@ Eigen::VectorXd JointPanel::posture() const {
 void JointPanel::updateValueLabel(int joint) {
   const auto j = static_cast<std::size_t>(joint);
   value_labels_[j]->setText(formatValue(sliders_[j]->valueSi(), prismatic_[j]));
+  if (j < bars_.size()) bars_[j]->setValue(sliders_[j]->valueSi());
 }
 
 }  // namespace flexirob::ui

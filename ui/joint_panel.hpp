@@ -34,6 +34,30 @@ class LimitSlider : public QSlider {
   int soft_upper_ = 0;
 };
 
+/// Distance of a joint to its nearest software limit as a bar (full: at mid range), green,
+/// amber below kAmberMargin and red below kRedMargin (Sect. 4.3.4: the tutor is warned when a
+/// posture nears a joint limit; kRedMargin is the workflow's warning margin).
+class LimitDistanceBar : public QWidget {
+  Q_OBJECT
+
+ public:
+  enum class Level { kOk, kAmber, kRed };
+  static constexpr double kAmberMargin = 0.35;  ///< [rad] (or m for prismatic joints)
+  static constexpr double kRedMargin = 0.17;    ///< [rad] = WorkflowOptions::limit_warning_margin
+
+  LimitDistanceBar(const robot::JointLimits& limits, QWidget* parent = nullptr);
+  void setValue(double q);
+  double distance() const { return distance_; }
+  Level level() const;
+  QSize sizeHint() const override { return {70, 14}; }
+
+ protected:
+  void paintEvent(QPaintEvent* event) override;
+
+ private:
+  double lower_, upper_, distance_ = 0.0;
+};
+
 class JointPanel : public QWidget {
   Q_OBJECT
 
@@ -47,8 +71,11 @@ class JointPanel : public QWidget {
   Eigen::VectorXd posture() const;
   int jointCount() const { return static_cast<int>(sliders_.size()); }
   LimitSlider* slider(int joint) const { return sliders_.at(static_cast<std::size_t>(joint)); }
+  LimitDistanceBar* limitBar(int joint) const { return bars_.at(static_cast<std::size_t>(joint)); }
+  /// Live mirror: the sliders show the robot's posture and cannot be dragged.
+  void setReadOnly(bool read_only);
 
- signals:
+ Q_SIGNALS:
   void postureChanged(const Eigen::VectorXd& q);
 
  private:
@@ -57,6 +84,7 @@ class JointPanel : public QWidget {
   QGridLayout* grid_ = nullptr;
   std::vector<LimitSlider*> sliders_;
   std::vector<QLabel*> value_labels_;
+  std::vector<LimitDistanceBar*> bars_;
   std::vector<bool> prismatic_;
   Eigen::VectorXd home_;
   bool updating_ = false;

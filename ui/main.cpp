@@ -5,6 +5,7 @@
 #include <QTimer>
 #include <cstdio>
 
+#include "ui/live_teaching.hpp"
 #include "ui/main_window.hpp"
 
 int main(int argc, char** argv) {
@@ -17,7 +18,8 @@ int main(int argc, char** argv) {
 
   QApplication app(argc, argv);
   QApplication::setApplicationName(QStringLiteral("flexirob"));
-  QApplication::setApplicationVersion(QStringLiteral("0.1.0"));
+  QApplication::setApplicationVersion(QStringLiteral(FLEXIROB_VERSION_STRING));
+  QApplication::setOrganizationName(QStringLiteral("flexirob"));
 
   QCommandLineParser parser;
   parser.setApplicationDescription(QStringLiteral("FlexIRob: teaching redundant robot arms"));
@@ -35,6 +37,15 @@ int main(int argc, char** argv) {
   const QCommandLineOption quit_after(QStringLiteral("quit-after-ms"),
                                       QStringLiteral("Quit after N milliseconds (default with --screenshot: 1500)."),
                                       QStringLiteral("N"));
+  const QCommandLineOption backend(QStringLiteral("backend"),
+                                   QStringLiteral("Robot backend: sim (default) or fri://ADDRESS:PORT (the real LWR IV)."),
+                                   QStringLiteral("B"), QStringLiteral("sim"));
+  const QCommandLineOption key_map(QStringLiteral("show-keys"), QStringLiteral("Show the key map in the view."));
+  const QCommandLineOption fresh_layout(QStringLiteral("default-layout"),
+                                        QStringLiteral("Ignore the window layout remembered from the last run."));
+  parser.addOption(backend);
+  parser.addOption(key_map);
+  parser.addOption(fresh_layout);
   parser.addOption(robot);
   parser.addOption(scene);
   parser.addOption(screenshot);
@@ -54,8 +65,14 @@ int main(int argc, char** argv) {
     quit_ms = 1500;
   }
 
-  flexirob::ui::MainWindow window(parser.value(robot).toStdString(), parser.value(scene).toStdString());
+  flexirob::ui::MainWindow::Options window_options;
+  window_options.backend = parser.value(backend).toStdString();
+  window_options.restore_layout = !parser.isSet(fresh_layout) && !parser.isSet(screenshot);
+  flexirob::ui::MainWindow window(parser.value(robot).toStdString(), parser.value(scene).toStdString(), window_options);
   window.show();
+  if (parser.isSet(key_map)) {
+    QTimer::singleShot(0, &window, [&] { window.toggleKeyMap(true); });
+  }
 
   int exit_code = 0;
   if (quit_ms >= 0) {
@@ -69,6 +86,14 @@ int main(int argc, char** argv) {
           exit_code = 2;
         }
       }
+      // Figures for the operator's record: display rate and the control worker's punctuality.
+      if (window.live() != nullptr) {
+        const flexirob::app::CycleStatistics stats = window.live()->statistics();
+        std::fprintf(stderr, "view %.1f fps; control %llu cycles, %llu deadline misses, max cycle %.0f us\n",
+                     window.framesPerSecond(), static_cast<unsigned long long>(stats.cycles),
+                     static_cast<unsigned long long>(stats.deadline_misses), stats.max_compute_us);
+      }
+      window.close();
       QApplication::quit();
     });
   }

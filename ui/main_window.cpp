@@ -3,47 +3,131 @@
 #include <QAction>
 #include <QActionGroup>
 #include <QApplication>
+#include <QCloseEvent>
+#include <QDateTime>
+#include <QDir>
 #include <QDockWidget>
+#include <QFile>
 #include <QFileDialog>
+#include <QInputDialog>
+#include <QKeyEvent>
 #include <QLabel>
 #include <QMenuBar>
+#include <QMessageBox>
 #include <QScrollArea>
+#include <QSettings>
+#include <QStandardPaths>
 #include <QStatusBar>
+#include <QThread>
+#include <QTimer>
+#include <QVBoxLayout>
+#include <fstream>
+#include <sstream>
 
+#include "app/session_recorder.hpp"
 #include "robot/resources.hpp"
+#include "robot/sim/reach.hpp"
+#include "ui/converged_chime.hpp"
 #include "ui/joint_panel.hpp"
+#include "ui/live_teaching.hpp"
+#include "ui/mouse_perturbation.hpp"
 #include "ui/osg_view.hpp"
+#include "ui/parameter_panel.hpp"
+#include "ui/stage_panel.hpp"
+
+#ifndef FLEXIROB_VERSION_STRING
+#define FLEXIROB_VERSION_STRING "unknown"
+#endif
 
 namespace flexirob::ui {
+namespace {
 
-MainWindow::MainWindow(const std::string& robot, const std::string& scene, QWidget* parent) : QMainWindow(parent) {
+constexpr int kDisplayPeriodMs = 16;  // ~60 Hz mirror
+
+std::string readText(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+Eigen::Vector4f collisionColour() { return {0.90F, 0.10F, 0.10F, 1.0F}; }
+
+}  // namespace
+
+MainWindow::MainWindow(const std::string& robot, const std::string& scene, QWidget* parent)
+    : MainWindow(robot, scene, Options{}, parent) {}
+
+MainWindow::MainWindow(const std::string& robot, const std::string& scene, const Options& options, QWidget* parent)
+    : QMainWindow(parent), options_(options), declarations_(robot::reachParameters()) {
   setWindowTitle(tr("FlexIRob"));
   view_ = new OsgView(this);
   setCentralWidget(view_);
   view_->setSceneRoot(world_.root());
 
-  joint_panel_ = new JointPanel;
-  auto* scroll = new QScrollArea;
-  scroll->setWidget(joint_panel_);
-  scroll->setWidgetResizable(true);
-  auto* dock = new QDockWidget(tr("Joints"), this);
-  dock->setObjectName(QStringLiteral("joints_dock"));
-  dock->setWidget(scroll);
-  dock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
-  addDockWidget(Qt::RightDockWidgetArea, dock);
-  connect(joint_panel_, &JointPanel::postureChanged, this, [this](const Eigen::VectorXd& q) { setPosture(q); });
+  force_arrow_ = std::make_unique<ForceArrow>();
+  world_.root()->addChild(force_arrow_->node());
+  perturbation_ = std::make_unique<MousePerturbation>(
+      *view_, world_, [this] { return live_ && live_->simulated() ? live_.get() : nullptr; },
+      [this]() -> const robot::Kinematics* { return kinematics_.get(); });
+  view_->setMouseGrabber(perturbation_.get());
+  chime_ = std::make_unique<ConvergedChime>();
+
+  // Where the eye is: the stage and the latest tutor warning on top of the 3D view, the key map
+  // on demand at its lower left.
+  banner_label_ = new QLabel(view_);
+  banner_label_->setObjectName(QStringLiteral("banner"));
+  banner_label_->setAttribute(Qt::WA_TransparentForMouseEvents);
+  banner_label_->setWordWrap(true);
+  banner_label_->setAlignment(Qt::AlignCenter);
+  QFont banner_font = banner_label_->font();
+  banner_font.setPointSize(banner_font.pointSize() + 5);
+  banner_font.setBold(true);
+  banner_label_->setFont(banner_font);
+  banner_label_->move(12, 10);
+  key_map_label_ = new QLabel(view_);
+  key_map_label_->setObjectName(QStringLiteral("key_map"));
+  key_map_label_->setAttribute(Qt::WA_TransparentForMouseEvents);
+  key_map_label_->setStyleSheet(QStringLiteral("QLabel { background: rgba(255,255,255,215); color: #202020;"
+                                               " border: 1px solid #888; padding: 6px; }"));
+  key_map_label_->setVisible(false);
+
+  parameters_ = std::make_unique<robot::ParameterSet>(declarations_);
+  try {
+    backend_ = app::parseBackendChoice(options_.backend);
+  } catch (const std::exception& error) {
+    reportError(tr("Backend '%1'").arg(QString::fromStdString(options_.backend)), error);
+  }
 
   status_label_ = new QLabel;
+  link_label_ = new QLabel;
+  statusBar()->addPermanentWidget(link_label_);
   statusBar()->addPermanentWidget(status_label_);
+  buildDocks();
   buildMenus();
 
   loadScene(scene);
   // Without an explicit robot, the robot the scene was made for.
   loadRobot(robot.empty() ? (scene_.robot.empty() ? std::string("lwr4") : scene_.robot) : robot);
   resize(1280, 800);
+  if (options_.restore_layout) {
+    QSettings settings;
+    restoreGeometry(settings.value(QStringLiteral("window/geometry")).toByteArray());
+    restoreState(settings.value(QStringLiteral("window/state")).toByteArray());
+  }
+
+  display_timer_ = new QTimer(this);
+  display_timer_->setTimerType(Qt::PreciseTimer);
+  connect(display_timer_, &QTimer::timeout, this, &MainWindow::mirror);
+  display_timer_->start(kDisplayPeriodMs);
+  fps_clock_.start();
+  view_->setFocus();
 }
 
-MainWindow::~MainWindow() = default;
+MainWindow::~MainWindow() {
+  display_timer_->stop();
+  stopLive();
+}
 
 void MainWindow::reportError(const QString& what, const std::exception& error) {
   const QString message = what + QStringLiteral(": ") + QString::fromUtf8(error.what());
@@ -51,45 +135,244 @@ void MainWindow::reportError(const QString& what, const std::exception& error) {
   qWarning("%s", qPrintable(message));
 }
 
-bool MainWindow::loadRobot(const std::string& name_or_path) {
+void MainWindow::buildDocks() {
+  stage_panel_ = new StagePanel;
+  auto* stage_dock = new QDockWidget(tr("Teaching"), this);
+  stage_dock->setObjectName(QStringLiteral("stage_dock"));
+  stage_dock->setWidget(stage_panel_);
+  stage_dock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
+  addDockWidget(Qt::LeftDockWidgetArea, stage_dock);
+  connect(stage_panel_, &StagePanel::buttonPressed, this, [this](app::Button button) {
+    if (live_) live_->press(button);
+    view_->setFocus();
+  });
+
+  joint_panel_ = new JointPanel;
+  auto* scroll = new QScrollArea;
+  scroll->setWidget(joint_panel_);
+  scroll->setWidgetResizable(true);
+  auto* joints_dock = new QDockWidget(tr("Joints"), this);
+  joints_dock->setObjectName(QStringLiteral("joints_dock"));
+  joints_dock->setWidget(scroll);
+  joints_dock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
+  addDockWidget(Qt::RightDockWidgetArea, joints_dock);
+  connect(joint_panel_, &JointPanel::postureChanged, this, [this](const Eigen::VectorXd& q) { setPosture(q); });
+
+  parameter_panel_ = new ParameterPanel;
+  auto* parameter_scroll = new QScrollArea;
+  parameter_scroll->setWidget(parameter_panel_);
+  parameter_scroll->setWidgetResizable(true);
+  auto* parameter_dock = new QDockWidget(tr("Parameters"), this);
+  parameter_dock->setObjectName(QStringLiteral("parameters_dock"));
+  parameter_dock->setWidget(parameter_scroll);
+  addDockWidget(Qt::RightDockWidgetArea, parameter_dock);
+  tabifyDockWidget(joints_dock, parameter_dock);
+  joints_dock->raise();
+  connect(parameter_panel_, &ParameterPanel::applyRequested, this,
+          [this](const std::map<std::string, double>& values) { applyParameters(values); });
+}
+
+void MainWindow::resetParameters() {
+  parameters_ = std::make_unique<robot::ParameterSet>(declarations_);
+  parameters_->applyOverrides(scene_.parameters);
+  parameters_->applyOverrides(parameter_edits_);
+  parameter_panel_->setParameters(*parameters_);
+}
+
+void MainWindow::applyParameters(const std::map<std::string, double>& values) {
+  // Keep only what differs from the scene's values, so that a later scene keeps its own.
+  robot::ParameterSet scene_values(declarations_);
+  scene_values.applyOverrides(scene_.parameters);
+  parameter_edits_.clear();
+  for (const auto& [name, value] : values) {
+    if (scene_values.has(name) && scene_values.get(name) != value) parameter_edits_[name] = value;
+  }
+  stopLive();
+  resetParameters();
+  startLive();
+  statusBar()->showMessage(tr("Parameters applied (%1 changed); the robot restarted").arg(parameter_edits_.size()), 8000);
+}
+
+void MainWindow::stopLive() {
+  if (live_) {
+    live_->stop();
+    handleEvents();
+    recordTaughtData();
+  }
+  live_.reset();
+  if (recorder_) recorder_->close();
+  recorder_.reset();
+  keyboard_mode_ = false;
+  teleop_.clear();
+  if (force_arrow_) force_arrow_->hide();
+  shown_cycle_ = ~0ULL;
+}
+
+void MainWindow::startRecording() {
+  recorded_areas_ = 0;
+  session_file_.clear();
+  if (!options_.record_sessions || !model_ || !live_) return;
+  const QString directory =
+      QStandardPaths::writableLocation(QStandardPaths::AppDataLocation) + QStringLiteral("/sessions");
+  if (!QDir().mkpath(directory)) {
+    statusBar()->showMessage(tr("Cannot create %1: this run is not recorded").arg(directory), 15000);
+    return;
+  }
+  const QString file = directory + QStringLiteral("/session-") +
+                       QDateTime::currentDateTimeUtc().toString(QStringLiteral("yyyyMMdd-HHmmss-zzz")) +
+                       QStringLiteral(".flexirob");
   try {
-    auto model = std::make_unique<robot::RobotModel>(robot::RobotModel::fromUrdfFile(resolveRobotPath(name_or_path)));
+    app::SessionMetadata metadata;
+    metadata.robot_name = model_->name();
+    metadata.robot_urdf = readText(model_->urdfPath());
+    metadata.tip_link = model_->tipLink();
+    metadata.scene_name = scene_.name.empty() ? std::string("empty") : scene_.name;
+    metadata.scene_text = robot::sceneToYaml(scene_);
+    std::ostringstream parameters;
+    parameters << "{\"backend\": \"" << backend_.text << "\"";
+    for (const auto& declaration : parameters_->declarations()) {
+      parameters << ", \"" << declaration.name << "\": " << parameters_->get(declaration.name);
+    }
+    parameters << "}";
+    metadata.parameters = parameters.str();
+    metadata.software_version = FLEXIROB_VERSION_STRING;
+    recorder_ = std::make_unique<app::SessionRecorder>(file.toStdString(), metadata);
+    session_file_ = file;
+  } catch (const std::exception& error) {
+    reportError(tr("Cannot record the session"), error);
+    recorder_.reset();
+  }
+}
+
+void MainWindow::startLive() {
+  if (!model_) return;
+  try {
+    app::WorkflowOptions workflow_options;
+    live_ = std::make_unique<LiveTeaching>(*model_, scene_, *parameters_, workflow_options, backend_,
+                                           LiveTeaching::Options{});
+  } catch (const std::exception& error) {
+    reportError(tr("Cannot start the robot on backend '%1'").arg(QString::fromStdString(backend_.text)), error);
+    live_.reset();
+    return;
+  }
+  startRecording();
+  live_->start();
+  heard_converged_ = 0;
+  last_warning_.clear();
+  stage_panel_->clearWarning();
+  mirror();
+}
+
+bool MainWindow::saveSession(const QString& file) {
+  if (!recorder_ || !live_) {
+    statusBar()->showMessage(tr("No session is being recorded"), 10000);
+    return false;
+  }
+  // Everything shown so far goes in; saveCopy closes the recorder, so record on into a new file.
+  handleEvents();
+  recordTaughtData();
+  bool ok = true;
+  try {
+    recorder_->saveCopy(file.toStdString());
+    statusBar()->showMessage(tr("Session saved to %1").arg(file), 10000);
+  } catch (const std::exception& error) {
+    reportError(tr("Cannot save the session to %1").arg(file), error);
+    ok = false;
+  }
+  recorder_.reset();
+  startRecording();
+  return ok;
+}
+
+bool MainWindow::loadRobot(const std::string& name_or_path) {
+  std::unique_ptr<robot::RobotModel> model;
+  try {
+    model = std::make_unique<robot::RobotModel>(robot::RobotModel::fromUrdfFile(resolveRobotPath(name_or_path)));
+  } catch (const std::exception& error) {
+    reportError(tr("Cannot load robot '%1'").arg(QString::fromStdString(name_or_path)), error);
+    return false;
+  }
+  stopLive();
+  try {
     auto kinematics = std::make_unique<robot::Kinematics>(*model);
     world_.setRobot(*model);
     model_ = std::move(model);
     kinematics_ = std::move(kinematics);
   } catch (const std::exception& error) {
     reportError(tr("Cannot load robot '%1'").arg(QString::fromStdString(name_or_path)), error);
+    startLive();
     return false;
   }
+  coloured_links_.clear();
   // Start posture: the scene's, if it was made for a robot with this many joints.
   Eigen::VectorXd q = model_->midPosture();
   if (scene_.home_posture && scene_.home_posture->size() == model_->dof()) q = *scene_.home_posture;
   joint_panel_->setRobot(*model_, q);
-  setPosture(joint_panel_->posture());
+  kinematics_->update(q);
+  world_.robot()->setPosture(*kinematics_);
   view_->setHomeCamera(world_.defaultCamera(static_cast<double>(view_->width()) / std::max(1, view_->height())));
   for (QAction* action : robot_menu_->actions()) {
     action->setChecked(action->data().toString().toStdString() == name_or_path);
   }
+  key_map_label_->setText(TeleopKeys::keyMapText(model_->dof()));
+  key_map_label_->adjustSize();
+  resetParameters();
+  startLive();
+  updateStatus();
   return true;
 }
 
 bool MainWindow::loadScene(const std::string& name_or_path) {
+  robot::Scene scene;
   try {
-    robot::Scene scene = robot::loadScene(name_or_path);
-    world_.setScene(scene);
-    scene_ = std::move(scene);
+    scene = robot::loadScene(name_or_path);
   } catch (const std::exception& error) {
     reportError(tr("Cannot load scene '%1'").arg(QString::fromStdString(name_or_path)), error);
     return false;
   }
+  stopLive();
+  try {
+    world_.setScene(scene);
+    scene_ = std::move(scene);
+  } catch (const std::exception& error) {
+    reportError(tr("Cannot load scene '%1'").arg(QString::fromStdString(name_or_path)), error);
+    startLive();
+    return false;
+  }
   if (model_ && scene_.home_posture && scene_.home_posture->size() == model_->dof()) {
     joint_panel_->setPosture(*scene_.home_posture);
-    setPosture(joint_panel_->posture());
+    kinematics_->update(*scene_.home_posture);
+    world_.robot()->setPosture(*kinematics_);
   }
   view_->setHomeCamera(world_.defaultCamera(static_cast<double>(view_->width()) / std::max(1, view_->height())));
   const std::string shown = name_or_path.empty() ? std::string("empty") : name_or_path;
   for (QAction* action : scene_menu_->actions()) action->setChecked(action->data().toString().toStdString() == shown);
+  resetParameters();
+  startLive();
+  updateStatus();
+  return true;
+}
+
+bool MainWindow::setBackend(const std::string& choice) {
+  app::BackendChoice parsed;
+  try {
+    parsed = app::parseBackendChoice(choice);
+  } catch (const std::exception& error) {
+    reportError(tr("Backend '%1'").arg(QString::fromStdString(choice)), error);
+    return false;
+  }
+  const app::BackendChoice previous = backend_;
+  stopLive();
+  backend_ = parsed;
+  startLive();
+  if (!live_) {  // e.g. the FRI port is taken or the robot is not an LWR IV: back to the previous
+    backend_ = previous;
+    startLive();
+    return false;
+  }
+  for (QAction* action : backend_menu_->actions()) {
+    if (action->isCheckable()) action->setChecked(action->data().toString().toStdString() == (parsed.kind == app::BackendKind::kSimulation ? "sim" : "fri"));
+  }
   updateStatus();
   return true;
 }
@@ -101,6 +384,240 @@ void MainWindow::setPosture(const Eigen::VectorXd& q) {
   if (joint_panel_->posture() != q) joint_panel_->setPosture(q);
   updateStatus();
   view_->update();
+}
+
+void MainWindow::mirror() {
+  // Frame rate of the 3D view, over windows of at least one second.
+  const qint64 elapsed_ms = fps_clock_.elapsed();
+  if (elapsed_ms >= 1000) {
+    fps_ = 1000.0 * static_cast<double>(view_->framesDrawn() - fps_frames_) / static_cast<double>(elapsed_ms);
+    fps_frames_ = view_->framesDrawn();
+    fps_clock_.restart();
+  }
+  if (!live_ || !model_) {
+    link_label_->setText(tr("no robot running"));
+    view_->update();
+    return;
+  }
+  live_->tick();
+  if (live_->grabbing() && keyboard_mode_) {  // the hand takes over from the keys
+    live_->setKeyboardMode(false);
+    keyboard_mode_ = false;
+  }
+  driveKeyboard();
+  const LiveSnapshot& s = live_->snapshot();
+  handleEvents();
+  recordTaughtData();
+  stage_panel_->showSnapshot(s);
+  if (s.failed) {
+    const auto end = std::find(s.failure.begin(), s.failure.end(), '\0');
+    last_warning_ = tr("The robot stopped: %1").arg(QString::fromStdString(std::string(s.failure.begin(), end)));
+  }
+  if (s.cycle != shown_cycle_ && s.dof == model_->dof()) {
+    recordState(s);
+    shown_cycle_ = s.cycle;
+    Eigen::VectorXd q(s.dof);
+    for (int j = 0; j < s.dof; ++j) q[j] = s.q[static_cast<std::size_t>(j)];
+    kinematics_->update(q);
+    world_.robot()->setPosture(*kinematics_);
+    bool dragging = false;
+    for (int j = 0; j < joint_panel_->jointCount(); ++j) dragging = dragging || joint_panel_->slider(j)->isSliderDown();
+    if (!dragging) joint_panel_->setPosture(q);
+
+    // Links in contact turn red (issue #7 item 4, collisions).
+    std::vector<std::string> touching;
+    for (int i = 0; i < s.contact_link_count && i < app::kMaxContactBodies; ++i) {
+      if (s.contact_links[static_cast<std::size_t>(i)] != nullptr) touching.emplace_back(s.contact_links[static_cast<std::size_t>(i)]);
+    }
+    if (touching != coloured_links_) {
+      world_.robot()->resetColors();
+      for (const std::string& link : touching) {
+        world_.robot()->setLinkColor(link, collisionColour());
+        for (const robot::Body& body : model_->bodies()) {
+          if (body.name != link) continue;
+          for (const std::string& folded : body.folded_links) world_.robot()->setLinkColor(folded, collisionColour());
+        }
+      }
+      coloured_links_ = touching;
+    }
+    if (s.hand_active) {
+      force_arrow_->show(Eigen::Vector3d(s.hand_point_W[0], s.hand_point_W[1], s.hand_point_W[2]),
+                         Eigen::Vector3d(s.hand_force_W[0], s.hand_force_W[1], s.hand_force_W[2]));
+    } else {
+      force_arrow_->hide();
+    }
+    // The acoustic acknowledgement of on_converged (Sect. 2.3.1).
+    if (s.on_converged > heard_converged_) {
+      heard_converged_ = s.on_converged;
+      chime_->play();
+      ++chimes_;
+    }
+    if (!last_warning_.isEmpty() || banner_label_->text().isEmpty() ||
+        banner_label_->property("stage").toString() != StagePanel::stageText(s.stage, s.sub_stage)) {
+      showBanner(last_warning_);
+    }
+  }
+  const app::LinkStatus link = live_->linkStatus();
+  link_label_->setText(QString::fromStdString(link.summary()));
+  link_label_->setStyleSheet(link.fault ? QStringLiteral("color: #c00000; font-weight: bold") : QString());
+  if (reconnect_action_ != nullptr) reconnect_action_->setEnabled(link.fault);
+  updateStatus();
+  view_->update();
+}
+
+void MainWindow::showBanner(const QString& warning) {
+  const LiveSnapshot& s = live_->snapshot();
+  const QString stage = StagePanel::stageText(s.stage, s.sub_stage);
+  const QColor colour = StagePanel::stageColor(s.stage, s.sub_stage);
+  QString text = QString(stage).replace(QLatin1Char('\n'), QStringLiteral(" · "));
+  if (!warning.isEmpty()) text += QStringLiteral("\n⚠ ") + warning;
+  banner_label_->setProperty("stage", stage);
+  banner_label_->setText(text);
+  banner_label_->setStyleSheet(
+      QStringLiteral("QLabel { background: rgba(%1,%2,%3,215); color: white; border-radius: 6px; padding: 6px 14px; }")
+          .arg(colour.red())
+          .arg(colour.green())
+          .arg(colour.blue()));
+  banner_label_->setMaximumWidth(std::max(200, view_->width() - 24));
+  banner_label_->adjustSize();
+  banner_label_->move(std::max(0, (view_->width() - banner_label_->width()) / 2), 10);
+  key_map_label_->move(12, std::max(0, view_->height() - key_map_label_->height() - 12));
+}
+
+void MainWindow::handleEvents() {
+  if (!live_) return;
+  for (const LiveEvent& event : live_->takeEvents()) {
+    using K = app::WorkflowEvent::Kind;
+    if (recorder_) {
+      if (event.kind == K::kStage) {
+        const auto slash = event.name.find('/');
+        recorder_->recordStage({event.time, event.name.substr(0, slash),
+                                slash == std::string::npos ? std::string() : event.name.substr(slash + 1)});
+      } else if (event.kind == K::kTrigger) {
+        recorder_->recordTrigger(event.time, event.name);
+      } else if (event.kind == K::kButton) {
+        recorder_->recordButton(event.time, event.name);
+      }
+    }
+    if (event.kind == K::kWarning || event.kind == K::kRefused) {
+      last_warning_ = QString::fromStdString(event.detail.empty() ? event.name : event.detail);
+      stage_panel_->showWarning(last_warning_);
+      statusBar()->showMessage(last_warning_, 15000);
+    } else if (event.kind == K::kStage || event.kind == K::kButton) {
+      // A new stage: the old warning no longer applies to what the operator sees.
+      last_warning_.clear();
+      stage_panel_->clearWarning();
+    } else if (event.kind == K::kCheck || event.kind == K::kModelLearned || event.kind == K::kAreaCreated) {
+      statusBar()->showMessage(QString::fromStdString(event.detail.empty() ? event.name : event.detail), 10000);
+    }
+  }
+}
+
+void MainWindow::recordTaughtData() {
+  if (!live_ || !recorder_) return;
+  const auto areas = live_->snapshot().area_data;  // immutable; held while read
+  if (!areas) return;
+  for (; recorded_areas_ < areas->size(); ++recorded_areas_) {
+    const app::TrainingArea& area = (*areas)[recorded_areas_];
+    const int k = static_cast<int>(recorded_areas_);
+    recorder_->recordArea({k, 0.0, area.centre, area.q_fixed});
+    for (Eigen::Index l = 0; l < area.X.cols(); ++l) recorder_->recordSample({0.0, k, area.X.col(l), area.Q.col(l)});
+  }
+}
+
+void MainWindow::recordState(const LiveSnapshot& s) {
+  if (!recorder_) return;
+  app::StateRecord record;
+  record.time = s.time;
+  record.dof = std::min<std::int32_t>(s.dof, static_cast<std::int32_t>(record.q.size()));
+  for (int j = 0; j < record.dof; ++j) {
+    const auto i = static_cast<std::size_t>(j);
+    record.q[i] = s.q[i];
+    record.q_cmd[i] = s.q_cmd[i];
+    record.tau_ext[i] = s.tau_ext[i];
+  }
+  record.p_WT = s.p_WT;
+  recorder_->recordState(record);
+}
+
+void MainWindow::driveKeyboard() {
+  // Held keys step the targets by velocity × the time since the last tick (Sect. 8.1).
+  const double dt = key_clock_.isValid() ? std::min(0.1, static_cast<double>(key_clock_.restart()) * 1e-3) : 0.0;
+  if (!key_clock_.isValid()) key_clock_.start();
+  if (!live_ || !model_ || !teleop_.anyHeld() || dt <= 0.0) return;
+  if (!keyboard_mode_) {
+    live_->setKeyboardMode(true);
+    keyboard_mode_ = true;
+  }
+  const Eigen::Vector3d v = teleop_.taskVelocity();
+  if (v.squaredNorm() > 0.0) live_->nudgeTask(v * dt);
+  const Eigen::VectorXd qd = teleop_.jointVelocities(model_->dof());
+  for (int j = 0; j < qd.size(); ++j) {
+    if (qd[j] != 0.0) live_->nudgeJoint(j, qd[j] * dt);
+  }
+}
+
+void MainWindow::keyPressEvent(QKeyEvent* event) {
+  const auto action = TeleopKeys::actionOf(event->key());
+  if (!action || (event->modifiers() & (Qt::ControlModifier | Qt::AltModifier))) {
+    QMainWindow::keyPressEvent(event);
+    return;
+  }
+  event->accept();
+  if (event->isAutoRepeat()) return;  // held keys act until released
+  switch (action->kind) {
+    case TeleopAction::Kind::kTask:
+    case TeleopAction::Kind::kJoint:
+      teleop_.press(event->key());
+      if (live_ && !keyboard_mode_) {
+        live_->setKeyboardMode(true);
+        keyboard_mode_ = true;
+      }
+      break;
+    case TeleopAction::Kind::kTrigger:
+      if (live_) live_->fire(action->trigger);
+      break;
+    case TeleopAction::Kind::kButton:
+      if (live_) live_->press(action->button);
+      break;
+    case TeleopAction::Kind::kToggleMap:
+      toggleKeyMap(!key_map_label_->isVisible());
+      break;
+  }
+}
+
+void MainWindow::toggleKeyMap(bool visible) {
+  key_map_label_->setVisible(visible);
+  key_map_label_->adjustSize();
+  key_map_label_->move(12, std::max(0, view_->height() - key_map_label_->height() - 12));
+  key_map_label_->raise();
+}
+
+void MainWindow::keyReleaseEvent(QKeyEvent* event) {
+  if (event->isAutoRepeat()) {
+    event->accept();
+    return;
+  }
+  if (teleop_.release(event->key())) {
+    event->accept();
+    return;
+  }
+  QMainWindow::keyReleaseEvent(event);
+}
+
+void MainWindow::focusOutEvent(QFocusEvent* event) {
+  // A key released while another window has the focus never arrives: let go of everything.
+  teleop_.clear();
+  QMainWindow::focusOutEvent(event);
+}
+
+void MainWindow::closeEvent(QCloseEvent* event) {
+  if (options_.restore_layout) {
+    QSettings settings;
+    settings.setValue(QStringLiteral("window/geometry"), saveGeometry());
+    settings.setValue(QStringLiteral("window/state"), saveState());
+  }
+  QMainWindow::closeEvent(event);
 }
 
 void MainWindow::updateStatus() {
@@ -118,6 +635,11 @@ void MainWindow::updateStatus() {
     text = tr("no robot   ");
   }
   text += tr("scene %1").arg(QString::fromStdString(scene_.name.empty() ? std::string("empty") : scene_.name));
+  if (live_) {
+    const app::CycleStatistics stats = live_->statistics();
+    text += tr("   control %1 cycles, %2 late").arg(stats.cycles).arg(stats.deadline_misses);
+  }
+  if (fps_ > 0.0) text += tr("   %1 fps").arg(fps_, 0, 'f', 1);
   status_label_->setText(text);
 }
 
@@ -133,13 +655,24 @@ void MainWindow::buildMenus() {
                                                       tr("Scenes (*.yaml *.yml);;All files (*)"));
     if (!path.isEmpty()) loadScene(path.toStdString());
   });
+  file->addSeparator();
+  file->addAction(tr("Save session &as…"), QKeySequence::SaveAs, this, [this] {
+    const QString path = QFileDialog::getSaveFileName(this, tr("Save session"), QStringLiteral("session.flexirob"),
+                                                      tr("FlexIRob sessions (*.flexirob);;All files (*)"));
+    if (!path.isEmpty()) saveSession(path);
+  });
+  file->addAction(tr("Show session &folder"), this, [this] {
+    QMessageBox::information(this, tr("Sessions"),
+                             tr("Every run is recorded. This run: %1").arg(session_file_.isEmpty() ? tr("not recorded")
+                                                                                                   : session_file_));
+  });
   file->addAction(tr("Save &screenshot…"), this, [this] {
     const QString path = QFileDialog::getSaveFileName(this, tr("Save screenshot"), QStringLiteral("flexirob.png"),
                                                       tr("PNG (*.png)"));
     if (!path.isEmpty() && !grab().save(path)) statusBar()->showMessage(tr("Cannot write %1").arg(path), 10000);
   });
   file->addSeparator();
-  file->addAction(tr("&Quit"), QKeySequence::Quit, qApp, &QApplication::quit);
+  file->addAction(tr("&Quit"), QKeySequence::Quit, this, &QWidget::close);
 
   robot_menu_ = menuBar()->addMenu(tr("&Robot"));
   auto* robots = new QActionGroup(this);
@@ -159,6 +692,40 @@ void MainWindow::buildMenus() {
     scenes->addAction(action);
   }
 
+  backend_menu_ = menuBar()->addMenu(tr("&Backend"));
+  auto* backends = new QActionGroup(this);
+  QAction* sim = backend_menu_->addAction(tr("&Simulation"), this, [this] { setBackend("sim"); });
+  sim->setData(QStringLiteral("sim"));
+  sim->setCheckable(true);
+  sim->setChecked(backend_.kind == app::BackendKind::kSimulation);
+  backends->addAction(sim);
+  QAction* fri = backend_menu_->addAction(tr("&Connect to the LWR IV over FRI…"), this, [this] {
+    bool ok = false;
+    const QString address = QInputDialog::getText(this, tr("Connect to the robot"),
+                                                  tr("Robot controller (fri://ADDRESS:PORT):"), QLineEdit::Normal,
+                                                  QStringLiteral("fri://192.168.0.20:49938"), &ok);
+    if (ok && !address.isEmpty() && !setBackend(address.toStdString())) {
+      for (QAction* action : backend_menu_->actions()) {
+        if (action->data().toString() == QStringLiteral("sim")) action->setChecked(backend_.kind == app::BackendKind::kSimulation);
+      }
+    }
+  });
+  fri->setData(QStringLiteral("fri"));
+  fri->setCheckable(true);
+  fri->setChecked(backend_.kind == app::BackendKind::kFri);
+  backends->addAction(fri);
+  backend_menu_->addSeparator();
+  backend_menu_->addAction(tr("&Disconnect (back to the simulation)"), this, [this] { setBackend("sim"); });
+  reconnect_action_ = backend_menu_->addAction(tr("&Confirm reconnect after a fault"), this, [this] {
+    if (!live_) return;
+    if (QMessageBox::question(this, tr("Reconnect"),
+                              tr("The link watchdog stopped commanding the robot. Is the robot's surrounding clear "
+                                 "and should commanding resume?")) == QMessageBox::Yes) {
+      live_->requestReconnect();
+    }
+  });
+  reconnect_action_->setEnabled(false);
+
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&Reset camera"), QKeySequence(Qt::Key_Home), view_, &OsgView::resetCamera);
   QAction* grid = view->addAction(tr("Ground &grid"));
@@ -168,11 +735,12 @@ void MainWindow::buildMenus() {
     world_.setGridVisible(on);
     view_->update();
   });
+  view->addAction(tr("&Key map (F1, H)"), this, [this] { toggleKeyMap(!key_map_label_->isVisible()); });
   QMenu* help = menuBar()->addMenu(tr("&Help"));
   help->addAction(tr("&Mouse"), this, [this] {
-    statusBar()->showMessage(
-        tr("Left drag: orbit   Middle or Shift+left drag: pan   Right drag or wheel: zoom   Double click: home view"),
-        15000);
+    statusBar()->showMessage(tr("Left drag on a link: pull the arm   Left drag elsewhere: orbit   Middle or "
+                                "Shift+left drag: pan   Right drag or wheel: zoom   Double click: home view"),
+                             15000);
   });
 }
 

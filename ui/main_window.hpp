@@ -1,33 +1,65 @@
 #pragma once
-// The main window: the 3D view in the centre, the joint panel docked at the right, menus to
-// choose robot and scene, and a status bar with the robot, the scene and the tip position.
+// The operator's main window (issue #7): the 3D view in the centre mirroring the live robot at
+// display rate; docks with the stage panel (four buttons, stage, learning, warnings), the joints
+// (posture and distance to the limits) and the declared parameters; menus for robot, scene,
+// backend and sessions; keyboard tele-operation and mouse perturbation of the arm in the view.
+//
+// The live robot (LiveTeaching: backend + workflow in a 1 kHz worker) is rebuilt when the robot,
+// the scene, the backend or the parameters change. Every run is recorded into a session file
+// (File ▸ Save session as… keeps a copy); the window's layout is remembered (QSettings).
 #include <QMainWindow>
+#include <QElapsedTimer>
+#include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
+#include "app/backend_factory.hpp"
 #include "render/world.hpp"
 #include "robot/kinematics.hpp"
+#include "robot/parameters.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/scene.hpp"
+#include "ui/live_teaching.hpp"
+#include "ui/teleop_keys.hpp"
 
 class QLabel;
 class QMenu;
+class QTimer;
+class QAction;
+class QDockWidget;
+
+namespace flexirob::app {
+class SessionRecorder;
+}
 
 namespace flexirob::ui {
 
 class JointPanel;
 class OsgView;
+class StagePanel;
+class ParameterPanel;
+class MousePerturbation;
+class ForceArrow;
+class ConvergedChime;
 
 class MainWindow : public QMainWindow {
   Q_OBJECT
 
  public:
+  struct Options {
+    std::string backend = "sim";  ///< "sim" or "fri://HOST:PORT"
+    bool record_sessions = true;  ///< record every run into a session file
+    bool restore_layout = true;   ///< restore the window layout of the last run (QSettings)
+  };
+
   /// robot: built-in name or URDF path; scene: built-in name or scene file ("" = empty).
   /// Failures are reported in the status bar (the window then starts without robot or with the
   /// empty scene) rather than thrown.
   MainWindow(const std::string& robot, const std::string& scene, QWidget* parent = nullptr);
+  MainWindow(const std::string& robot, const std::string& scene, const Options& options, QWidget* parent = nullptr);
   ~MainWindow() override;
 
   /// Loads a robot (built-in name or URDF path). Returns false and shows why on failure; the
@@ -35,32 +67,112 @@ class MainWindow : public QMainWindow {
   bool loadRobot(const std::string& name_or_path);
   /// Loads a scene (built-in name or file). Returns false and shows why on failure.
   bool loadScene(const std::string& name_or_path);
-  /// Poses the robot (size dof(), radians / metres): view, joint panel and status bar.
+  /// Switches the backend ("sim" or "fri://HOST:PORT"); false and the reason shown on failure.
+  bool setBackend(const std::string& choice);
+  /// Poses the robot shown (size dof(), radians / metres): view, joint panel and status bar.
+  /// With the live simulation in IDLE, the simulated arm is put there too.
   void setPosture(const Eigen::VectorXd& q);
+
+  /// Takes the newest snapshot of the live robot into the view and the panels (the display
+  /// timer calls it; tests call it to avoid waiting).
+  void mirror();
 
   OsgView* view() const { return view_; }
   JointPanel* jointPanel() const { return joint_panel_; }
+  StagePanel* stagePanel() const { return stage_panel_; }
+  ParameterPanel* parameterPanel() const { return parameter_panel_; }
+  LiveTeaching* live() const { return live_.get(); }
+  MousePerturbation* perturbation() const { return perturbation_.get(); }
+  ForceArrow* forceArrow() const { return force_arrow_.get(); }
+  QLabel* keyMapLabel() const { return key_map_label_; }
+  QLabel* bannerLabel() const { return banner_label_; }
   render::World& world() { return world_; }
   const robot::RobotModel* robotModel() const { return model_.get(); }
   const robot::Kinematics* kinematics() const { return kinematics_.get(); }
   const robot::Scene& scene() const { return scene_; }
+  const robot::ParameterSet& parameters() const { return *parameters_; }
   QMenu* robotMenu() const { return robot_menu_; }
   QMenu* sceneMenu() const { return scene_menu_; }
+  QMenu* backendMenu() const { return backend_menu_; }
+  /// The session file the current run records into (empty when not recording).
+  QString sessionFile() const { return session_file_; }
+  /// on_converged acknowledgements played so far.
+  int chimes() const { return chimes_; }
+  /// Frames per second of the 3D view over the last seconds (0 before the first second).
+  double framesPerSecond() const { return fps_; }
+
+  /// Shows (or hides) the key map over the view.
+  void toggleKeyMap(bool visible);
+
+  /// Writes a copy of the current run's session to `file` and goes on recording into a new one.
+  /// The recording holds the states at display rate, the stages, triggers, buttons and areas.
+  bool saveSession(const QString& file);
+
+ protected:
+  void keyPressEvent(QKeyEvent* event) override;
+  void keyReleaseEvent(QKeyEvent* event) override;
+  void closeEvent(QCloseEvent* event) override;
+  void focusOutEvent(QFocusEvent* event) override;
 
  private:
   void buildMenus();
+  void buildDocks();
   void updateStatus();
   void reportError(const QString& what, const std::exception& error);
+  /// Stops the live robot and closes its session (before model or scene change).
+  void stopLive();
+  /// Builds and starts the live robot for the current model, scene, backend and parameters.
+  void startLive();
+  void startRecording();
+  void handleEvents();
+  void recordTaughtData();
+  void driveKeyboard();
+  void recordState(const LiveSnapshot& snapshot);
+  void showBanner(const QString& warning);
+  void applyParameters(const std::map<std::string, double>& values);
+  void resetParameters();
 
+  Options options_;
   render::World world_;
   std::unique_ptr<robot::RobotModel> model_;
   std::unique_ptr<robot::Kinematics> kinematics_;
   robot::Scene scene_;
+  std::vector<robot::ParameterDeclaration> declarations_;
+  std::unique_ptr<robot::ParameterSet> parameters_;
+  std::map<std::string, double> parameter_edits_;  // operator's values, applied after scene overrides
+  app::BackendChoice backend_;
+  std::unique_ptr<app::SessionRecorder> recorder_;
+  std::unique_ptr<LiveTeaching> live_;
+  QString session_file_;
+  std::size_t recorded_areas_ = 0;
+  std::uint64_t shown_cycle_ = ~0ULL;
+  std::uint64_t heard_converged_ = 0;
+  int chimes_ = 0;
+
   OsgView* view_ = nullptr;
   JointPanel* joint_panel_ = nullptr;
+  StagePanel* stage_panel_ = nullptr;
+  ParameterPanel* parameter_panel_ = nullptr;
+  QLabel* key_map_label_ = nullptr;
+  QLabel* banner_label_ = nullptr;
+  QLabel* status_label_ = nullptr;
+  QLabel* link_label_ = nullptr;
   QMenu* robot_menu_ = nullptr;
   QMenu* scene_menu_ = nullptr;
-  QLabel* status_label_ = nullptr;
+  QMenu* backend_menu_ = nullptr;
+  QAction* reconnect_action_ = nullptr;
+  QTimer* display_timer_ = nullptr;
+  std::unique_ptr<MousePerturbation> perturbation_;
+  std::unique_ptr<ForceArrow> force_arrow_;
+  std::unique_ptr<ConvergedChime> chime_;
+  TeleopKeys teleop_;
+  bool keyboard_mode_ = false;
+  QElapsedTimer key_clock_;
+  QString last_warning_;
+  QElapsedTimer fps_clock_;
+  long fps_frames_ = 0;
+  double fps_ = 0.0;
+  std::vector<std::string> coloured_links_;
 };
 
 }  // namespace flexirob::ui

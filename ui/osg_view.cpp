@@ -3,6 +3,9 @@
 #include <QMouseEvent>
 #include <QOpenGLContext>
 #include <QWheelEvent>
+#include <algorithm>
+#include <osgUtil/IntersectionVisitor>
+#include <osgUtil/LineSegmentIntersector>
 
 #include "render/shapes.hpp"
 #include "render/world.hpp"
@@ -98,7 +101,54 @@ int OsgView::osgButton(const QMouseEvent* event) const {
   }
 }
 
+int OsgView::pick(const QPointF& position, const std::vector<osg::Node*>& bodies, Eigen::Vector3d& point_W) {
+  const QPointF p = position * scale();
+  // OSG's window coordinates grow upwards.
+  const double x = p.x();
+  const double y = height() * scale() - p.y();
+  osg::ref_ptr<osgUtil::LineSegmentIntersector> intersector =
+      new osgUtil::LineSegmentIntersector(osgUtil::Intersector::WINDOW, x, y);
+  osgUtil::IntersectionVisitor visitor(intersector.get());
+  viewer_->getCamera()->accept(visitor);
+  for (const auto& hit : intersector->getIntersections()) {  // sorted nearest first
+    for (osg::Node* node : hit.nodePath) {
+      const auto found = std::find(bodies.begin(), bodies.end(), node);
+      if (found != bodies.end()) {
+        const osg::Vec3d w = hit.getWorldIntersectPoint();
+        point_W = Eigen::Vector3d(w.x(), w.y(), w.z());
+        return static_cast<int>(found - bodies.begin());
+      }
+    }
+  }
+  return -1;
+}
+
+void OsgView::ray(const QPointF& position, Eigen::Vector3d& origin_W, Eigen::Vector3d& direction_W) const {
+  const osg::Camera* camera = viewer_->getCamera();
+  const osg::Matrixd vpw = camera->getViewMatrix() * camera->getProjectionMatrix() *
+                           camera->getViewport()->computeWindowMatrix();
+  const osg::Matrixd inverse = osg::Matrixd::inverse(vpw);
+  const QPointF p = position * scale();
+  const double x = p.x();
+  const double y = height() * scale() - p.y();
+  const osg::Vec3d near_W = osg::Vec3d(x, y, 0.0) * inverse;
+  const osg::Vec3d far_W = osg::Vec3d(x, y, 1.0) * inverse;
+  origin_W = Eigen::Vector3d(near_W.x(), near_W.y(), near_W.z());
+  direction_W = Eigen::Vector3d(far_W.x() - near_W.x(), far_W.y() - near_W.y(), far_W.z() - near_W.z()).normalized();
+}
+
+Eigen::Vector3d OsgView::viewDirection() const {
+  const render::CameraPose camera = currentCamera();
+  return (camera.center_W - camera.eye_W).normalized();
+}
+
 void OsgView::mousePressEvent(QMouseEvent* event) {
+  if (grabber_ != nullptr && event->button() == Qt::LeftButton && !(event->modifiers() & Qt::ShiftModifier) &&
+      grabber_->press(event->position())) {
+    grabbing_ = true;
+    update();
+    return;
+  }
   const QPointF p = event->position() * scale();
   events()->mouseButtonPress(static_cast<float>(p.x()), static_cast<float>(p.y()),
                              static_cast<unsigned int>(osgButton(event)));
@@ -106,6 +156,14 @@ void OsgView::mousePressEvent(QMouseEvent* event) {
 }
 
 void OsgView::mouseReleaseEvent(QMouseEvent* event) {
+  if (grabbing_) {
+    if (event->button() == Qt::LeftButton) {
+      grabbing_ = false;
+      if (grabber_ != nullptr) grabber_->release();
+    }
+    update();
+    return;
+  }
   const QPointF p = event->position() * scale();
   events()->mouseButtonRelease(static_cast<float>(p.x()), static_cast<float>(p.y()),
                                static_cast<unsigned int>(osgButton(event)));
@@ -113,6 +171,11 @@ void OsgView::mouseReleaseEvent(QMouseEvent* event) {
 }
 
 void OsgView::mouseMoveEvent(QMouseEvent* event) {
+  if (grabbing_) {
+    if (grabber_ != nullptr) grabber_->move(event->position());
+    update();
+    return;
+  }
   const QPointF p = event->position() * scale();
   events()->mouseMotion(static_cast<float>(p.x()), static_cast<float>(p.y()));
   update();

@@ -3,7 +3,11 @@
 // graphics window (no window of OSG's own), rendering in paintGL. The mouse orbits (left
 // button), pans (middle, or left with Shift) and zooms (right button, wheel) around the scene.
 #include <QOpenGLWidget>
+#include <osg/Node>
 #include <osg/ref_ptr>
+#include <vector>
+
+#include <Eigen/Core>
 #include <osgGA/OrbitManipulator>
 #include <osgViewer/GraphicsWindow>
 #include <osgViewer/Viewer>
@@ -11,6 +15,16 @@
 #include "render/camera.hpp"
 
 namespace flexirob::ui {
+
+/// Takes the left mouse button before the camera does (the mouse perturbation of the arm).
+/// press() returns true to take the drag; move() and release() then follow until release.
+class ViewMouseGrabber {
+ public:
+  virtual ~ViewMouseGrabber() = default;
+  virtual bool press(const QPointF& position) = 0;
+  virtual void move(const QPointF& position) = 0;
+  virtual void release() = 0;
+};
 
 class OsgView : public QOpenGLWidget {
   Q_OBJECT
@@ -29,6 +43,16 @@ class OsgView : public QOpenGLWidget {
   render::CameraPose currentCamera() const;
   /// Frames drawn so far (for tests and frame-rate figures).
   long framesDrawn() const { return frames_; }
+
+  /// The nearest surface under widget position `position` that belongs to one of `bodies`:
+  /// its index in `bodies` and the hit point [m, W]; -1 if none.
+  int pick(const QPointF& position, const std::vector<osg::Node*>& bodies, Eigen::Vector3d& point_W);
+  /// The ray through widget position `position`: origin (on the near plane) and unit direction [W].
+  void ray(const QPointF& position, Eigen::Vector3d& origin_W, Eigen::Vector3d& direction_W) const;
+  /// Unit vector from the eye towards the centre of the view [W].
+  Eigen::Vector3d viewDirection() const;
+  /// Null or a grabber that gets left-button drags first (not owned).
+  void setMouseGrabber(ViewMouseGrabber* grabber) { grabber_ = grabber; }
 
  protected:
   void initializeGL() override;
@@ -50,6 +74,8 @@ class OsgView : public QOpenGLWidget {
   osg::ref_ptr<osgGA::OrbitManipulator> manipulator_;
   render::CameraPose home_;
   long frames_ = 0;
+  ViewMouseGrabber* grabber_ = nullptr;
+  bool grabbing_ = false;
 };
 
 }  // namespace flexirob::ui

@@ -1,0 +1,53 @@
+#pragma once
+// The stage panel (thesis Sect. 2.3, Fig. 2.5 and 2.8): the four buttons of the teaching
+// procedure, enabled only when the workflow would accept them; the current stage and sub-stage
+// in large, colour-coded letters (APPROACHING amber, RECORDING red, TEACH-IN magenta, EXECUTION
+// blue, ...); a progress bar while the redundancy resolution is learned; the latest tutor
+// warning; counts of areas, teach-ins and triggers. The panel only shows a LiveSnapshot and
+// emits the button the operator pressed; it owns no workflow.
+#include <QWidget>
+
+#include "app/workflow.hpp"
+#include "ui/live_teaching.hpp"
+
+class QLabel;
+class QProgressBar;
+class QPushButton;
+
+namespace flexirob::ui {
+
+class StagePanel : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit StagePanel(QWidget* parent = nullptr);
+
+  /// Shows the state of `snapshot` (cheap when nothing changed; called at display rate).
+  void showSnapshot(const LiveSnapshot& snapshot);
+  /// A tutor warning or a refused request, shown until the next one or until cleared.
+  void showWarning(const QString& text);
+  void clearWarning();
+
+  QPushButton* button(app::Button button) const;
+  QLabel* stageLabel() const { return stage_label_; }
+  QLabel* warningLabel() const { return warning_label_; }
+  QProgressBar* learningBar() const { return learning_bar_; }
+
+  /// Background and text colour of a stage / sub-stage (also used by the view's banner).
+  static QColor stageColor(app::Stage stage, app::SubStage sub_stage);
+  static QString stageText(app::Stage stage, app::SubStage sub_stage);
+
+ Q_SIGNALS:
+  void buttonPressed(app::Button button);
+
+ private:
+  QPushButton* buttons_[4] = {};
+  QLabel* stage_label_ = nullptr;
+  QLabel* controller_label_ = nullptr;
+  QLabel* counts_label_ = nullptr;
+  QLabel* warning_label_ = nullptr;
+  QProgressBar* learning_bar_ = nullptr;
+  QString shown_stage_;
+};
+
+}  // namespace flexirob::ui
