@@ -13,6 +13,7 @@ void registerAllBenchmarks() {
   registerRenderBenchmarks();
   registerSessionBenchmarks();
   registerControlBenchmarks();
+  registerEvaluationBenchmarks();
 }
 
 }  // namespace flexirob::bench

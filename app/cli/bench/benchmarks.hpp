@@ -10,6 +10,7 @@ void registerPlanningBenchmarks();
 void registerRenderBenchmarks();
 void registerSessionBenchmarks();
 void registerControlBenchmarks();
+void registerEvaluationBenchmarks();
 // Each module adds its register function here and calls it from registerAllBenchmarks().
 
 /// Registers every benchmark of the product once.
