@@ -159,7 +159,8 @@ osg::ref_ptr<osg::Node> makeGroundGrid(double half_extent, double spacing) {
   return group;
 }
 
-World::World() : root_(new osg::Group), content_(new osg::Group), grid_(makeGroundGrid()) {
+World::World()
+    : root_(new osg::Group), content_(new osg::Group), grid_(makeGroundGrid()), overlays_(std::make_unique<Overlays>()) {
   root_->setName("world");
   // A key light from the front-left above, a weaker fill from the right and a rim light from
   // behind: rounded shells show their curvature from any default viewpoint.
@@ -178,6 +179,7 @@ World::World() : root_(new osg::Group), content_(new osg::Group), grid_(makeGrou
   state->setMode(GL_NORMALIZE, osg::StateAttribute::ON);
   root_->addChild(grid_);
   root_->addChild(content_);
+  root_->addChild(overlays_->root());
 }
 
 World::~World() = default;

@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "render/camera.hpp"
+#include "render/overlays.hpp"
 #include "render/robot_graph.hpp"
 #include "robot/scene.hpp"
 
@@ -46,6 +47,9 @@ class World {
   /// Replaces the scene.
   void setScene(const robot::Scene& scene);
   void setGridVisible(bool visible);
+  /// The overlay layers (render/overlays.hpp), drawn with the robot and the scene; not part of
+  /// contentBound() or defaultCamera(), so a large confidence slice does not move the camera.
+  Overlays& overlays() { return *overlays_; }
 
   /// Bounding sphere (centre in W, radius in m) of the robot and the scene, grid excluded.
   std::pair<Eigen::Vector3d, double> contentBound() const;
@@ -58,6 +62,7 @@ class World {
   osg::ref_ptr<osg::Node> grid_;
   osg::ref_ptr<osg::Node> scene_node_;
   std::unique_ptr<RobotGraph> robot_;
+  std::unique_ptr<Overlays> overlays_;
 };
 
 }  // namespace flexirob::render

@@ -1,0 +1,561 @@
+#include "render/overlays.hpp"
+
+#include <osg/BlendFunc>
+#include <osg/Depth>
+#include <osg/LineWidth>
+#include <osg/MatrixTransform>
+#include <osg/Point>
+#include <osg/ShapeDrawable>
+#include <osgText/Text>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "render/shapes.hpp"
+#include "robot/errors.hpp"
+#include "robot/kinematics.hpp"
+
+namespace flexirob::render {
+
+namespace {
+
+osg::Vec3 toVec3(const Eigen::Vector3d& p) {
+  return {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())};
+}
+
+// Unlit, coloured by the geometry's colour array, blended when translucent.
+void makeUnlit(osg::StateSet& state, bool translucent) {
+  state.setMode(GL_LIGHTING, osg::StateAttribute::OFF | osg::StateAttribute::PROTECTED);
+  if (translucent) {
+    state.setAttributeAndModes(new osg::BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA));
+    state.setAttributeAndModes(new osg::Depth(osg::Depth::LESS, 0.0, 1.0, false));
+    state.setRenderingHint(osg::StateSet::TRANSPARENT_BIN);
+  }
+}
+
+osg::ref_ptr<osg::Geometry> makeGeometry(osg::Vec3Array* vertices, const osg::Vec4& color, osg::PrimitiveSet* primitive) {
+  osg::ref_ptr<osg::Geometry> geometry = new osg::Geometry();
+  osg::ref_ptr<osg::Vec4Array> colors = new osg::Vec4Array();
+  colors->push_back(color);
+  geometry->setVertexArray(vertices);
+  geometry->setColorArray(colors, osg::Array::BIND_OVERALL);
+  geometry->addPrimitiveSet(primitive);
+  return geometry;
+}
+
+}  // namespace
+
+Eigen::Vector4f OverlayPalette::area(int index) {
+  // Eight hues chosen to stay apart from each other, from the scene's green areas and from the
+  // grey robot (Okabe-Ito-like, with two additions).
+  static const std::array<Eigen::Vector4f, 8> kColors = {
+      Eigen::Vector4f(0.00F, 0.45F, 0.70F, 1.0F),  // blue
+      Eigen::Vector4f(0.90F, 0.60F, 0.00F, 1.0F),  // orange
+      Eigen::Vector4f(0.00F, 0.62F, 0.45F, 1.0F),  // bluish green
+      Eigen::Vector4f(0.80F, 0.40F, 0.70F, 1.0F),  // reddish purple
+      Eigen::Vector4f(0.84F, 0.20F, 0.10F, 1.0F),  // vermillion
+      Eigen::Vector4f(0.35F, 0.70F, 0.90F, 1.0F),  // sky blue
+      Eigen::Vector4f(0.55F, 0.35F, 0.15F, 1.0F),  // brown
+      Eigen::Vector4f(0.40F, 0.20F, 0.60F, 1.0F),  // violet
+  };
+  const int n = static_cast<int>(kColors.size());
+  return kColors[static_cast<std::size_t>(((index % n) + n) % n)];
+}
+
+Eigen::Vector4f confidenceColor(double value) {
+  if (std::isnan(value)) return {0.5F, 0.5F, 0.5F, 0.0F};
+  // Five control points of viridis, linearly interpolated.
+  static const std::array<Eigen::Vector3f, 5> kStops = {
+      Eigen::Vector3f(0.267F, 0.005F, 0.329F), Eigen::Vector3f(0.229F, 0.322F, 0.546F),
+      Eigen::Vector3f(0.128F, 0.567F, 0.551F), Eigen::Vector3f(0.369F, 0.789F, 0.383F),
+      Eigen::Vector3f(0.993F, 0.906F, 0.144F)};
+  const double v = std::clamp(value, 0.0, 1.0) * static_cast<double>(kStops.size() - 1);
+  const auto i = std::min(static_cast<std::size_t>(v), kStops.size() - 2);
+  const auto s = static_cast<float>(v - static_cast<double>(i));
+  const Eigen::Vector3f c = (1.0F - s) * kStops[i] + s * kStops[i + 1];
+  return {c.x(), c.y(), c.z(), 1.0F};
+}
+
+osg::ref_ptr<osg::Geode> makePoints(const std::vector<Eigen::Vector3d>& points_W, const Eigen::Vector4f& rgba,
+                                    float size_px) {
+  osg::ref_ptr<osg::Vec3Array> vertices = new osg::Vec3Array();
+  vertices->reserve(points_W.size());
+  for (const Eigen::Vector3d& p : points_W) vertices->push_back(toVec3(p));
+  osg::ref_ptr<osg::Geode> geode = new osg::Geode();
+  geode->addDrawable(makeGeometry(vertices.get(), toOsgColor(rgba),
+                                  new osg::DrawArrays(GL_POINTS, 0, static_cast<int>(vertices->size()))));
+  // A lone point has a bounding sphere of radius 0, which small-feature culling would drop.
+  geode->setCullingActive(false);
+  osg::StateSet* state = geode->getOrCreateStateSet();
+  makeUnlit(*state, rgba[3] < 0.999F);
+  state->setAttributeAndModes(new osg::Point(size_px));
+  return geode;
+}
+
+osg::ref_ptr<osg::Geode> makePolyline(const std::vector<Eigen::Vector3d>& points_W, const Eigen::Vector4f& rgba,
+                                      float width_px) {
+  osg::ref_ptr<osg::Geode> geode = new osg::Geode();
+  if (points_W.size() >= 2) {
+    osg::ref_ptr<osg::Vec3Array> vertices = new osg::Vec3Array();
+    for (const Eigen::Vector3d& p : points_W) vertices->push_back(toVec3(p));
+    geode->addDrawable(makeGeometry(vertices.get(), toOsgColor(rgba),
+                                    new osg::DrawArrays(GL_LINE_STRIP, 0, static_cast<int>(vertices->size()))));
+  }
+  osg::StateSet* state = geode->getOrCreateStateSet();
+  makeUnlit(*state, rgba[3] < 0.999F);
+  state->setAttributeAndModes(new osg::LineWidth(width_px));
+  return geode;
+}
+
+osg::ref_ptr<osg::Group> makeTrainingSamples(const std::vector<AreaSamples>& areas, float size_px) {
+  osg::ref_ptr<osg::Group> group = new osg::Group();
+  for (const AreaSamples& area : areas) {
+    osg::ref_ptr<osg::Geode> points = makePoints(area.points_W, OverlayPalette::area(area.area), size_px);
+    points->setName("samples:" + std::to_string(area.area));
+    group->addChild(points);
+  }
+  return group;
+}
+
+osg::ref_ptr<osg::Node> makeGhostArm(const robot::RobotModel& model, const Eigen::VectorXd& q,
+                                     const Eigen::Vector4f& rgba) {
+  if (q.size() != model.dof()) {
+    throw std::invalid_argument("makeGhostArm: expected " + std::to_string(model.dof()) + " joint values, got " +
+                                std::to_string(q.size()));
+  }
+  RobotGraph graph(model);
+  robot::Kinematics kinematics(model);
+  kinematics.update(q);
+  graph.setPosture(kinematics);
+  osg::ref_ptr<osg::Group> ghost = graph.root();
+  ghost->setName("ghost:" + model.name());
+  // The parent's OVERRIDE material wins over the visuals' own (they are not PROTECTED).
+  applyColor(*ghost, rgba);
+  osg::StateSet* state = ghost->getOrCreateStateSet();
+  state->setAttributeAndModes(new osg::Depth(osg::Depth::LESS, 0.0, 1.0, false),
+                              osg::StateAttribute::ON | osg::StateAttribute::OVERRIDE);
+  state->setRenderingHint(osg::StateSet::TRANSPARENT_BIN);
+  return ghost;
+}
+
+ConfidenceGrid sampleConfidence(const std::function<double(const Eigen::Vector3d&)>& confidence,
+                                const Eigen::Vector2d& lower_xy, const Eigen::Vector2d& upper_xy, double z,
+                                int resolution) {
+  if (resolution < 2) throw std::invalid_argument("sampleConfidence: resolution must be at least 2");
+  ConfidenceGrid grid;
+  grid.lower_xy = lower_xy;
+  grid.upper_xy = upper_xy;
+  grid.z = z;
+  grid.values.resize(resolution, resolution);
+  const Eigen::Vector2d step = (upper_xy - lower_xy) / (resolution - 1);
+  for (int i = 0; i < resolution; ++i) {
+    for (int j = 0; j < resolution; ++j) {
+      grid.values(i, j) = confidence(Eigen::Vector3d(lower_xy.x() + i * step.x(), lower_xy.y() + j * step.y(), z));
+    }
+  }
+  return grid;
+}
+
+osg::ref_ptr<osg::Geode> makeConfidenceSlice(const ConfidenceGrid& grid, float alpha) {
+  const auto rows = static_cast<int>(grid.values.rows());
+  const auto cols = static_cast<int>(grid.values.cols());
+  if (rows < 2 || cols < 2) throw std::invalid_argument("makeConfidenceSlice: need at least 2 x 2 values");
+  const Eigen::Vector2d extent = grid.upper_xy - grid.lower_xy;
+  if (!(std::abs(extent.x()) > 0.0 && std::abs(extent.y()) > 0.0)) {
+    throw std::invalid_argument("makeConfidenceSlice: the slice has no extent");
+  }
+  osg::ref_ptr<osg::Vec3Array> vertices = new osg::Vec3Array();
+  osg::ref_ptr<osg::Vec4Array> colors = new osg::Vec4Array();
+  vertices->reserve(static_cast<std::size_t>(rows * cols));
+  colors->reserve(static_cast<std::size_t>(rows * cols));
+  for (int i = 0; i < rows; ++i) {
+    for (int j = 0; j < cols; ++j) {
+      const double x = grid.lower_xy.x() + extent.x() * i / (rows - 1);
+      const double y = grid.lower_xy.y() + extent.y() * j / (cols - 1);
+      vertices->push_back(toVec3(Eigen::Vector3d(x, y, grid.z)));
+      Eigen::Vector4f c = confidenceColor(grid.values(i, j));
+      c[3] *= alpha;
+      colors->push_back(toOsgColor(c));
+    }
+  }
+  osg::ref_ptr<osg::DrawElementsUInt> triangles = new osg::DrawElementsUInt(GL_TRIANGLES);
+  triangles->reserve(static_cast<std::size_t>(6 * (rows - 1) * (cols - 1)));
+  for (int i = 0; i + 1 < rows; ++i) {
+    for (int j = 0; j + 1 < cols; ++j) {
+      const auto a = static_cast<unsigned>(i * cols + j);
+      const auto b = a + static_cast<unsigned>(cols);
+      for (unsigned index : {a, b, b + 1, a, b + 1, a + 1}) triangles->push_back(index);
+    }
+  }
+  osg::ref_ptr<osg::Geometry> geometry = new osg::Geometry();
+  geometry->setVertexArray(vertices);
+  geometry->setColorArray(colors, osg::Array::BIND_PER_VERTEX);
+  geometry->addPrimitiveSet(triangles);
+  osg::ref_ptr<osg::Geode> geode = new osg::Geode();
+  geode->setName("confidence:z=" + std::to_string(grid.z));
+  geode->addDrawable(geometry);
+  osg::StateSet* state = geode->getOrCreateStateSet();
+  makeUnlit(*state, alpha < 0.999F);
+  state->setMode(GL_CULL_FACE, osg::StateAttribute::OFF);
+  return geode;
+}
+
+osg::ref_ptr<osg::Group> makeReachability(const std::vector<Eigen::Vector3d>& points_W,
+                                          const std::vector<bool>& reachable, float size_px) {
+  if (points_W.size() != reachable.size()) {
+    throw std::invalid_argument("makeReachability: " + std::to_string(points_W.size()) + " points but " +
+                                std::to_string(reachable.size()) + " flags");
+  }
+  std::vector<Eigen::Vector3d> yes;
+  std::vector<Eigen::Vector3d> no;
+  for (std::size_t i = 0; i < points_W.size(); ++i) (reachable[i] ? yes : no).push_back(points_W[i]);
+  osg::ref_ptr<osg::Group> group = new osg::Group();
+  osg::ref_ptr<osg::Geode> reached = makePoints(yes, OverlayPalette::reachable(), size_px);
+  reached->setName("reachable");
+  osg::ref_ptr<osg::Geode> missed = makePoints(no, OverlayPalette::unreachable(), size_px);
+  missed->setName("unreachable");
+  group->addChild(reached);
+  group->addChild(missed);
+  return group;
+}
+
+osg::ref_ptr<osg::Node> makeGoalMarker(const Eigen::Vector3d& p_W, double radius, const Eigen::Vector4f& rgba) {
+  osg::ref_ptr<osg::MatrixTransform> marker =
+      new osg::MatrixTransform(osg::Matrixd::translate(p_W.x(), p_W.y(), p_W.z()));
+  marker->setName("goal");
+  marker->addChild(makePrimitive(PrimitiveShape::kSphere, Eigen::Vector3d(radius, 0, 0), rgba));
+  // Three axis lines twice as long as the sphere: the goal stays visible inside an obstacle.
+  const auto r = static_cast<float>(2.0 * radius);
+  osg::ref_ptr<osg::Vec3Array> vertices = new osg::Vec3Array();
+  for (const osg::Vec3& axis : {osg::Vec3(r, 0, 0), osg::Vec3(0, r, 0), osg::Vec3(0, 0, r)}) {
+    vertices->push_back(-axis);
+    vertices->push_back(axis);
+  }
+  osg::ref_ptr<osg::Geode> cross = new osg::Geode();
+  cross->addDrawable(makeGeometry(vertices.get(), toOsgColor(rgba), new osg::DrawArrays(GL_LINES, 0, 6)));
+  makeUnlit(*cross->getOrCreateStateSet(), false);
+  cross->getOrCreateStateSet()->setAttributeAndModes(new osg::LineWidth(2.0F));
+  marker->addChild(cross);
+  return marker;
+}
+
+osg::ref_ptr<osg::Node> makeForceArrow(const Eigen::Vector3d& origin_W, const Eigen::Vector3d& force_W,
+                                       double metres_per_newton, const Eigen::Vector4f& rgba) {
+  osg::ref_ptr<osg::Group> group = new osg::Group();
+  group->setName("force");
+  const double magnitude = force_W.norm();
+  if (magnitude < 1e-6) return group;
+  const double length = magnitude * metres_per_newton;
+  const double head = std::min(0.3 * length, 0.04);
+  const double shaft = length - head;
+  const double radius = std::clamp(0.04 * length, 0.003, 0.008);
+  // The arrow is built along +z and rotated onto the force.
+  const osg::Matrixd rotation = osg::Matrixd::rotate(osg::Vec3d(0, 0, 1), toOsg(force_W / magnitude));
+  osg::ref_ptr<osg::MatrixTransform> frame =
+      new osg::MatrixTransform(rotation * osg::Matrixd::translate(toOsg(origin_W)));
+  osg::ref_ptr<osg::MatrixTransform> shaft_node =
+      new osg::MatrixTransform(osg::Matrixd::translate(0, 0, 0.5 * shaft));
+  shaft_node->addChild(makePrimitive(PrimitiveShape::kCylinder, Eigen::Vector3d(radius, shaft, 0), rgba));
+  osg::ref_ptr<osg::Cone> cone = new osg::Cone(osg::Vec3(), static_cast<float>(2.5 * radius), static_cast<float>(head));
+  // osg::Cone's origin is a quarter of the height above its base.
+  osg::ref_ptr<osg::MatrixTransform> head_node =
+      new osg::MatrixTransform(osg::Matrixd::translate(0, 0, shaft + 0.25 * head));
+  osg::ref_ptr<osg::ShapeDrawable> cone_drawable = new osg::ShapeDrawable(cone);
+  osg::ref_ptr<osg::Geode> cone_geode = new osg::Geode();
+  cone_geode->addDrawable(cone_drawable);
+  applyColor(*cone_geode, rgba);
+  head_node->addChild(cone_geode);
+  frame->addChild(shaft_node);
+  frame->addChild(head_node);
+  group->addChild(frame);
+  return group;
+}
+
+int showCollisions(RobotGraph& robot, const std::vector<std::string>& touching) {
+  robot.resetColors();
+  int coloured = 0;
+  for (const std::string& link : touching) coloured += robot.setLinkColor(link, OverlayPalette::collision());
+  return coloured;
+}
+
+osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, int viewport_width,
+                                     int viewport_height) {
+  osg::ref_ptr<osg::Camera> hud = new osg::Camera();
+  hud->setName("legend");
+  hud->setReferenceFrame(osg::Transform::ABSOLUTE_RF);
+  hud->setProjectionMatrixAsOrtho2D(0.0, std::max(1, viewport_width), 0.0, std::max(1, viewport_height));
+  hud->setViewMatrix(osg::Matrixd::identity());
+  hud->setClearMask(GL_DEPTH_BUFFER_BIT);
+  hud->setRenderOrder(osg::Camera::POST_RENDER);
+  hud->setAllowEventFocus(false);
+  osg::StateSet* state = hud->getOrCreateStateSet();
+  state->setMode(GL_LIGHTING, osg::StateAttribute::OFF | osg::StateAttribute::PROTECTED);
+  state->setMode(GL_DEPTH_TEST, osg::StateAttribute::OFF);
+  state->setAttributeAndModes(new osg::BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA));
+  if (entries.empty()) return hud;
+
+  constexpr float kMargin = 10.0F;
+  constexpr float kLine = 20.0F;
+  constexpr float kSwatch = 12.0F;
+  constexpr float kCharHeight = 14.0F;
+  const float top = static_cast<float>(viewport_height) - kMargin;
+  const auto rows = static_cast<float>(entries.size());
+  std::size_t longest = 0;
+  for (const LegendEntry& entry : entries) longest = std::max(longest, entry.label.size());
+  const float width = 3.0F * kMargin + kSwatch + 0.62F * kCharHeight * static_cast<float>(longest);
+
+  osg::ref_ptr<osg::Geode> geode = new osg::Geode();
+  // A light panel behind the entries, then one swatch per entry (quads, drawn in order).
+  osg::ref_ptr<osg::Vec3Array> quads = new osg::Vec3Array();
+  osg::ref_ptr<osg::Vec4Array> colors = new osg::Vec4Array();
+  const auto quad = [&](float x0, float y0, float x1, float y1, const osg::Vec4& color) {
+    for (const osg::Vec3& v : {osg::Vec3(x0, y0, 0), osg::Vec3(x1, y0, 0), osg::Vec3(x1, y1, 0), osg::Vec3(x0, y1, 0)}) {
+      quads->push_back(v);
+      colors->push_back(color);
+    }
+  };
+  quad(kMargin * 0.5F, top - rows * kLine - kMargin * 0.5F, kMargin * 0.5F + width, top + kMargin * 0.5F,
+       osg::Vec4(1.0F, 1.0F, 1.0F, 0.78F));
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const float y = top - static_cast<float>(i + 1) * kLine + 0.5F * (kLine - kSwatch);
+    Eigen::Vector4f rgba = entries[i].rgba;
+    rgba[3] = 1.0F;
+    quad(kMargin, y, kMargin + kSwatch, y + kSwatch, toOsgColor(rgba));
+    osg::ref_ptr<osgText::Text> text = new osgText::Text();
+    text->setCharacterSize(kCharHeight);
+    text->setColor(osg::Vec4(0.08F, 0.08F, 0.1F, 1.0F));
+    text->setAxisAlignment(osgText::Text::SCREEN);
+    text->setAlignment(osgText::Text::LEFT_BOTTOM);
+    text->setPosition(osg::Vec3(2.0F * kMargin + kSwatch, y, 0.0F));
+    text->setText(entries[i].label);
+    geode->addDrawable(text);
+  }
+  osg::ref_ptr<osg::Geometry> panel = new osg::Geometry();
+  panel->setVertexArray(quads);
+  panel->setColorArray(colors, osg::Array::BIND_PER_VERTEX);
+  panel->addPrimitiveSet(new osg::DrawArrays(GL_QUADS, 0, static_cast<int>(quads->size())));
+  geode->insertChild(0, panel);  // behind the swatches and labels
+  hud->addChild(geode);
+  return hud;
+}
+
+// --- ItmGraphOverlay ------------------------------------------------------------------------
+
+ItmGraphOverlay::ItmGraphOverlay(float node_size_px, float edge_width_px)
+    : geode_(new osg::Geode),
+      vertices_(new osg::Vec3Array),
+      live_nodes_(new osg::DrawElementsUInt(GL_POINTS)),
+      edge_indices_(new osg::DrawElementsUInt(GL_LINES)) {
+  geode_->setName("itm_graph");
+  // Vertex arrays change as the graph grows: display lists would be rebuilt every frame.
+  lines_ = makeGeometry(vertices_.get(), toOsgColor(OverlayPalette::itmEdge()), edge_indices_.get());
+  points_ = makeGeometry(vertices_.get(), toOsgColor(OverlayPalette::itmNode()), live_nodes_.get());
+  for (osg::Geometry* geometry : {lines_.get(), points_.get()}) {
+    geometry->setUseDisplayList(false);
+    geometry->setUseVertexBufferObjects(true);
+    geometry->setDataVariance(osg::Object::DYNAMIC);
+  }
+  lines_->getOrCreateStateSet()->setAttributeAndModes(new osg::LineWidth(edge_width_px));
+  points_->getOrCreateStateSet()->setAttributeAndModes(new osg::Point(node_size_px));
+  // Nodes lie at the ends of their edges, at the same depth: the edges test depth without
+  // writing it, so a node wins over its edges in whichever order the two are drawn.
+  lines_->getOrCreateStateSet()->setAttributeAndModes(new osg::Depth(osg::Depth::LESS, 0.0, 1.0, false));
+  points_->setCullingActive(false);  // a lone node has a bound of radius 0
+  geode_->addDrawable(lines_);
+  geode_->addDrawable(points_);  // after the edges: nodes on top of the lines meeting them
+  makeUnlit(*geode_->getOrCreateStateSet(), false);
+}
+
+bool ItmGraphOverlay::hasNode(int id) const {
+  return id >= 0 && static_cast<std::size_t>(id) < slot_of_node_.size() && slot_of_node_[static_cast<std::size_t>(id)] >= 0;
+}
+
+void ItmGraphOverlay::touch() {
+  vertices_->dirty();
+  live_nodes_->dirty();
+  edge_indices_->dirty();
+  points_->dirtyBound();
+  lines_->dirtyBound();
+}
+
+void ItmGraphOverlay::setNode(int id, const Eigen::Vector3d& p_W) {
+  if (id < 0) throw std::invalid_argument("ItmGraphOverlay::setNode: negative node id");
+  const auto index = static_cast<std::size_t>(id);
+  if (index >= vertices_->size()) {
+    vertices_->resize(index + 1);
+    slot_of_node_.resize(index + 1, -1);
+  }
+  (*vertices_)[index] = toVec3(p_W);
+  if (slot_of_node_[index] < 0) {
+    slot_of_node_[index] = static_cast<int>(live_nodes_->size());
+    live_nodes_->push_back(static_cast<unsigned>(id));
+  }
+  touch();
+}
+
+void ItmGraphOverlay::removeNode(int id) {
+  if (!hasNode(id)) return;
+  const auto index = static_cast<std::size_t>(id);
+  // Swap-remove from the list of live nodes.
+  const auto slot = static_cast<std::size_t>(slot_of_node_[index]);
+  const unsigned last = live_nodes_->back();
+  (*live_nodes_)[slot] = last;
+  slot_of_node_[last] = static_cast<int>(slot);
+  live_nodes_->pop_back();
+  slot_of_node_[index] = -1;
+  // Its edges (a node has a handful: a linear scan of the edges is cheap next to a redraw).
+  osg::DrawElementsUInt& edges = *edge_indices_;
+  for (std::size_t e = 0; e + 1 < edges.size();) {
+    if (edges[e] == static_cast<unsigned>(id) || edges[e + 1] == static_cast<unsigned>(id)) {
+      edges[e] = edges[edges.size() - 2];
+      edges[e + 1] = edges[edges.size() - 1];
+      edges.resize(edges.size() - 2);
+    } else {
+      e += 2;
+    }
+  }
+  touch();
+}
+
+void ItmGraphOverlay::addEdge(int a, int b) {
+  if (!hasNode(a) || !hasNode(b) || a == b) {
+    throw std::invalid_argument("ItmGraphOverlay::addEdge: no nodes " + std::to_string(a) + " and " + std::to_string(b));
+  }
+  const osg::DrawElementsUInt& edges = *edge_indices_;
+  const auto ua = static_cast<unsigned>(a);
+  const auto ub = static_cast<unsigned>(b);
+  for (std::size_t e = 0; e + 1 < edges.size(); e += 2) {
+    if ((edges[e] == ua && edges[e + 1] == ub) || (edges[e] == ub && edges[e + 1] == ua)) return;
+  }
+  edge_indices_->push_back(ua);
+  edge_indices_->push_back(ub);
+  touch();
+}
+
+void ItmGraphOverlay::removeEdge(int a, int b) {
+  osg::DrawElementsUInt& edges = *edge_indices_;
+  const auto ua = static_cast<unsigned>(a);
+  const auto ub = static_cast<unsigned>(b);
+  for (std::size_t e = 0; e + 1 < edges.size(); e += 2) {
+    if ((edges[e] == ua && edges[e + 1] == ub) || (edges[e] == ub && edges[e + 1] == ua)) {
+      edges[e] = edges[edges.size() - 2];
+      edges[e + 1] = edges[edges.size() - 1];
+      edges.resize(edges.size() - 2);
+      touch();
+      return;
+    }
+  }
+}
+
+void ItmGraphOverlay::clear() {
+  vertices_->clear();
+  live_nodes_->clear();
+  edge_indices_->clear();
+  slot_of_node_.clear();
+  touch();
+}
+
+void ItmGraphOverlay::setGraph(const std::vector<std::pair<int, Eigen::Vector3d>>& nodes,
+                               const std::vector<std::pair<int, int>>& edges) {
+  clear();
+  int largest = -1;
+  for (const auto& [id, p] : nodes) {
+    if (id < 0) throw std::invalid_argument("ItmGraphOverlay::setGraph: negative node id");
+    largest = std::max(largest, id);
+  }
+  vertices_->resize(static_cast<std::size_t>(largest + 1));
+  slot_of_node_.assign(static_cast<std::size_t>(largest + 1), -1);
+  live_nodes_->reserve(nodes.size());
+  for (const auto& [id, p] : nodes) {
+    (*vertices_)[static_cast<std::size_t>(id)] = toVec3(p);
+    if (slot_of_node_[static_cast<std::size_t>(id)] >= 0) continue;
+    slot_of_node_[static_cast<std::size_t>(id)] = static_cast<int>(live_nodes_->size());
+    live_nodes_->push_back(static_cast<unsigned>(id));
+  }
+  // Edges are taken as given (an ITM holds each once); no per-edge duplicate search.
+  edge_indices_->reserve(2 * edges.size());
+  for (const auto& [a, b] : edges) {
+    if (!hasNode(a) || !hasNode(b)) {
+      clear();
+      throw std::invalid_argument("ItmGraphOverlay::setGraph: edge " + std::to_string(a) + "-" + std::to_string(b) +
+                                  " joins a node not given");
+    }
+    edge_indices_->push_back(static_cast<unsigned>(a));
+    edge_indices_->push_back(static_cast<unsigned>(b));
+  }
+  touch();
+}
+
+// --- Overlays -------------------------------------------------------------------------------
+
+const char* overlayLayerName(OverlayLayer layer) {
+  switch (layer) {
+    case OverlayLayer::kTrainingSamples: return "samples";
+    case OverlayLayer::kGhostArms: return "ghosts";
+    case OverlayLayer::kConfidence: return "confidence";
+    case OverlayLayer::kItmGraph: return "itm";
+    case OverlayLayer::kGoalAndPath: return "path";
+    case OverlayLayer::kTrajectories: return "trajectories";
+    case OverlayLayer::kReachability: return "reachability";
+    case OverlayLayer::kForce: return "force";
+    case OverlayLayer::kLegend: return "legend";
+  }
+  return "?";
+}
+
+const char* overlayLayerTitle(OverlayLayer layer) {
+  switch (layer) {
+    case OverlayLayer::kTrainingSamples: return "Training samples";
+    case OverlayLayer::kGhostArms: return "q_fixed ghost arms";
+    case OverlayLayer::kConfidence: return "Confidence slices";
+    case OverlayLayer::kItmGraph: return "ITM graph";
+    case OverlayLayer::kGoalAndPath: return "Goal and planned path";
+    case OverlayLayer::kTrajectories: return "Target and teach-in trajectories";
+    case OverlayLayer::kReachability: return "Reachable targets";
+    case OverlayLayer::kForce: return "Hand force";
+    case OverlayLayer::kLegend: return "Legend";
+  }
+  return "?";
+}
+
+OverlayLayer parseOverlayLayer(const std::string& name) {
+  std::string valid;
+  for (OverlayLayer layer : kAllOverlayLayers) {
+    if (name == overlayLayerName(layer)) return layer;
+    valid += (valid.empty() ? "" : ", ") + std::string(overlayLayerName(layer));
+  }
+  throw InputError("unknown overlay '" + name + "' (expected one of: " + valid + ")");
+}
+
+Overlays::Overlays() : root_(new osg::Group), itm_(std::make_unique<ItmGraphOverlay>()) {
+  root_->setName("overlays");
+  for (OverlayLayer layer : kAllOverlayLayers) {
+    osg::ref_ptr<osg::Group> group = new osg::Group();
+    group->setName(std::string("overlay:") + overlayLayerName(layer));
+    layers_[static_cast<std::size_t>(layer)] = group;
+    root_->addChild(group);
+  }
+  layer(OverlayLayer::kItmGraph)->addChild(itm_->node());
+}
+
+Overlays::~Overlays() = default;
+
+osg::Group* Overlays::layer(OverlayLayer layer) const { return layers_[static_cast<std::size_t>(layer)].get(); }
+
+void Overlays::setContent(OverlayLayer which, osg::ref_ptr<osg::Node> content) {
+  osg::Group* group = layer(which);
+  group->removeChildren(0, group->getNumChildren());
+  if (which == OverlayLayer::kItmGraph) group->addChild(itm_->node());  // the incremental graph stays
+  if (content) group->addChild(content);
+}
+
+void Overlays::addContent(OverlayLayer which, osg::ref_ptr<osg::Node> content) {
+  if (content) layer(which)->addChild(content);
+}
+
+void Overlays::setVisible(OverlayLayer which, bool visible) { layer(which)->setNodeMask(visible ? ~0U : 0U); }
+
+bool Overlays::visible(OverlayLayer which) const { return layer(which)->getNodeMask() != 0U; }
+
+}  // namespace flexirob::render

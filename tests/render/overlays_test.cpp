@@ -1,0 +1,341 @@
+// Overlays: the geometry holds what the input says, and an offscreen render with a layer on
+// shows that layer's colour where the camera projection puts its points.
+#include <gtest/gtest.h>
+#include <osg/ComputeBoundsVisitor>
+#include <osg/Geometry>
+
+#include <cmath>
+#include <filesystem>
+
+#include "render/camera.hpp"
+#include "render/offscreen.hpp"
+#include "render/overlays.hpp"
+#include "render/shapes.hpp"
+#include "render/world.hpp"
+#include "robot/errors.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+
+namespace flexirob::render {
+namespace {
+
+constexpr int kWidth = 320;
+constexpr int kHeight = 240;
+
+std::array<float, 4> background() {
+  const Eigen::Vector4f c = Palette::background();
+  return {c[0], c[1], c[2], c[3]};
+}
+
+const osg::Geometry& onlyGeometry(const osg::Geode& geode) {
+  EXPECT_EQ(geode.getNumDrawables(), 1U);
+  const osg::Drawable* drawable = geode.getNumDrawables() > 0 ? geode.getDrawable(0) : nullptr;
+  const osg::Geometry* geometry = drawable != nullptr ? drawable->asGeometry() : nullptr;
+  if (geometry == nullptr) throw std::runtime_error("expected a geode holding one geometry");
+  return *geometry;
+}
+
+Eigen::Vector3d vertex(const osg::Geometry& geometry, std::size_t i) {
+  const auto& vertices = *static_cast<const osg::Vec3Array*>(geometry.getVertexArray());
+  return {vertices[i].x(), vertices[i].y(), vertices[i].z()};
+}
+
+// Colour distance (sum over RGB, 0..765) between a pixel and an RGBA colour in 0..1.
+int colorDistance(const std::array<std::uint8_t, 4>& pixel, const Eigen::Vector4f& rgba) {
+  int distance = 0;
+  for (int c = 0; c < 3; ++c) distance += std::abs(int{pixel[static_cast<std::size_t>(c)]} - static_cast<int>(std::lround(rgba[c] * 255.0F)));
+  return distance;
+}
+
+std::array<std::uint8_t, 4> pixelAt(const Image& image, const CameraPose& camera, const Eigen::Vector3d& p_W) {
+  const auto pixel = projectToPixel(camera, image.width, image.height, p_W);
+  EXPECT_TRUE(pixel.has_value());
+  return image.pixel(static_cast<int>(pixel->x()), static_cast<int>(pixel->y()));
+}
+
+int changedPixels(const Image& a, const Image& b) {
+  int count = 0;
+  for (std::size_t i = 0; i < a.rgba.size(); i += 4) {
+    if (a.rgba[i] != b.rgba[i] || a.rgba[i + 1] != b.rgba[i + 1] || a.rgba[i + 2] != b.rgba[i + 2]) ++count;
+  }
+  return count;
+}
+
+const CameraPose& testCamera() {
+  static const CameraPose camera = parseCamera("-1.8,-1.2,1.3,-0.3,0,0.4");
+  return camera;
+}
+
+TEST(OverlayPalette, AreaColoursDifferAndRepeatAfterEight) {
+  for (int a = 0; a < 8; ++a) {
+    for (int b = a + 1; b < 8; ++b) {
+      EXPECT_GT((OverlayPalette::area(a) - OverlayPalette::area(b)).head<3>().norm(), 0.2) << a << " vs " << b;
+    }
+  }
+  EXPECT_EQ(OverlayPalette::area(9), OverlayPalette::area(1));
+  EXPECT_EQ(OverlayPalette::area(-1), OverlayPalette::area(7));
+}
+
+TEST(ConfidenceColor, GetsLighterWithConfidenceAndClamps) {
+  // Relative luminance (Rec. 709) grows monotonically along the map.
+  const auto luminance = [](const Eigen::Vector4f& c) { return 0.2126F * c[0] + 0.7152F * c[1] + 0.0722F * c[2]; };
+  float previous = -1.0F;
+  for (int i = 0; i <= 20; ++i) {
+    const float l = luminance(confidenceColor(i / 20.0));
+    EXPECT_GT(l, previous) << "at " << i / 20.0;
+    previous = l;
+  }
+  EXPECT_EQ(confidenceColor(-3.0), confidenceColor(0.0));
+  EXPECT_EQ(confidenceColor(7.0), confidenceColor(1.0));
+  EXPECT_EQ(confidenceColor(std::nan(""))[3], 0.0F);
+}
+
+TEST(TrainingSamples, OneCloudPerAreaHoldingItsPointsInItsColour) {
+  std::vector<AreaSamples> areas(3);
+  for (int a = 0; a < 3; ++a) {
+    areas[static_cast<std::size_t>(a)].area = a;
+    for (int k = 0; k <= a * 4; ++k) areas[static_cast<std::size_t>(a)].points_W.emplace_back(0.1 * a, 0.01 * k, 0.5);
+  }
+  const osg::ref_ptr<osg::Group> group = makeTrainingSamples(areas);
+  ASSERT_EQ(group->getNumChildren(), 3U);
+  for (unsigned a = 0; a < 3; ++a) {
+    const auto* geode = group->getChild(a)->asGeode();
+    ASSERT_NE(geode, nullptr);
+    EXPECT_EQ(geode->getName(), "samples:" + std::to_string(a));
+    const osg::Geometry& geometry = onlyGeometry(*geode);
+    ASSERT_EQ(geometry.getVertexArray()->getNumElements(), areas[a].points_W.size());
+    for (std::size_t k = 0; k < areas[a].points_W.size(); ++k) {
+      EXPECT_LT((vertex(geometry, k) - areas[a].points_W[k]).norm(), 1e-6);
+    }
+    const auto& color = (*static_cast<const osg::Vec4Array*>(geometry.getColorArray()))[0];
+    EXPECT_EQ(color, toOsgColor(OverlayPalette::area(static_cast<int>(a))));
+  }
+}
+
+TEST(ConfidenceSlice, SamplesTheCallbackOnTheGridAndColoursEachVertex) {
+  // Confidence rising linearly in x across the slice, constant in y.
+  const auto confidence = [](const Eigen::Vector3d& p) { return (p.x() + 1.0) / 2.0; };
+  const ConfidenceGrid grid = sampleConfidence(confidence, {-1.0, -0.5}, {1.0, 0.5}, 0.4, 5);
+  ASSERT_EQ(grid.values.rows(), 5);
+  for (int i = 0; i < 5; ++i) {
+    for (int j = 0; j < 5; ++j) EXPECT_NEAR(grid.values(i, j), i / 4.0, 1e-12);
+  }
+  const osg::ref_ptr<osg::Geode> slice = makeConfidenceSlice(grid, 1.0F);
+  const osg::Geometry& geometry = onlyGeometry(*slice);
+  ASSERT_EQ(geometry.getVertexArray()->getNumElements(), 25U);
+  EXPECT_EQ(geometry.getPrimitiveSet(0)->getNumIndices(), 6U * 4U * 4U);
+  const auto& colors = *static_cast<const osg::Vec4Array*>(geometry.getColorArray());
+  for (std::size_t v = 0; v < 25; ++v) {
+    const Eigen::Vector3d p = vertex(geometry, v);
+    EXPECT_NEAR(p.z(), 0.4, 1e-6);
+    EXPECT_EQ(colors[v], toOsgColor(confidenceColor(confidence(p))));
+  }
+  EXPECT_THROW(sampleConfidence(confidence, {0, 0}, {1, 1}, 0.0, 1), std::invalid_argument);
+  ConfidenceGrid flat = grid;
+  flat.upper_xy.x() = flat.lower_xy.x();
+  EXPECT_THROW(makeConfidenceSlice(flat), std::invalid_argument);
+}
+
+TEST(ItmGraphOverlay, FollowsInsertionsAndDeletionsOfNodesAndEdges) {
+  ItmGraphOverlay graph;
+  graph.setGraph({{0, {0, 0, 0}}, {1, {1, 0, 0}}, {4, {0, 1, 0}}}, {{0, 1}, {1, 4}});
+  EXPECT_EQ(graph.nodeCount(), 3);
+  EXPECT_EQ(graph.edgeCount(), 2);
+  EXPECT_FALSE(graph.hasNode(2));
+  graph.setNode(2, {0.5, 0.5, 0});
+  graph.addEdge(2, 0);
+  graph.addEdge(0, 2);  // already there
+  EXPECT_EQ(graph.edgeCount(), 3);
+  graph.removeNode(1);  // takes both its edges
+  EXPECT_EQ(graph.nodeCount(), 3);
+  EXPECT_EQ(graph.edgeCount(), 1);
+  EXPECT_THROW(graph.addEdge(1, 0), std::invalid_argument);
+  graph.removeEdge(0, 2);
+  EXPECT_EQ(graph.edgeCount(), 0);
+  EXPECT_THROW(graph.setGraph({{0, {0, 0, 0}}}, {{0, 3}}), std::invalid_argument);
+  EXPECT_EQ(graph.nodeCount(), 0) << "a refused graph leaves nothing half-built";
+
+  // The drawn primitives are exactly the live nodes and the edges.
+  ItmGraphOverlay grown;
+  for (int id = 0; id < 10000; ++id) {
+    grown.setNode(id, Eigen::Vector3d(0.001 * id, 0.0, 0.5));
+    if (id > 0) grown.addEdge(id - 1, id);
+  }
+  for (int id = 0; id < 10000; id += 2) grown.removeNode(id);
+  EXPECT_EQ(grown.nodeCount(), 5000);
+  EXPECT_EQ(grown.edgeCount(), 0) << "a chain with every other node removed keeps no edge";
+  const osg::Geode& geode = *grown.node();
+  ASSERT_EQ(geode.getNumDrawables(), 2U);
+  EXPECT_EQ(geode.getDrawable(1)->asGeometry()->getPrimitiveSet(0)->getNumIndices(), 5000U);
+}
+
+TEST(Reachability, SplitsPointsByFlagAndRefusesMismatchedSizes) {
+  const osg::ref_ptr<osg::Group> group =
+      makeReachability({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, {true, false, true});
+  ASSERT_EQ(group->getNumChildren(), 2U);
+  EXPECT_EQ(onlyGeometry(*group->getChild(0)->asGeode()).getVertexArray()->getNumElements(), 2U);
+  EXPECT_EQ(onlyGeometry(*group->getChild(1)->asGeode()).getVertexArray()->getNumElements(), 1U);
+  EXPECT_THROW(makeReachability({{0, 0, 0}}, {}), std::invalid_argument);
+}
+
+TEST(ForceArrow, SpansFromTheOriginAlongTheScaledForce) {
+  const Eigen::Vector3d origin(0.2, -0.1, 0.6);
+  const Eigen::Vector3d force(0.0, 30.0, -40.0);  // 50 N
+  const osg::ref_ptr<osg::Node> arrow = makeForceArrow(origin, force, 0.01);
+  osg::ComputeBoundsVisitor visitor;
+  arrow->accept(visitor);
+  const osg::BoundingBox& box = visitor.getBoundingBox();
+  ASSERT_TRUE(box.valid());
+  const Eigen::Vector3d tip = origin + 0.01 * force;  // 0.5 m away
+  const Eigen::Vector3d lower(box.xMin(), box.yMin(), box.zMin());
+  const Eigen::Vector3d upper(box.xMax(), box.yMax(), box.zMax());
+  // The arrow is at most a head radius (2.5 x 8 mm) thick around the segment origin-tip.
+  const double thickness = 0.021;
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(lower[k], std::min(origin[k], tip[k]), thickness) << "axis " << k;
+    EXPECT_NEAR(upper[k], std::max(origin[k], tip[k]), thickness) << "axis " << k;
+  }
+  osg::ComputeBoundsVisitor none;
+  makeForceArrow(origin, Eigen::Vector3d::Zero())->accept(none);
+  EXPECT_FALSE(none.getBoundingBox().valid()) << "no arrow without a force";
+}
+
+TEST(OverlayLayers, NamesRoundTripAndUnknownNamesAreRefused) {
+  for (OverlayLayer layer : kAllOverlayLayers) EXPECT_EQ(parseOverlayLayer(overlayLayerName(layer)), layer);
+  EXPECT_THROW(parseOverlayLayer("nonsense"), InputError);
+}
+
+// --- Offscreen: each layer shows its colour where its points project -------------------------
+
+class OverlayRender : public ::testing::Test {
+ protected:
+  OverlayRender() : renderer_(kWidth, kHeight) { world_.setGridVisible(false); }
+  Image render() { return renderer_.render(world_.root(), testCamera(), background()); }
+
+  World world_;
+  OffscreenRenderer renderer_;
+};
+
+TEST_F(OverlayRender, SamplesShowInTheirAreaColourWhereProjected) {
+  const Image empty = render();
+  const std::vector<Eigen::Vector3d> area0 = {{-0.5, -0.2, 0.3}, {-0.4, 0.3, 0.7}};
+  const std::vector<Eigen::Vector3d> area2 = {{-0.2, 0.1, 0.5}};
+  world_.overlays().setContent(OverlayLayer::kTrainingSamples, makeTrainingSamples({{0, area0}, {2, area2}}, 9.0F));
+  const Image shown = render();
+  for (const Eigen::Vector3d& p : area0) EXPECT_LT(colorDistance(pixelAt(shown, testCamera(), p), OverlayPalette::area(0)), 30);
+  EXPECT_LT(colorDistance(pixelAt(shown, testCamera(), area2[0]), OverlayPalette::area(2)), 30);
+  // Toggled off, the layer leaves no trace.
+  world_.overlays().setVisible(OverlayLayer::kTrainingSamples, false);
+  EXPECT_FALSE(world_.overlays().visible(OverlayLayer::kTrainingSamples));
+  EXPECT_EQ(changedPixels(render(), empty), 0);
+}
+
+TEST_F(OverlayRender, ReachableGreenUnreachableRedAndItmNodesInTheirColour) {
+  const Eigen::Vector3d reached(-0.5, -0.3, 0.5);
+  const Eigen::Vector3d missed(-0.2, 0.4, 0.9);
+  world_.overlays().setContent(OverlayLayer::kReachability, makeReachability({reached, missed}, {true, false}));
+  const Eigen::Vector3d node_a(-0.6, 0.3, 0.2);
+  const Eigen::Vector3d node_b(0.1, -0.4, 0.3);
+  world_.overlays().itm().setGraph({{3, node_a}, {8, node_b}}, {{3, 8}});
+  const Image image = render();
+  EXPECT_LT(colorDistance(pixelAt(image, testCamera(), reached), OverlayPalette::reachable()), 30);
+  EXPECT_LT(colorDistance(pixelAt(image, testCamera(), missed), OverlayPalette::unreachable()), 30);
+  EXPECT_LT(colorDistance(pixelAt(image, testCamera(), node_a), OverlayPalette::itmNode()), 30)
+      << "a node is drawn over the ends of its edges";
+  EXPECT_LT(colorDistance(pixelAt(image, testCamera(), node_b), OverlayPalette::itmNode()), 30);
+  // The middle of the edge is drawn in the edge colour.
+  EXPECT_LT(colorDistance(pixelAt(image, testCamera(), 0.5 * (node_a + node_b)), OverlayPalette::itmEdge()), 40);
+}
+
+TEST_F(OverlayRender, ConfidenceSliceShowsItsColourMapWhereProjected) {
+  const auto confidence = [](const Eigen::Vector3d& p) { return p.x() < -0.3 ? 0.0 : 1.0; };
+  world_.overlays().setContent(OverlayLayer::kConfidence,
+                               makeConfidenceSlice(sampleConfidence(confidence, {-0.8, -0.4}, {0.2, 0.4}, 0.3, 41), 1.0F));
+  const Image image = render();
+  EXPECT_LT(colorDistance(pixelAt(image, testCamera(), {-0.6, 0.0, 0.3}), confidenceColor(0.0)), 30);
+  EXPECT_LT(colorDistance(pixelAt(image, testCamera(), {0.0, 0.0, 0.3}), confidenceColor(1.0)), 30);
+}
+
+TEST_F(OverlayRender, GoalMarkerPathAndForceArrowShowInTheirColours) {
+  const Eigen::Vector3d goal(-0.4, 0.2, 0.6);
+  world_.overlays().setContent(OverlayLayer::kGoalAndPath, makeGoalMarker(goal, 0.04));
+  const Eigen::Vector3d from(-0.7, -0.4, 0.2);
+  world_.overlays().addContent(OverlayLayer::kGoalAndPath,
+                               makePolyline({from, Eigen::Vector3d(-0.7, -0.4, 0.5)}, OverlayPalette::plannedPath(), 4.0F));
+  const Eigen::Vector3d origin(0.0, -0.3, 0.3);
+  world_.overlays().setContent(OverlayLayer::kForce, makeForceArrow(origin, Eigen::Vector3d(0, 0, 40.0), 0.01));
+  const Image image = render();
+  // The lit sphere's centre faces the camera: its hue is the goal's (red and blue above green).
+  const auto goal_pixel = pixelAt(image, testCamera(), goal);
+  EXPECT_GT(goal_pixel[0], goal_pixel[1] + 60);
+  EXPECT_GT(goal_pixel[2], goal_pixel[1] + 20);
+  EXPECT_LT(colorDistance(pixelAt(image, testCamera(), Eigen::Vector3d(-0.7, -0.4, 0.35)), OverlayPalette::plannedPath()), 30);
+  // The arrow's shaft, 40 N x 0.01 m/N = 0.4 m up: yellow (red and green far above blue).
+  const auto shaft = pixelAt(image, testCamera(), origin + Eigen::Vector3d(0, 0, 0.15));
+  EXPECT_GT(shaft[0], shaft[2] + 80);
+  EXPECT_GT(shaft[1], shaft[2] + 50);
+}
+
+TEST_F(OverlayRender, LegendDrawsItsSwatchesInTheTopLeftCorner) {
+  const Image empty = render();
+  world_.overlays().setContent(OverlayLayer::kLegend,
+                               makeLegend({{"area 0", OverlayPalette::area(0)}, {"area 1", OverlayPalette::area(1)}}, kWidth, kHeight));
+  const Image image = render();
+  // Swatch i spans x in [10, 22], y (from the top) in [10 + 20 i + 4, 10 + 20 i + 16].
+  EXPECT_LT(colorDistance(image.pixel(16, 10 + 10), OverlayPalette::area(0)), 12);
+  EXPECT_LT(colorDistance(image.pixel(16, 10 + 20 + 10), OverlayPalette::area(1)), 12);
+  EXPECT_GT(changedPixels(empty, image), 200) << "the labels and the panel are drawn too";
+  // Nothing far from the corner changes.
+  EXPECT_EQ(image.pixel(kWidth - 5, kHeight - 5), empty.pixel(kWidth - 5, kHeight - 5));
+}
+
+TEST_F(OverlayRender, GhostArmTintsThePictureWithoutHidingTheArm) {
+  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  world_.setRobot(model);
+  const Image arm_only = render();
+  Eigen::VectorXd q = model.midPosture();
+  q[0] += 1.2;
+  q[1] += 0.7;
+  world_.overlays().setContent(OverlayLayer::kGhostArms, makeGhostArm(model, q));
+  const Image with_ghost = render();
+  robot::Kinematics kinematics(model);
+  kinematics.update(q);
+  // Where the ghost's elbow is (nothing else there), the background turns towards its grey.
+  const Eigen::Vector3d elbow = kinematics.X_WB(4).translation();
+  const auto before = pixelAt(arm_only, testCamera(), elbow);
+  const auto after = pixelAt(with_ghost, testCamera(), elbow);
+  EXPECT_LT(colorDistance(after, OverlayPalette::ghost()), colorDistance(before, OverlayPalette::ghost()));
+  EXPECT_GT(changedPixels(arm_only, with_ghost), 500);
+  EXPECT_THROW(makeGhostArm(model, Eigen::VectorXd::Zero(3)), std::invalid_argument);
+}
+
+TEST_F(OverlayRender, CollidingLinkTurnsRed) {
+  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  world_.setRobot(model);
+  robot::Kinematics kinematics(model);
+  kinematics.update(model.midPosture());
+  const std::string link = model.bodies().at(3).name;
+  ASSERT_GT(showCollisions(*world_.robot(), {link}), 0);
+  const Image red = render();
+  // Somewhere along the body, towards the next one, the shell is red.
+  const Eigen::Vector3d a = kinematics.X_WB(3).translation();
+  const Eigen::Vector3d b = kinematics.X_WB(4).translation();
+  bool found = false;
+  for (double s = 0.1; s < 0.95 && !found; s += 0.1) {
+    const auto pixel = pixelAt(red, testCamera(), a + s * (b - a));
+    found = pixel[0] > 120 && pixel[1] < pixel[0] / 4 && pixel[2] < pixel[0] / 4;
+  }
+  EXPECT_TRUE(found) << "expected the colliding link " << link << " in red";
+  EXPECT_EQ(showCollisions(*world_.robot(), {}), 0);
+  const Image restored = render();
+  bool still_red = false;
+  for (double s = 0.1; s < 0.95; s += 0.1) {
+    const auto pixel = pixelAt(restored, testCamera(), a + s * (b - a));
+    still_red = still_red || (pixel[0] > 120 && pixel[1] < pixel[0] / 4 && pixel[2] < pixel[0] / 4);
+  }
+  EXPECT_FALSE(still_red) << "the URDF colours come back once nothing touches";
+}
+
+}  // namespace
+}  // namespace flexirob::render
