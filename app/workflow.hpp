@@ -134,8 +134,10 @@ struct WorkflowOptions {
   double check_speed = 0.1;        ///< [m/s] along the straight transition
   double check_tolerance = 0.01;   ///< [m] error that still counts as accurate
   double execution_speed = 0.1;    ///< [m/s] in EXECUTION
-  /// [m] planTo() refuses goals farther than this from every ITM node (unexplored space).
-  double max_goal_gap = 0.05;
+  /// [m] planTo() refuses goals farther than this from every ITM node: unexplored space. The
+  /// ITM's quantization error e_max (0.1 m) is the distance within which a node stands for
+  /// the explored positions around it.
+  double max_goal_gap = 0.10;
 };
 
 class Workflow {
