@@ -6,9 +6,19 @@ function(flexirob_target_settings target)
   if(FLEXIROB_WERROR)
     target_compile_options(${target} PRIVATE -Werror)
   endif()
+  # Sanitizer builds (scripts/test-sanitizers.sh): every report aborts the test that caused it
+  # (-fno-sanitize-recover), so a UBSan finding fails CTest instead of scrolling past.
   if(FLEXIROB_SANITIZE)
-    target_compile_options(${target} PRIVATE -fsanitize=${FLEXIROB_SANITIZE} -fno-omit-frame-pointer)
+    target_compile_options(${target} PRIVATE -fsanitize=${FLEXIROB_SANITIZE} -fno-omit-frame-pointer
+                                             -fno-sanitize-recover=all)
     target_link_options(${target} PRIVATE -fsanitize=${FLEXIROB_SANITIZE})
+  endif()
+  # Fuzzer builds (clang only, scripts/fuzz.sh): the libraries get libFuzzer's coverage
+  # instrumentation plus ASan and UBSan; the fuzz targets add the libFuzzer main (fuzz/).
+  if(FLEXIROB_BUILD_FUZZERS)
+    target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link,address,undefined
+                                             -fno-sanitize-recover=all -fno-omit-frame-pointer)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
   endif()
 endfunction()
 
@@ -35,6 +45,8 @@ function(flexirob_add_test target)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
-  gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT ${ARG_TIMEOUT}
+  # Labelled with the suite so that a sanitizer run can pick whole suites (ctest -L app_tests);
+  # a test added to a suite later is picked up without being named anywhere.
+  gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS ${target}
                        ENVIRONMENT "FLEXIROB_RESOURCES=${FLEXIROB_SOURCE_RESOURCE_DIR}")
 endfunction()

@@ -1,0 +1,142 @@
+// Hostile files and arguments through the real flexirob-cli: every one ends with exit code 2
+// and exactly one line "error: ..." on stderr, quickly and without exhausting memory
+// (docs/RELIABILITY.md).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "tests/cli/cli_test_support.hpp"
+
+namespace flexirob {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CliResult;
+using testing::runCliBinary;
+
+class HostileCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("flexirob-hostile-cli-" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+  fs::path write(const std::string& name, const std::string& content) const {
+    const fs::path file = dir_ / name;
+    std::ofstream(file, std::ios::binary) << content;
+    return file;
+  }
+  /// A file of `bytes` bytes that starts with `head` and occupies no disk space beyond it.
+  fs::path sparse(const std::string& name, const std::string& head, std::uintmax_t bytes) const {
+    const fs::path file = write(name, head);
+    fs::resize_file(file, bytes);
+    return file;
+  }
+  static void expectRefused(const CliResult& result, const std::string& expected_part) {
+    EXPECT_EQ(result.exit_code, 2) << result.err;
+    EXPECT_TRUE(result.out.empty()) << result.out;
+    ASSERT_FALSE(result.err.empty());
+    EXPECT_EQ(result.err.rfind("error: ", 0), 0U) << result.err;
+    EXPECT_EQ(result.err.find('\n'), result.err.size() - 1) << "not one line: " << result.err;
+    EXPECT_LE(result.err.size(), 400U) << result.err;
+    EXPECT_NE(result.err.find(expected_part), std::string::npos) << result.err;
+  }
+  fs::path dir_;
+};
+
+TEST_F(HostileCli, TwoGigabyteMeshInARobotIsRefusedBeforeLoading) {
+  const fs::path mesh = sparse("huge.stl", "solid huge\n", 2ULL * 1024 * 1024 * 1024);
+  const fs::path urdf = write("bigmesh.urdf",
+                              "<robot name=\"b\"><link name=\"base\"/><link name=\"l1\"><collision><geometry><mesh filename=\"" +
+                                  mesh.string() +
+                                  "\"/></geometry></collision></link><joint name=\"j1\" type=\"revolute\"><parent "
+                                  "link=\"base\"/><child link=\"l1\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" "
+                                  "velocity=\"1\" effort=\"1\"/></joint></robot>");
+  expectRefused(runCliBinary("reach --robot " + urdf.string() + " --target 0.1,0,0 --max-time 0.01"), "larger than 256 MB");
+}
+
+TEST_F(HostileCli, TwoGigabyteMeshObstacleInASceneIsRefused) {
+  const fs::path mesh = sparse("huge.stl", "solid huge\n", 2ULL * 1024 * 1024 * 1024);
+  const fs::path scene = write("big.yaml", "name: big\nobstacles:\n  - name: m\n    shape: mesh\n    file: " + mesh.string() +
+                                               "\n    position: [0.5, 0, 0]\n");
+  expectRefused(runCliBinary("reach --scene " + scene.string() + " --target 0.4,0,0.5 --max-time 0.01"), "larger than");
+}
+
+TEST_F(HostileCli, MillionJointUrdfIsRefused) {
+  const fs::path urdf = dir_ / "million.urdf";
+  {
+    std::ofstream out(urdf);
+    out << "<robot name=\"million\"><link name=\"l0\"/>\n";
+    for (int i = 1; i <= 1'000'000; ++i) {
+      out << "<link name=\"l" << i << "\"/><joint name=\"j" << i << "\" type=\"continuous\"><parent link=\"l" << i - 1
+          << "\"/><child link=\"l" << i << "\"/></joint>\n";
+    }
+    out << "</robot>\n";
+  }
+  expectRefused(runCliBinary("robot info --robot " + urdf.string()), "larger than 64 MB");
+}
+
+TEST_F(HostileCli, DeeplyNestedUrdfIsRefused) {
+  std::string xml = "<robot name=\"deep\"><link name=\"base\">";
+  for (int i = 0; i < 300000; ++i) xml += "<visual>";
+  for (int i = 0; i < 300000; ++i) xml += "</visual>";
+  xml += "</link></robot>";
+  expectRefused(runCliBinary("robot info --robot " + write("deep.urdf", xml).string()), "nested deeper");
+}
+
+TEST_F(HostileCli, SceneWithNanPoseIsRefusedNamingTheLine) {
+  const fs::path scene = write("nan.yaml",
+                               "name: nan\nobstacles:\n  - name: box\n    shape: box\n    size: [0.1, 0.1, 0.1]\n"
+                               "    position: [.nan, 0, 0.2]\n");
+  expectRefused(runCliBinary("reach --scene " + scene.string() + " --target 0.4,0,0.5 --max-time 0.01"),
+                "nan.yaml:6");
+}
+
+TEST_F(HostileCli, DeeplyNestedSceneIsRefused) {
+  const fs::path scene = write("deep.yaml", "name: deep\nobstacles: " + std::string(100000, '[') + std::string(100000, ']') + "\n");
+  expectRefused(runCliBinary("reach --scene " + scene.string() + " --target 0.4,0,0.5 --max-time 0.01"), "deep.yaml");
+}
+
+TEST_F(HostileCli, HugeNumericListIsRefusedWithAShortMessage) {
+  // 100 kB, below the kernel's 128 kB limit for one argument.
+  std::string list = "0.1";
+  while (list.size() < 100'000) list += ",0.1";
+  expectRefused(runCliBinary("fk --q " + list), "--q");
+  std::string garbage(100'000, '9');
+  garbage += "x";
+  expectRefused(runCliBinary("fk --q 0,0,0," + garbage + ",0,0,0"), "is not a finite number");
+}
+
+TEST_F(HostileCli, NonFiniteAndOverflowingNumbersAreRefused) {
+  expectRefused(runCliBinary("fk --q 0,0,0,nan,0,0,0"), "not a finite number");
+  expectRefused(runCliBinary("fk --q 0,0,0,1e999,0,0,0"), "not a finite number");
+  expectRefused(runCliBinary("reach --target 0.4,inf,0.5"), "not a finite number");
+}
+
+TEST_F(HostileCli, GarbageModelGraphAndSessionFilesAreRefused) {
+  const fs::path garbage = write("garbage.bin", std::string("\x00\xff\x13garbage\n", 11));
+  const fs::path data = write("data.csv", "x,y,z\n0.4,0,0.5\n");
+  expectRefused(runCliBinary("learn predict --model " + garbage.string() + " --data " + data.string()), "garbage.bin");
+  expectRefused(runCliBinary("itm path --graph " + garbage.string() + " --from 0,0,0 --to 1,0,0"), "garbage.bin");
+  expectRefused(runCliBinary("review --session " + garbage.string()), "garbage.bin");
+  // Sparse files of 2 GB with a plausible start: refused by their headers or sizes, not read.
+  expectRefused(runCliBinary("review --session " +
+                             sparse("huge.session", std::string("SQLite format 3\0", 16), 2ULL * 1024 * 1024 * 1024).string()),
+                "huge.session");
+  expectRefused(runCliBinary("itm path --graph " + sparse("huge.itm", "FLXITM\r\n", 2ULL * 1024 * 1024 * 1024).string() +
+                             " --from 0,0,0 --to 1,0,0"),
+                "huge.itm");
+  expectRefused(runCliBinary("learn predict --model " +
+                             sparse("huge.model", "flexirob-model 1\n", 2ULL * 1024 * 1024 * 1024).string() + " --data " +
+                             data.string()),
+                "huge.model");
+}
+
+}  // namespace
+}  // namespace flexirob
