@@ -25,12 +25,13 @@ stage() { echo "== $(date -u +%H:%M:%S) $*" >&2; }
 run_asan() {
   local dir="${FLEXIROB_ASAN_BUILD_DIR:-$root/build-asan}"
   stage "asan: configure and build ($dir)"
-  cmake -S "$root" -B "$dir" "${common_flags[@]}" -DFLEXIROB_SANITIZE=address,undefined >&2
-  cmake --build "$dir" -j "$jobs" >&2
-  stage "asan: ctest"
+  # Set before building: test discovery runs the sanitized test executables.
   export ASAN_OPTIONS="halt_on_error=1:abort_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1"
   export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$suppressions/ubsan.supp"
   export LSAN_OPTIONS="suppressions=$suppressions/lsan.supp:print_suppressions=0"
+  cmake -S "$root" -B "$dir" "${common_flags[@]}" -DFLEXIROB_SANITIZE=address,undefined >&2
+  cmake --build "$dir" -j "$jobs" >&2
+  stage "asan: ctest"
   (cd "$dir" && ctest --output-on-failure -j "$jobs" --timeout 900)
   stage "asan: done"
 }
@@ -38,10 +39,10 @@ run_asan() {
 run_tsan() {
   local dir="${FLEXIROB_TSAN_BUILD_DIR:-$root/build-tsan}"
   stage "tsan: configure and build ($dir)"
+  export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$suppressions/tsan.supp"
   cmake -S "$root" -B "$dir" "${common_flags[@]}" -DFLEXIROB_SANITIZE=thread >&2
   cmake --build "$dir" -j "$jobs" --target robot_tests app_tests learning_tests planning_tests >&2
   stage "tsan: ctest"
-  export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$suppressions/tsan.supp"
   (cd "$dir" && ctest --output-on-failure -j "$jobs" --timeout 900 -L '^(robot|app|learning|planning)_tests$')
   stage "tsan: done"
 }
