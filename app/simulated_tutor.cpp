@@ -82,6 +82,113 @@ double SimulatedTutor::pathClearance(const std::vector<Eigen::VectorXd>& path) {
   return clearance;
 }
 
+bool SimulatedTutor::postureFree(const Eigen::VectorXd& q, double margin) {
+  world_->update(q);
+  if (!world_->contacts().empty()) return false;
+  return world_->clearance(std::max(0.05, 2.0 * margin)).distance >= margin;
+}
+
+bool SimulatedTutor::segmentFree(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double margin) {
+  // Samples every 0.02 rad of the largest joint motion: at the LWR's 1.1 m reach a tip moves
+  // at most about 2 cm between samples, the order of the margin.
+  const double length = (b - a).cwiseAbs().maxCoeff();
+  const int samples = std::max(1, static_cast<int>(std::ceil(length / 0.02)));
+  for (int s = 1; s <= samples; ++s) {
+    if (!postureFree(a + (b - a) * (static_cast<double>(s) / samples), margin)) return false;
+  }
+  return true;
+}
+
+std::vector<Eigen::VectorXd> SimulatedTutor::planApproach(const Eigen::VectorXd& from, const Eigen::VectorXd& to,
+                                                         double margin) {
+  if (segmentFree(from, to, margin)) return {from, to};
+  // The start may itself lie closer to an obstacle than the margin (the arm rests where the
+  // last recording ended): edges leaving it need only be contact-free, their ends keep the margin.
+  const int dof = model_->dof();
+  const Eigen::VectorXd lower = model_->softLowerLimits();
+  const Eigen::VectorXd upper = model_->softUpperLimits();
+  constexpr double kStep = 0.25;  // [rad] largest joint change per tree edge
+  struct Tree {
+    std::vector<Eigen::VectorXd> nodes;
+    std::vector<int> parent;
+  };
+  Tree start_tree{{from}, {-1}};
+  Tree goal_tree{{to}, {-1}};
+  const auto nearest = [](const Tree& tree, const Eigen::VectorXd& q) {
+    int best = 0;
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
+      const double d = (tree.nodes[i] - q).squaredNorm();
+      if (d < best_distance) {
+        best_distance = d;
+        best = static_cast<int>(i);
+      }
+    }
+    return best;
+  };
+  // One step from the nearest node towards q; returns the new node's index or -1.
+  const auto extend = [&](Tree& tree, const Eigen::VectorXd& q, bool& arrived) {
+    const int near = nearest(tree, q);
+    const Eigen::VectorXd& q_near = tree.nodes[static_cast<std::size_t>(near)];
+    const Eigen::VectorXd delta = q - q_near;
+    const double length = delta.cwiseAbs().maxCoeff();
+    arrived = length <= kStep;
+    const Eigen::VectorXd q_new = arrived ? q : Eigen::VectorXd(q_near + delta * (kStep / length));
+    // The first edge out of a start closer than the margin may only move away from the obstacle.
+    const bool from_start = near == 0 && &tree == &start_tree && !postureFree(q_near, margin);
+    if (from_start ? !segmentFree(q_near, q_new, 0.0) || !postureFree(q_new, margin) : !segmentFree(q_near, q_new, margin)) {
+      arrived = false;
+      return -1;
+    }
+    tree.nodes.push_back(q_new);
+    tree.parent.push_back(near);
+    return static_cast<int>(tree.nodes.size()) - 1;
+  };
+  Tree* a = &start_tree;
+  Tree* b = &goal_tree;
+  Eigen::VectorXd q_rand(dof);
+  for (int it = 0; it < options_.approach_iterations; ++it) {
+    for (int j = 0; j < dof; ++j) q_rand[j] = random_.uniform(lower[j], upper[j]);
+    bool arrived = false;
+    const int added = extend(*a, q_rand, arrived);
+    if (added >= 0) {
+      // Connect: the other tree grows towards the new node until it arrives or is blocked.
+      const Eigen::VectorXd target = a->nodes[static_cast<std::size_t>(added)];
+      int last = -1;
+      bool connected = false;
+      for (int k = 0; k < 200; ++k) {
+        const int grown = extend(*b, target, connected);
+        if (grown < 0) break;
+        last = grown;
+        if (connected) break;
+      }
+      if (connected && last >= 0) {
+        const auto branch = [](const Tree& tree, int node) {
+          std::vector<Eigen::VectorXd> out;
+          for (int i = node; i >= 0; i = tree.parent[static_cast<std::size_t>(i)]) out.push_back(tree.nodes[static_cast<std::size_t>(i)]);
+          return out;
+        };
+        std::vector<Eigen::VectorXd> from_side = branch(start_tree, a == &start_tree ? added : last);
+        std::vector<Eigen::VectorXd> to_side = branch(goal_tree, a == &start_tree ? last : added);
+        std::reverse(from_side.begin(), from_side.end());
+        std::vector<Eigen::VectorXd> path = from_side;
+        path.insert(path.end(), to_side.begin() + 1, to_side.end());
+        // Shortcuts: a person takes the direct way where it is free.
+        for (int s = 0; s < 150 && path.size() > 2; ++s) {
+          const std::size_t i = random_.index(path.size() - 2);
+          const std::size_t k = i + 2 + random_.index(path.size() - i - 2);
+          if (k >= path.size()) continue;
+          if (i == 0 && !postureFree(path[0], margin)) continue;
+          if (segmentFree(path[i], path[k], margin)) path.erase(path.begin() + static_cast<std::ptrdiff_t>(i + 1), path.begin() + static_cast<std::ptrdiff_t>(k));
+        }
+        return path;
+      }
+    }
+    std::swap(a, b);
+  }
+  return {};
+}
+
 PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested) {
   const int dof = model_->dof();
   const Eigen::VectorXd lower = model_->softLowerLimits();
@@ -170,7 +277,9 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
   Eigen::VectorXd integral = Eigen::VectorXd::Zero(dof);
   std::size_t next = 1;
   const double dt = sim_->cycleTime();
-  const double deadline = sim_->time() + options_.max_phase_time;
+  double path_length = 0.0;  // [rad] of the largest joint, what the reference needs speed for
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) path_length += (path[i + 1] - path[i]).cwiseAbs().maxCoeff();
+  const double deadline = sim_->time() + path_length / speed + options_.max_phase_time;
   int phase = 0;
   while (true) {
     if (sim_->time() > deadline) {
@@ -253,19 +362,16 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     area.failure = "no collision-free posture with enough clearance";
     return false;
   }
-  // The way there: straight in joint space, or over the home posture if that is clearer.
-  std::vector<Eigen::VectorXd> path{state_.q, choice.q};
-  if (pathClearance(path) < options_.min_clearance && scene_->home_posture && scene_->home_posture->size() == model_->dof()) {
-    std::vector<Eigen::VectorXd> via{state_.q, *scene_->home_posture, choice.q};
-    if (pathClearance(via) > pathClearance(path)) path = via;
-  }
-  // A person moves slowly where the arm passes close to an obstacle, and not at all where it
-  // would touch one.
-  const double path_clearance = pathClearance(path);
-  if (path_clearance < 0.5 * options_.min_clearance) {
+  // The way there: straight in joint space where that keeps the clearance, otherwise around
+  // the obstacles (RRT-Connect in the collision world), keeping the full margin if possible.
+  std::vector<Eigen::VectorXd> path = planApproach(state_.q, choice.q, options_.min_clearance);
+  if (path.empty()) path = planApproach(state_.q, choice.q, 0.5 * options_.min_clearance);
+  if (path.empty()) {
     area.failure = "no collision-free way to the posture";
     return false;
   }
+  // A person moves slowly where the arm passes close to an obstacle.
+  const double path_clearance = std::max(0.0, pathClearance(path));
   const double speed = options_.approach_speed * std::clamp(path_clearance / 0.15, 0.1, 1.0);
   // Touch (on_affected -> APPROACHING), push the links there, let go (on_converged -> POSED).
   kinematics_.update(choice.q);

@@ -33,7 +33,8 @@ struct TutorOptions {
   int posture_candidates = 24;     ///< IK solutions tried per area
   double min_clearance = 0.03;     ///< [m] a posture (and the approach) must keep from obstacles
   double approach_speed = 0.4;     ///< [rad/s] of the tutor's joint-space reference
-  double max_phase_time = 30.0;    ///< [s] a phase may take before the tutor gives up
+  double max_phase_time = 30.0;    ///< [s] a phase may take beyond its planned duration before the tutor gives up
+  int approach_iterations = 4000;  ///< RRT-Connect iterations for a way around obstacles
   bool realtime = false;           ///< pace at wall-clock speed
   /// Called with the measured state after every control cycle (a session recorder); may be empty.
   std::function<void(const robot::RobotState&)> on_cycle;
@@ -99,6 +100,12 @@ class SimulatedTutor {
   bool grab(SubStage sub_stage, const Eigen::Vector3d& direction);
   void tick();
   double pathClearance(const std::vector<Eigen::VectorXd>& path);
+  /// A joint-space path from `from` to `to` keeping `margin` [m] from the obstacles at every
+  /// sample (RRT-Connect, then shortcuts), as a person leads the arm around an obstacle rather
+  /// than straight through it; empty if none was found.
+  std::vector<Eigen::VectorXd> planApproach(const Eigen::VectorXd& from, const Eigen::VectorXd& to, double margin);
+  bool postureFree(const Eigen::VectorXd& q, double margin);
+  bool segmentFree(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double margin);
   void updateReport();
 
   robot::Simulation* sim_;

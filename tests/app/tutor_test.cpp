@@ -125,3 +125,36 @@ TEST(SimulatedTutor, IsDeterministicForAFixedSeed) {
 
 }  // namespace
 }  // namespace flexirob::app
+
+namespace flexirob::app {
+namespace {
+
+// Setup I's area I3 lies under the board, on the far side of it from the home posture: the
+// straight joint-space way there runs into the board, so the tutor has to lead the arm around
+// it (the approach planner) and does so without a contact.
+TEST(SimulatedTutor, LeadsTheArmAroundTheBoardToAnAreaUnderIt) {
+  robot::Scene scene = robot::loadScene("setup_I");
+  const robot::Area under_board = scene.training_areas.at(2);
+  ASSERT_EQ(under_board.name, "I3");
+  scene.training_areas = {under_board};
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  robot::Simulation sim(lwr4(), &scene, parameters);
+  sim.reset(*scene.home_posture);
+  WorkflowOptions options;
+  options.background_learning = false;
+  Workflow workflow(sim, parameters, options);
+  TutorOptions tutor_options;
+  tutor_options.circles = 1;
+  tutor_options.posture_candidates = 8;
+  SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
+  const TutorReport report = tutor.configure(1);
+  ASSERT_EQ(report.areas.size(), 1U);
+  EXPECT_TRUE(report.areas[0].taught) << report.areas[0].failure;
+  EXPECT_EQ(report.collisions, 0U);
+  ASSERT_EQ(workflow.areas().size(), 1U);
+  EXPECT_LT((workflow.areas()[0].centre - under_board.p_WA).norm(), 0.05);
+}
+
+}  // namespace
+}  // namespace flexirob::app
