@@ -109,11 +109,16 @@ Json runPeers(const PeerOptions& options) {
                 {"time_per_target_us", method.time_per_target_us},
                 {"mean_iterations", method.mean_iterations},
                 {"median_error_m", method.median_error_m}};
-      if (&method != &methods.front()) {
-        const auto& ours = methods.front();
-        json["ratio_time_peer_over_ours"] = method.time_per_target_us / ours.time_per_target_us;
-        json["ratio_success_ours_over_peer"] =
-            method.success_rate > 0.0 ? Json(ours.success_rate / method.success_rate) : Json(nullptr);
+      // Ratios of each peer against both of ours (task only: the same problem as KDL's LMA;
+      // hierarchical: with the posture preference).
+      if (method.name.rfind("flexirob_", 0) != 0) {
+        for (const auto& ours : methods) {
+          if (ours.name.rfind("flexirob_", 0) != 0) continue;
+          const std::string suffix = ours.name.substr(std::string("flexirob_").size());
+          json["ratio_time_peer_over_ours_" + suffix] = method.time_per_target_us / ours.time_per_target_us;
+          json["ratio_success_ours_" + suffix + "_over_peer"] =
+              method.success_rate > 0.0 ? Json(ours.success_rate / method.success_rate) : Json(nullptr);
+        }
       }
       entry["methods"].push_back(json);
     }

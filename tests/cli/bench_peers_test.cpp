@@ -42,15 +42,21 @@ Eigen::VectorXd postureNearStart(const robot::RobotModel& model, std::mt19937& r
 
 TEST(BenchReachingPeer, OurControllerAsSolverReachesTipPositionsOfPosturesNearTheStartInsideTheLimits) {
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
-  bench::peers::ControllerPositionSolver solver(model, 1e-5, 100);
+  const Eigen::VectorXd q_start = bench::peers::bentStartPosture(model);
+  bench::peers::ControllerPositionSolver task_only(model, 1e-5, 100, 0.0);
+  bench::peers::ControllerPositionSolver hierarchical(model, 1e-5, 100, 0.5);
   std::mt19937 rng(7);
   for (int k = 0; k < 20; ++k) {
     const Eigen::Vector3d target = robot::tipPose(model, postureNearStart(model, rng)).translation();
-    const auto solved = solver.solve(bench::peers::bentStartPosture(model), target);
-    EXPECT_LT((robot::tipPose(model, solved.q).translation() - target).norm(), 1e-5) << "target " << k;
-    EXPECT_LT(solved.iterations, 100);
-    EXPECT_TRUE(((solved.q - model.softLowerLimits()).array() >= 0.0).all());
-    EXPECT_TRUE(((model.softUpperLimits() - solved.q).array() >= 0.0).all());
+    const auto plain = task_only.solve(q_start, target);
+    EXPECT_LT((robot::tipPose(model, plain.q).translation() - target).norm(), 1e-5) << "target " << k;
+    EXPECT_LT(plain.iterations, 100);
+    const auto pulled = hierarchical.solve(q_start, target);
+    EXPECT_LT((robot::tipPose(model, pulled.q).translation() - target).norm(), 1e-3) << "target " << k;
+    for (const auto* q : {&plain.q, &pulled.q}) {
+      EXPECT_TRUE(((*q - model.softLowerLimits()).array() >= 0.0).all());
+      EXPECT_TRUE(((model.softUpperLimits() - *q).array() >= 0.0).all());
+    }
   }
 }
 

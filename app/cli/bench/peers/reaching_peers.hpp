@@ -6,6 +6,7 @@
 // postures inside the soft limits). KDL entries exist only when built with FLEXIROB_HAVE_KDL.
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -33,8 +34,9 @@ struct ReachingMethodResult {
 };
 
 /// Our controller as a solver: q ← clamp(q + q̇·Δt) with κ_x·Δt = 1 (a Newton step on the
-/// task), κ_q·Δt = 0.1 towards the start posture, q̇ scaled to the velocity limits (so one step
-/// moves a joint at most its limit times one second), until |x_des − x| < eps.
+/// task), κ_q·Δt = kappa_q_step towards the start posture (the null-space target q_c), q̇
+/// scaled to the velocity limits (so one step moves a joint at most its limit times one
+/// second), until |x_des − x| < eps.
 struct ControllerSolveResult {
   Eigen::VectorXd q;
   int iterations = 0;
@@ -42,7 +44,8 @@ struct ControllerSolveResult {
 };
 class ControllerPositionSolver {
  public:
-  explicit ControllerPositionSolver(const robot::RobotModel& model, double eps = 1e-5, int max_iterations = 100);
+  explicit ControllerPositionSolver(const robot::RobotModel& model, double eps = 1e-5, int max_iterations = 100,
+                                    double kappa_q_step = 0.5);
   ~ControllerPositionSolver();
   ControllerSolveResult solve(const Eigen::VectorXd& q_start, const Eigen::Vector3d& p_des);
 
