@@ -93,6 +93,7 @@ FriBackend::FriBackend(RobotModel model, FriBackendConfig config, UdpSocket sock
   reference_q_.setZero(dof);
   reference_stiffness_.setConstant(dof, config_.hold_stiffness);
   reference_damping_.setConstant(dof, config_.hold_damping);
+  limited_q_.setZero(dof);
   status_.cycle = cycle_;
 }
 
@@ -157,13 +158,26 @@ CommandStatus FriBackend::writeCommand(const JointImpedanceCommand& command) {
   }
   // 3. The robot is in a state where commands act: CMD, joint impedance, quality, no fault.
   if (!commandingPermitted()) return reject(FriRejection::kNotPermitted);
-  // 4. No joint faster than its velocity limit over one cycle, from what was sent last.
+  // 4. No joint faster than its velocity limit over one cycle, from what was sent last. A
+  // faster command is refused, or (kRateLimit) the posture that leaves moves towards it at the
+  // velocity limit, so that a mode switch of the controller (a new posture at low stiffness)
+  // never makes the arm jump and the reference catches up within a few cycles.
+  bool limited = false;
+  limited_q_ = command.q_cmd;
   for (int j = 0; j < dof; ++j) {
     const double v_max = model_.joints()[static_cast<std::size_t>(j)].limits.velocity;
     const double step_max = v_max * cycle_ * (1.0 + config_.velocity_tolerance);
-    if (std::abs(command.q_cmd[j] - reference_q_[j]) > step_max) return reject(FriRejection::kVelocityLimit);
+    const double step = command.q_cmd[j] - reference_q_[j];
+    if (std::abs(step) <= step_max) continue;
+    if (config_.velocity_policy == FriVelocityPolicy::kReject) return reject(FriRejection::kVelocityLimit);
+    limited_q_[j] = reference_q_[j] + std::copysign(v_max * cycle_, step);
+    limited = true;
   }
-  reference_q_ = command.q_cmd;
+  if (limited) {
+    ++status_.counters.commands_rate_limited;
+    status_.last_rejection = FriRejection::kVelocityLimit;
+  }
+  reference_q_ = limited_q_;
   reference_stiffness_ = command.stiffness;
   reference_damping_ = command.damping;
   command_active_ = true;
@@ -204,6 +218,7 @@ void FriBackend::sendReply() {
     ++status_.counters.send_failures;
   }
   unanswered_ = 0;
+  last_reply_time_ = Clock::now();
   status_.last_reply_seq = reply_sequence_;
 }
 
@@ -337,7 +352,11 @@ void FriBackend::step() {
   const auto start = Clock::now();
   // Wait for the measurement that is due; once it is overdue, wait at most one more timeout so
   // that a silent link neither spins nor blocks.
-  auto deadline = has_measurement_ ? last_measurement_time_ + timeout : start + timeout;
+  // The timeout runs from the last measurement or from our answer to it, whichever came later:
+  // a measurement is not late for an answer we had not sent yet. (If our loop was late while the
+  // KRC kept sending, the measurements that piled up trip the watchdog in drainSocket().)
+  const auto since = std::max(last_measurement_time_, last_reply_time_);
+  auto deadline = has_measurement_ ? since + timeout : start + timeout;
   if (deadline <= start) deadline = start + timeout;
   for (;;) {
     if (drainSocket()) {
@@ -345,7 +364,7 @@ void FriBackend::step() {
       return;
     }
     const auto now = Clock::now();
-    if (has_measurement_ && !fault_ && now - last_measurement_time_ >= timeout) {
+    if (has_measurement_ && !fault_ && now - since >= timeout) {
       tripWatchdog(FriFault::kMeasurementTimeout);
       // After a silence the KRC may have restarted its counter: take the next one as it comes.
       has_sequence_ = false;

@@ -15,11 +15,13 @@
 //  - short, oversized, malformed (wrong id or packetSize, non-finite joint values) datagrams are
 //    dropped (counted); repeated or out-of-order ones too;
 //  - a controller command leaves only while the KRC reports CMD state, joint impedance control
-//    and quality >= OK, and only if it lies inside the software position limits and moves no
-//    joint faster than its velocity limit over one cycle; anything else is rejected and the
-//    previous posture is held;
+//    and quality >= OK, and only if it lies inside the software position limits; a command
+//    that would move a joint faster than its velocity limit over one cycle is forwarded moved
+//    towards at the velocity limit (FriVelocityPolicy::kRateLimit, the default) or rejected
+//    (kReject); anything else is rejected and the previous posture is held;
 //  - the watchdog: `watchdog_cycles` measurements in a row missing (lost in transit, none for
-//    (watchdog_cycles + 0.5) cycles, or left unanswered because our loop was late) trip it:
+//    (watchdog_cycles + 0.5) cycles after the later of the last measurement and our answer to
+//    it, or left unanswered because our loop was late) trip it:
 //    the backend stops forwarding commands, answers the KRC with the held posture, and reports
 //    the fault until the operator calls confirmReconnect().
 // Not thread-safe: one control thread calls step(), readState(), writeCommand() and reads
@@ -37,6 +39,13 @@
 #include "robot/udp_socket.hpp"
 
 namespace flexirob::robot {
+
+/// What writeCommand() does with a command that would move a joint faster than its velocity
+/// limit within one cycle.
+enum class FriVelocityPolicy {
+  kRateLimit,  ///< forward the posture moved towards it at the velocity limit (counted)
+  kReject,     ///< refuse it; the previous posture is held
+};
 
 struct FriBackendConfig {
   std::string local_address = "0.0.0.0";           ///< where to listen
@@ -58,6 +67,7 @@ struct FriBackendConfig {
   double max_stiffness = 5000.0;
   /// Slack on the velocity check for float rounding: |Δq| <= v_max·T·(1 + tolerance).
   double velocity_tolerance = 1e-6;
+  FriVelocityPolicy velocity_policy = FriVelocityPolicy::kRateLimit;
 };
 
 /// The backend choice "fri://HOST[:PORT]" (the GUI's and flexirob's --backend) as a
@@ -87,7 +97,8 @@ enum class FriRejection {
   kNone,
   kInvalid,          ///< wrong size, non-finite, negative or excessive stiffness/damping
   kPositionLimit,    ///< outside the software position limits
-  kVelocityLimit,    ///< a joint would move faster than its velocity limit in one cycle
+  kVelocityLimit,    ///< a joint would move faster than its velocity limit in one cycle (kReject), or
+                     ///< the last command was forwarded at the velocity limit (kRateLimit)
   kNotPermitted,     ///< not CMD state, quality below minimum, not joint impedance, or fault
 };
 const char* toString(FriRejection rejection);
@@ -108,6 +119,7 @@ struct FriCounters {
   std::uint64_t hold_replies = 0;          ///< answers carrying the held posture
   std::uint64_t send_failures = 0;
   std::uint64_t commands_rejected = 0;     ///< writeCommand() calls refused
+  std::uint64_t commands_rate_limited = 0; ///< commands forwarded at the velocity limit (kRateLimit)
   std::uint64_t watchdog_trips = 0;
   std::uint64_t quality_holds = 0;         ///< CMD-state cycles held because of low quality
   std::uint64_t step_timeouts = 0;         ///< step() calls that returned without a measurement
@@ -195,6 +207,7 @@ class FriBackend final : public RobotBackend {
   bool reply_pending_ = false;
   int unanswered_ = 0;          // measurements taken in since the last answer
   Clock::time_point last_measurement_time_;
+  Clock::time_point last_reply_time_;
   std::uint64_t cycles_since_start_ = 0;
 
   // The measured state, converted once per measurement.
@@ -205,6 +218,7 @@ class FriBackend final : public RobotBackend {
   Eigen::VectorXd reference_q_;          // joint positions of the last answer, or the hold
   Eigen::VectorXd reference_stiffness_;
   Eigen::VectorXd reference_damping_;
+  Eigen::VectorXd limited_q_;            // the posture that leaves after the velocity check
   bool command_active_ = false;          // the reference is an accepted controller command
   bool fault_ = false;
 

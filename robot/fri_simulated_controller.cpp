@@ -56,6 +56,7 @@ FriSimulatedController::FriSimulatedController(RobotModel model, FriSimulatedCon
   requireRange(config_.viscous_damping, 0.0, 1e3, "viscous damping [Nm s/rad]");
   requireRange(config_.krl_stiffness, 0.0, kKrcMaxStiffness, "KRL stiffness [Nm/rad]");
   requireRange(config_.krl_damping, 0.0, 1.0, "KRL damping");
+  requireRange(config_.lockstep_patience, 1e-3, 60.0, "lockstep patience [s]");
   const int dof = model_.dof();
   if (config_.q_initial.size() == 0) {
     q_ = model_.midPosture();
@@ -136,6 +137,10 @@ void FriSimulatedController::setExternalTorque(const Eigen::VectorXd& tau_ext) {
 }
 
 void FriSimulatedController::run(double seconds) {
+  if (config_.lockstep) {
+    runLockstep(seconds);
+    return;
+  }
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   const auto elapsed = [&start] { return std::chrono::duration<double>(Clock::now() - start).count(); };
@@ -156,6 +161,30 @@ void FriSimulatedController::run(double seconds) {
     for (const auto& packet : outgoing_) wake = std::min(wake, packet.due);
     now = elapsed();
     if (wake > now) socket_.waitReadable(wake - now);
+  }
+}
+
+void FriSimulatedController::runLockstep(double seconds) {
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  const auto elapsed = [&start] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  // A stop() must be seen within this wall-clock time while we wait for an answer.
+  constexpr double kPoll = 0.01;  // [s]
+  while (!stop_requested_ && elapsed() < seconds) {
+    const double now = static_cast<double>(lockstep_cycles_++) * config_.cycle;  // simulated time
+    cycle(now);
+    const std::uint16_t awaited = send_seq_;
+    sendDue(now + config_.delay);  // no wall-clock delay to wait out: the clock is simulated
+    // Wait for the PC's answer to this measurement (one lost or held back gets none: go on).
+    const double wait_start = elapsed();
+    while (measurement_left_ && !stop_requested_ && last_reflected_seq_ != awaited) {
+      receiveCommands(now);
+      if (last_reflected_seq_ == awaited) break;
+      const double waited = elapsed() - wait_start;
+      if (waited >= config_.lockstep_patience) break;
+      socket_.waitReadable(std::min(kPoll, config_.lockstep_patience - waited));
+    }
+    receiveCommands(now);
   }
 }
 
@@ -200,6 +229,7 @@ void FriSimulatedController::cycle(double now) {
 
   std::uint64_t lost = 0;
   std::uint64_t reordered = 0;
+  measurement_left_ = false;
   if (drop_next_ > 0) {
     --drop_next_;
     lost = 1;
@@ -212,10 +242,12 @@ void FriSimulatedController::cycle(double now) {
     outgoing_.push_back(*held_back_);
     held_back_.reset();
     reordered = 1;
+    measurement_left_ = true;
   } else if (config_.reorder > 0.0 && uniform_(random_) < config_.reorder) {
     held_back_ = packet;
   } else {
     outgoing_.push_back(packet);
+    measurement_left_ = true;
   }
 
   std::vector<std::vector<std::uint8_t>> injected;
@@ -278,6 +310,7 @@ void FriSimulatedController::receiveCommands(double now) {
       }
     }
     last_command_seq_ = command.header.send_seq;
+    last_reflected_seq_ = command.header.refl_seq;
     {
       std::lock_guard lock(mutex_);
       ++stats_.commands_received;

@@ -50,6 +50,13 @@ struct FriSimulatedControllerConfig {
   double viscous_damping = 0.5;    ///< [Nm s/rad] the extra term c
   double krl_stiffness = 1000.0;   ///< [Nm/rad] impedance the KRL script holds in monitor mode
   double krl_damping = 0.7;
+  /// Faster than real time, for tests of whole teaching runs: the next measurement leaves as
+  /// soon as the PC has answered the previous one, and the measurement timestamps count
+  /// simulated cycles. If no answer comes within `lockstep_patience` [s] of wall-clock time the
+  /// controller goes on like the KRC (next cycle, the answer counts as missed). Loss, delay and
+  /// reordering act as in real time.
+  bool lockstep = false;
+  double lockstep_patience = 1.0;
 };
 
 struct FriSimulatedControllerStats {
@@ -123,6 +130,7 @@ class FriSimulatedController {
   };
 
   void run(double seconds);
+  void runLockstep(double seconds);
   void cycle(double now);
   void receiveCommands(double now);
   void applyCommand(const fri::CommandDatagram& command);
@@ -146,6 +154,9 @@ class FriSimulatedController {
   int good_quality_cycles_ = 0;
   std::uint16_t send_seq_ = 0;
   std::uint16_t last_command_seq_ = 0;
+  std::uint16_t last_reflected_seq_ = 0;  // the PC's reflection of our counter, latest command
+  std::uint64_t lockstep_cycles_ = 0;     // cycles run in lockstep: the simulated clock
+  bool measurement_left_ = false;         // this cycle's measurement was sent (not lost, not held)
   std::vector<SentRecord> sent_;  // ring of the last measurements, for the answer rate
   std::size_t sent_next_ = 0;
   double latency_sum_ = 0.0;

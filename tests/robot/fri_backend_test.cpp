@@ -74,9 +74,10 @@ FriSimulatedControllerConfig simConfig(double cycle, bool command_mode) {
   return sim;
 }
 
-FriBackendConfig backendConfig(int watchdog_cycles) {
+FriBackendConfig backendConfig(int watchdog_cycles, FriVelocityPolicy velocity = FriVelocityPolicy::kReject) {
   FriBackendConfig config;
   config.watchdog_cycles = watchdog_cycles;
+  config.velocity_policy = velocity;
   return config;
 }
 
@@ -261,6 +262,38 @@ TEST(FriBackend, RejectsCommandsOutsideTheSoftwareLimits) {
   EXPECT_LT((link.controller->stats().q_desired - q).cwiseAbs().maxCoeff(), 1e-6);
 }
 
+TEST(FriBackend, RateLimitsAJumpingCommandTowardsItsTarget) {
+  Link link(simConfig(5e-3, true), backendConfig(50, FriVelocityPolicy::kRateLimit));
+  ASSERT_TRUE(link.stepUntil([&] { return link.backend->status().link == FriLink::kCommanding; }, 400));
+  const RobotModel& model = lwr4();
+  const double dt = link.backend->cycleTime();
+  const Eigen::VectorXd held = link.backend->heldPosture();
+  // A jump of 4.5 velocity-limit steps on joint 3 at low stiffness (a controller switching to
+  // gravity compensation at where the arm was pushed to): it leaves in five steps of at most
+  // v_max·T, the last one landing on the target.
+  Eigen::VectorXd target = held;
+  const double v_step = model.velocityLimits()[2] * dt;
+  target[2] += 4.5 * v_step;
+  std::vector<double> sent{held[2]};
+  for (int i = 0; i < 6; ++i) {
+    ASSERT_EQ(link.backend->writeCommand(impedance(target, 20.0, 0.7)), CommandStatus::kAccepted);
+    sent.push_back(link.backend->heldPosture()[2]);
+    link.backend->step();
+  }
+  for (std::size_t i = 1; i < sent.size(); ++i) EXPECT_LE(std::abs(sent[i] - sent[i - 1]), v_step * (1.0 + 1e-9)) << i;
+  EXPECT_NEAR(sent[4], held[2] + 4.0 * v_step, 1e-12);
+  EXPECT_DOUBLE_EQ(sent[5], target[2]);
+  EXPECT_EQ(link.backend->status().counters.commands_rate_limited, 4U);
+  EXPECT_EQ(link.backend->status().counters.commands_rejected, 0U);
+  link.steps(3);
+  EXPECT_EQ(link.controller->stats().commands_refused, 0U);
+  EXPECT_NEAR(link.controller->stats().q_desired[2], target[2], 1e-6);
+  // Position limits still refuse.
+  Eigen::VectorXd outside = target;
+  outside[5] = 0.5 * (model.softUpperLimits()[5] + model.upperLimits()[5]);
+  EXPECT_EQ(link.backend->writeCommand(impedance(outside)), CommandStatus::kRejected);
+}
+
 TEST(FriBackend, EveryAcceptedCommandKeepsTheLimitsForRandomInput) {
   Link link(simConfig(5e-3, true), backendConfig(50));
   ASSERT_TRUE(link.stepUntil([&] { return link.backend->status().link == FriLink::kCommanding; }, 400));
@@ -378,6 +411,48 @@ TEST(FriBackend, ToleratesFewerLostMeasurementsThanTheLimit) {
   EXPECT_EQ(link.backend->status().counters.lost_measurements, 1U);
   EXPECT_EQ(link.backend->status().counters.watchdog_trips, 0U);
   EXPECT_EQ(link.backend->status().link, FriLink::kMonitoring);
+}
+
+TEST(FriBackend, CountsRandomLossAsTheControllerDropsIt) {
+  FriSimulatedControllerConfig sim = simConfig(2e-3, false);
+  sim.loss = 0.2;
+  sim.seed = 5;
+  Link link(sim, backendConfig(50));
+  ASSERT_TRUE(link.stepUntil([&] { return link.backend->hasMeasurement(); }, 100));
+  const std::uint64_t lost_before = link.controller->stats().measurements_lost;
+  link.steps(150);
+  link.controller->stop();
+  link.steps(1);  // take in what is still in flight (the step times out after that)
+  const FriSimulatedControllerStats stats = link.controller->stats();
+  const FriStatus& status = link.backend->status();
+  // Every measurement the controller dropped after the first one we saw is a gap in its
+  // sequence counter. Slack of a few: losses after the last measurement received show no gap
+  // yet, and the controller's count was read a moment after our first measurement.
+  const std::uint64_t lost = stats.measurements_lost - lost_before;
+  EXPECT_GT(lost, 5U);
+  EXPECT_LE(status.counters.lost_measurements, lost + 3);
+  EXPECT_GE(status.counters.lost_measurements + 3, lost);
+  EXPECT_EQ(status.counters.watchdog_trips, 1U);  // only the silence after stop()
+  EXPECT_EQ(status.fault, FriFault::kMeasurementTimeout);
+}
+
+TEST(FriBackend, WatchdogTripsUnderHeavyRandomLoss) {
+  // Half of all datagrams lost at random: three measurements in a row go missing within a few
+  // hundred cycles (no such run in 400 cycles has a probability of about e^-25).
+  FriSimulatedControllerConfig sim = simConfig(5e-3, false);
+  sim.loss = 0.5;
+  sim.seed = 9;
+  Link link(sim, backendConfig(3));
+  ASSERT_TRUE(link.stepUntil([&] { return link.backend->hasMeasurement(); }, 100));
+  ASSERT_TRUE(link.stepUntil([&] { return link.backend->status().link == FriLink::kFault; }, 400));
+  const FriStatus& status = link.backend->status();
+  EXPECT_EQ(status.counters.watchdog_trips, 1U);
+  EXPECT_TRUE(status.fault == FriFault::kMeasurementsLost || status.fault == FriFault::kMeasurementTimeout);
+  EXPECT_GT(status.counters.lost_measurements, 0U);
+  // It stays in fault while the lossy link goes on: only the operator clears it.
+  link.steps(50);
+  EXPECT_EQ(link.backend->status().link, FriLink::kFault);
+  EXPECT_EQ(link.backend->status().counters.watchdog_trips, 1U);
 }
 
 TEST(FriBackend, TimeoutTripsWatchdogAndReconnectNeedsFreshMeasurements) {
