@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <map>
 #include <set>
 #include <tuple>
 
@@ -26,16 +28,27 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
   MotionOutcome outcome;
   const auto steps = static_cast<int>(std::ceil((duration + settle) / kDt));
   Eigen::Vector3d target = p_des(0.0);
+  double error_sum = 0.0;
+  int error_samples = 0;
   for (int k = 1; k <= steps; ++k) {
     target = p_des(std::min(duration, k * kDt));
     map.predict(target, q_c);
     controller.velocity(limiter.command(), target, q_c, qd, &limiter);
     limiter.updateVelocity(qd);
     if (k % 10 == 0) {
+      if (k * kDt <= duration) {
+        kinematics.update(limiter.command());
+        const double error = (kinematics.p_WT() - target).norm();
+        error_sum += error;
+        outcome.max_error_m = std::max(outcome.max_error_m, error);
+        ++error_samples;
+      }
       if (world != nullptr) {
         world->update(limiter.command());
         if (!world->contacts().empty()) {
           outcome.collided = true;
+          const robot::Contact& contact = world->contacts().front();
+          outcome.contact = world->bodyName(contact.body) + "/" + world->otherName(contact);
           break;  // a collision ends the motion as on the real robot
         }
       }
@@ -45,6 +58,8 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
   }
   kinematics.update(limiter.command());
   outcome.final_error_m = (kinematics.p_WT() - target).norm();
+  outcome.mean_error_m = error_samples > 0 ? error_sum / error_samples : outcome.final_error_m;
+  if (error_samples == 0) outcome.max_error_m = outcome.final_error_m;
   outcome.q = limiter.command();
   return outcome;
 }
@@ -65,7 +80,49 @@ std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& mod
   return {shoulder, reach};
 }
 
+// Points of the arm in posture q: body origins, the tip and every 2 cm between consecutive ones.
+void armPoints(robot::Kinematics& kinematics, int dof, std::vector<Eigen::Vector3d>& out) {
+  std::vector<Eigen::Vector3d> chain;
+  for (int b = 1; b <= dof; ++b) chain.push_back(kinematics.X_WB(b).translation());
+  chain.push_back(kinematics.p_WT());
+  out.push_back(chain.front());
+  for (std::size_t i = 0; i + 1 < chain.size(); ++i) {
+    const double length = (chain[i + 1] - chain[i]).norm();
+    const int steps = std::max(1, static_cast<int>(std::ceil(length / 0.02)));
+    for (int s = 1; s <= steps; ++s) out.push_back(chain[i] + (chain[i + 1] - chain[i]) * (static_cast<double>(s) / steps));
+  }
+}
+
 }  // namespace
+
+bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::ParameterSet& parameters,
+                                robot::CollisionWorld& world, const Eigen::Vector3d& p_W,
+                                const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random) {
+  const int dof = model.dof();
+  const Eigen::VectorXd lower = model.softLowerLimits();
+  const Eigen::VectorXd upper = model.softUpperLimits();
+  robot::HierarchicalController controller(model, parameters);
+  robot::Kinematics kinematics(model);
+  Eigen::VectorXd q(dof), q_null(dof), q_target(dof);
+  for (int seed = 0; seed < seeds; ++seed) {
+    if (seed == 0) {
+      q_null = q_start;
+    } else {
+      for (int j = 0; j < dof; ++j) q_null[j] = random.uniform(lower[j], upper[j]);
+    }
+    q = q_null.cwiseMax(lower).cwiseMin(upper);
+    for (int it = 0; it < 300; ++it) {
+      controller.target(q, p_W, q_null, 0.02, q_target);
+      q = q_target.cwiseMax(lower).cwiseMin(upper);
+      if (controller.taskError() < 1e-4 && it > 30) break;
+    }
+    kinematics.update(q);
+    if ((kinematics.p_WT() - p_W).norm() > 1e-3) continue;
+    world.update(q);
+    if (world.contacts().empty()) return true;
+  }
+  return false;
+}
 
 ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::Scene& scene,
                                   const robot::ParameterSet& parameters, const learning::Learner& map,
@@ -84,11 +141,17 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   ReachableResult result;
   result.grid_points = static_cast<int>(points.size());
   std::vector<Eigen::Vector3d> targets;
+  learning::UniformRandom random(7);  // the IK seeds of the accessibility test: fixed, T must not vary
   for (const auto& p : points) {
     if ((p - shoulder).norm() > reach - grid.tolerance) continue;
     bool inside = false;
     for (const auto& obstacle : scene.obstacles) inside = inside || robot::obstacleContains(obstacle, p);
-    if (!inside) targets.push_back(p);
+    if (inside) continue;
+    if (!scene.obstacles.empty() && !accessibleWithoutCollision(model, parameters, world, p, q_start, 24, random)) {
+      ++result.inaccessible;
+      continue;
+    }
+    targets.push_back(p);
   }
   result.targets = static_cast<int>(targets.size());
   int explored = 0;
@@ -97,14 +160,199 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     const Eigen::Vector3d cell = ((p - grid.lower) / grid.spacing).array().round();
     if (explored_cells.count({std::lround(cell.x()), std::lround(cell.y()), std::lround(cell.z())}) != 0) ++explored;
     const MotionOutcome outcome = executeMotion(model, parameters, map, q_start, [&](double) { return p; }, 0.0, 3.0, &world);
-    if (outcome.collided) ++result.collided;
-    if (!outcome.collided && outcome.final_error_m <= grid.tolerance) ++result.reached;
+    if (outcome.collided) {
+      ++result.collided;
+      ++result.contacts[outcome.contact];
+    }
+    const bool reached = !outcome.collided && outcome.final_error_m <= grid.tolerance;
+    if (reached) ++result.reached;
+    result.target_points.push_back(p);
+    result.target_reached.push_back(reached);
+    result.final_postures.push_back(outcome.q);
     if (progress && i % 20 == 0) progress(static_cast<double>(i) / static_cast<double>(targets.size()));
   }
   if (progress) progress(1.0);
   if (result.targets > 0) {
     result.reachable_fraction = static_cast<double>(result.reached) / result.targets;
     result.explored_fraction = static_cast<double>(explored) / result.targets;
+  }
+  return result;
+}
+
+SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot::Scene& scene,
+                                    const robot::EvaluationGrid& grid, const std::vector<Eigen::VectorXd>& postures,
+                                    double distance) {
+  const auto [shoulder, reach] = shoulderAndReach(model);
+  robot::Kinematics kinematics(model);
+  std::vector<Eigen::Vector3d> maneuvering;  // M
+  for (const auto& q : postures) {
+    kinematics.update(q);
+    armPoints(kinematics, model.dof(), maneuvering);
+  }
+  // d(x, M) by buckets of `distance` edge: only the 27 neighbouring buckets can be closer.
+  std::map<std::tuple<long, long, long>, std::vector<Eigen::Vector3d>> buckets;
+  const auto key = [&](const Eigen::Vector3d& p) {
+    return std::make_tuple(std::lround(std::floor(p.x() / distance)), std::lround(std::floor(p.y() / distance)),
+                           std::lround(std::floor(p.z() / distance)));
+  };
+  for (const auto& p : maneuvering) buckets[key(p)].push_back(p);
+  SceneModelResult result;
+  for (const auto& x : grid.points()) {
+    if ((x - shoulder).norm() > reach - grid.tolerance) continue;
+    ++result.workspace_points;
+    bool near = false;
+    const auto [i, j, k] = key(x);
+    for (long di = -1; di <= 1 && !near; ++di) {
+      for (long dj = -1; dj <= 1 && !near; ++dj) {
+        for (long dk = -1; dk <= 1 && !near; ++dk) {
+          const auto it = buckets.find({i + di, j + dj, k + dk});
+          if (it == buckets.end()) continue;
+          for (const auto& m : it->second) {
+            if ((m - x).norm() <= distance) {
+              near = true;
+              break;
+            }
+          }
+        }
+      }
+    }
+    bool inside = false;
+    for (const auto& obstacle : scene.obstacles) inside = inside || robot::obstacleContains(obstacle, x);
+    if (inside) ++result.obstacle_points;
+    if (near) continue;
+    result.model.push_back(x);
+    if (inside) {
+      ++result.obstacle_points_enclosed;
+    } else {
+      ++result.free_points_in_model;
+    }
+  }
+  result.model_points = static_cast<int>(result.model.size());
+  if (result.obstacle_points > 0) {
+    result.obstacle_enclosed_fraction = static_cast<double>(result.obstacle_points_enclosed) / result.obstacle_points;
+  }
+  return result;
+}
+
+TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robot::Scene& scene,
+                                      const robot::ParameterSet& parameters, const learning::Learner& map,
+                                      const std::vector<EvaluatedArea>& areas, int per_area, double speed,
+                                      std::uint64_t seed, const ProgressCallback& progress) {
+  if (areas.empty()) throw InputError("trajectories: no taught area");
+  if (!(speed > 0.0)) throw InputError("trajectories: speed must be positive");
+  for (const auto& area : areas) {
+    model.checkPosture(area.q_fixed);
+    if (area.samples.rows() != 3 || area.samples.cols() < 1) throw InputError("trajectories: an area has no samples");
+  }
+  // The regions: name -> list of point sequences (each a chain of straight segments).
+  std::vector<std::pair<std::string, std::vector<std::vector<Eigen::Vector3d>>>> regions;
+  const auto region = [&](const std::string& name) -> std::vector<std::vector<Eigen::Vector3d>>& {
+    for (auto& r : regions) {
+      if (r.first == name) return r.second;
+    }
+    regions.push_back({name, {}});
+    return regions.back().second;
+  };
+  TrajectoryResult result;
+  if (!scene.trajectories.empty()) {
+    result.from_scene = true;
+    for (const auto& trajectory : scene.trajectories) region(trajectory.group.empty() ? "all" : trajectory.group).push_back(trajectory.waypoints);
+  } else {
+    if (areas.size() < 2) throw InputError("trajectories: the scene lists none and fewer than two areas were taught");
+    if (per_area < 1) throw InputError("trajectories: expected at least one trajectory per area");
+    learning::UniformRandom random(seed);
+    struct Box {
+      Eigen::Vector3d lower, upper;
+    };
+    const Box left{areas[0].samples.rowwise().minCoeff(), areas[0].samples.rowwise().maxCoeff()};
+    const Box right{areas[1].samples.rowwise().minCoeff(), areas[1].samples.rowwise().maxCoeff()};
+    // The interpolation area: between the boxes along the axis that separates their centres
+    // most, spanning both boxes along the other two (Fig. 3.7).
+    Box between{left.lower.cwiseMin(right.lower), left.upper.cwiseMax(right.upper)};
+    Eigen::Index axis = 0;
+    (0.5 * (left.lower + left.upper) - 0.5 * (right.lower + right.upper)).cwiseAbs().maxCoeff(&axis);
+    const bool left_low = left.lower[axis] + left.upper[axis] < right.lower[axis] + right.upper[axis];
+    const Box& low = left_low ? left : right;
+    const Box& high = left_low ? right : left;
+    between.lower[axis] = std::min(low.upper[axis], high.lower[axis]);
+    between.upper[axis] = std::max(low.upper[axis], high.lower[axis]);
+    const auto draw = [&](const Box& box) {
+      Eigen::Vector3d p;
+      for (int a = 0; a < 3; ++a) p[a] = random.uniform(box.lower[a], box.upper[a]);
+      return p;
+    };
+    // Each region: a chain of random points, every trajectory starting where the last ended.
+    const auto chain = [&](const std::string& name, const Box& box, int count) {
+      Eigen::Vector3d from = draw(box);
+      for (int t = 0; t < count; ++t) {
+        const Eigen::Vector3d to = draw(box);
+        region(name).push_back({from, to});
+        from = to;
+      }
+    };
+    chain("left", left, per_area);
+    chain("right", right, per_area);
+    chain("interpolation", between, 2 * per_area);
+  }
+  robot::CollisionWorld world(model, scene);
+  robot::Kinematics kinematics(model);
+  int total = 0;
+  for (const auto& r : regions) total += static_cast<int>(r.second.size());
+  int done = 0;
+  for (const auto& [name, trajectories] : regions) {
+    TrajectoryRegionResult out;
+    out.name = name;
+    // The arm starts in the taught posture of the area nearest the region's first point, is
+    // brought there kinematically, then follows each straight segment at `speed`.
+    const Eigen::Vector3d first = trajectories.front().front();
+    std::size_t nearest = 0;
+    double nearest_distance = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < areas.size(); ++k) {
+      const double d = (areas[k].samples.col(0) - first).norm();
+      if (d < nearest_distance) {
+        nearest_distance = d;
+        nearest = k;
+      }
+    }
+    const Eigen::VectorXd q_area = executeMotion(model, parameters, map, areas[nearest].q_fixed,
+                                                 [&](double) { return first; }, 0.0, 3.0, nullptr).q;
+    Eigen::VectorXd q = q_area;
+    std::vector<double> errors;
+    for (const auto& waypoints : trajectories) {
+      kinematics.update(q);
+      std::vector<Eigen::Vector3d> line{kinematics.p_WT()};
+      line.insert(line.end(), waypoints.begin(), waypoints.end());
+      std::vector<double> at{0.0};
+      for (std::size_t i = 1; i < line.size(); ++i) at.push_back(at.back() + (line[i] - line[i - 1]).norm() / speed);
+      const double duration = std::max(at.back(), 1e-3);
+      const MotionOutcome outcome = executeMotion(
+          model, parameters, map, q,
+          [&](double t) {
+            for (std::size_t i = 1; i < line.size(); ++i) {
+              if (t <= at[i]) return Eigen::Vector3d(line[i - 1] + (line[i] - line[i - 1]) * ((t - at[i - 1]) / std::max(1e-9, at[i] - at[i - 1])));
+            }
+            return line.back();
+          },
+          duration, 0.5, &world);
+      errors.push_back(outcome.mean_error_m);
+      out.e_task_max_mm = std::max(out.e_task_max_mm, 1e3 * outcome.max_error_m);
+      if (outcome.collided) {
+        ++out.collisions;
+        q = q_area;  // after a collision the arm is brought back, as on the real robot
+      } else {
+        q = outcome.q;
+      }
+      if (progress) progress(static_cast<double>(++done) / total);
+    }
+    out.trajectories = static_cast<int>(trajectories.size());
+    double sum = 0.0;
+    for (const double e : errors) sum += e;
+    const double mean = sum / static_cast<double>(errors.size());
+    double variance = 0.0;
+    for (const double e : errors) variance += (e - mean) * (e - mean);
+    out.e_task_mean_mm = 1e3 * mean;
+    out.e_task_std_mm = 1e3 * std::sqrt(variance / static_cast<double>(errors.size()));
+    result.regions.push_back(out);
   }
   return result;
 }

@@ -7,6 +7,8 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "learning/learner.hpp"
@@ -23,7 +25,10 @@ using ProgressCallback = std::function<void(double fraction)>;
 /// One motion executed kinematically with the hierarchical controller.
 struct MotionOutcome {
   double final_error_m = 0.0;
+  double mean_error_m = 0.0;  ///< E_task: mean |x_des(t) − x(t)| over the motion, sampled every 10 ms
+  double max_error_m = 0.0;
   bool collided = false;  ///< a contact with an obstacle or the robot itself at a checked sample
+  std::string contact;    ///< the first contact, "body/other" (empty without one)
   Eigen::VectorXd q;      ///< final posture
 };
 
@@ -36,12 +41,25 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
 
 struct ReachableResult {
   int grid_points = 0;   ///< points of G
-  int targets = 0;       ///< |T|: grid points within reach and outside the obstacles
+  int targets = 0;       ///< |T|: grid points within reach, outside the obstacles and accessible
+  int inaccessible = 0;  ///< within reach and outside the obstacles, but no collision-free posture reaches them
   int reached = 0;       ///< reached within the tolerance without collision
   int collided = 0;
   double reachable_fraction = 0.0;  ///< reached / targets
   double explored_fraction = 0.0;   ///< targets whose grid cell holds a training sample
+  std::map<std::string, int> contacts;         ///< collided targets per first contact "body/other"
+  std::vector<Eigen::Vector3d> target_points;  ///< T
+  std::vector<bool> target_reached;           ///< per target of T
+  std::vector<Eigen::VectorXd> final_postures; ///< per target of T: where the arm ended [rad]
 };
+
+/// Whether some collision-free posture puts the tip on p_W (within 1 mm): IK with the
+/// hierarchical controller from `seeds` null-space targets (q_start first, then seeded random
+/// postures). Sect. 3.3.2 keeps in T only the targets "theoretically accessible without
+/// colliding" (for setup I it names those above the board); this is the scene-independent test.
+bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::ParameterSet& parameters,
+                                robot::CollisionWorld& world, const Eigen::Vector3d& p_W,
+                                const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random);
 
 /// Sect. 3.3.2: each target of the grid is approached from `q_start` (settle time 3 s).
 /// training_X: 3 x L training inputs (for the explored fraction).
@@ -60,6 +78,48 @@ struct PlanningResult {
 
 /// Sect. 8.3: `goals` random graph nodes (seeded) visited one after another from q_start; each
 /// planned with A* + spline and executed with the hierarchical controller.
+/// Eq. 4.1: the implicit scene model S = {x ∈ T : d(x, M) > 0.1 m}, with T the grid points
+/// within reach (obstacles not removed) and M the points of the arm (joint origins and the
+/// links between them, every 2 cm) in the postures the reachability evaluation ended in.
+struct SceneModelResult {
+  int workspace_points = 0;         ///< |T| (obstacle-independent)
+  int model_points = 0;             ///< |S|
+  int obstacle_points = 0;          ///< points of T inside an obstacle
+  int obstacle_points_enclosed = 0; ///< of those, in S
+  int free_points_in_model = 0;     ///< points of S outside every obstacle
+  double obstacle_enclosed_fraction = 0.0;
+  std::vector<Eigen::Vector3d> model;  ///< S
+};
+SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot::Scene& scene,
+                                    const robot::EvaluationGrid& grid, const std::vector<Eigen::VectorXd>& postures,
+                                    double distance = 0.1);
+
+/// Tab. 3.2: E_task and E_coll along straight trajectories per region. With the scene's
+/// evaluation trajectories (grouped left / right / interpolation) those are run; otherwise
+/// `per_area` random straight trajectories in the axis-aligned box around each of the first two
+/// areas' samples and 2·per_area in the box between them (the thesis: 25 / 25 / 50).
+struct TrajectoryRegionResult {
+  std::string name;
+  int trajectories = 0;
+  double e_task_mean_mm = 0.0;  ///< mean over trajectories of their mean tracking error
+  double e_task_std_mm = 0.0;
+  double e_task_max_mm = 0.0;   ///< largest error at any sample
+  int collisions = 0;           ///< E_coll: trajectories with a contact
+};
+struct TrajectoryResult {
+  std::vector<TrajectoryRegionResult> regions;
+  bool from_scene = false;  ///< the scene's trajectories (true) or drawn around the samples
+};
+/// A taught area as the trajectory evaluation needs it.
+struct EvaluatedArea {
+  Eigen::MatrixXd samples;  ///< 3 x L [m, W]
+  Eigen::VectorXd q_fixed;  ///< [rad]
+};
+TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robot::Scene& scene,
+                                      const robot::ParameterSet& parameters, const learning::Learner& map,
+                                      const std::vector<EvaluatedArea>& areas, int per_area, double speed,
+                                      std::uint64_t seed, const ProgressCallback& progress = {});
+
 PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Scene& scene,
                                 const robot::ParameterSet& parameters, const learning::Learner& map,
                                 const planning::Itm& graph, const Eigen::VectorXd& q_start, int goals,

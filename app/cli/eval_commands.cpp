@@ -9,6 +9,7 @@
 
 #include "app/cli/cli_support.hpp"
 #include "app/evaluation.hpp"
+#include "app/experiments.hpp"
 #include "app/session_reader.hpp"
 #include "planning/itm_file.hpp"
 #include "app/workflow.hpp"
@@ -168,6 +169,8 @@ struct EvalOptions {
   double spacing = 0.0;
   int goals = 10;
   std::uint64_t seed = 1;
+  int per_area = 25;
+  double speed = 0.1;
 };
 
 Json runReachable(const EvalOptions& options) {
@@ -191,7 +194,77 @@ Json runReachable(const EvalOptions& options) {
           {"tolerance_m", grid.tolerance},
           {"learner", options.learner},
           {"areas", session.q_fixed.size()},
-          {"samples", session.data.size()}};
+          {"samples", session.data.size()},
+          {"inaccessible", result.inaccessible},
+          {"contacts", result.contacts}};
+}
+
+// The session's areas with their samples, for the trajectory evaluation.
+std::vector<app::EvaluatedArea> sessionAreas(const Session& session) {
+  std::vector<app::EvaluatedArea> areas;
+  for (std::size_t k = 0; k < session.q_fixed.size(); ++k) {
+    std::vector<Eigen::Index> columns;
+    for (Eigen::Index l = 0; l < session.data.size(); ++l) {
+      if (session.data.areaOf(l) == static_cast<int>(k)) columns.push_back(l);
+    }
+    if (columns.empty()) continue;
+    app::EvaluatedArea area;
+    area.q_fixed = session.q_fixed[k];
+    area.samples.resize(3, static_cast<Eigen::Index>(columns.size()));
+    for (std::size_t i = 0; i < columns.size(); ++i) area.samples.col(static_cast<Eigen::Index>(i)) = session.data.X.col(columns[i]);
+    areas.push_back(area);
+  }
+  return areas;
+}
+
+Json runSceneModel(const EvalOptions& options) {
+  const Session session = loadSession(options.session);
+  const auto learner = learnMap(session, options.learner);
+  const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
+  const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
+  // Eq. 4.1 uses the postures the reachability evaluation ends in (Sect. 4.2.2).
+  const app::ReachableResult reachable =
+      app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
+                             session.data.X, [](double f) { reportProgress("eval scene-model", f); });
+  const app::SceneModelResult model = app::evaluateSceneModel(*session.model, session.scene_data, grid, reachable.final_postures);
+  return {{"workspace_points", model.workspace_points},
+          {"model_points", model.model_points},
+          {"obstacle_points", model.obstacle_points},
+          {"obstacle_points_enclosed", model.obstacle_points_enclosed},
+          {"obstacle_enclosed_fraction", model.obstacle_enclosed_fraction},
+          {"free_points_in_model", model.free_points_in_model},
+          {"reachable_fraction", reachable.reachable_fraction},
+          {"spacing_m", grid.spacing},
+          {"learner", options.learner},
+          {"areas", session.q_fixed.size()}};
+}
+
+Json trajectoryJson(const app::TrajectoryResult& result) {
+  Json regions = Json::array();
+  for (const auto& region : result.regions) {
+    regions.push_back({{"region", region.name},
+                       {"trajectories", region.trajectories},
+                       {"e_task_mean_mm", region.e_task_mean_mm},
+                       {"e_task_std_mm", region.e_task_std_mm},
+                       {"e_task_max_mm", region.e_task_max_mm},
+                       {"e_coll", region.collisions}});
+  }
+  return {{"source", result.from_scene ? "scene" : "drawn around the samples"}, {"regions", regions}};
+}
+
+Json runTrajectories(const EvalOptions& options) {
+  const Session session = loadSession(options.session);
+  const auto learner = learnMap(session, options.learner);
+  const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
+  const app::TrajectoryResult result =
+      app::evaluateTrajectories(*session.model, session.scene_data, parameters, *learner, sessionAreas(session),
+                                options.per_area, options.speed, options.seed,
+                                [](double f) { reportProgress("eval trajectories", f); });
+  Json out = trajectoryJson(result);
+  out["learner"] = options.learner;
+  out["speed_m_s"] = options.speed;
+  out["areas"] = session.q_fixed.size();
+  return out;
 }
 
 Json runPlan(const EvalOptions& options) {
@@ -224,6 +297,18 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   reachable->add_option("--learner", options->learner, "elm, oselm or llm");
   reachable->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(CLI::Range(0.01, 1.0));
   reachable->callback([&runner, options] { runner.select([options] { return runReachable(*options); }); });
+  CLI::App* scene_model = eval->add_subcommand("scene-model", "implicit scene model S of Eq. 4.1 and how much of the obstacles it encloses");
+  scene_model->add_option("--session", options->session, "session file written by teach")->required();
+  scene_model->add_option("--learner", options->learner, "elm, oselm or llm");
+  scene_model->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(CLI::Range(0.01, 1.0));
+  scene_model->callback([&runner, options] { runner.select([options] { return runSceneModel(*options); }); });
+  CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
+  trajectories->add_option("--session", options->session, "session file written by teach")->required();
+  trajectories->add_option("--learner", options->learner, "elm, oselm or llm");
+  trajectories->add_option("--per-area", options->per_area, "trajectories per training area without scene trajectories (interpolation: twice)")->check(CLI::Range(1, 10000));
+  trajectories->add_option("--speed", options->speed, "tip speed [m/s]")->check(CLI::Range(0.01, 1.0));
+  trajectories->add_option("--seed", options->seed, "random seed for drawn trajectories");
+  trajectories->callback([&runner, options] { runner.select([options] { return runTrajectories(*options); }); });
 
   CLI::App* plan = app.add_subcommand("plan", "plan to random ITM nodes and execute (Sect. 8.3)");
   plan->add_option("--session", options->session, "session file written by teach")->required();

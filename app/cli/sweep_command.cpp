@@ -1,0 +1,283 @@
+// `sweep`: the thesis' tables reproduced headless with the simulated tutor (issue #6, DESIGN §6):
+// Tab. 3.2 (setups A-D and D* with a third area: E_task and E_coll per region), Tab. 3.3
+// (setup I with 1/2/4/6/12 areas, setup II with 1/2/4/6/21: explored and reachable workspace,
+// plus the implicit scene model of Eq. 4.1), Tab. 3.4 (ELM ε × LLM η × sub-sampling s over
+// seeds: E_coll), Tab. 7.1 (ITM statistics for δ = 0, 2, 3, 4, 5) and Sect. 8.3 (9-DoF arm,
+// 8 areas, 100 planned goals). JSON on stdout, a markdown table with `--markdown F`, progress
+// on stderr.
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <set>
+#include <sstream>
+
+#include "app/cli/cli_support.hpp"
+#include "app/experiments.hpp"
+#include "robot/errors.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/scene.hpp"
+
+namespace flexirob::cli {
+namespace {
+
+struct SweepOptions {
+  std::vector<std::string> tables{"3.2", "3.3", "3.4", "7.1", "8.3"};
+  double spacing = 0.0;        ///< Tab. 3.3 grid spacing (0: the scene's, 5 cm)
+  double spacing_34 = 0.15;    ///< Tab. 3.4 grid spacing
+  int seeds = 10;              ///< Tab. 3.4 network initializations
+  int goals = 100;             ///< Sect. 8.3
+  int max_areas = 1000;        ///< Tab. 3.3 rows with more areas are skipped
+  std::string markdown;        ///< markdown table file, or empty
+  std::string json_out;        ///< JSON file, or empty
+};
+
+void log(const std::string& line) { std::cerr << "sweep: " << line << std::endl; }
+
+std::string fixed(double value, int digits) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(digits) << value;
+  return out.str();
+}
+
+struct Loaded {
+  robot::RobotModel model;
+  robot::Scene scene;
+};
+
+Loaded load(const std::string& scene_name) {
+  robot::Scene scene = robot::loadScene(scene_name);
+  robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(scene.robot.empty() ? "lwr4" : scene.robot), "");
+  return {std::move(model), std::move(scene)};
+}
+
+app::TeachSpec teachSpec(int areas) {
+  app::TeachSpec spec;
+  spec.areas = areas;
+  spec.seed = 1;
+  spec.workflow.background_learning = false;
+  return spec;
+}
+
+// Tab. 3.2: two areas (three for D*), the regions' E_task and E_coll.
+Json table32(std::ostream& md) {
+  const std::vector<std::tuple<std::string, std::string, int>> rows{
+      {"A", "setup_A", 2}, {"B", "setup_B", 2}, {"C", "setup_C", 2}, {"D", "setup_D", 2}, {"D*", "setup_D", 3}};
+  // Thesis Tab. 3.2 (left / right / interp.): E_task mm, E_coll.
+  const std::map<std::string, std::string> thesis{{"A", "2.0 / 1.6 / 1.9 mm; 0 / 0 / 0"},
+                                                  {"B", "1.8 / 2.0 / 1.9 mm; 0 / 0 / 0"},
+                                                  {"C", "2.0 / 1.6 / 1.7 mm; 0 / 0 / 0"},
+                                                  {"D", "1.9 / 1.6 / 1.6 mm; 0 / 0 / 16"},
+                                                  {"D*", "(Sect. 3.3.1: collisions gone with the third area)"}};
+  md << "\n## Tab. 3.2 — E_task and E_coll per region (ELM, tutor seed 1)\n\n"
+     << "| setup | areas | samples | E_task left / right / interp. [mm] (mean ± sd, max) | E_coll left / right / interp. | thesis |\n|---|---|---|---|---|---|\n";
+  Json out = Json::array();
+  for (const auto& [label, scene_name, areas] : rows) {
+    log("Tab. 3.2 setup " + label);
+    const Loaded loaded = load(scene_name);
+    const app::TaughtSystem taught = app::teachInSimulation(loaded.model, loaded.scene, teachSpec(areas));
+    const auto map = app::fitMap(taught.data, loaded.model.dof(), app::LearnerKind::kElm, {}, {});
+    const app::TrajectoryResult result = app::evaluateTrajectories(
+        loaded.model, loaded.scene, app::sceneParameters(loaded.scene), *map, app::evaluatedAreas(taught), 25, 0.1, 1,
+        [&](double f) { reportProgress("Tab. 3.2 " + label, f); });
+    std::string errors, collisions;
+    Json regions = Json::array();
+    for (const auto& region : result.regions) {
+      errors += (errors.empty() ? "" : " / ") + fixed(region.e_task_mean_mm, 1) + " ± " + fixed(region.e_task_std_mm, 1) +
+                " (" + fixed(region.e_task_max_mm, 1) + ")";
+      collisions += (collisions.empty() ? "" : " / ") + std::to_string(region.collisions) + "/" + std::to_string(region.trajectories);
+      regions.push_back({{"region", region.name}, {"trajectories", region.trajectories}, {"e_task_mean_mm", region.e_task_mean_mm},
+                         {"e_task_std_mm", region.e_task_std_mm}, {"e_task_max_mm", region.e_task_max_mm}, {"e_coll", region.collisions}});
+    }
+    md << "| " << label << " | " << taught.areas.size() << " | " << taught.data.size() << " | " << errors << " | " << collisions
+       << " | " << thesis.at(label) << " |\n";
+    out.push_back({{"setup", label}, {"scene", scene_name}, {"areas", taught.areas.size()}, {"samples", taught.data.size()},
+                   {"teaching_contacts", taught.tutor.collisions}, {"regions", regions}});
+  }
+  return out;
+}
+
+// Tab. 3.3 (and Eq. 4.1 on the same evaluation).
+Json table33(const SweepOptions& options, std::ostream& md) {
+  const std::vector<std::tuple<std::string, int, std::string>> rows{
+      {"setup_I", 1, "5.2 / 51.3"},  {"setup_I", 2, "11.0 / 47.3"},  {"setup_I", 4, "23.7 / 89.7"},
+      {"setup_I", 6, "31.0 / 93.0"}, {"setup_I", 12, "? / 97.1"},     {"setup_II", 1, "? / 60+"},
+      {"setup_II", 2, "?"},           {"setup_II", 4, "?"},            {"setup_II", 6, "? / 80+"},
+      {"setup_II", 21, "? / 94+"}};
+  md << "\n## Tab. 3.3 — reachable workspace (ELM, tutor seed 1), with the implicit scene model (Eq. 4.1)\n\n"
+     << "| setup | areas (taught / given up) | samples | targets in T | explored % | reachable % | collided targets | S encloses obstacle points | free points in S | thesis explored / reachable % | wall s |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  Json out = Json::array();
+  for (const auto& [scene_name, areas, thesis] : rows) {
+    if (areas > options.max_areas) continue;
+    log("Tab. 3.3 " + scene_name + " with " + std::to_string(areas) + " areas");
+    const auto start = std::chrono::steady_clock::now();
+    const Loaded loaded = load(scene_name);
+    const app::TaughtSystem taught = app::teachInSimulation(loaded.model, loaded.scene, teachSpec(areas));
+    const auto map = app::fitMap(taught.data, loaded.model.dof(), app::LearnerKind::kElm, {}, {});
+    const robot::EvaluationGrid grid = app::sceneGrid(loaded.scene, options.spacing);
+    const app::ReachableResult reachable =
+        app::evaluateReachable(loaded.model, loaded.scene, app::sceneParameters(loaded.scene), *map, taught.home, grid,
+                               taught.data.X, [&](double f) { reportProgress("Tab. 3.3 " + scene_name, f); });
+    const app::SceneModelResult model = app::evaluateSceneModel(loaded.model, loaded.scene, grid, reachable.final_postures);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    md << "| " << scene_name << " | " << taught.areas.size() << " / " << taught.areas_given_up << " | " << taught.data.size() << " | "
+       << reachable.targets << " | " << fixed(100.0 * reachable.explored_fraction, 1) << " | "
+       << fixed(100.0 * reachable.reachable_fraction, 1) << " | " << reachable.collided << " | " << model.obstacle_points_enclosed
+       << " / " << model.obstacle_points << " | " << model.free_points_in_model << " | " << thesis << " | " << fixed(wall, 0) << " |\n";
+    md.flush();
+    out.push_back({{"scene", scene_name}, {"areas_requested", areas}, {"areas", taught.areas.size()},
+                   {"areas_given_up", taught.areas_given_up}, {"samples", taught.data.size()},
+                   {"teaching_contacts", taught.tutor.collisions}, {"targets", reachable.targets},
+                   {"inaccessible", reachable.inaccessible}, {"reached", reachable.reached}, {"collided", reachable.collided},
+                   {"explored_fraction", reachable.explored_fraction}, {"reachable_fraction", reachable.reachable_fraction},
+                   {"scene_model_points", model.model_points}, {"obstacle_points", model.obstacle_points},
+                   {"obstacle_points_enclosed", model.obstacle_points_enclosed},
+                   {"free_points_in_model", model.free_points_in_model}, {"contacts", reachable.contacts},
+                   {"spacing_m", grid.spacing}, {"wall_s", wall}});
+  }
+  return out;
+}
+
+// Tab. 3.4: E_coll over ELM ε / LLM η × sub-sampling s, averaged over seeds. The thesis ran one
+// target trajectory through the workspace; here the collided targets of the reachability
+// evaluation on a coarse grid take its place (the same question: does the map generalize
+// collision-free beyond the data?).
+Json table34(const SweepOptions& options, std::ostream& md) {
+  md << "\n## Tab. 3.4 — E_coll (targets with a contact, mean over " << options.seeds << " seeds) and reachable %, 4 areas, grid "
+     << fixed(options.spacing_34, 2) << " m\n\n| setup | learner | parameter | s = 1 | s = 5 | s = 80 |\n|---|---|---|---|---|---|\n";
+  Json out = Json::array();
+  for (const std::string scene_name : {"setup_I", "setup_II"}) {
+    const Loaded loaded = load(scene_name);
+    log("Tab. 3.4 " + scene_name + ": teaching 4 areas");
+    const app::TaughtSystem taught = app::teachInSimulation(loaded.model, loaded.scene, teachSpec(4));
+    const robot::EvaluationGrid grid = app::sceneGrid(loaded.scene, options.spacing_34);
+    const robot::ParameterSet parameters = app::sceneParameters(loaded.scene);
+    for (const auto kind : {app::LearnerKind::kElm, app::LearnerKind::kLlm}) {
+      const bool elm = kind == app::LearnerKind::kElm;
+      for (const double value : elm ? std::vector<double>{1.0, 0.01, 0.0001} : std::vector<double>{1.0, 0.1, 0.01}) {
+        md << "| " << scene_name << " | " << (elm ? "ELM" : "LLM") << " | " << (elm ? "ε = " : "η = ") << value;
+        for (const int s : {1, 5, 80}) {
+          const learning::TrainingSet data = app::subsample(taught.data, s);
+          double collided = 0.0, reachable = 0.0;
+          for (int seed = 1; seed <= options.seeds; ++seed) {
+            learning::ElmParams elm_params;
+            learning::LlmParams llm_params;
+            elm_params.seed = llm_params.seed = static_cast<std::uint64_t>(seed);
+            if (elm) elm_params.epsilon = value; else llm_params.eta = value;
+            const auto map = app::fitMap(data, loaded.model.dof(), kind, elm_params, llm_params);
+            const app::ReachableResult result =
+                app::evaluateReachable(loaded.model, loaded.scene, parameters, *map, taught.home, grid, data.X);
+            collided += result.collided;
+            reachable += result.reachable_fraction;
+          }
+          collided /= options.seeds;
+          reachable /= options.seeds;
+          log("Tab. 3.4 " + scene_name + (elm ? " ELM eps=" : " LLM eta=") + fixed(value, 4) + " s=" + std::to_string(s) +
+              ": E_coll " + fixed(collided, 1) + ", reachable " + fixed(100 * reachable, 1) + " %");
+          md << " | " << fixed(collided, 1) << " (" << fixed(100.0 * reachable, 0) << " %)";
+          out.push_back({{"scene", scene_name}, {"learner", elm ? "elm" : "llm"}, {elm ? "epsilon" : "eta", value}, {"s", s},
+                         {"samples", data.size()}, {"seeds", options.seeds}, {"e_coll_mean", collided},
+                         {"reachable_fraction_mean", reachable}});
+        }
+        md << " |\n";
+        md.flush();
+      }
+    }
+  }
+  return out;
+}
+
+// Tab. 7.1: graph statistics of the ITM fed during the same teaching session, per δ.
+Json table71(std::ostream& md) {
+  md << "\n## Tab. 7.1 — ITM statistics per δ (setup_I, 4 areas, e_max = 0.10 m)\n\n"
+     << "| δ | nodes | edges | max ν | mean ν | max ε [m] | mean ε [m] |\n|---|---|---|---|---|---|---|\n";
+  Json out = Json::array();
+  const Loaded loaded = load("setup_I");
+  for (const int delta : {0, 2, 3, 4, 5}) {
+    log("Tab. 7.1 delta = " + std::to_string(delta));
+    app::TeachSpec spec = teachSpec(4);
+    spec.workflow.itm.delta = delta;
+    const app::TaughtSystem taught = app::teachInSimulation(loaded.model, loaded.scene, spec);
+    const planning::ItmStatistics stats = taught.itm->statistics();
+    const bool bootstrapped = stats.bootstrapped_nodes > 0;
+    md << "| " << delta << " | " << stats.nodes << " | " << stats.edges << " | " << stats.max_valence << " | "
+       << fixed(stats.mean_valence, 2) << " | " << (bootstrapped ? fixed(stats.bootstrap_error_max, 3) : "n.a.") << " | "
+       << (bootstrapped ? fixed(stats.bootstrap_error_mean, 4) : "n.a.") << " |\n";
+    out.push_back({{"delta", delta}, {"nodes", stats.nodes}, {"edges", stats.edges}, {"max_valence", stats.max_valence},
+                   {"mean_valence", stats.mean_valence}, {"bootstrapped_nodes", stats.bootstrapped_nodes},
+                   {"bootstrap_error_max", bootstrapped ? Json(stats.bootstrap_error_max) : Json()},
+                   {"bootstrap_error_mean", bootstrapped ? Json(stats.bootstrap_error_mean) : Json()},
+                   {"components", stats.components}});
+  }
+  md << "\nThesis (its own session, Fig. 7.5): δ = 0: 175 nodes, 330 edges, max ν 10, mean ν 3.76; δ = 2: 177 / 388 / 13 / 4.37, ε 0.026 / 0.0208.\n";
+  return out;
+}
+
+// Sect. 8.3: the 9-DoF arm, 8 areas, planned paths to random graph nodes.
+Json section83(const SweepOptions& options, std::ostream& md) {
+  log("Sect. 8.3: arm9, 8 areas");
+  const Loaded loaded = load("arm9_areas");
+  const app::TaughtSystem taught = app::teachInSimulation(loaded.model, loaded.scene, teachSpec(8));
+  const auto map = app::fitMap(taught.data, loaded.model.dof(), app::LearnerKind::kElm, {}, {});
+  const Eigen::VectorXd start = taught.areas.empty() ? taught.home : taught.areas.front().q_fixed;
+  const app::PlanningResult result =
+      app::evaluatePlanning(loaded.model, loaded.scene, app::sceneParameters(loaded.scene), *map, *taught.itm, start,
+                            options.goals, 1, [](double f) { reportProgress("Sect. 8.3", f); });
+  md << "\n## Sect. 8.3 — 9-DoF arm (arm9_areas), 8 areas, " << options.goals << " goals\n\n"
+     << "| areas (taught / given up) | ITM nodes | paths found | collision-free | within 1 cm | mean plan ms | thesis |\n|---|---|---|---|---|---|---|\n"
+     << "| " << taught.areas.size() << " / " << taught.areas_given_up << " | " << taught.itm->nodeCount() << " | " << result.found
+     << " | " << result.collision_free << " | " << result.reached_1cm << " | " << fixed(result.mean_plan_ms, 2)
+     << " | 99/100 collision-free |\n";
+  return {{"areas", taught.areas.size()}, {"areas_given_up", taught.areas_given_up}, {"teaching_contacts", taught.tutor.collisions},
+          {"itm_nodes", taught.itm->nodeCount()}, {"goals", result.goals}, {"found", result.found},
+          {"collision_free", result.collision_free}, {"reached_1cm", result.reached_1cm}, {"mean_plan_ms", result.mean_plan_ms}};
+}
+
+Json runSweep(const SweepOptions& options) {
+  const std::set<std::string> known{"3.2", "3.3", "3.4", "7.1", "8.3"};
+  for (const auto& table : options.tables) {
+    if (known.count(table) == 0) throw InputError("--tables: unknown table '" + table + "' (3.2, 3.3, 3.4, 7.1, 8.3)");
+  }
+  std::ofstream file;
+  if (!options.markdown.empty()) {
+    file.open(options.markdown);
+    if (!file) throw InputError("--markdown: cannot write '" + options.markdown + "'");
+  }
+  std::ostringstream discard;
+  std::ostream& md = options.markdown.empty() ? static_cast<std::ostream&>(discard) : file;
+  md << "# flexirob-cli sweep\n";
+  Json out = Json::object();
+  const auto wanted = [&](const std::string& t) { return std::find(options.tables.begin(), options.tables.end(), t) != options.tables.end(); };
+  if (wanted("3.2")) out["tab_3_2"] = table32(md);
+  if (wanted("3.3")) out["tab_3_3"] = table33(options, md);
+  if (wanted("3.4")) out["tab_3_4"] = table34(options, md);
+  if (wanted("7.1")) out["tab_7_1"] = table71(md);
+  if (wanted("8.3")) out["sect_8_3"] = section83(options, md);
+  if (!options.json_out.empty()) {
+    std::ofstream json(options.json_out);
+    if (!json) throw InputError("--json: cannot write '" + options.json_out + "'");
+    json << out.dump(2) << "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
+void registerSweepCommand(CLI::App& app, CommandRunner& runner) {
+  auto options = std::make_shared<SweepOptions>();
+  CLI::App* sweep = app.add_subcommand("sweep", "reproduce the thesis' tables with the simulated tutor (Tab. 3.2, 3.3, 3.4, 7.1, Sect. 8.3)");
+  sweep->add_option("--tables", options->tables, "subset of 3.2 3.3 3.4 7.1 8.3")->delimiter(',');
+  sweep->add_option("--spacing", options->spacing, "Tab. 3.3 grid spacing [m] (default: the scene's)")->check(CLI::Range(0.01, 1.0));
+  sweep->add_option("--spacing-34", options->spacing_34, "Tab. 3.4 grid spacing [m]")->check(CLI::Range(0.01, 1.0));
+  sweep->add_option("--seeds", options->seeds, "Tab. 3.4 network initializations")->check(CLI::Range(1, 100));
+  sweep->add_option("--goals", options->goals, "Sect. 8.3 goals")->check(CLI::Range(1, 10000));
+  sweep->add_option("--max-areas", options->max_areas, "skip Tab. 3.3 rows with more areas")->check(CLI::Range(1, 1000));
+  sweep->add_option("--markdown", options->markdown, "write the tables as markdown to this file");
+  sweep->add_option("--json", options->json_out, "write the JSON result to this file as well");
+  sweep->callback([&runner, options] { runner.select([options] { return runSweep(*options); }); });
+}
+
+}  // namespace flexirob::cli

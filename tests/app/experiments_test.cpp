@@ -1,0 +1,131 @@
+// Pieces of the thesis' experiments: sub-sampling (Tab. 3.4), the accessible targets of
+// Sect. 3.3.2, the implicit scene model (Eq. 4.1) and the trajectory evaluation (Tab. 3.2).
+#include <gtest/gtest.h>
+
+#include "app/evaluation.hpp"
+#include "app/experiments.hpp"
+#include "learning/elm.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/errors.hpp"
+#include "robot/resources.hpp"
+
+namespace flexirob::app {
+namespace {
+
+const robot::RobotModel& lwr4() {
+  static const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  return model;
+}
+
+Eigen::VectorXd ready() {
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(7);
+  q[1] = 0.6;
+  q[3] = -1.6;
+  q[5] = 0.9;
+  return q;
+}
+
+std::unique_ptr<learning::Learner> constantMap() {
+  learning::TrainingSet data;
+  data.X.resize(3, 8);
+  data.Y.resize(7, 8);
+  for (int l = 0; l < 8; ++l) {
+    data.X.col(l) = Eigen::Vector3d(-0.5 + 0.1 * (l % 2), -0.3 + 0.2 * ((l / 2) % 2), 0.2 + 0.2 * (l / 4));
+    data.Y.col(l) = ready();
+  }
+  auto elm = std::make_unique<learning::Elm>(3, 7);
+  elm->fit(data);
+  return elm;
+}
+
+TEST(Experiments, SubsamplingKeepsEverySthSampleOfEachAreaStartingWithItsFirst) {
+  learning::TrainingSet data;
+  data.X.resize(3, 12);
+  data.Y.resize(1, 12);
+  for (int l = 0; l < 12; ++l) {
+    data.X.col(l) = Eigen::Vector3d::Constant(l);
+    data.Y(0, l) = l;
+    data.area.push_back(l < 7 ? 0 : 1);  // area 0: samples 0..6, area 1: samples 7..11
+  }
+  const learning::TrainingSet out = subsample(data, 3);
+  // Area 0 keeps 0, 3, 6; area 1 keeps 7, 10.
+  ASSERT_EQ(out.size(), 5);
+  const std::vector<double> expected{0, 3, 6, 7, 10};
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(out.Y(0, i), expected[static_cast<std::size_t>(i)]);
+  EXPECT_EQ(out.area, (std::vector<int>{0, 0, 0, 1, 1}));
+  EXPECT_EQ(subsample(data, 1).size(), 12);
+  EXPECT_THROW(subsample(data, 0), InputError);
+}
+
+TEST(Experiments, TargetsAboveTheBoardOfSetupIAreNotAccessibleButTargetsInFrontAre) {
+  const robot::Scene scene = robot::loadScene("setup_I");
+  const robot::ParameterSet parameters = sceneParameters(scene);
+  robot::CollisionWorld world(lwr4(), scene);
+  learning::UniformRandom random(7);
+  // In front of the robot, in free space.
+  EXPECT_TRUE(accessibleWithoutCollision(lwr4(), parameters, world, Eigen::Vector3d(-0.5, -0.1, 0.3), ready(), 8, random));
+  // Just above the far end of the board (z = 0.56 m top face): the arm would have to pass
+  // through the board or the box to put its tip there (Sect. 3.3.2 removes these from T_I).
+  EXPECT_FALSE(accessibleWithoutCollision(lwr4(), parameters, world, Eigen::Vector3d(-0.6, 0.4, 0.6), ready(), 8, random));
+}
+
+TEST(Experiments, SceneModelEnclosesAnObstacleTheArmNeverComesNear) {
+  // The arm rests in the ready posture (tip about 0.5 m in front); a box far to the side and
+  // one around the tip. Eq. 4.1: S holds the grid points farther than 0.1 m from the arm.
+  robot::Scene scene;
+  robot::Obstacle far;
+  far.name = "far";
+  far.shape = robot::Obstacle::Shape::kBox;
+  far.size = Eigen::Vector3d(0.2, 0.2, 0.2);
+  far.X_WO = Eigen::Isometry3d(Eigen::Translation3d(-0.3, -0.5, 0.2));
+  scene.obstacles.push_back(far);
+  robot::Obstacle at_tip = far;
+  at_tip.name = "at_tip";
+  at_tip.X_WO = Eigen::Isometry3d(Eigen::Translation3d(robot::tipPose(lwr4(), ready()).translation()));
+  scene.obstacles.push_back(at_tip);
+  robot::EvaluationGrid grid;
+  grid.spacing = 0.05;
+  const SceneModelResult result = evaluateSceneModel(lwr4(), scene, grid, {ready()});
+  ASSERT_GT(result.obstacle_points, 0);
+  // Every point of the far box is in S; no point of the box at the tip is.
+  int far_points = 0;
+  for (const auto& p : grid.points()) far_points += robot::obstacleContains(far, p) ? 1 : 0;
+  EXPECT_EQ(result.obstacle_points_enclosed, far_points);
+  for (const auto& p : result.model) EXPECT_FALSE(robot::obstacleContains(at_tip, p));
+  EXPECT_GT(result.free_points_in_model, 0);
+  // With no posture at all, S is the whole workspace.
+  EXPECT_EQ(evaluateSceneModel(lwr4(), scene, grid, {}).model_points, result.workspace_points);
+}
+
+TEST(Experiments, TrajectoriesBetweenTwoAreasAreAccurateAndCountedPerRegion) {
+  robot::Scene empty;
+  const robot::ParameterSet parameters = sceneParameters(empty);
+  const auto map = constantMap();
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  // Two areas of samples 0.3 m apart along y, the ready posture taught in both.
+  std::vector<EvaluatedArea> areas(2);
+  for (int k = 0; k < 2; ++k) {
+    areas[static_cast<std::size_t>(k)].q_fixed = ready();
+    Eigen::MatrixXd& samples = areas[static_cast<std::size_t>(k)].samples;
+    samples.resize(3, 8);
+    for (int l = 0; l < 8; ++l) {
+      samples.col(l) = tip + Eigen::Vector3d(0.05 * ((l & 1) - 0.5), (k == 0 ? 0.15 : -0.15) + 0.05 * (((l >> 1) & 1) - 0.5),
+                                             0.05 * (((l >> 2) & 1) - 0.5));
+    }
+  }
+  const TrajectoryResult result = evaluateTrajectories(lwr4(), empty, parameters, *map, areas, 2, 0.1, 1);
+  ASSERT_EQ(result.regions.size(), 3u);
+  EXPECT_FALSE(result.from_scene);
+  EXPECT_EQ(result.regions[0].trajectories, 2);
+  EXPECT_EQ(result.regions[1].trajectories, 2);
+  EXPECT_EQ(result.regions[2].trajectories, 4);
+  for (const auto& region : result.regions) {
+    EXPECT_EQ(region.collisions, 0);
+    // At 0.1 m/s the hierarchical controller lags by millimetres at most (Tab. 3.2: ~2 mm).
+    EXPECT_LT(region.e_task_mean_mm, 5.0) << region.name;
+    EXPECT_GT(region.e_task_max_mm, 0.0) << region.name;
+  }
+}
+
+}  // namespace
+}  // namespace flexirob::app
