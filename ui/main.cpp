@@ -7,6 +7,7 @@
 
 #include "ui/live_teaching.hpp"
 #include "ui/main_window.hpp"
+#include "ui/review_window.hpp"
 
 int main(int argc, char** argv) {
   // Depth buffer and multisampling for the 3D view; set before any GL context exists.
@@ -50,6 +51,9 @@ int main(int argc, char** argv) {
   parser.addOption(scene);
   parser.addOption(screenshot);
   parser.addOption(quit_after);
+  const QCommandLineOption review(QStringLiteral("review"),
+                                  QStringLiteral("Review a session recording F in the review window."), QStringLiteral("F"));
+  parser.addOption(review);
   parser.process(app);
 
   int quit_ms = -1;
@@ -63,6 +67,24 @@ int main(int argc, char** argv) {
     }
   } else if (parser.isSet(screenshot)) {
     quit_ms = 1500;
+  }
+
+  if (parser.isSet(review)) {
+    flexirob::ui::ReviewWindow review_window;
+    if (!review_window.open(parser.value(review).toStdString())) {
+      std::fprintf(stderr, "error: %s\n", qPrintable(review_window.errorString()));
+      return 2;
+    }
+    review_window.show();
+    if (quit_ms >= 0) {
+      QTimer::singleShot(quit_ms, &review_window, [&] {
+        if (parser.isSet(screenshot) && !review_window.grab().save(parser.value(screenshot))) {
+          std::fprintf(stderr, "error: cannot write screenshot '%s'\n", qPrintable(parser.value(screenshot)));
+        }
+        QApplication::quit();
+      });
+    }
+    return QApplication::exec();
   }
 
   flexirob::ui::MainWindow::Options window_options;

@@ -1,0 +1,195 @@
+// The review window replays a session recording: stepping frames moves the arm to the recorded
+// posture, the timeline shows the stage bands, playback runs forwards and backwards, and a file
+// that is no recording is refused with its reason.
+#include <QImage>
+#include <QLineSeries>
+#include <QTemporaryDir>
+#include <QtTest>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "app/session_reader.hpp"
+#include "app/session_recorder.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "ui/plot_panel.hpp"
+#include "ui/review_window.hpp"
+
+using namespace flexirob;
+
+namespace {
+
+constexpr double kDuration = 6.0;  // [s] of recorded states at 1 kHz
+constexpr double kJointAmplitude = 0.6;
+
+// Joint 1 swings sinusoidally (period 2 s) about the middle posture; everything else rests.
+Eigen::VectorXd postureAt(const robot::RobotModel& model, double t) {
+  Eigen::VectorXd q = model.midPosture();
+  q[0] += kJointAmplitude * std::sin(M_PI * t);
+  return q;
+}
+
+// A recording as the workflow writes one: stages with sub-stages, triggers and buttons, a
+// training area with samples, a teach-in trajectory and the robot's states at 1 kHz.
+void writeRecording(const std::filesystem::path& file) {
+  const auto path = resolveRobotPath("lwr4");
+  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(path);
+  app::SessionMetadata meta;
+  meta.robot_name = "lwr4";
+  std::ostringstream urdf;
+  urdf << std::ifstream(path).rdbuf();
+  meta.robot_urdf = urdf.str();
+  meta.tip_link = model.tipLink();
+  meta.software_version = "test";
+  app::SessionRecorder recorder(file, meta);
+  recorder.recordStage({0.0, "IDLE", ""});
+  recorder.recordStage({1.0, "CONFIGURATION", "APPROACHING"});
+  recorder.recordStage({2.5, "CONFIGURATION", "RECORDING"});
+  recorder.recordStage({4.0, "PROGRAMMING", "TEACH-IN"});
+  recorder.recordButton(0.9, "start_configuration");
+  recorder.recordTrigger(2.5, "on_converged");
+  app::AreaRecord area;
+  area.area = 0;
+  area.time = 2.5;
+  area.x_init = Eigen::Vector3d(-0.5, 0.0, 0.5);
+  area.q_fixed = model.midPosture();
+  recorder.recordArea(area);
+  for (int k = 0; k < 20; ++k) {
+    recorder.recordSample({2.5 + 0.05 * k, 0, Eigen::Vector3d(-0.5, 0.01 * k, 0.5), model.midPosture()});
+  }
+  robot::Kinematics kinematics(model);
+  for (int i = 0; i <= static_cast<int>(kDuration * 1000); ++i) {
+    const double t = i * 1e-3;
+    const Eigen::VectorXd q = postureAt(model, t);
+    kinematics.update(q);
+    app::StateRecord state;
+    state.time = t;
+    state.dof = static_cast<std::int32_t>(model.dof());
+    for (int j = 0; j < model.dof(); ++j) {
+      state.q[static_cast<std::size_t>(j)] = q[j];
+      state.q_cmd[static_cast<std::size_t>(j)] = q[j];
+    }
+    const Eigen::Vector3d p = kinematics.p_WT();
+    state.p_WT = {p.x(), p.y(), p.z()};
+    while (!recorder.recordState(state)) QThread::msleep(1);
+  }
+  recorder.close();
+}
+
+}  // namespace
+
+class ReviewWindowTest : public QObject {
+  Q_OBJECT
+
+ private Q_SLOTS:
+  void initTestCase() {
+    QVERIFY(dir_.isValid());
+    file_ = std::filesystem::path(dir_.path().toStdString()) / "session.db";
+    writeRecording(file_);
+  }
+
+  void opensARecordingWithItsStagesAndPlots() {
+    ui::ReviewWindow window;
+    QVERIFY2(window.open(file_), qPrintable(window.errorString()));
+    QCOMPARE(window.reader()->stateCount(), static_cast<std::int64_t>(kDuration * 1000) + 1);
+    QCOMPARE(window.timeline()->t0(), 0.0);
+    QCOMPARE(window.timeline()->t1(), kDuration);
+    QCOMPARE(window.stageAt(3.0), std::string("CONFIGURATION / RECORDING"));
+    QCOMPARE(window.stageAt(5.0), std::string("PROGRAMMING / TEACH-IN"));
+    QVERIFY(window.plots()->sampleCount() > 1000);
+    // Joint 1 plotted within its limits: at t = 0.5 s the swing is at its top.
+    const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+    const auto& limits = model.joints()[0].limits;
+    const double expected = (model.midPosture()[0] + kJointAmplitude - limits.lower) / (limits.upper - limits.lower);
+    const QLineSeries* joint1 = window.plots()->jointPlot()->series(2);
+    double at_half = std::nan("");
+    for (const QPointF& p : joint1->points()) {
+      if (std::abs(p.x() - 0.5) < 0.004) at_half = p.y();
+    }
+    QVERIFY(std::abs(at_half - expected) < 1e-3);
+  }
+
+  void steppingFramesMovesTheArmToTheRecordedPosture() {
+    ui::ReviewWindow window;
+    QVERIFY(window.open(file_));
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+    window.setTime(1.0);
+    const Eigen::VectorXd before = window.shownPosture();
+    QVERIFY((before - postureAt(model, 1.0)).norm() < 1e-9);
+    const osg::Matrixd link2_before = window.world().robot()->body(2)->getMatrix();
+    window.stepFrames(6);  // 0.2 s later
+    const double t = 1.0 + 6 * ui::ReviewWindow::kFrameSeconds;
+    QVERIFY(std::abs(window.time() - t) < 1e-9);
+    // The state at or before t: recorded every millisecond.
+    const Eigen::VectorXd expected = postureAt(model, std::floor(t * 1000 + 1e-6) * 1e-3);
+    QVERIFY((window.shownPosture() - expected).norm() < 1e-9);
+    QVERIFY(std::abs(window.shownPosture()[0] - before[0]) > 0.1);
+    QVERIFY(!(window.world().robot()->body(2)->getMatrix() == link2_before));
+    window.stepFrames(-6);
+    QVERIFY((window.shownPosture() - before).norm() < 1e-9);
+    // The plots' cursor follows.
+    QVERIFY(std::abs(window.plots()->cursorTime() - 1.0) < 1e-9);
+  }
+
+  void timelineScreenshotShowsTheStageBandsAndTheCursor() {
+    ui::ReviewWindow window;
+    QVERIFY(window.open(file_));
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    window.setTime(5.5);
+    QApplication::processEvents();
+    const QImage strip = window.timeline()->grab().toImage();
+    // Just inside the bands' top edge (14 px from the top), above their centred labels.
+    const int y = static_cast<int>(17 * strip.devicePixelRatio());
+    for (const auto& [time, label] : std::vector<std::pair<double, std::string>>{
+             {0.5, "IDLE"}, {1.7, "CONFIGURATION / APPROACHING"}, {3.2, "CONFIGURATION / RECORDING"}, {4.6, "PROGRAMMING / TEACH-IN"}}) {
+      const int x = static_cast<int>(window.timeline()->xOf(time) * strip.devicePixelRatio());
+      QCOMPARE(strip.pixelColor(x, y).rgb(), ui::stageColor(label).rgb());
+    }
+    const int cursor_x = static_cast<int>(std::round(window.timeline()->xOf(5.5) * strip.devicePixelRatio()));
+    const QColor cursor = strip.pixelColor(cursor_x, y);
+    QVERIFY(cursor.red() > 150 && cursor.green() < 80);
+    if (!qEnvironmentVariableIsEmpty("FLEXIROB_REVIEW_SCREENSHOT")) {
+      window.grab().save(qEnvironmentVariable("FLEXIROB_REVIEW_SCREENSHOT"));
+    }
+  }
+
+  void playsForwardsAndBackwards() {
+    ui::ReviewWindow window;
+    QVERIFY(window.open(file_));
+    window.setTime(3.0);
+    window.setSpeed(2.0);
+    window.play();
+    QTest::qWait(300);
+    window.pause();
+    QVERIFY(window.time() > 3.2);
+    const double reached = window.time();
+    window.setSpeed(-4.0);
+    window.play();
+    QTest::qWait(300);
+    window.pause();
+    QVERIFY(window.time() < reached - 0.4);
+  }
+
+  void refusesAFileThatIsNoRecordingAndKeepsTheOpenOne() {
+    ui::ReviewWindow window;
+    QVERIFY(window.open(file_));
+    const auto junk = std::filesystem::path(dir_.path().toStdString()) / "junk.db";
+    std::ofstream(junk) << "not a database";
+    QVERIFY(!window.open(junk));
+    QVERIFY(!window.errorString().isEmpty());
+    QVERIFY(window.isOpen());
+    QCOMPARE(window.reader()->file(), file_);
+  }
+
+ private:
+  QTemporaryDir dir_;
+  std::filesystem::path file_;
+};
+
+QTEST_MAIN(ReviewWindowTest)
+#include "review_window_test.moc"

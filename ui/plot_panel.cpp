@@ -1,0 +1,230 @@
+#include "ui/plot_panel.hpp"
+
+#include <QChart>
+#include <QLegend>
+#include <QLegendMarker>
+#include <QLineSeries>
+#include <QMouseEvent>
+#include <QPen>
+#include <QValueAxis>
+#include <QVBoxLayout>
+
+#include <algorithm>
+
+namespace flexirob::ui {
+
+namespace {
+
+// Joint colours: distinct hues in joint order (Qt's own chart themes cycle five).
+QColor jointColor(int joint) {
+  static const QColor kColors[] = {QColor(0, 114, 178),  QColor(230, 159, 0),  QColor(0, 158, 115),
+                                   QColor(204, 121, 167), QColor(213, 94, 0),   QColor(86, 180, 233),
+                                   QColor(140, 90, 40),   QColor(100, 50, 150), QColor(60, 60, 60)};
+  return kColors[joint % 9];
+}
+
+}  // namespace
+
+// --- TimePlot -------------------------------------------------------------------------------
+
+TimePlot::TimePlot(const QString& title, const QString& value_label, QWidget* parent)
+    : QChartView(parent), chart_(new QChart) {
+  chart_->setTitle(title);
+  chart_->legend()->setAlignment(Qt::AlignRight);
+  chart_->setMargins(QMargins(4, 2, 4, 2));
+  chart_->setAnimationOptions(QChart::NoAnimation);
+  time_axis_ = new QValueAxis;
+  time_axis_->setTitleText(QStringLiteral("t [s]"));
+  time_axis_->setLabelFormat(QStringLiteral("%.1f"));
+  value_axis_ = new QValueAxis;
+  value_axis_->setTitleText(value_label);
+  chart_->addAxis(time_axis_, Qt::AlignBottom);
+  chart_->addAxis(value_axis_, Qt::AlignLeft);
+  cursor_ = new QLineSeries;
+  cursor_->setName(QStringLiteral("cursor"));
+  cursor_->setPen(QPen(QColor(200, 30, 30), 1.5, Qt::DashLine));
+  chart_->addSeries(cursor_);
+  cursor_->attachAxis(time_axis_);
+  cursor_->attachAxis(value_axis_);
+  chart_->legend()->markers(cursor_).front()->setVisible(false);
+  setChart(chart_);
+  setRenderHint(QPainter::Antialiasing, false);  // thousands of points stay cheap to draw
+  setMinimumHeight(140);
+  setTimeRange(0.0, 1.0);
+  value_axis_->setRange(0.0, 1.0);
+}
+
+int TimePlot::addSeries(const QString& name, const QColor& color, Qt::PenStyle style, qreal width) {
+  auto* series = new QLineSeries;
+  series->setName(name);
+  series->setPen(QPen(color, width, style));
+  series->setUseOpenGL(false);
+  chart_->addSeries(series);
+  series->attachAxis(time_axis_);
+  series->attachAxis(value_axis_);
+  series_.push_back(series);
+  return static_cast<int>(series_.size()) - 1;
+}
+
+void TimePlot::setSeriesData(int series, const QList<QPointF>& points) {
+  series_.at(static_cast<std::size_t>(series))->replace(points);
+  if (!fixed_values_) autoscale();
+}
+
+void TimePlot::setSeriesName(int series, const QString& name) { series_.at(static_cast<std::size_t>(series))->setName(name); }
+
+void TimePlot::setTimeRange(double t0, double t1) {
+  if (!(t1 > t0)) t1 = t0 + 1e-3;
+  time_axis_->setRange(t0, t1);
+  updateCursorLine();
+}
+
+void TimePlot::setValueRange(double lower, double upper) {
+  fixed_values_ = true;
+  value_axis_->setRange(lower, upper);
+  updateCursorLine();
+}
+
+void TimePlot::autoscale() {
+  double lower = std::numeric_limits<double>::infinity();
+  double upper = -lower;
+  for (const QLineSeries* series : series_) {
+    for (const QPointF& p : series->points()) {
+      lower = std::min(lower, p.y());
+      upper = std::max(upper, p.y());
+    }
+  }
+  if (!(upper >= lower)) return;
+  const double margin = std::max(0.05 * (upper - lower), 1e-9 + 1e-3 * std::abs(upper));
+  value_axis_->setRange(lower - margin, upper + margin);
+  updateCursorLine();
+}
+
+void TimePlot::setCursorTime(double time) {
+  cursor_time_ = time;
+  updateCursorLine();
+}
+
+void TimePlot::updateCursorLine() {
+  cursor_->replace(QList<QPointF>{{cursor_time_, value_axis_->min()}, {cursor_time_, value_axis_->max()}});
+}
+
+double TimePlot::timeAt(double widget_x) const {
+  const QPointF scene = mapToScene(QPoint(static_cast<int>(widget_x), height() / 2));
+  const QPointF value = chart_->mapToValue(chart_->mapFromScene(scene), cursor_);
+  return std::clamp(value.x(), time_axis_->min(), time_axis_->max());
+}
+
+void TimePlot::mousePressEvent(QMouseEvent* event) {
+  if (event->button() == Qt::LeftButton) Q_EMIT cursorRequested(timeAt(event->position().x()));
+  QChartView::mousePressEvent(event);
+}
+
+void TimePlot::mouseMoveEvent(QMouseEvent* event) {
+  if ((event->buttons() & Qt::LeftButton) != 0) Q_EMIT cursorRequested(timeAt(event->position().x()));
+  QChartView::mouseMoveEvent(event);
+}
+
+// --- PlotPanel ------------------------------------------------------------------------------
+
+PlotPanel::PlotPanel(QWidget* parent) : QWidget(parent) {
+  auto* layout = new QVBoxLayout(this);
+  layout->setContentsMargins(0, 0, 0, 0);
+  task_error_ = new TimePlot(QStringLiteral("Task error"), QStringLiteral("[m]"), this);
+  task_error_->addSeries(QStringLiteral("|x - x_des|"), QColor(0, 114, 178));
+  // Joint values scaled to their hard limits: every joint shares one axis, the limits are the
+  // lines at 0 and 1 (Sect. 4.3.4).
+  joints_ = new TimePlot(QStringLiteral("Joints within their limits (0 = lower, 1 = upper)"), QString(), this);
+  joints_->setValueRange(-0.05, 1.05);
+  cycles_ = new TimePlot(QStringLiteral("Control cycle"), QStringLiteral("[µs]"), this);
+  compute_series_ = cycles_->addSeries(QStringLiteral("compute"), QColor(0, 158, 115));
+  max_compute_series_ = cycles_->addSeries(QStringLiteral("max compute"), QColor(213, 94, 0), Qt::DotLine);
+  for (TimePlot* plot : {task_error_, joints_, cycles_}) {
+    layout->addWidget(plot, 1);
+    connect(plot, &TimePlot::cursorRequested, this, [this](double time) {
+      setCursorTime(time);
+      Q_EMIT cursorTimeChanged(time);
+    });
+  }
+}
+
+void PlotPanel::setJoints(const std::vector<std::string>& names, const Eigen::VectorXd& lower,
+                          const Eigen::VectorXd& upper) {
+  joint_names_ = names;
+  lower_ = lower;
+  upper_ = upper;
+  samples_.clear();
+  // The joint chart's series are rebuilt: limit lines first, then one per joint.
+  auto* fresh = new TimePlot(QStringLiteral("Joints within their limits (0 = lower, 1 = upper)"), QString(), this);
+  fresh->setValueRange(-0.05, 1.05);
+  fresh->addSeries(QStringLiteral("limits"), QColor(200, 30, 30), Qt::DashLine, 1.0);
+  fresh->addSeries(QString(), QColor(200, 30, 30), Qt::DashLine, 1.0);
+  for (std::size_t j = 0; j < names.size(); ++j) fresh->addSeries(QString::fromStdString(names[j]), jointColor(static_cast<int>(j)));
+  // Only the first limit line is named in the legend.
+  static_cast<QVBoxLayout*>(layout())->replaceWidget(joints_, fresh);
+  joints_->deleteLater();
+  joints_ = fresh;
+  connect(joints_, &TimePlot::cursorRequested, this, [this](double time) {
+    setCursorTime(time);
+    Q_EMIT cursorTimeChanged(time);
+  });
+  joints_->setCursorTime(cursor_time_);
+  rebuild();
+}
+
+void PlotPanel::setSamples(const std::vector<PlotSample>& samples) {
+  live_ = false;
+  samples_.assign(samples.begin(), samples.end());
+  rebuild();
+}
+
+void PlotPanel::append(const PlotSample& sample) {
+  live_ = true;
+  samples_.push_back(sample);
+  while (!samples_.empty() && samples_.front().time < sample.time - window_seconds_) samples_.pop_front();
+  rebuild();
+}
+
+void PlotPanel::setWindowSeconds(double seconds) { window_seconds_ = std::max(0.5, seconds); }
+
+void PlotPanel::setCursorTime(double time) {
+  cursor_time_ = time;
+  for (TimePlot* plot : {task_error_, joints_, cycles_}) plot->setCursorTime(time);
+}
+
+void PlotPanel::rebuild() {
+  QList<QPointF> error;
+  QList<QPointF> compute;
+  QList<QPointF> max_compute;
+  const auto joints = static_cast<int>(joint_names_.size());
+  std::vector<QList<QPointF>> normalized(static_cast<std::size_t>(joints));
+  double misses = std::numeric_limits<double>::quiet_NaN();
+  for (const PlotSample& s : samples_) {
+    if (std::isfinite(s.task_error)) error.append({s.time, s.task_error});
+    if (std::isfinite(s.compute_us)) compute.append({s.time, s.compute_us});
+    if (std::isfinite(s.max_compute_us)) max_compute.append({s.time, s.max_compute_us});
+    if (std::isfinite(s.deadline_misses)) misses = s.deadline_misses;
+    if (s.q.size() != joints) continue;
+    for (int j = 0; j < joints; ++j) {
+      const double range = upper_[j] - lower_[j];
+      normalized[static_cast<std::size_t>(j)].append({s.time, range > 0.0 ? (s.q[j] - lower_[j]) / range : 0.5});
+    }
+  }
+  double t0 = samples_.empty() ? 0.0 : samples_.front().time;
+  const double t1 = samples_.empty() ? 1.0 : samples_.back().time;
+  if (live_) t0 = std::max(t0, t1 - window_seconds_);
+  task_error_->setSeriesData(0, error);
+  cycles_->setSeriesData(compute_series_, compute);
+  cycles_->setSeriesData(max_compute_series_, max_compute);
+  cycles_->setSeriesName(compute_series_, std::isfinite(misses)
+                                              ? QStringLiteral("compute (%1 deadline misses)").arg(static_cast<qint64>(misses))
+                                              : QStringLiteral("compute"));
+  if (joints_->seriesCount() == joints + 2) {
+    joints_->setSeriesData(0, {{t0, 0.0}, {t1, 0.0}});
+    joints_->setSeriesData(1, {{t0, 1.0}, {t1, 1.0}});
+    for (int j = 0; j < joints; ++j) joints_->setSeriesData(j + 2, normalized[static_cast<std::size_t>(j)]);
+  }
+  for (TimePlot* plot : {task_error_, joints_, cycles_}) plot->setTimeRange(t0, t1);
+}
+
+}  // namespace flexirob::ui

@@ -1,0 +1,123 @@
+#pragma once
+// Plots of the running (or reviewed) robot with Qt Charts (issue #7 item 7): the task error, the
+// joint values against their limits and the control thread's cycle statistics, stacked with one
+// time axis each and a shared time cursor. Clicking or dragging in any plot moves the cursor and
+// emits cursorTimeChanged (the review window scrubs its timeline with it).
+//
+// The panel takes plain samples (PlotSample), not the control thread's snapshot: the live window
+// converts its ControlSnapshot / CycleStatistics, the review window its recorded states.
+// Wiring into the main window: create a PlotPanel in a dock, call setJoints() when the robot
+// changes and append() from the display timer; setWindowSeconds() picks the rolling window.
+#include <QChartView>
+#include <QWidget>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <string>
+#include <vector>
+
+class QChart;
+class QLineSeries;
+class QValueAxis;
+
+namespace flexirob::ui {
+
+/// One point in time of everything the panel plots; NaN (or an empty q) leaves a series out.
+struct PlotSample {
+  double time = 0.0;                                              ///< [s]
+  double task_error = std::numeric_limits<double>::quiet_NaN();  ///< [m]
+  Eigen::VectorXd q;                                              ///< joint positions [rad]
+  double compute_us = std::numeric_limits<double>::quiet_NaN();  ///< control cycle work [µs]
+  double max_compute_us = std::numeric_limits<double>::quiet_NaN();
+  double deadline_misses = std::numeric_limits<double>::quiet_NaN();  ///< cumulative count
+};
+
+/// One chart against time with any number of line series and a vertical cursor line.
+class TimePlot : public QChartView {
+  Q_OBJECT
+
+ public:
+  TimePlot(const QString& title, const QString& value_label, QWidget* parent = nullptr);
+
+  /// Adds a series; returns its index.
+  int addSeries(const QString& name, const QColor& color, Qt::PenStyle style = Qt::SolidLine, qreal width = 1.5);
+  void setSeriesData(int series, const QList<QPointF>& points);
+  void setSeriesName(int series, const QString& name);
+  int seriesCount() const { return static_cast<int>(series_.size()); }
+  const QLineSeries* series(int index) const { return series_.at(static_cast<std::size_t>(index)); }
+  void setTimeRange(double t0, double t1);
+  /// Fixed value range; without it, the range follows the data (with 5 % margins).
+  void setValueRange(double lower, double upper);
+  void setCursorTime(double time);
+  double cursorTime() const { return cursor_time_; }
+  /// The time under a widget x coordinate.
+  double timeAt(double widget_x) const;
+
+ Q_SIGNALS:
+  void cursorRequested(double time);
+
+ protected:
+  void mousePressEvent(QMouseEvent* event) override;
+  void mouseMoveEvent(QMouseEvent* event) override;
+
+ private:
+  void updateCursorLine();
+  void autoscale();
+
+  QChart* chart_ = nullptr;
+  QValueAxis* time_axis_ = nullptr;
+  QValueAxis* value_axis_ = nullptr;
+  QLineSeries* cursor_ = nullptr;
+  std::vector<QLineSeries*> series_;
+  double cursor_time_ = 0.0;
+  bool fixed_values_ = false;
+};
+
+class PlotPanel : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit PlotPanel(QWidget* parent = nullptr);
+
+  /// The joints plotted: names and hard limits [rad] (sizes equal). Clears the data.
+  void setJoints(const std::vector<std::string>& names, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper);
+  /// Replaces every series with these samples (time order) and shows their whole time span.
+  void setSamples(const std::vector<PlotSample>& samples);
+  /// Appends one sample (live) and shows the last windowSeconds().
+  void append(const PlotSample& sample);
+  void setWindowSeconds(double seconds);
+  double windowSeconds() const { return window_seconds_; }
+
+  /// Moves the cursor of every plot (no signal).
+  void setCursorTime(double time);
+  double cursorTime() const { return cursor_time_; }
+
+  TimePlot* taskErrorPlot() const { return task_error_; }
+  TimePlot* jointPlot() const { return joints_; }
+  TimePlot* cyclePlot() const { return cycles_; }
+  int sampleCount() const { return static_cast<int>(samples_.size()); }
+
+ Q_SIGNALS:
+  /// The user put the cursor at `time` in one of the plots.
+  void cursorTimeChanged(double time);
+
+ private:
+  void rebuild();
+
+  TimePlot* task_error_ = nullptr;
+  TimePlot* joints_ = nullptr;
+  TimePlot* cycles_ = nullptr;
+  int compute_series_ = -1;
+  int max_compute_series_ = -1;
+  std::vector<std::string> joint_names_;
+  Eigen::VectorXd lower_;
+  Eigen::VectorXd upper_;
+  std::deque<PlotSample> samples_;
+  double window_seconds_ = 20.0;
+  double cursor_time_ = 0.0;
+  bool live_ = false;
+};
+
+}  // namespace flexirob::ui

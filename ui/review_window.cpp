@@ -1,0 +1,453 @@
+#include "ui/review_window.hpp"
+
+#include <QComboBox>
+#include <QDateTime>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QMenuBar>
+#include <QMouseEvent>
+#include <QPainter>
+#include <QPushButton>
+#include <QSplitter>
+#include <QStatusBar>
+#include <QTimer>
+#include <QVBoxLayout>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+#include "app/session_reader.hpp"
+#include "render/overlays.hpp"
+#include "robot/errors.hpp"
+#include "robot/resources.hpp"
+#include "robot/scene.hpp"
+#include "ui/osg_view.hpp"
+#include "ui/overlay_menu.hpp"
+#include "ui/plot_panel.hpp"
+
+namespace flexirob::ui {
+
+namespace {
+
+// States picked for the plots: enough for a smooth curve across a wide window, few enough to
+// read through the time index in milliseconds.
+constexpr int kPlotPoints = 2000;
+// A collision is shown for this long after it was recorded [s] (contacts are recorded as events).
+constexpr double kCollisionHold = 0.1;
+
+// The robot a recording was made with: the built-in or file model if it still resolves, else
+// the recorded URDF text (meshes resolved against the robot resources).
+robot::RobotModel recordedRobot(const app::SessionMetadata& meta) {
+  try {
+    const std::filesystem::path path = resolveRobotPath(meta.robot_name);
+    if (std::filesystem::exists(path)) return robot::RobotModel::fromUrdfFile(path, meta.tip_link);
+  } catch (const InputError&) {
+    // Neither a built-in name nor an existing file any more: the recorded text follows.
+  }
+  if (meta.robot_urdf.empty()) throw InputError("the recording holds no robot description");
+  return robot::RobotModel::fromUrdfString(meta.robot_urdf, resourceDir() / "robots", meta.tip_link);
+}
+
+std::string bandLabel(const app::StageRecord& stage) {
+  return stage.sub_stage.empty() ? stage.stage : stage.stage + " / " + stage.sub_stage;
+}
+
+}  // namespace
+
+QColor stageColor(const std::string& label) {
+  // The sub-stage decides where there is one (as in the stage panel), else the stage.
+  const std::string key = label.substr(label.find(" / ") == std::string::npos ? 0 : label.find(" / ") + 3);
+  if (key == "APPROACHING") return {240, 180, 60};
+  if (key == "RECORDING") return {220, 80, 70};
+  if (key == "TEACH-IN") return {150, 90, 200};
+  if (key == "EXECUTION") return {60, 170, 90};
+  if (key == "POSED") return {245, 215, 120};
+  if (key == "WAITING" || key == "IDLE") return {190, 195, 205};
+  if (key == "CONFIGURATION") return {90, 150, 220};
+  if (key == "PROGRAMMING") return {170, 130, 220};
+  const auto hue = static_cast<int>(std::hash<std::string>{}(key) % 360U);
+  return QColor::fromHsv(hue, 110, 230);
+}
+
+// --- Timeline -------------------------------------------------------------------------------
+
+Timeline::Timeline(QWidget* parent) : QWidget(parent) {
+  setMinimumHeight(48);
+  setSizePolicy(QSizePolicy::Expanding, QSizePolicy::Fixed);
+  setFixedHeight(56);
+}
+
+void Timeline::setRange(double t0, double t1) {
+  t0_ = t0;
+  t1_ = t1 > t0 ? t1 : t0 + 1e-3;
+  update();
+}
+
+void Timeline::setBands(std::vector<StageBand> bands) {
+  bands_ = std::move(bands);
+  update();
+}
+
+void Timeline::setMarkers(std::vector<TimelineMarker> markers) {
+  markers_ = std::move(markers);
+  update();
+}
+
+void Timeline::setTime(double time) {
+  time_ = time;
+  update();
+}
+
+double Timeline::xOf(double time) const { return 4.0 + (width() - 8.0) * (time - t0_) / (t1_ - t0_); }
+
+double Timeline::timeAt(double x) const {
+  return std::clamp(t0_ + (x - 4.0) / std::max(1.0, width() - 8.0) * (t1_ - t0_), t0_, t1_);
+}
+
+void Timeline::paintEvent(QPaintEvent* /*event*/) {
+  QPainter painter(this);
+  painter.fillRect(rect(), QColor(245, 246, 248));
+  const int band_top = 14;
+  const int band_height = height() - 28;
+  for (const StageBand& band : bands_) {
+    const double x0 = xOf(band.t0);
+    const double x1 = xOf(band.t1);
+    const QRectF area(x0, band_top, std::max(1.0, x1 - x0), band_height);
+    painter.fillRect(area, stageColor(band.label));
+    if (x1 - x0 > 60.0) {
+      painter.setPen(QColor(30, 30, 35));
+      painter.drawText(area.adjusted(3, 0, -3, 0), Qt::AlignVCenter | Qt::AlignLeft,
+                       QString::fromStdString(band.label));
+    }
+  }
+  // Triggers as ticks above the bands, buttons as triangles below.
+  for (const TimelineMarker& marker : markers_) {
+    const double x = xOf(marker.time);
+    if (marker.trigger) {
+      painter.setPen(QPen(QColor(20, 20, 25), 2.0));
+      painter.drawLine(QPointF(x, 2), QPointF(x, band_top + 4));
+    } else {
+      painter.setPen(Qt::NoPen);
+      painter.setBrush(QColor(20, 60, 160));
+      const double y = band_top + band_height + 2;
+      painter.drawPolygon(QPolygonF({QPointF(x, y), QPointF(x - 5, y + 9), QPointF(x + 5, y + 9)}));
+    }
+  }
+  const double x = xOf(time_);
+  painter.setPen(QPen(QColor(200, 30, 30), 2.0));
+  painter.drawLine(QPointF(x, 0), QPointF(x, height()));
+}
+
+void Timeline::mousePressEvent(QMouseEvent* event) {
+  if (event->button() == Qt::LeftButton) Q_EMIT timeRequested(timeAt(event->position().x()));
+}
+
+void Timeline::mouseMoveEvent(QMouseEvent* event) {
+  if ((event->buttons() & Qt::LeftButton) != 0) Q_EMIT timeRequested(timeAt(event->position().x()));
+}
+
+// --- ReviewWindow ---------------------------------------------------------------------------
+
+struct ReviewWindow::Events {
+  std::vector<app::SampleRecord> samples;
+  std::vector<app::AreaRecord> areas;
+  std::vector<app::TrajectoryRecord> trajectories;
+  std::vector<app::CollisionRecord> collisions;
+};
+
+ReviewWindow::ReviewWindow(QWidget* parent)
+    : QMainWindow(parent), world_(std::make_unique<render::World>()), events_(std::make_unique<Events>()) {
+  setWindowTitle(QStringLiteral("FlexIRob review"));
+  auto* central = new QWidget(this);
+  auto* layout = new QVBoxLayout(central);
+  auto* splitter = new QSplitter(Qt::Horizontal, central);
+  view_ = new OsgView(splitter);
+  view_->setSceneRoot(world_->root());
+  view_->setMinimumSize(360, 300);
+  plots_ = new PlotPanel(splitter);
+  splitter->addWidget(view_);
+  splitter->addWidget(plots_);
+  splitter->setStretchFactor(0, 3);
+  splitter->setStretchFactor(1, 2);
+  layout->addWidget(splitter, 1);
+
+  timeline_ = new Timeline(central);
+  layout->addWidget(timeline_);
+  auto* controls = new QHBoxLayout();
+  auto* back = new QPushButton(QStringLiteral("◀ frame"), central);
+  play_button_ = new QPushButton(QStringLiteral("Play"), central);
+  auto* forward = new QPushButton(QStringLiteral("frame ▶"), central);
+  speed_box_ = new QComboBox(central);
+  for (double speed : {-4.0, -2.0, -1.0, -0.5, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0}) {
+    speed_box_->addItem(QStringLiteral("%1×").arg(speed), speed);
+  }
+  speed_box_->setCurrentIndex(speed_box_->findData(1.0));
+  speed_box_->setToolTip(QStringLiteral("Playback speed (negative: backwards)"));
+  time_label_ = new QLabel(central);
+  stage_label_ = new QLabel(central);
+  QFont big = stage_label_->font();
+  big.setBold(true);
+  stage_label_->setFont(big);
+  for (QWidget* widget : std::initializer_list<QWidget*>{back, play_button_, forward, speed_box_, time_label_}) {
+    controls->addWidget(widget);
+  }
+  controls->addStretch(1);
+  controls->addWidget(stage_label_);
+  layout->addLayout(controls);
+  setCentralWidget(central);
+
+  timer_ = new QTimer(this);
+  timer_->setInterval(33);
+  connect(timer_, &QTimer::timeout, this, &ReviewWindow::advance);
+  connect(play_button_, &QPushButton::clicked, this, [this] { playing() ? pause() : play(); });
+  connect(back, &QPushButton::clicked, this, [this] { stepFrames(-1); });
+  connect(forward, &QPushButton::clicked, this, [this] { stepFrames(1); });
+  connect(speed_box_, &QComboBox::currentIndexChanged, this,
+          [this](int index) { setSpeed(speed_box_->itemData(index).toDouble()); });
+  connect(timeline_, &Timeline::timeRequested, this, &ReviewWindow::setTime);
+  connect(plots_, &PlotPanel::cursorTimeChanged, this, &ReviewWindow::setTime);
+  auto* overlay_menu = new OverlayMenu(world_->overlays(), this);
+  menuBar()->addMenu(overlay_menu);
+  connect(overlay_menu, &OverlayMenu::toggled, view_, [this] { view_->update(); });
+  resize(1200, 760);
+  statusBar()->showMessage(QStringLiteral("Open a session recording"));
+}
+
+ReviewWindow::~ReviewWindow() {
+  // The view draws the world: detach it before the world goes.
+  view_->setSceneRoot(nullptr);
+}
+
+bool ReviewWindow::open(const std::filesystem::path& file) {
+  try {
+    auto reader = std::make_unique<app::SessionReader>(file);
+    auto model = std::make_unique<robot::RobotModel>(recordedRobot(reader->metadata()));
+    robot::Scene scene;
+    if (!reader->metadata().scene_text.empty()) {
+      scene = robot::parseScene(reader->metadata().scene_text, resourceDir() / "scenes", file.filename().string());
+    }
+    pause();
+    world_->setRobot(*model);
+    world_->setScene(scene);
+    for (render::OverlayLayer layer : render::kAllOverlayLayers) world_->overlays().setContent(layer, nullptr);
+    world_->overlays().itm().clear();
+    kinematics_ = std::make_unique<robot::Kinematics>(*model);
+
+    auto events = std::make_unique<Events>();
+    events->samples = reader->samples();
+    events->areas = reader->areas();
+    events->trajectories = reader->trajectories();
+    events->collisions = reader->collisions();
+    std::vector<app::StageRecord> stages = reader->stages();
+    bands_.clear();
+    for (std::size_t i = 0; i < stages.size(); ++i) {
+      const double t1 = i + 1 < stages.size() ? stages[i + 1].time : reader->endTime();
+      bands_.push_back({stages[i].time, std::max(t1, stages[i].time), bandLabel(stages[i])});
+    }
+    const double t0 = reader->startTime();
+    const double t1 = std::max(reader->endTime(), t0 + 1e-3);
+    timeline_->setRange(t0, t1);
+    timeline_->setBands(bands_);
+    std::vector<TimelineMarker> markers;
+    for (const app::SignalRecord& signal : reader->signals()) {
+      markers.push_back({signal.time, signal.kind == app::SignalKind::Trigger, signal.name});
+    }
+    timeline_->setMarkers(std::move(markers));
+
+    // Plots from states picked through the time index (never a scan of the whole table).
+    std::vector<std::string> names;
+    Eigen::VectorXd lower(model->dof());
+    Eigen::VectorXd upper(model->dof());
+    for (int j = 0; j < model->dof(); ++j) {
+      const robot::Joint& joint = model->joints()[static_cast<std::size_t>(j)];
+      names.push_back(joint.name);
+      lower[j] = joint.limits.lower;
+      upper[j] = joint.limits.upper;
+    }
+    plots_->setJoints(names, lower, upper);
+    std::vector<PlotSample> samples;
+    const int points = reader->stateCount() > 0 ? static_cast<int>(std::min<std::int64_t>(kPlotPoints, reader->stateCount())) : 0;
+    double last_time = -1e300;
+    for (int i = 0; i < points; ++i) {
+      const double t = points > 1 ? t0 + (t1 - t0) * i / (points - 1) : t0;
+      const std::optional<app::StateRecord> state = reader->stateAt(t);
+      if (!state || state->time <= last_time) continue;
+      last_time = state->time;
+      PlotSample sample;
+      sample.time = state->time;
+      sample.q = state->qVector();
+      // No desired task position is recorded with the states: the task error shown is how far
+      // the commanded posture's tip is from the measured one, |FK(q_cmd) - FK(q)|.
+      if (sample.q.size() == model->dof()) {
+        kinematics_->update(state->qCmdVector());
+        const Eigen::Vector3d commanded = kinematics_->p_WT();
+        sample.task_error = (commanded - state->position()).norm();
+      }
+      samples.push_back(std::move(sample));
+    }
+    plots_->setSamples(samples);
+    plots_->taskErrorPlot()->setSeriesName(0, QStringLiteral("|FK(q_cmd) - x|"));
+
+    reader_ = std::move(reader);
+    model_ = std::move(model);
+    events_ = std::move(events);
+    shown_samples_ = shown_areas_ = shown_trajectories_ = static_cast<std::size_t>(-1);
+    shown_collisions_.clear();
+    error_.clear();
+    view_->setHomeCamera(world_->defaultCamera(static_cast<double>(std::max(1, view_->width())) /
+                                               std::max(1, view_->height())));
+    setWindowTitle(QStringLiteral("FlexIRob review — %1").arg(QString::fromStdString(file.filename().string())));
+    statusBar()->showMessage(QStringLiteral("%1: %2 states, %3 s, robot %4")
+                                 .arg(QString::fromStdString(file.string()))
+                                 .arg(reader_->stateCount())
+                                 .arg(t1 - t0, 0, 'f', 1)
+                                 .arg(QString::fromStdString(model_->name())));
+    time_ = t0 - 1.0;  // force a redraw
+    setTime(t0);
+    return true;
+  } catch (const std::exception& error) {
+    error_ = QString::fromUtf8(error.what());
+    statusBar()->showMessage(QStringLiteral("cannot open %1: %2").arg(QString::fromStdString(file.string()), error_));
+    return false;
+  }
+}
+
+void ReviewWindow::setTime(double time) {
+  if (!reader_) return;
+  time = std::clamp(time, reader_->startTime(), std::max(reader_->startTime(), reader_->endTime()));
+  time_ = time;
+  if (const std::optional<app::StateRecord> state = reader_->stateAt(time)) {
+    const Eigen::VectorXd q = state->qVector();
+    if (q.size() == model_->dof()) {
+      kinematics_->update(q);
+      world_->robot()->setPosture(*kinematics_);
+      shown_q_ = q;
+    }
+  }
+  updateOverlays();
+  timeline_->setTime(time);
+  plots_->setCursorTime(time);
+  updateLabels();
+  view_->update();
+}
+
+void ReviewWindow::updateOverlays() {
+  // Everything recorded up to now, in time order: counts decide whether a layer changed.
+  const auto before = [this](double t) { return t <= time_; };
+  const auto samples_now = static_cast<std::size_t>(
+      std::count_if(events_->samples.begin(), events_->samples.end(), [&](const app::SampleRecord& s) { return before(s.time); }));
+  const auto areas_now = static_cast<std::size_t>(
+      std::count_if(events_->areas.begin(), events_->areas.end(), [&](const app::AreaRecord& a) { return before(a.time); }));
+  // Trajectories grow point by point as their times pass: count the points shown.
+  std::size_t trajectories_now = 0;
+  for (const app::TrajectoryRecord& t : events_->trajectories) {
+    trajectories_now += t.times.size() == 0 ? static_cast<std::size_t>(t.positions.cols())
+                                            : static_cast<std::size_t>(std::count_if(t.times.begin(), t.times.end(), before));
+  }
+  render::Overlays& overlays = world_->overlays();
+  if (samples_now != shown_samples_) {
+    std::map<int, render::AreaSamples> per_area;
+    for (const app::SampleRecord& sample : events_->samples) {
+      if (!before(sample.time)) continue;
+      render::AreaSamples& area = per_area[sample.area];
+      area.area = sample.area;
+      if (sample.x.size() >= 3) area.points_W.emplace_back(sample.x.head<3>());
+    }
+    std::vector<render::AreaSamples> areas;
+    for (auto& [index, area] : per_area) areas.push_back(std::move(area));
+    overlays.setContent(render::OverlayLayer::kTrainingSamples, render::makeTrainingSamples(areas));
+    shown_samples_ = samples_now;
+  }
+  if (areas_now != shown_areas_) {
+    overlays.setContent(render::OverlayLayer::kGhostArms, nullptr);
+    for (const app::AreaRecord& area : events_->areas) {
+      if (!before(area.time) || area.q_fixed.size() != model_->dof()) continue;
+      Eigen::Vector4f rgba = render::OverlayPalette::area(area.area);
+      rgba[3] = 0.3F;
+      overlays.addContent(render::OverlayLayer::kGhostArms, render::makeGhostArm(*model_, area.q_fixed, rgba));
+    }
+    shown_areas_ = areas_now;
+  }
+  if (trajectories_now != shown_trajectories_) {
+    overlays.setContent(render::OverlayLayer::kTrajectories, nullptr);
+    for (const app::TrajectoryRecord& trajectory : events_->trajectories) {
+      if (trajectory.times.size() > 0 && !before(trajectory.times[0])) continue;
+      std::vector<Eigen::Vector3d> points;
+      for (Eigen::Index k = 0; k < trajectory.positions.cols(); ++k) {
+        if (k < trajectory.times.size() && !before(trajectory.times[k])) break;  // drawn as far as recorded
+        points.emplace_back(trajectory.positions.col(k));
+      }
+      const Eigen::Vector4f rgba = trajectory.kind == app::TrajectoryKind::TeachIn ? render::OverlayPalette::teachInTrajectory()
+                                   : trajectory.kind == app::TrajectoryKind::Target ? render::OverlayPalette::targetTrajectory()
+                                                                                    : render::OverlayPalette::executedTrajectory();
+      overlays.addContent(render::OverlayLayer::kTrajectories, render::makePolyline(points, rgba));
+    }
+    shown_trajectories_ = trajectories_now;
+  }
+  std::vector<std::string> touching;
+  for (const app::CollisionRecord& collision : events_->collisions) {
+    if (collision.time > time_ || collision.time < time_ - kCollisionHold) continue;
+    touching.push_back(collision.body_a);
+    touching.push_back(collision.body_b);
+  }
+  if (touching != shown_collisions_) {
+    render::showCollisions(*world_->robot(), touching);
+    shown_collisions_ = touching;
+  }
+}
+
+void ReviewWindow::updateLabels() {
+  time_label_->setText(QStringLiteral("t = %1 s / %2 s").arg(time_, 0, 'f', 3).arg(reader_ ? reader_->endTime() : 0.0, 0, 'f', 1));
+  const std::string stage = stageAt(time_);
+  stage_label_->setText(QString::fromStdString(stage));
+  const QColor color = stageColor(stage);
+  stage_label_->setStyleSheet(stage.empty() ? QString()
+                                            : QStringLiteral("background: %1; padding: 2px 8px;").arg(color.name()));
+}
+
+std::string ReviewWindow::stageAt(double time) const {
+  for (auto band = bands_.rbegin(); band != bands_.rend(); ++band) {
+    if (band->t0 <= time) return band->label;
+  }
+  return {};
+}
+
+void ReviewWindow::play() {
+  if (!reader_) return;
+  // At an end, playing starts again from the other end.
+  if (speed_ > 0 && time_ >= reader_->endTime()) setTime(reader_->startTime());
+  if (speed_ < 0 && time_ <= reader_->startTime()) setTime(reader_->endTime());
+  last_tick_ms_ = QDateTime::currentMSecsSinceEpoch();
+  timer_->start();
+  play_button_->setText(QStringLiteral("Pause"));
+}
+
+void ReviewWindow::pause() {
+  timer_->stop();
+  play_button_->setText(QStringLiteral("Play"));
+}
+
+bool ReviewWindow::playing() const { return timer_->isActive(); }
+
+void ReviewWindow::setSpeed(double speed) {
+  if (speed == 0.0 || !std::isfinite(speed)) return;
+  speed_ = speed;
+  const int index = speed_box_->findData(speed);
+  if (index >= 0 && index != speed_box_->currentIndex()) speed_box_->setCurrentIndex(index);
+}
+
+void ReviewWindow::stepFrames(int frames) {
+  pause();
+  setTime(time_ + frames * kFrameSeconds);
+}
+
+void ReviewWindow::advance() {
+  const qint64 now = QDateTime::currentMSecsSinceEpoch();
+  const double elapsed = static_cast<double>(now - last_tick_ms_) * 1e-3;
+  last_tick_ms_ = now;
+  setTime(time_ + speed_ * elapsed);
+  if ((speed_ > 0 && time_ >= reader_->endTime()) || (speed_ < 0 && time_ <= reader_->startTime())) pause();
+}
+
+}  // namespace flexirob::ui

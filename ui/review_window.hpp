@@ -1,0 +1,167 @@
+#pragma once
+// The review window (issue #8 item 3): a session recording (app/session_reader.hpp) replayed.
+// A timeline with the stage bands and the trigger and button markers, play/pause, a speed
+// (reverse included) and frame stepping; the arm replayed in a 3D view with the overlays of that
+// moment (training samples recorded so far, the areas' q_fixed ghosts, teach-in and target
+// trajectories, colliding links in red); the plots (ui/plot_panel.hpp) share the time cursor.
+//
+// Opening reads only the recording's ends, its events and ~2000 states picked through the time
+// index (SessionReader::stateAt), so a 30-minute recording opens in well under 2 s and
+// scrubbing reads one state per displayed frame.
+//
+// Started by `flexirob --review FILE` (ui/main.cpp) or from the main window's File menu.
+#include <QMainWindow>
+#include <QWidget>
+
+#include <Eigen/Core>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "render/world.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/robot_model.hpp"
+
+namespace flexirob::app {
+class SessionReader;
+}
+
+class QComboBox;
+class QLabel;
+class QPushButton;
+class QTimer;
+
+namespace flexirob::ui {
+
+class OsgView;
+class PlotPanel;
+
+/// A stretch of session time spent in one stage (and sub-stage).
+struct StageBand {
+  double t0 = 0.0;
+  double t1 = 0.0;
+  std::string label;  ///< "STAGE" or "STAGE / SUB_STAGE"
+};
+
+/// A trigger (drawn as a tick above the bands) or a button press (a triangle below).
+struct TimelineMarker {
+  double time = 0.0;
+  bool trigger = true;
+  std::string name;
+};
+
+/// Colour of a stage band: fixed for the workflow's stages, a stable hue for any other name.
+QColor stageColor(const std::string& label);
+
+/// The time strip: stage bands, markers (triggers above, buttons below) and the cursor; clicking
+/// and dragging scrubs (timeRequested).
+class Timeline : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit Timeline(QWidget* parent = nullptr);
+
+  void setRange(double t0, double t1);
+  void setBands(std::vector<StageBand> bands);
+  void setMarkers(std::vector<TimelineMarker> markers);
+  void setTime(double time);
+  double time() const { return time_; }
+  double t0() const { return t0_; }
+  double t1() const { return t1_; }
+  /// The widget x coordinate of a time, and back.
+  double xOf(double time) const;
+  double timeAt(double x) const;
+  QSize sizeHint() const override { return {600, 56}; }
+
+ Q_SIGNALS:
+  void timeRequested(double time);
+
+ protected:
+  void paintEvent(QPaintEvent* event) override;
+  void mousePressEvent(QMouseEvent* event) override;
+  void mouseMoveEvent(QMouseEvent* event) override;
+
+ private:
+  double t0_ = 0.0;
+  double t1_ = 1.0;
+  double time_ = 0.0;
+  std::vector<StageBand> bands_;
+  std::vector<TimelineMarker> markers_;
+};
+
+class ReviewWindow : public QMainWindow {
+  Q_OBJECT
+
+ public:
+  /// One displayed frame of the recording when stepping [s] (30 frames per second).
+  static constexpr double kFrameSeconds = 1.0 / 30.0;
+
+  explicit ReviewWindow(QWidget* parent = nullptr);
+  ~ReviewWindow() override;
+
+  /// Opens a recording. On failure returns false, keeps what was open and leaves the one-line
+  /// reason in errorString() (and the status bar).
+  bool open(const std::filesystem::path& file);
+  const QString& errorString() const { return error_; }
+  bool isOpen() const { return reader_ != nullptr; }
+
+  /// Shows the recording at `time` (clamped to the recording).
+  void setTime(double time);
+  double time() const { return time_; }
+  void play();
+  void pause();
+  bool playing() const;
+  /// Playback speed, a multiple of real time; negative plays backwards (not 0).
+  void setSpeed(double speed);
+  double speed() const { return speed_; }
+  /// Moves by `frames` frames of kFrameSeconds (negative: back); pauses playback.
+  void stepFrames(int frames);
+
+  /// The posture shown now (empty before a recording is open).
+  const Eigen::VectorXd& shownPosture() const { return shown_q_; }
+  /// The stage band at the current time (empty label if none).
+  std::string stageAt(double time) const;
+
+  Timeline* timeline() const { return timeline_; }
+  PlotPanel* plots() const { return plots_; }
+  OsgView* view() const { return view_; }
+  render::World& world() { return *world_; }
+  const app::SessionReader* reader() const { return reader_.get(); }
+
+ private:
+  void advance();
+  void updateOverlays();
+  void updateLabels();
+
+  std::unique_ptr<render::World> world_;
+  std::unique_ptr<app::SessionReader> reader_;
+  std::unique_ptr<robot::RobotModel> model_;
+  std::unique_ptr<robot::Kinematics> kinematics_;
+  struct Events;  // the recording's events, read once when opened
+  std::unique_ptr<Events> events_;
+  std::vector<StageBand> bands_;
+
+  OsgView* view_ = nullptr;
+  Timeline* timeline_ = nullptr;
+  PlotPanel* plots_ = nullptr;
+  QPushButton* play_button_ = nullptr;
+  QComboBox* speed_box_ = nullptr;
+  QLabel* time_label_ = nullptr;
+  QLabel* stage_label_ = nullptr;
+  QTimer* timer_ = nullptr;
+  QString error_;
+
+  double time_ = 0.0;
+  double speed_ = 1.0;
+  qint64 last_tick_ms_ = -1;
+  Eigen::VectorXd shown_q_;
+  // What the overlays show now, to rebuild them only when the moment's content changes.
+  std::size_t shown_samples_ = static_cast<std::size_t>(-1);
+  std::size_t shown_areas_ = static_cast<std::size_t>(-1);
+  std::size_t shown_trajectories_ = static_cast<std::size_t>(-1);
+  std::vector<std::string> shown_collisions_;
+};
+
+}  // namespace flexirob::ui
