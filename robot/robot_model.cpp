@@ -9,7 +9,9 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
+#include <vector>
 
 #include "robot/errors.hpp"
 
@@ -238,6 +240,30 @@ void foldLinkInto(Body& body, const urdf::Link& link, const Eigen::Isometry3d& X
   }
 }
 
+// urdfdom links a joint's child to its parent without checking that the joints form a tree: a
+// link can be the child of two joints, and joints can form a cycle away from the root. Every
+// walk below (up to the root, down through fixed joints) assumes a tree, so check it first:
+// every link's children name it as their parent, and every chain of parents ends.
+void checkTree(const urdf::ModelInterface& model) {
+  std::set<const urdf::Link*> ends_at_a_root;
+  for (const auto& [name, link] : model.links_) {
+    for (const auto& child : link->child_links) {
+      if (child->getParent().get() != link.get()) {
+        throw InputError("invalid URDF: link '" + child->name + "' is the child of more than one joint");
+      }
+    }
+    std::vector<const urdf::Link*> chain;
+    for (const urdf::Link* l = link.get(); l != nullptr && ends_at_a_root.count(l) == 0; l = l->getParent().get()) {
+      if (chain.size() > model.links_.size()) {
+        throw InputError("invalid URDF: the joints above link '" + name + "' form a cycle");
+      }
+      chain.push_back(l);
+      if (!l->parent_joint) break;
+    }
+    ends_at_a_root.insert(chain.begin(), chain.end());
+  }
+}
+
 int countMovable(const urdf::Link* link) {
   int count = 0;
   for (; link != nullptr && link->parent_joint; link = link->getParent().get()) {
@@ -333,6 +359,7 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
     throw InputError("invalid URDF: " + reason);
   }
   if (urdf_model->links_.size() > kMaxLinks) throw InputError("URDF has more than 10000 links");
+  checkTree(*urdf_model);
   const urdf::LinkConstSharedPtr root = urdf_model->getRoot();
   if (!root) throw InputError("invalid URDF: no root link");
 

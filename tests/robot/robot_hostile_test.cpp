@@ -91,6 +91,34 @@ TEST(HostileUrdf, MoreLinksThanTheLimitUnderTheSizeLimitAreRefusedByCount) {
   EXPECT_NE(message.find("more than 10000 links"), std::string::npos) << message;
 }
 
+std::string joint(const std::string& name, const std::string& parent, const std::string& child) {
+  return "<joint name=\"" + name + "\" type=\"continuous\"><parent link=\"" + parent + "\"/><child link=\"" + child +
+         "\"/><axis xyz=\"0 0 1\"/></joint>";
+}
+
+TEST(HostileUrdf, JointCyclesAreRefusedInsteadOfLoopingForever) {
+  // Found by fuzz/urdf_fuzzer.cpp (fuzz/regressions/urdf/joint_cycle_hang.urdf): a joint whose
+  // parent is its own child made the search for the default tip walk up the chain forever.
+  const std::string links = "<link name=\"base\"/><link name=\"a\"/><link name=\"b\"/><link name=\"tip\"/>";
+  const std::string self_loop = "<robot name=\"r\">" + links + joint("j0", "base", "b") + joint("j1", "a", "a") +
+                                joint("j2", "a", "tip") + "</robot>";
+  const std::string two_cycle = "<robot name=\"r\">" + links + joint("j1", "a", "b") + joint("j2", "b", "a") +
+                                joint("j3", "a", "tip") + "</robot>";
+  for (const std::string& xml : {self_loop, two_cycle}) {
+    const std::string message = inputErrorOf([&xml] { RobotModel::fromUrdfString(xml, kResources); });
+    EXPECT_FALSE(message.empty()) << xml;
+  }
+  const std::string message = inputErrorOf([&two_cycle] { RobotModel::fromUrdfString(two_cycle, kResources); });
+  EXPECT_NE(message.find("form a cycle"), std::string::npos) << message;
+}
+
+TEST(HostileUrdf, ALinkThatIsTheChildOfTwoJointsIsRefused) {
+  const std::string xml = "<robot name=\"r\"><link name=\"base\"/><link name=\"a\"/><link name=\"b\"/>" +
+                          joint("j1", "base", "a") + joint("j2", "base", "b") + joint("j3", "b", "a") + "</robot>";
+  const std::string message = inputErrorOf([&xml] { RobotModel::fromUrdfString(xml, kResources); });
+  EXPECT_NE(message.find("child of more than one joint"), std::string::npos) << message;
+}
+
 TEST(HostileUrdf, NonFiniteOriginsAxesAndLimitsAreRefused) {
   const auto urdf = [](const std::string& joint_body) {
     return "<robot name=\"n\"><link name=\"base\"/><link name=\"l1\"/><joint name=\"j1\" type=\"revolute\">"
