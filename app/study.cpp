@@ -1,0 +1,598 @@
+#include "app/study.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "app/session_reader.hpp"
+#include "app/study_metrics.hpp"
+#include "robot/collision.hpp"
+#include "robot/errors.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/scene.hpp"
+
+namespace flexirob::app {
+namespace {
+
+std::optional<double> median(std::vector<double> values) {
+  if (values.empty()) return std::nullopt;
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+std::string trim(const std::string& text) {
+  const auto first = text.find_first_not_of(" \t\r");
+  if (first == std::string::npos) return "";
+  return text.substr(first, text.find_last_not_of(" \t\r") - first + 1);
+}
+
+std::vector<std::string> splitCsv(const std::string& line) {
+  std::vector<std::string> fields;
+  std::stringstream stream(line);
+  std::string field;
+  while (std::getline(stream, field, ',')) fields.push_back(trim(field));
+  if (!line.empty() && line.back() == ',') fields.emplace_back();
+  return fields;
+}
+
+// A CSV field: quoted when it holds a separator or a quote.
+std::string csvField(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (const char c : text) {
+    if (c == '"') quoted += '"';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+std::string csvNumber(double value) {
+  if (!std::isfinite(value)) return "";
+  std::ostringstream out;
+  out.precision(9);
+  out << value;
+  return out.str();
+}
+
+std::string csvNumber(const std::optional<double>& value) { return value ? csvNumber(*value) : ""; }
+
+// The robot a recording was made with: the built-in or file model if it still resolves, else
+// the recorded URDF text (meshes resolved against the robot resources).
+robot::RobotModel recordedRobot(const SessionReader& reader) {
+  const SessionMetadata& meta = reader.metadata();
+  try {
+    const std::filesystem::path path = resolveRobotPath(meta.robot_name);
+    if (std::filesystem::exists(path)) return robot::RobotModel::fromUrdfFile(path, meta.tip_link);
+  } catch (const InputError&) {
+    // Not a built-in name nor an existing file any more: fall back to the recorded text.
+  }
+  if (meta.robot_urdf.empty()) throw InputError("no robot description recorded");
+  return robot::RobotModel::fromUrdfString(meta.robot_urdf, resourceDir() / "robots", meta.tip_link);
+}
+
+}  // namespace
+
+KMeansResult kMeans(const Eigen::MatrixXd& points, const Eigen::MatrixXd& initial_centres, int max_iterations) {
+  if (points.cols() == 0 || initial_centres.cols() == 0 || points.rows() != initial_centres.rows() ||
+      points.rows() == 0 || max_iterations < 1 || !points.allFinite() || !initial_centres.allFinite()) {
+    throw std::invalid_argument("kMeans: expected D x P points and D x k finite centres, P, k, D >= 1");
+  }
+  const Eigen::Index P = points.cols();
+  const Eigen::Index k = initial_centres.cols();
+  KMeansResult result;
+  result.centres = initial_centres;
+  result.labels.assign(static_cast<std::size_t>(P), -1);
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    bool changed = false;
+    for (Eigen::Index p = 0; p < P; ++p) {
+      Eigen::Index best = 0;
+      (result.centres.colwise() - points.col(p)).colwise().squaredNorm().minCoeff(&best);
+      auto& label = result.labels[static_cast<std::size_t>(p)];
+      if (label != static_cast<int>(best)) {
+        label = static_cast<int>(best);
+        changed = true;
+      }
+    }
+    result.iterations = iteration + 1;
+    if (!changed) {
+      result.converged = true;
+      break;
+    }
+    Eigen::MatrixXd sums = Eigen::MatrixXd::Zero(points.rows(), k);
+    Eigen::VectorXi counts = Eigen::VectorXi::Zero(k);
+    for (Eigen::Index p = 0; p < P; ++p) {
+      const int label = result.labels[static_cast<std::size_t>(p)];
+      sums.col(label) += points.col(p);
+      ++counts[label];
+    }
+    for (Eigen::Index c = 0; c < k; ++c) {
+      if (counts[c] > 0) result.centres.col(c) = sums.col(c) / counts[c];
+    }
+  }
+  result.sizes.assign(static_cast<std::size_t>(k), 0);
+  result.inertia = 0.0;
+  for (Eigen::Index p = 0; p < P; ++p) {
+    const int label = result.labels[static_cast<std::size_t>(p)];
+    ++result.sizes[static_cast<std::size_t>(label)];
+    result.inertia += (points.col(p) - result.centres.col(label)).squaredNorm();
+  }
+  return result;
+}
+
+Eigen::MatrixXd pairwiseDistances(const Eigen::MatrixXd& points) {
+  const Eigen::Index P = points.cols();
+  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(P, P);
+  for (Eigen::Index i = 0; i < P; ++i) {
+    for (Eigen::Index j = i + 1; j < P; ++j) d(i, j) = d(j, i) = (points.col(i) - points.col(j)).norm();
+  }
+  return d;
+}
+
+Eigen::MatrixXd classicalMds(const Eigen::MatrixXd& distances, int dimensions) {
+  const Eigen::Index P = distances.rows();
+  if (P == 0 || distances.cols() != P || dimensions < 1 || !distances.allFinite() ||
+      (distances - distances.transpose()).cwiseAbs().maxCoeff() > 1e-9 * (1.0 + distances.cwiseAbs().maxCoeff())) {
+    throw std::invalid_argument("classicalMds: expected a finite symmetric P x P distance matrix, dimensions >= 1");
+  }
+  // B = −½ J D² J, J = I − 11ᵀ/P: the Gram matrix of the centred configuration.
+  const Eigen::MatrixXd squared = distances.array().square().matrix();
+  const Eigen::MatrixXd J = Eigen::MatrixXd::Identity(P, P) - Eigen::MatrixXd::Constant(P, P, 1.0 / static_cast<double>(P));
+  const Eigen::MatrixXd B = -0.5 * J * squared * J;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(0.5 * (B + B.transpose()));
+  Eigen::MatrixXd coordinates = Eigen::MatrixXd::Zero(dimensions, P);
+  // Eigen sorts eigenvalues increasingly: the largest come last.
+  for (int d = 0; d < dimensions && d < P; ++d) {
+    const Eigen::Index column = P - 1 - d;
+    const double lambda = std::max(0.0, solver.eigenvalues()[column]);
+    Eigen::VectorXd axis = solver.eigenvectors().col(column) * std::sqrt(lambda);
+    Eigen::Index largest = 0;
+    axis.cwiseAbs().maxCoeff(&largest);
+    if (axis[largest] < 0.0) axis = -axis;
+    coordinates.row(d) = axis.transpose();
+  }
+  return coordinates;
+}
+
+std::vector<AreaClusterSeeds> thesisClusterSeeds() {
+  constexpr double h = std::numbers::pi / 2.0;
+  constexpr double q = std::numbers::pi / 4.0;
+  const auto posture = [](std::array<double, 6> values) { return Eigen::Map<const Eigen::VectorXd>(values.data(), 6).eval(); };
+  AreaClusterSeeds left{0, {"L1", "L2", "L3"},
+                        {posture({0, h, -h, -h, h, h}), posture({0, h, -h, -h, -h, -h}), posture({0, h, h, h, -h, h})}};
+  AreaClusterSeeds right{1,
+                         {"R1", "R2", "R3", "R4", "R5", "R6", "R7"},
+                         {posture({0, h, h, -h, -h, h}), posture({0, h, -h, h, -h, -h}), posture({0, h, -h, h, h, h}),
+                          posture({h, h, h, h, -h, h}), posture({h, h, -h, -h, -h, -h}), posture({h, h, -h, -h, h, h}),
+                          posture({q, h, q, 0, -q, h})}};
+  return {left, right};
+}
+
+std::vector<AreaClusterSeeds> loadClusterSeeds(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError("cluster seeds: cannot read '" + file.string() + "'");
+  std::map<int, AreaClusterSeeds> by_area;
+  std::string line;
+  int line_number = 0;
+  std::optional<Eigen::Index> joints;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const std::string where = file.filename().string() + ":" + std::to_string(line_number);
+    if (trim(line).empty() || trim(line)[0] == '#') continue;
+    const auto fields = splitCsv(line);
+    if (line_number == 1 && !fields.empty() && fields[0] == "area") continue;  // header
+    if (fields.size() < 3) throw InputError("cluster seeds " + where + ": expected area,name,q1,...");
+    int area = 0;
+    try {
+      std::size_t used = 0;
+      area = std::stoi(fields[0], &used);
+      if (used != fields[0].size() || area < 0) throw std::invalid_argument("area");
+    } catch (const std::exception&) {
+      throw InputError("cluster seeds " + where + ": expected an area index >= 0, got '" + fields[0] + "'");
+    }
+    if (fields[1].empty()) throw InputError("cluster seeds " + where + ": empty cluster name");
+    Eigen::VectorXd q(static_cast<Eigen::Index>(fields.size() - 2));
+    for (std::size_t i = 2; i < fields.size(); ++i) {
+      try {
+        std::size_t used = 0;
+        q[static_cast<Eigen::Index>(i - 2)] = std::stod(fields[i], &used);
+        if (used != fields[i].size()) throw std::invalid_argument("number");
+      } catch (const std::exception&) {
+        throw InputError("cluster seeds " + where + ": expected a joint value in radians, got '" + fields[i] + "'");
+      }
+    }
+    if (!q.allFinite()) throw InputError("cluster seeds " + where + ": non-finite joint value");
+    if (joints && *joints != q.size()) {
+      throw InputError("cluster seeds " + where + ": expected " + std::to_string(*joints) + " joint values, got " +
+                       std::to_string(q.size()));
+    }
+    joints = q.size();
+    auto& seeds = by_area[area];
+    seeds.area = area;
+    seeds.names.push_back(fields[1]);
+    seeds.centres.push_back(q);
+  }
+  if (by_area.empty()) throw InputError("cluster seeds: '" + file.string() + "' holds no centre");
+  std::vector<AreaClusterSeeds> seeds;
+  for (auto& [area, entry] : by_area) seeds.push_back(std::move(entry));
+  return seeds;
+}
+
+ParticipantResult analyseSession(const SessionReader& reader, double replay_interval) {
+  ParticipantResult result;
+  const SessionMetadata& meta = reader.metadata();
+  result.file = reader.file().filename().string();
+  result.participant = meta.participant.empty() ? reader.file().stem().string() : meta.participant;
+  result.robot = meta.robot_name;
+  result.scene = meta.scene_name;
+  result.closed_cleanly = !reader.meta("end_time_utc").empty();
+  result.duration_s = reader.endTime() - reader.startTime();
+
+  for (const auto& area : reader.areas()) result.q_fixed[area.area] = area.q_fixed;
+  for (const auto& [area, count] : reader.sampleCounts()) result.samples += count;
+  std::set<int> areas;
+  for (const auto& [area, q] : result.q_fixed) areas.insert(area);
+  for (const auto& [area, count] : reader.sampleCounts()) areas.insert(area);
+  result.areas = static_cast<int>(areas.size());
+
+  // E_task over executed motions; shape metrics of teach-ins against their targets.
+  const auto trajectories = reader.trajectories();
+  std::map<std::int64_t, const TrajectoryRecord*> by_id;
+  const TrajectoryRecord* first_target = nullptr;
+  for (const auto& t : trajectories) {
+    by_id[t.id] = &t;
+    if (t.kind == TrajectoryKind::Target && !first_target) first_target = &t;
+  }
+  double error_sum = 0.0;
+  Eigen::Index error_points = 0;
+  std::vector<double> deviations, procrustes, jerks;
+  for (const auto& t : trajectories) {
+    const auto found = by_id.find(t.reference_id);
+    const TrajectoryRecord* reference = found == by_id.end() ? nullptr : found->second;
+    if (t.kind == TrajectoryKind::Executed && reference && t.positions.cols() > 0 && reference->positions.cols() > 0) {
+      error_sum += taskSpaceError(targetsForExecution(t, *reference), t.positions) * static_cast<double>(t.positions.cols());
+      error_points += t.positions.cols();
+    } else if (t.kind == TrajectoryKind::TeachIn && t.positions.cols() > 0) {
+      const TrajectoryRecord* target = reference ? reference : first_target;
+      if (target && target->positions.cols() > 0) {
+        deviations.push_back(maxDeviation(t.positions, target->positions));
+        procrustes.push_back(procrustesDistance(t.positions, target->positions).distance);
+      }
+      try {
+        jerks.push_back(jerk(t.times, t.positions).mean);
+      } catch (const std::invalid_argument&) {
+        // Fewer than four points or repeated times: no jerk for this one.
+      }
+    }
+  }
+  if (error_points > 0) result.e_task = error_sum / static_cast<double>(error_points);
+  const auto mean = [](const std::vector<double>& v) -> std::optional<double> {
+    if (v.empty()) return std::nullopt;
+    double sum = 0.0;
+    for (const double x : v) sum += x;
+    return sum / static_cast<double>(v.size());
+  };
+  if (!deviations.empty()) result.max_deviation = *std::max_element(deviations.begin(), deviations.end());
+  result.procrustes = mean(procrustes);
+  result.jerk_mean = mean(jerks);
+  result.e_coll_recorded = static_cast<std::int64_t>(reader.collisions().size());
+  result.time_per_phase = timePerPhase(reader.stages(), reader.endTime());
+
+  // E_coll (Sect. 3.3) by replay: the recorded postures in the collision world of the recorded
+  // robot and scene, an event per pair that starts touching.
+  try {
+    const robot::RobotModel model = recordedRobot(reader);
+    const robot::Scene scene = meta.scene_text.empty()
+                                   ? robot::Scene{}
+                                   : robot::parseScene(meta.scene_text, resourceDir() / "scenes",
+                                                       "scene recorded in " + result.file);
+    robot::CollisionWorld world(model, scene);
+    robot::CollisionMonitor monitor;
+    const double interval = std::max(replay_interval, 0.0);
+    double next = -1e300;
+    // Read in slices so that a long recording does not sit in memory at once.
+    constexpr double kSlice = 60.0;  // [s]
+    Eigen::VectorXd q(model.dof());
+    // Read every stride-th state only: about one per interval at the recorded rate.
+    const double duration = reader.endTime() - reader.startTime();
+    const double rate = duration > 0.0 ? static_cast<double>(reader.stateCount() - 1) / duration : 1.0;
+    const int stride = std::max(1, static_cast<int>(std::floor(interval * rate * (1.0 + 1e-6))));  // 9.999… is 10
+    for (double t0 = reader.startTime(); reader.stateCount() > 0 && t0 <= reader.endTime(); t0 += kSlice) {
+      const double t1 = std::min(t0 + kSlice, reader.endTime());
+      for (const auto& state : reader.states(t0, t1, stride)) {
+        if (state.time < next || (t0 > reader.startTime() && state.time <= t0)) continue;
+        next = state.time + interval - 0.5 / rate;  // half a sample of slack for rounded times
+        if (state.dof != model.dof()) throw InputError("recorded states have " + std::to_string(state.dof) + " joints");
+        q = state.qVector();
+        world.update(q);
+        const auto& contacts = world.contacts();
+        monitor.observe(contacts, state.time);
+        ++result.replayed_samples;
+      }
+      if (t1 >= reader.endTime()) break;
+    }
+    result.e_coll = static_cast<std::int64_t>(monitor.events());
+    result.colliding_samples = static_cast<std::int64_t>(monitor.collidingSteps());
+  } catch (const InputError& error) {
+    result.replay_note = error.what();
+  }
+  return result;
+}
+
+void clusterStudy(StudyResult& study, const StudyOptions& options) {
+  study.clusterings.clear();
+  study.combinations.clear();
+  for (auto& participant : study.participants) participant.cluster.clear();
+  for (const auto& seeds : options.seeds) {
+    if (seeds.centres.empty()) continue;
+    const Eigen::Index joints = seeds.centres.front().size();
+    AreaClustering clustering;
+    clustering.area = seeds.area;
+    clustering.names = seeds.names;
+    std::vector<std::size_t> members;
+    for (std::size_t i = 0; i < study.participants.size(); ++i) {
+      const auto found = study.participants[i].q_fixed.find(seeds.area);
+      if (found != study.participants[i].q_fixed.end() && found->second.size() >= joints) members.push_back(i);
+    }
+    if (members.empty()) continue;
+    clustering.postures.resize(joints, static_cast<Eigen::Index>(members.size()));
+    for (std::size_t m = 0; m < members.size(); ++m) {
+      clustering.postures.col(static_cast<Eigen::Index>(m)) =
+          study.participants[members[m]].q_fixed.at(seeds.area).head(joints);
+      clustering.participants.push_back(study.participants[members[m]].participant);
+    }
+    Eigen::MatrixXd initial(joints, static_cast<Eigen::Index>(seeds.centres.size()));
+    for (std::size_t c = 0; c < seeds.centres.size(); ++c) initial.col(static_cast<Eigen::Index>(c)) = seeds.centres[c];
+    clustering.kmeans = kMeans(clustering.postures, initial);
+    // MDS of postures and centres together, so that both lie in one plane (Fig. B.2).
+    Eigen::MatrixXd all(joints, clustering.postures.cols() + initial.cols());
+    all << clustering.postures, clustering.kmeans.centres;
+    const Eigen::MatrixXd plane = classicalMds(pairwiseDistances(all), 2);
+    clustering.mds = plane.leftCols(clustering.postures.cols());
+    clustering.centre_mds = plane.rightCols(initial.cols());
+    for (std::size_t m = 0; m < members.size(); ++m) {
+      study.participants[members[m]].cluster[seeds.area] =
+          seeds.names[static_cast<std::size_t>(clustering.kmeans.labels[m])];
+    }
+    study.clusterings.push_back(std::move(clustering));
+  }
+
+  // Tab. 4.1: participants grouped by their clusters over every clustered area.
+  struct Group {
+    int users = 0, successful = 0;
+    std::vector<double> e_task, e_coll;
+  };
+  std::map<std::string, Group> groups;
+  for (const auto& participant : study.participants) {
+    if (participant.cluster.empty() || participant.cluster.size() != study.clusterings.size()) continue;
+    std::string name;
+    for (const auto& clustering : study.clusterings) {
+      name += (name.empty() ? "" : "-") + participant.cluster.at(clustering.area);
+    }
+    Group& group = groups[name];
+    ++group.users;
+    if (participant.e_task) group.e_task.push_back(*participant.e_task);
+    if (participant.e_coll) group.e_coll.push_back(static_cast<double>(*participant.e_coll));
+    const bool accurate = !participant.e_task || *participant.e_task <= options.success_e_task;
+    if (accurate && participant.e_coll && *participant.e_coll == 0) ++group.successful;
+  }
+  for (const auto& [name, group] : groups) {
+    study.combinations.push_back(
+        {name, group.users, group.successful, median(group.e_task), median(group.e_coll), group.successful > 0});
+  }
+}
+
+StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions& options) {
+  if (!std::filesystem::is_directory(folder)) throw InputError("study: '" + folder.string() + "' is no folder");
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+    const std::string extension = entry.path().extension().string();
+    if (entry.is_regular_file() && (extension == ".db" || extension == ".sqlite" || extension == ".session")) {
+      files.push_back(entry.path());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  StudyResult study;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    if (options.progress) options.progress(files[i].filename().string(), static_cast<double>(i) / static_cast<double>(files.size()));
+    try {
+      const SessionReader reader(files[i]);
+      study.participants.push_back(analyseSession(reader, options.replay_interval));
+    } catch (const InputError& error) {
+      study.skipped.push_back(files[i].filename().string() + ": " + error.what());
+    }
+  }
+  if (options.progress) options.progress("clustering", 1.0);
+  if (study.participants.empty()) {
+    throw InputError("study: no readable session in '" + folder.string() + "' (" + std::to_string(files.size()) +
+                     " candidate files; sessions end in .db, .sqlite or .session)");
+  }
+  clusterStudy(study, options);
+  return study;
+}
+
+std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const std::filesystem::path& folder) {
+  std::error_code error;
+  std::filesystem::create_directories(folder, error);
+  if (error) throw InputError("--csv-dir: cannot create '" + folder.string() + "': " + error.message());
+  std::vector<std::filesystem::path> written;
+  const auto write = [&](const std::string& name, const std::string& text) {
+    const std::filesystem::path file = folder / name;
+    std::ofstream out(file, std::ios::binary);
+    out << text;
+    out.close();
+    if (!out) throw InputError("--csv-dir: cannot write '" + file.string() + "'");
+    written.push_back(file);
+  };
+
+  std::ostringstream participants;
+  participants << "participant,file,robot,scene,closed_cleanly,duration_s,areas,samples,e_task_m,max_deviation_m,"
+                  "procrustes_m,jerk_mean_m_s3,e_coll,colliding_samples,replayed_samples,e_coll_recorded";
+  for (const auto& clustering : study.clusterings) participants << ",cluster_area" << clustering.area;
+  participants << "\n";
+  for (const auto& p : study.participants) {
+    participants << csvField(p.participant) << ',' << csvField(p.file) << ',' << csvField(p.robot) << ','
+                 << csvField(p.scene) << ',' << (p.closed_cleanly ? 1 : 0) << ',' << csvNumber(p.duration_s) << ','
+                 << p.areas << ',' << p.samples << ',' << csvNumber(p.e_task) << ',' << csvNumber(p.max_deviation) << ','
+                 << csvNumber(p.procrustes) << ',' << csvNumber(p.jerk_mean) << ','
+                 << (p.e_coll ? std::to_string(*p.e_coll) : "") << ',' << p.colliding_samples << ','
+                 << p.replayed_samples << ',' << p.e_coll_recorded;
+    for (const auto& clustering : study.clusterings) {
+      const auto found = p.cluster.find(clustering.area);
+      participants << ',' << (found == p.cluster.end() ? "" : csvField(found->second));
+    }
+    participants << "\n";
+  }
+  write("participants.csv", participants.str());
+
+  std::ostringstream phases;
+  phases << "participant,phase,seconds\n";
+  for (const auto& p : study.participants) {
+    for (const auto& [phase, seconds] : p.time_per_phase) {
+      phases << csvField(p.participant) << ',' << csvField(phase) << ',' << csvNumber(seconds) << "\n";
+    }
+  }
+  write("phases.csv", phases.str());
+
+  for (const auto& clustering : study.clusterings) {
+    const Eigen::Index joints = clustering.postures.rows();
+    std::ostringstream members;
+    members << "participant,cluster,mds_x,mds_y";
+    for (Eigen::Index j = 0; j < joints; ++j) members << ",q" << j + 1 << "_rad";
+    members << "\n";
+    for (Eigen::Index m = 0; m < clustering.postures.cols(); ++m) {
+      members << csvField(clustering.participants[static_cast<std::size_t>(m)]) << ','
+              << csvField(clustering.names[static_cast<std::size_t>(clustering.kmeans.labels[static_cast<std::size_t>(m)])])
+              << ',' << csvNumber(clustering.mds(0, m)) << ',' << csvNumber(clustering.mds(1, m));
+      for (Eigen::Index j = 0; j < joints; ++j) members << ',' << csvNumber(clustering.postures(j, m));
+      members << "\n";
+    }
+    write("clusters_area" + std::to_string(clustering.area) + ".csv", members.str());
+
+    std::ostringstream centres;
+    centres << "cluster,users,mds_x,mds_y";
+    for (Eigen::Index j = 0; j < joints; ++j) centres << ",q" << j + 1 << "_rad";
+    centres << "\n";
+    for (std::size_t c = 0; c < clustering.names.size(); ++c) {
+      const auto column = static_cast<Eigen::Index>(c);
+      centres << csvField(clustering.names[c]) << ',' << clustering.kmeans.sizes[c] << ','
+              << csvNumber(clustering.centre_mds(0, column)) << ',' << csvNumber(clustering.centre_mds(1, column));
+      for (Eigen::Index j = 0; j < joints; ++j) centres << ',' << csvNumber(clustering.kmeans.centres(j, column));
+      centres << "\n";
+    }
+    write("centres_area" + std::to_string(clustering.area) + ".csv", centres.str());
+  }
+
+  std::ostringstream combinations;
+  combinations << "combination,users,successful,median_e_task_m,median_e_coll,consistent\n";
+  for (const auto& c : study.combinations) {
+    combinations << csvField(c.name) << ',' << c.users << ',' << c.successful << ',' << csvNumber(c.median_e_task)
+                 << ',' << csvNumber(c.median_e_coll) << ',' << (c.consistent ? 1 : 0) << "\n";
+  }
+  write("combinations.csv", combinations.str());
+  return written;
+}
+
+namespace {
+
+using Rgb = std::array<std::uint8_t, 3>;
+
+// Distinct colours for up to ten clusters (then they repeat).
+constexpr std::array<Rgb, 10> kPalette{{{228, 26, 28},
+                                        {55, 126, 184},
+                                        {77, 175, 74},
+                                        {152, 78, 163},
+                                        {255, 127, 0},
+                                        {166, 86, 40},
+                                        {247, 129, 191},
+                                        {0, 0, 0},
+                                        {0, 160, 160},
+                                        {120, 120, 0}}};
+
+struct Canvas {
+  ScatterImage& image;
+  void set(int x, int y, const Rgb& colour) const {
+    if (x < 0 || y < 0 || x >= image.width || y >= image.height) return;
+    const auto i = static_cast<std::size_t>(4 * (y * image.width + x));
+    image.rgba[i] = colour[0];
+    image.rgba[i + 1] = colour[1];
+    image.rgba[i + 2] = colour[2];
+    image.rgba[i + 3] = 255;
+  }
+  void disc(double cx, double cy, double radius, const Rgb& colour) const {
+    for (int y = static_cast<int>(cy - radius); y <= static_cast<int>(cy + radius) + 1; ++y) {
+      for (int x = static_cast<int>(cx - radius); x <= static_cast<int>(cx + radius) + 1; ++x) {
+        if (std::hypot(x - cx, y - cy) <= radius) set(x, y, colour);
+      }
+    }
+  }
+  void ring(double cx, double cy, double radius, double width, const Rgb& colour) const {
+    for (int y = static_cast<int>(cy - radius - width); y <= static_cast<int>(cy + radius + width) + 1; ++y) {
+      for (int x = static_cast<int>(cx - radius - width); x <= static_cast<int>(cx + radius + width) + 1; ++x) {
+        if (std::abs(std::hypot(x - cx, y - cy) - radius) <= 0.5 * width) set(x, y, colour);
+      }
+    }
+  }
+  void rectangle(int x0, int y0, int x1, int y1, const Rgb& colour) const {
+    for (int x = x0; x <= x1; ++x) {
+      set(x, y0, colour);
+      set(x, y1, colour);
+    }
+    for (int y = y0; y <= y1; ++y) {
+      set(x0, y, colour);
+      set(x1, y, colour);
+    }
+  }
+};
+
+}  // namespace
+
+ScatterImage renderMdsScatter(const StudyResult& study, int width, int height) {
+  if (width < 16 || height < 16 || width > 8192 || height > 8192) {
+    throw InputError("scatter plot: expected a size in [16, 8192] pixels");
+  }
+  ScatterImage image{width, height, std::vector<std::uint8_t>(static_cast<std::size_t>(4 * width * height), 255)};
+  const Canvas canvas{image};
+  const int panels = std::max<int>(1, static_cast<int>(study.clusterings.size()));
+  const int panel_width = width / panels;
+  constexpr int kMargin = 12;
+  const Rgb frame{160, 160, 160};
+  for (int p = 0; p < static_cast<int>(study.clusterings.size()); ++p) {
+    const AreaClustering& c = study.clusterings[static_cast<std::size_t>(p)];
+    const int x0 = p * panel_width + kMargin;
+    const int x1 = (p + 1) * panel_width - kMargin;
+    const int y0 = kMargin;
+    const int y1 = height - kMargin;
+    canvas.rectangle(x0 - 4, y0 - 4, x1 + 4, y1 + 4, frame);
+    // One scale for both axes (MDS distances are meaningful), fitted to points and centres.
+    Eigen::MatrixXd all(2, c.mds.cols() + c.centre_mds.cols());
+    all << c.mds, c.centre_mds;
+    const Eigen::Vector2d low = all.rowwise().minCoeff();
+    const Eigen::Vector2d high = all.rowwise().maxCoeff();
+    const double span = std::max({high.x() - low.x(), high.y() - low.y(), 1e-9});
+    const double scale = std::min(x1 - x0, y1 - y0) / span;
+    const double ox = 0.5 * (x0 + x1) - scale * 0.5 * (low.x() + high.x());
+    const double oy = 0.5 * (y0 + y1) + scale * 0.5 * (low.y() + high.y());
+    const auto px = [&](double x) { return ox + scale * x; };
+    const auto py = [&](double y) { return oy - scale * y; };  // y up
+    for (Eigen::Index m = 0; m < c.mds.cols(); ++m) {
+      const auto label = static_cast<std::size_t>(c.kmeans.labels[static_cast<std::size_t>(m)]);
+      canvas.disc(px(c.mds(0, m)), py(c.mds(1, m)), 4.0, kPalette[label % kPalette.size()]);
+    }
+    for (Eigen::Index k = 0; k < c.centre_mds.cols(); ++k) {
+      if (c.kmeans.sizes[static_cast<std::size_t>(k)] == 0) continue;  // an unused seed
+      canvas.ring(px(c.centre_mds(0, k)), py(c.centre_mds(1, k)), 9.0, 2.0,
+                  kPalette[static_cast<std::size_t>(k) % kPalette.size()]);
+    }
+  }
+  return image;
+}
+
+}  // namespace flexirob::app
