@@ -31,6 +31,7 @@ class CollectingReporter : public benchmark::BenchmarkReporter {
       const double seconds_per_iteration = run.GetAdjustedRealTime() / benchmark::GetTimeUnitMultiplier(run.time_unit);
       samples_[run.run_name.function_name].push_back(seconds_per_iteration * 1e6);  // microseconds
       iterations_[run.run_name.function_name] += run.iterations;
+      for (const auto& [counter, value] : run.counters) counters_[run.run_name.function_name][counter] = value.value;
       std::fprintf(stderr, ".");
     }
   }
@@ -44,6 +45,8 @@ class CollectingReporter : public benchmark::BenchmarkReporter {
     static const ThesisFigure kThesis[] = {
         {"planning/itm_insert_delta4/", 1000.0, "Sect. 7.4: < 1 ms per sample with 300+ nodes, delta = 4 (upper bound)"},
         {"control/cycle", 1000.0, "FRI cycle 1 ms (Sect. 8.1): the whole budget of one control cycle"},
+        {"learning/elm_fit/", 5.3e6,
+         "Sect. 4.3.3: 5.3 +- 1.0 s of learning per configuration (2012 hardware, with its model selection)"},
     };
     Json entries = Json::array();
     for (const auto& [name, values] : samples_) {
@@ -65,6 +68,9 @@ class CollectingReporter : public benchmark::BenchmarkReporter {
                          {"max_us", sorted.back()},
                          {"repetitions", sorted.size()},
                          {"iterations", iterations_.at(name)}});
+      if (const auto found = counters_.find(name); found != counters_.end()) {
+        for (const auto& [counter, value] : found->second) entries.back()["counters"][counter] = value;
+      }
       for (const auto& figure : kThesis) {
         if (name.rfind(figure.prefix, 0) != 0) continue;
         entries.back()["thesis_us"] = figure.us;
@@ -78,6 +84,7 @@ class CollectingReporter : public benchmark::BenchmarkReporter {
  private:
   std::map<std::string, std::vector<double>> samples_;
   std::map<std::string, std::int64_t> iterations_;
+  std::map<std::string, std::map<std::string, double>> counters_;  // of the last repetition
 };
 
 struct PeerOptions {

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <random>
 
@@ -62,10 +63,21 @@ ControllerSolveResult ControllerPositionSolver::solve(const Eigen::VectorXd& q_s
   ControllerSolveResult result;
   result.q = q_start;
   Impl& s = *impl_;
+  // Stalled (held by joint limits or at a local minimum of the error): no 0.1 % progress of
+  // the best error in 20 iterations ends the solve, as KDL's LMA stops on vanishing steps.
+  constexpr int kStallIterations = 20;
+  double best_error = std::numeric_limits<double>::infinity();
+  int best_iteration = 0;
   for (result.iterations = 0; result.iterations <= s.max_iterations; ++result.iterations) {
     s.controller.velocity(result.q, p_des, q_start, s.qd);
     result.error_m = s.controller.taskError();
     if (result.error_m < s.eps || result.iterations == s.max_iterations) break;
+    if (result.error_m < (1.0 - 1e-3) * best_error) {
+      best_error = result.error_m;
+      best_iteration = result.iterations;
+    } else if (result.iterations - best_iteration >= kStallIterations) {
+      break;
+    }
     result.q = (result.q + kStep * s.qd).cwiseMax(s.lower).cwiseMin(s.upper);
   }
   return result;
