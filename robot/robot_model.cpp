@@ -359,7 +359,17 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
     throw InputError("invalid URDF: " + reason);
   }
   if (urdf_model->links_.size() > kMaxLinks) throw InputError("URDF has more than 10000 links");
-  checkTree(*urdf_model);
+  try {
+    checkTree(*urdf_model);
+  } catch (const InputError&) {
+    // Links own their children through shared pointers, so a cycle would keep itself alive
+    // (a leak per refused file): drop the child lists before the model goes.
+    for (auto& [name, link] : urdf_model->links_) {
+      link->child_links.clear();
+      link->child_joints.clear();
+    }
+    throw;
+  }
   const urdf::LinkConstSharedPtr root = urdf_model->getRoot();
   if (!root) throw InputError("invalid URDF: no root link");
 
