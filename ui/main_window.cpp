@@ -257,7 +257,6 @@ void MainWindow::startLive() {
   }
   startRecording();
   live_->start();
-  heard_converged_ = 0;
   last_warning_.clear();
   stage_panel_->clearWarning();
   mirror();
@@ -308,6 +307,7 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
   Eigen::VectorXd q = model_->midPosture();
   if (scene_.home_posture && scene_.home_posture->size() == model_->dof()) q = *scene_.home_posture;
   joint_panel_->setRobot(*model_, q);
+  joint_panel_->setReadOnly(true);  // the panel mirrors the live arm; the backend owns the posture
   kinematics_->update(q);
   world_.robot()->setPosture(*kinematics_);
   view_->setHomeCamera(world_.defaultCamera(static_cast<double>(view_->width()) / std::max(1, view_->height())));
@@ -446,12 +446,6 @@ void MainWindow::mirror() {
     } else {
       force_arrow_->hide();
     }
-    // The acoustic acknowledgement of on_converged (Sect. 2.3.1).
-    if (s.on_converged > heard_converged_) {
-      heard_converged_ = s.on_converged;
-      chime_->play();
-      ++chimes_;
-    }
     if (!last_warning_.isEmpty() || banner_label_->text().isEmpty() ||
         banner_label_->property("stage").toString() != StagePanel::stageText(s.stage, s.sub_stage)) {
       showBanner(last_warning_);
@@ -498,6 +492,11 @@ void MainWindow::handleEvents() {
       } else if (event.kind == K::kButton) {
         recorder_->recordButton(event.time, event.name);
       }
+    }
+    // The acoustic acknowledgement of on_converged (Sect. 2.3.1), detected or from the keyboard.
+    if (event.kind == K::kTrigger && event.name == robot::toString(robot::TriggerKind::kOnConverged)) {
+      chime_->play();
+      ++chimes_;
     }
     if (event.kind == K::kWarning || event.kind == K::kRefused) {
       last_warning_ = QString::fromStdString(event.detail.empty() ? event.name : event.detail);

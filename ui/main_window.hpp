@@ -146,7 +146,6 @@ class MainWindow : public QMainWindow {
   QString session_file_;
   std::size_t recorded_areas_ = 0;
   std::uint64_t shown_cycle_ = ~0ULL;
-  std::uint64_t heard_converged_ = 0;
   int chimes_ = 0;
 
   OsgView* view_ = nullptr;

@@ -30,7 +30,7 @@ QColor jointColor(int joint) {
 TimePlot::TimePlot(const QString& title, const QString& value_label, QWidget* parent)
     : QChartView(parent), chart_(new QChart) {
   chart_->setTitle(title);
-  chart_->legend()->setAlignment(Qt::AlignRight);
+  chart_->legend()->setAlignment(Qt::AlignBottom);  // the plot keeps the panel's width
   chart_->setMargins(QMargins(4, 2, 4, 2));
   chart_->setAnimationOptions(QChart::NoAnimation);
   time_axis_ = new QValueAxis;
@@ -69,6 +69,10 @@ int TimePlot::addSeries(const QString& name, const QColor& color, Qt::PenStyle s
 void TimePlot::setSeriesData(int series, const QList<QPointF>& points) {
   series_.at(static_cast<std::size_t>(series))->replace(points);
   if (!fixed_values_) autoscale();
+}
+
+void TimePlot::hideFromLegend(int series) {
+  for (QLegendMarker* marker : chart_->legend()->markers(series_.at(static_cast<std::size_t>(series)))) marker->setVisible(false);
 }
 
 void TimePlot::setSeriesName(int series, const QString& name) { series_.at(static_cast<std::size_t>(series))->setName(name); }
@@ -159,8 +163,8 @@ void PlotPanel::setJoints(const std::vector<std::string>& names, const Eigen::Ve
   fresh->setValueRange(-0.05, 1.05);
   fresh->addSeries(QStringLiteral("limits"), QColor(200, 30, 30), Qt::DashLine, 1.0);
   fresh->addSeries(QString(), QColor(200, 30, 30), Qt::DashLine, 1.0);
+  fresh->hideFromLegend(1);  // one legend entry for both limit lines
   for (std::size_t j = 0; j < names.size(); ++j) fresh->addSeries(QString::fromStdString(names[j]), jointColor(static_cast<int>(j)));
-  // Only the first limit line is named in the legend.
   static_cast<QVBoxLayout*>(layout())->replaceWidget(joints_, fresh);
   joints_->deleteLater();
   joints_ = fresh;
@@ -184,6 +188,8 @@ void PlotPanel::append(const PlotSample& sample) {
   while (!samples_.empty() && samples_.front().time < sample.time - window_seconds_) samples_.pop_front();
   rebuild();
 }
+
+void PlotPanel::setCycleStatisticsVisible(bool visible) { cycles_->setVisible(visible); }
 
 void PlotPanel::setWindowSeconds(double seconds) { window_seconds_ = std::max(0.5, seconds); }
 

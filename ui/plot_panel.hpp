@@ -45,6 +45,7 @@ class TimePlot : public QChartView {
   int addSeries(const QString& name, const QColor& color, Qt::PenStyle style = Qt::SolidLine, qreal width = 1.5);
   void setSeriesData(int series, const QList<QPointF>& points);
   void setSeriesName(int series, const QString& name);
+  void hideFromLegend(int series);
   int seriesCount() const { return static_cast<int>(series_.size()); }
   const QLineSeries* series(int index) const { return series_.at(static_cast<std::size_t>(index)); }
   void setTimeRange(double t0, double t1);
@@ -88,6 +89,8 @@ class PlotPanel : public QWidget {
   /// Appends one sample (live) and shows the last windowSeconds().
   void append(const PlotSample& sample);
   void setWindowSeconds(double seconds);
+  /// Shows or hides the control-cycle plot (recordings hold no cycle statistics).
+  void setCycleStatisticsVisible(bool visible);
   double windowSeconds() const { return window_seconds_; }
 
   /// Moves the cursor of every plot (no signal).

@@ -170,6 +170,8 @@ ReviewWindow::ReviewWindow(QWidget* parent)
   splitter->addWidget(plots_);
   splitter->setStretchFactor(0, 3);
   splitter->setStretchFactor(1, 2);
+  splitter->setSizes({700, 480});
+  plots_->setCycleStatisticsVisible(false);  // recordings hold no control-cycle statistics
   layout->addWidget(splitter, 1);
 
   timeline_ = new Timeline(central);

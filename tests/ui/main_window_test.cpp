@@ -36,6 +36,14 @@ QStringList toQStringList(const std::vector<std::string>& names) {
 // Qt's offscreen platform has no OpenGL: a shown QOpenGLWidget would crash there in Qt itself.
 bool canDraw() { return QGuiApplication::platformName() != QStringLiteral("offscreen"); }
 
+// No session files and no layout of an earlier run.
+MainWindow::Options quietOptions() {
+  MainWindow::Options options;
+  options.record_sessions = false;
+  options.restore_layout = false;
+  return options;
+}
+
 void showIfDrawable(QWidget& window) {
   if (canDraw()) window.show();
 }
@@ -54,9 +62,9 @@ double maxDifference(const osg::Matrixd& a, const osg::Matrixd& b) {
 class MainWindowTest : public QObject {
   Q_OBJECT
 
- private slots:
+ private Q_SLOTS:
   void buildsWithTheDefaultRobotAndScene() {
-    MainWindow window("lwr4", "setup_I");
+    MainWindow window("lwr4", "setup_I", quietOptions());
     showIfDrawable(window);
     QVERIFY(window.robotModel() != nullptr);
     QCOMPARE(window.robotModel()->name(), std::string("lwr4"));
@@ -67,36 +75,30 @@ class MainWindowTest : public QObject {
     QCOMPARE(window.world().robot()->bodyCount(), static_cast<int>(window.robotModel()->bodies().size()));
   }
 
-  void movingASliderPosesTheRobotInTheView() {
-    MainWindow window("lwr4", "empty");
+  void theViewAndTheJointPanelMirrorTheLiveArm() {
+    MainWindow window("lwr4", "empty", quietOptions());
     showIfDrawable(window);
-    flexirob::ui::JointPanel* panel = window.jointPanel();
-    QSignalSpy spy(panel, &flexirob::ui::JointPanel::postureChanged);
-    const Eigen::VectorXd before = panel->posture();
-    const int elbow = 3;  // A4
-    const int last_body = window.world().robot()->bodyCount() - 1;
-    const osg::Matrixd X_before = window.world().robot()->body(last_body)->getMatrix();
-    // A user presses Page Up on the A4 slider: one page step of 10 degrees.
-    flexirob::ui::LimitSlider* slider = panel->slider(elbow);
-    slider->setFocus();
-    QTest::keyClick(slider, Qt::Key_PageUp);
-    QCOMPARE(spy.count(), 1);
-    const Eigen::VectorXd after = panel->posture();
-    QVERIFY(std::abs(std::abs(after[elbow] - before[elbow]) - 10.0 * M_PI / 180.0) < 2e-3);
-    for (int j = 0; j < 7; ++j) {
-      if (j != elbow) QCOMPARE(after[j], before[j]);
-    }
-    // The view's flange body moved, to where an independent forward kinematics puts it.
-    const osg::Matrixd X_after = window.world().robot()->body(last_body)->getMatrix();
-    QVERIFY(maxDifference(X_before, X_after) > 1e-3);
+    QTRY_VERIFY(window.live() != nullptr && window.live()->snapshot().running);
+    QTest::qWait(100);
+    window.mirror();
+    const auto& snapshot = window.live()->snapshot();
+    Eigen::VectorXd q(snapshot.dof);
+    for (int j = 0; j < snapshot.dof; ++j) q[j] = snapshot.q[static_cast<std::size_t>(j)];
+    window.mirror();  // the arm is held still in IDLE: the newest snapshot shows the same posture
+    QVERIFY((window.jointPanel()->posture() - q).cwiseAbs().maxCoeff() < 2e-3);  // slider steps of 1e-3
+    // The view's flange body is where an independent forward kinematics of the live posture
+    // puts it; the sliders only show the posture (the arm is the backend's).
     flexirob::robot::Kinematics kinematics(*window.robotModel());
-    kinematics.update(after);
-    QVERIFY(maxDifference(X_after, flexirob::render::toOsgMatrix(kinematics.X_WB(last_body))) < 1e-9);
-    QVERIFY((window.kinematics()->p_WT() - kinematics.p_WT()).norm() < 1e-12);
+    kinematics.update(window.kinematics()->q());
+    const int last_body = window.world().robot()->bodyCount() - 1;
+    QVERIFY(maxDifference(window.world().robot()->body(last_body)->getMatrix(),
+                          flexirob::render::toOsgMatrix(kinematics.X_WB(last_body))) < 1e-9);
+    QVERIFY((window.kinematics()->q() - q).cwiseAbs().maxCoeff() < 1e-3);
+    QVERIFY(!window.jointPanel()->slider(0)->isEnabled());
   }
 
   void menusListTheBuiltInRobotsAndScenes() {
-    MainWindow window("lwr4", "empty");
+    MainWindow window("lwr4", "empty", quietOptions());
     QCOMPARE(actionNames(window.robotMenu()), toQStringList(flexirob::builtinRobotNames()));
     QCOMPARE(actionNames(window.sceneMenu()), toQStringList(flexirob::robot::builtinSceneNames()));
     // Choosing the 9-DoF arm from the menu rebuilds the joint panel.
@@ -112,7 +114,7 @@ class MainWindowTest : public QObject {
   }
 
   void badChoicesKeepTheCurrentRobotAndScene() {
-    MainWindow window("lwr4", "setup_I");
+    MainWindow window("lwr4", "setup_I", quietOptions());
     QVERIFY(!window.loadRobot("/nonexistent/robot.urdf"));
     QVERIFY(!window.loadScene("no_such_scene"));
     QCOMPARE(window.robotModel()->name(), std::string("lwr4"));
@@ -122,7 +124,7 @@ class MainWindowTest : public QObject {
 
   void viewDrawsTheRobotWhereItStands() {
     if (!canDraw()) QSKIP("no OpenGL on Qt's offscreen platform");
-    MainWindow window("lwr4", "empty");
+    MainWindow window("lwr4", "empty", quietOptions());
     window.show();
     QVERIFY(QTest::qWaitForWindowExposed(&window));
     const QImage shown = window.view()->grabFramebuffer();
@@ -149,7 +151,7 @@ class MainWindowTest : public QObject {
 
   void mouseOrbitsPansAndZooms() {
     if (!canDraw()) QSKIP("no OpenGL on Qt's offscreen platform");
-    MainWindow window("lwr4", "empty");
+    MainWindow window("lwr4", "empty", quietOptions());
     window.show();
     QVERIFY(QTest::qWaitForWindowExposed(&window));
     flexirob::ui::OsgView* view = window.view();
@@ -161,7 +163,8 @@ class MainWindowTest : public QObject {
       QApplication::sendEvent(view, &event);
     };
     const auto drag = [&](Qt::MouseButton button, Qt::KeyboardModifiers modifiers) {
-      const QPointF start(view->width() / 2.0, view->height() / 2.0);
+      // From the sky in the upper left corner: a press on the arm would grab it instead.
+      const QPointF start(view->width() * 0.08, view->height() * 0.08);
       send(QEvent::MouseButtonPress, start, button, button, modifiers);
       for (int i = 1; i <= 5; ++i) {
         send(QEvent::MouseMove, start + QPointF(12.0 * i, 4.0 * i), Qt::NoButton, button, modifiers);

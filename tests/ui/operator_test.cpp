@@ -1,0 +1,316 @@
+// The operator's interactions with the live robot: the stage panel's buttons drive the teaching
+// workflow, the keyboard moves the 9-DoF arm, a mouse drag on a link pulls it, the force arrow
+// and the key map show in the window, the joint-limit bars, parameters and sessions.
+#include <QApplication>
+#include <QDoubleSpinBox>
+#include <QGuiApplication>
+#include <QLabel>
+#include <QMouseEvent>
+#include <QPushButton>
+#include <QStandardPaths>
+#include <QTemporaryDir>
+#include <QTest>
+
+#include "app/session_reader.hpp"
+#include "render/camera.hpp"
+#include "robot/kinematics.hpp"
+#include "ui/joint_panel.hpp"
+#include "ui/live_teaching.hpp"
+#include "ui/main_window.hpp"
+#include "ui/mouse_perturbation.hpp"
+#include "ui/osg_view.hpp"
+#include "ui/parameter_panel.hpp"
+#include "ui/stage_panel.hpp"
+#include "ui/teleop_keys.hpp"
+
+using flexirob::app::Button;
+using flexirob::app::Stage;
+using flexirob::app::SubStage;
+using flexirob::ui::MainWindow;
+
+namespace {
+
+bool canDraw() { return QGuiApplication::platformName() != QStringLiteral("offscreen"); }
+
+MainWindow::Options quietOptions() {
+  MainWindow::Options options;
+  options.record_sessions = false;
+  options.restore_layout = false;
+  return options;
+}
+
+Eigen::Vector3d tip(MainWindow& window) {
+  const auto& s = window.live()->snapshot();
+  return {s.p_WT[0], s.p_WT[1], s.p_WT[2]};
+}
+
+Eigen::Vector3d bodyOrigin(MainWindow& window, int body) {
+  window.mirror();
+  return window.kinematics()->X_WB(body).translation();
+}
+
+void waitRunning(MainWindow& window) {
+  QTRY_VERIFY_WITH_TIMEOUT(window.live() != nullptr && window.live()->snapshot().running, 10000);
+}
+
+}  // namespace
+
+class OperatorTest : public QObject {
+  Q_OBJECT
+
+ private Q_SLOTS:
+  void initTestCase() { QStandardPaths::setTestModeEnabled(true); }
+
+  void buttonsDriveTheWorkflow() {
+    MainWindow window("lwr4", "setup_I", quietOptions());
+    if (canDraw()) window.show();
+    waitRunning(window);
+    flexirob::ui::StagePanel* panel = window.stagePanel();
+    const auto& s = window.live()->snapshot();
+    window.mirror();
+    // In IDLE without areas only "start configuration" makes sense.
+    QVERIFY(panel->button(Button::kStartConfiguration)->isEnabled());
+    QVERIFY(!panel->button(Button::kFinishedConfiguration)->isEnabled());
+    QVERIFY(!panel->button(Button::kStartProgramming)->isEnabled());
+    QVERIFY(!panel->button(Button::kFinishedProgramming)->isEnabled());
+
+    QTest::mouseClick(panel->button(Button::kStartConfiguration), Qt::LeftButton);
+    QTRY_COMPARE(s.stage, Stage::kConfiguration);
+    QTRY_VERIFY(panel->stageLabel()->text().contains(QStringLiteral("CONFIGURATION")));
+    QVERIFY(!panel->button(Button::kStartConfiguration)->isEnabled());
+    QVERIFY(!panel->button(Button::kFinishedConfiguration)->isEnabled());  // no area yet
+
+    // The keyboard's trigger keys walk through the sub-stages (Sect. 8.1); on_converged chimes.
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
+    QTRY_VERIFY(panel->stageLabel()->text().contains(QStringLiteral("APPROACHING")));
+    const int chimes = window.chimes();
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
+    QTRY_VERIFY(window.chimes() > chimes);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kRecording);
+    QVERIFY(!panel->button(Button::kFinishedConfiguration)->isEnabled());  // not while recording
+    QTest::qWait(300);  // samples every 20 ms
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(s.areas, 1);
+    QTRY_VERIFY(panel->button(Button::kFinishedConfiguration)->isEnabled());
+
+    QTest::mouseClick(panel->button(Button::kFinishedConfiguration), Qt::LeftButton);
+    QTRY_COMPARE(s.stage, Stage::kIdle);
+    QTRY_VERIFY_WITH_TIMEOUT(s.model_ready, 30000);
+    QTRY_VERIFY(panel->button(Button::kStartProgramming)->isEnabled());
+    QTest::mouseClick(panel->button(Button::kStartProgramming), Qt::LeftButton);
+    QTRY_COMPARE(s.stage, Stage::kProgramming);
+    QTRY_VERIFY(panel->button(Button::kFinishedProgramming)->isEnabled());
+    QTest::mouseClick(panel->button(Button::kFinishedProgramming), Qt::LeftButton);
+    QTRY_COMPARE(s.stage, Stage::kExecution);
+    QTRY_VERIFY(panel->stageLabel()->text().contains(QStringLiteral("EXECUTION")));
+  }
+
+  void aRefusedRequestIsShownAsAWarning() {
+    MainWindow window("lwr4", "empty", quietOptions());
+    waitRunning(window);
+    // F6 (finish configuration) in IDLE: the workflow refuses and says why.
+    QTest::keyClick(&window, Qt::Key_F6);
+    QTRY_VERIFY(window.stagePanel()->warningLabel()->text().contains(QStringLiteral("finished_configuration")));
+    QCOMPARE(window.live()->snapshot().stage, Stage::kIdle);
+  }
+
+  void keysMoveTheNineDofArm() {
+    MainWindow window("arm9", "empty", quietOptions());
+    if (canDraw()) window.show();
+    waitRunning(window);
+    QCOMPARE(window.robotModel()->dof(), 9);
+    const auto& s = window.live()->snapshot();
+    QTest::keyClick(&window, Qt::Key_F5);  // start configuration
+    QTRY_COMPARE(s.stage, Stage::kConfiguration);
+    QTest::keyClick(&window, Qt::Key_Space);  // on_affected: APPROACHING
+    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
+
+    // Holding → moves the tip along +x at the tele-operation speed.
+    const Eigen::Vector3d before = tip(window);
+    QTest::keyPress(&window, Qt::Key_Right);
+    QTest::qWait(1500);
+    QTest::keyRelease(&window, Qt::Key_Right);
+    QTRY_VERIFY(s.keyboard_mode);
+    QTest::qWait(500);
+    const Eigen::Vector3d moved = tip(window);
+    QVERIFY2(moved.x() - before.x() > 0.03,
+             qPrintable(QStringLiteral("tip moved by (%1, %2, %3) m")
+                            .arg(moved.x() - before.x())
+                            .arg(moved.y() - before.y())
+                            .arg(moved.z() - before.z())));
+    QVERIFY(std::abs(moved.z() - before.z()) < 0.5 * (moved.x() - before.x()));
+
+    // Holding 3 turns joint 3 (the null space: the tip stays about where it is).
+    const double q3 = s.q[2];
+    QTest::keyPress(&window, Qt::Key_3);
+    QTest::qWait(1500);
+    QTest::keyRelease(&window, Qt::Key_3);
+    QTest::qWait(500);
+    QVERIFY2(s.q[2] - q3 > 0.05, qPrintable(QStringLiteral("joint 3 moved by %1 rad").arg(s.q[2] - q3)));
+  }
+
+  void aMouseDragOnALinkPullsIt() {
+    if (!canDraw()) QSKIP("no OpenGL on Qt's offscreen platform");
+    MainWindow window("lwr4", "empty", quietOptions());
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    waitRunning(window);
+    const auto& s = window.live()->snapshot();
+    QTest::mouseClick(window.stagePanel()->button(Button::kStartConfiguration), Qt::LeftButton);
+    QTRY_COMPARE(s.stage, Stage::kConfiguration);
+    flexirob::ui::OsgView* view = window.view();
+    view->grabFramebuffer();
+    const int elbow = 4;
+    const Eigen::Vector3d before = bodyOrigin(window, elbow);
+    const auto pixel = flexirob::render::projectToPixel(view->currentCamera(), view->width(), view->height(), before);
+    QVERIFY(pixel.has_value());
+    const auto send = [view](QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons held) {
+      QMouseEvent event(type, at, view->mapToGlobal(at), button, held, Qt::NoModifier);
+      QApplication::sendEvent(view, &event);
+    };
+    const QPointF start(pixel->x(), pixel->y());
+    send(QEvent::MouseButtonPress, start, Qt::LeftButton, Qt::LeftButton);
+    QVERIFY2(window.perturbation()->grabbing(), "the press did not grab the elbow");
+    // Pull to the upper left (the camera's left and up) and hold.
+    for (int i = 1; i <= 8; ++i) {
+      send(QEvent::MouseMove, start + QPointF(-10.0 * i, -8.0 * i), Qt::NoButton, Qt::LeftButton);
+      QTest::qWait(30);
+    }
+    QTRY_VERIFY(s.hand_active);
+    QTRY_VERIFY(window.forceArrow()->visible());
+    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);  // the pull is a touch: on_affected
+    QTest::qWait(1500);
+    const Eigen::Vector3d pulled = bodyOrigin(window, elbow);
+    send(QEvent::MouseButtonRelease, start + QPointF(-80.0, -64.0), Qt::LeftButton, Qt::NoButton);
+    QVERIFY(!window.perturbation()->grabbing());
+    QTRY_VERIFY(!window.forceArrow()->visible());
+    QVERIFY2((pulled - before).norm() > 0.03,
+             qPrintable(QStringLiteral("the elbow moved %1 m").arg((pulled - before).norm())));
+    // It moved towards where the cursor went, in the picture.
+    const auto moved_pixel = flexirob::render::projectToPixel(view->currentCamera(), view->width(), view->height(), pulled);
+    QVERIFY(moved_pixel.has_value());
+    const Eigen::Vector2d drag(-80.0, -64.0);
+    const double along = (*moved_pixel - *pixel).dot(drag.normalized());
+    QVERIFY2(along > 5.0, qPrintable(QStringLiteral("the elbow moved %1 px along the drag").arg(along)));
+  }
+
+  void theForceArrowAndTheKeyMapShowInTheWindow() {
+    if (!canDraw()) QSKIP("no OpenGL on Qt's offscreen platform");
+    MainWindow window("lwr4", "empty", quietOptions());
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    waitRunning(window);
+    // The arrow at the tip, 40 N along −y: pixels change where it is drawn, and only there.
+    const Eigen::Vector3d p = window.kinematics()->p_WT();
+    window.forceArrow()->show(p, Eigen::Vector3d(0.0, -40.0, 0.0));
+    const QImage with_arrow = window.view()->grabFramebuffer();
+    window.forceArrow()->hide();
+    const QImage without = window.view()->grabFramebuffer();
+    QCOMPARE(with_arrow.size(), without.size());
+    int changed = 0;
+    for (int y = 0; y < with_arrow.height(); ++y) {
+      for (int x = 0; x < with_arrow.width(); ++x) changed += with_arrow.pixel(x, y) != without.pixel(x, y) ? 1 : 0;
+    }
+    QVERIFY2(changed > 150, qPrintable(QStringLiteral("the arrow changed %1 pixels").arg(changed)));
+    const auto middle = flexirob::render::projectToPixel(window.view()->currentCamera(), with_arrow.width(),
+                                                         with_arrow.height(), p + Eigen::Vector3d(0.0, -0.1, 0.0));
+    QVERIFY(middle.has_value());
+    const QPoint m(static_cast<int>(middle->x()), static_cast<int>(middle->y()));
+    QVERIFY2(with_arrow.pixel(m) != without.pixel(m), "the arrow is not drawn along the force");
+
+    // H shows the key map over the view, H hides it.
+    QVERIFY(!window.keyMapLabel()->isVisible());
+    QTest::keyClick(&window, Qt::Key_H);
+    QVERIFY(window.keyMapLabel()->isVisible());
+    QVERIFY(window.keyMapLabel()->text().contains(QStringLiteral("on_affected")));
+    QVERIFY(window.view()->geometry().contains(window.keyMapLabel()->geometry().translated(window.view()->pos())));
+    QTest::keyClick(&window, Qt::Key_H);
+    QVERIFY(!window.keyMapLabel()->isVisible());
+  }
+
+  void jointLimitBarsTurnAmberThenRed() {
+    flexirob::robot::JointLimits limits;
+    limits.lower = limits.soft_lower = -2.0;
+    limits.upper = limits.soft_upper = 2.0;
+    flexirob::ui::LimitDistanceBar bar(limits);
+    using Level = flexirob::ui::LimitDistanceBar::Level;
+    bar.setValue(0.0);
+    QCOMPARE(bar.level(), Level::kOk);
+    QCOMPARE(bar.distance(), 2.0);
+    bar.setValue(2.0 - 0.30);  // 0.30 rad from the upper limit
+    QCOMPARE(bar.level(), Level::kAmber);
+    bar.setValue(-2.0 + 0.10);
+    QCOMPARE(bar.level(), Level::kRed);
+    QVERIFY(std::abs(bar.distance() - 0.10) < 1e-12);
+  }
+
+  void theKeyMapCoversTaskJointsTriggersAndButtons() {
+    using flexirob::ui::TeleopAction;
+    using flexirob::ui::TeleopKeys;
+    TeleopKeys keys;
+    QVERIFY(keys.press(Qt::Key_Right));
+    QVERIFY(keys.press(Qt::Key_PageDown));
+    const Eigen::Vector3d v = keys.taskVelocity();
+    QCOMPARE(v, Eigen::Vector3d(TeleopKeys::kTaskSpeed, 0.0, -TeleopKeys::kTaskSpeed));
+    QVERIFY(keys.press(Qt::Key_9));  // joint 9 +
+    QVERIFY(keys.press(Qt::Key_E));  // joint 3 −
+    const Eigen::VectorXd arm9 = keys.jointVelocities(9);
+    QCOMPARE(arm9[8], TeleopKeys::kJointSpeed);
+    QCOMPARE(arm9[2], -TeleopKeys::kJointSpeed);
+    QCOMPARE(keys.jointVelocities(7).cwiseAbs().sum(), TeleopKeys::kJointSpeed);  // the LWR has no joint 9
+    QVERIFY(!keys.press(Qt::Key_Space));  // a trigger is a click, not held
+    QCOMPARE(TeleopKeys::actionOf(Qt::Key_Space)->trigger, flexirob::app::Trigger::kOnAffected);
+    QCOMPARE(TeleopKeys::actionOf(Qt::Key_Return)->trigger, flexirob::app::Trigger::kOnConverged);
+    QCOMPARE(TeleopKeys::actionOf(Qt::Key_F7)->button, Button::kStartProgramming);
+    QVERIFY(!TeleopKeys::actionOf(Qt::Key_Z).has_value());
+    QVERIFY(keys.release(Qt::Key_Right));
+    QCOMPARE(keys.taskVelocity().x(), 0.0);
+  }
+
+  void appliedParametersRestartTheRobotWithThem() {
+    MainWindow window("lwr4", "empty", quietOptions());
+    waitRunning(window);
+    const auto& declaration = window.parameters().declarations().front();
+    QDoubleSpinBox* box = window.parameterPanel()->spinBox(declaration.name);
+    QVERIFY(box != nullptr);
+    const double changed = declaration.min_value + 0.25 * (declaration.max_value - declaration.min_value);
+    box->setValue(changed);
+    const double shown = box->value();  // rounded to the box's decimals
+    auto* apply = window.parameterPanel()->findChild<QPushButton*>(QStringLiteral("apply_parameters"));
+    QVERIFY(apply != nullptr);
+    QTest::mouseClick(apply, Qt::LeftButton);
+    // The panel is rebuilt from the new parameter set: the new value stays shown.
+    QCOMPARE(window.parameters().get(declaration.name), shown);
+    QCOMPARE(window.parameterPanel()->spinBox(declaration.name)->value(), shown);
+    waitRunning(window);
+  }
+
+  void aSessionIsRecordedAndSaved() {
+    MainWindow::Options options = quietOptions();
+    options.record_sessions = true;
+    MainWindow window("lwr4", "empty", options);
+    waitRunning(window);
+    QVERIFY(!window.sessionFile().isEmpty());
+    QTest::keyClick(&window, Qt::Key_F5);
+    QTRY_COMPARE(window.live()->snapshot().stage, Stage::kConfiguration);
+    QTest::qWait(300);
+    QTemporaryDir directory;
+    const QString file = directory.filePath(QStringLiteral("saved.flexirob"));
+    QVERIFY(window.saveSession(file));
+    const flexirob::app::SessionReader reader(file.toStdString());
+    QCOMPARE(reader.metadata().robot_name, std::string("lwr4"));
+    QVERIFY(reader.stateCount() > 5);
+    bool configuration = false;
+    for (const auto& stage : reader.stages()) configuration = configuration || stage.stage == "CONFIGURATION";
+    QVERIFY(configuration);
+    // Recording goes on into a new file.
+    QVERIFY(!window.sessionFile().isEmpty());
+    QVERIFY(window.sessionFile() != file);
+  }
+};
+
+QTEST_MAIN(OperatorTest)
+#include "operator_test.moc"
