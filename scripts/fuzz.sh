@@ -39,6 +39,7 @@ for target in "${targets[@]}"; do
   stage "fuzz: $target for ${seconds}s"
   work="$dir/fuzz-work/$target"
   artifacts="$dir/fuzz-artifacts/$target/"
+  rm -rf "$artifacts"  # only this run's findings are copied to fuzz/regressions
   mkdir -p "$work" "$artifacts"
   # -rss_limit_mb and -malloc_limit_mb: an input that makes a parser allocate more than 2 GB
   # is a finding (absurd sizes must be refused before allocating), not an out-of-memory kill.
