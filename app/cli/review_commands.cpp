@@ -1,6 +1,9 @@
 // `review --session F`: the study metrics of one recorded session (DESIGN §5, §6; thesis
 // Sect. 3.3, 4.3.3, 5.2.2). Fields: duration_s, areas, samples, e_task, e_coll and the details
 // they come from.
+// `review --study DIR`: every session in DIR: per-participant table, k-means clusters of the
+// q_fixed postures per area (App. B.4), MDS coordinates, the consistent combinations (Tab. 4.1);
+// --csv-dir writes every table as CSV, --plot the MDS scatter plot as PNG (docs/STUDY.md).
 #include <cmath>
 #include <map>
 #include <optional>
@@ -10,7 +13,10 @@
 
 #include "app/cli/cli_support.hpp"
 #include "app/session_reader.hpp"
+#include "app/study.hpp"
 #include "app/study_metrics.hpp"
+#include "render/offscreen.hpp"
+#include "robot/errors.hpp"
 
 namespace flexirob::cli {
 namespace {
@@ -160,16 +166,142 @@ Json review(const std::string& file) {
   };
   out["recorder_states_dropped"] = count("states_dropped");
   out["recorder_events_dropped"] = count("events_dropped");
+  // E_coll by replay: the recorded postures against the recorded scene in the collision world.
+  const app::ParticipantResult replayed = app::analyseSession(reader, 0.01);
+  out["e_coll_replayed"] = replayed.e_coll ? Json(*replayed.e_coll) : Json(nullptr);
+  out["colliding_samples_replayed"] = replayed.colliding_samples;
+  out["replayed_samples"] = replayed.replayed_samples;
+  if (!replayed.replay_note.empty()) out["replay_note"] = replayed.replay_note;
+  return out;
+}
+
+Json optionalNumber(const std::optional<double>& value) { return value ? Json(*value) : Json(nullptr); }
+
+struct StudyArguments {
+  std::string folder;
+  std::string csv_dir;
+  std::string plot;
+  std::string centres;
+  double success_e_task = 0.01;
+  double replay_interval = 0.01;
+};
+
+Json reviewStudy(const StudyArguments& arguments) {
+  app::StudyOptions options;
+  if (!arguments.centres.empty()) options.seeds = app::loadClusterSeeds(arguments.centres);
+  options.success_e_task = arguments.success_e_task;
+  options.replay_interval = arguments.replay_interval;
+  options.progress = [](const std::string& what, double fraction) { reportProgress("review " + what, fraction); };
+  const app::StudyResult study = app::analyseStudy(arguments.folder, options);
+
+  Json out;
+  out["study"] = arguments.folder;
+  Json participants = Json::array();
+  for (const auto& p : study.participants) {
+    Json clusters = Json::object();
+    for (const auto& [area, name] : p.cluster) clusters[std::to_string(area)] = name;
+    Json phases = Json::object();
+    for (const auto& [phase, seconds] : p.time_per_phase) phases[phase] = seconds;
+    participants.push_back({{"participant", p.participant},
+                            {"file", p.file},
+                            {"robot", p.robot},
+                            {"scene", p.scene},
+                            {"closed_cleanly", p.closed_cleanly},
+                            {"duration_s", p.duration_s},
+                            {"areas", p.areas},
+                            {"samples", p.samples},
+                            {"e_task", optionalNumber(p.e_task)},
+                            {"max_deviation_m", optionalNumber(p.max_deviation)},
+                            {"procrustes_m", optionalNumber(p.procrustes)},
+                            {"jerk_mean", optionalNumber(p.jerk_mean)},
+                            {"e_coll", p.e_coll ? Json(*p.e_coll) : Json(nullptr)},
+                            {"colliding_samples", p.colliding_samples},
+                            {"e_coll_recorded", p.e_coll_recorded},
+                            {"clusters", clusters},
+                            {"time_per_phase_s", phases}});
+    if (!p.replay_note.empty()) participants.back()["replay_note"] = p.replay_note;
+  }
+  out["participants"] = participants;
+  out["skipped"] = study.skipped;
+  Json clusterings = Json::array();
+  for (const auto& c : study.clusterings) {
+    Json clusters = Json::array();
+    for (std::size_t k = 0; k < c.names.size(); ++k) {
+      clusters.push_back({{"name", c.names[k]},
+                          {"users", c.kmeans.sizes[k]},
+                          {"centre", toJson(c.kmeans.centres.col(static_cast<Eigen::Index>(k)))}});
+    }
+    Json members = Json::array();
+    for (std::size_t m = 0; m < c.participants.size(); ++m) {
+      const auto column = static_cast<Eigen::Index>(m);
+      members.push_back({{"participant", c.participants[m]},
+                         {"cluster", c.names[static_cast<std::size_t>(c.kmeans.labels[m])]},
+                         {"mds", {c.mds(0, column), c.mds(1, column)}}});
+    }
+    clusterings.push_back({{"area", c.area},
+                           {"iterations", c.kmeans.iterations},
+                           {"converged", c.kmeans.converged},
+                           {"clusters", clusters},
+                           {"members", members}});
+  }
+  out["clusterings"] = clusterings;
+  Json combinations = Json::array();
+  for (const auto& c : study.combinations) {
+    combinations.push_back({{"combination", c.name},
+                            {"users", c.users},
+                            {"successful", c.successful},
+                            {"median_e_task", optionalNumber(c.median_e_task)},
+                            {"median_e_coll", optionalNumber(c.median_e_coll)},
+                            {"consistent", c.consistent}});
+  }
+  out["combinations"] = combinations;
+  if (!arguments.csv_dir.empty()) {
+    Json files = Json::array();
+    for (const auto& file : app::writeStudyCsv(study, arguments.csv_dir)) files.push_back(file.string());
+    out["csv_files"] = files;
+  }
+  if (!arguments.plot.empty()) {
+    const app::ScatterImage scatter = app::renderMdsScatter(study, 360 * std::max<int>(1, static_cast<int>(study.clusterings.size())), 360);
+    render::Image image;
+    image.width = scatter.width;
+    image.height = scatter.height;
+    image.rgba = scatter.rgba;
+    render::writePng(image, arguments.plot);
+    out["plot"] = arguments.plot;
+  }
   return out;
 }
 
 }  // namespace
 
 void registerReviewCommands(CLI::App& app, CommandRunner& runner) {
-  auto* command = app.add_subcommand("review", "Study metrics of a recorded session");
+  auto* command = app.add_subcommand("review", "Study metrics of a recorded session or of a folder of sessions");
   auto session = std::make_shared<std::string>();
-  command->add_option("--session", *session, "session database written by teach or the GUI")->required();
-  command->callback([&runner, session] { runner.select([session] { return review(*session); }); });
+  auto study = std::make_shared<StudyArguments>();
+  auto* session_option = command->add_option("--session", *session, "session database written by teach or the GUI");
+  auto* study_option = command->add_option("--study", study->folder, "folder of session databases (*.db, *.sqlite, *.session)");
+  session_option->excludes(study_option);
+  command->add_option("--csv-dir", study->csv_dir, "with --study: write every table as CSV into this folder");
+  command->add_option("--plot", study->plot, "with --study: write the MDS scatter plot of the postures (PNG)");
+  command->add_option("--centres", study->centres,
+                      "with --study: initial k-means centres, CSV lines area,name,q1,...,q6 (default: thesis Tab. B.1)");
+  command->add_option("--success-e-task", study->success_e_task, "with --study: E_task [m] a successful teaching stays within")
+      ->check(CLI::Range(0.0, 10.0));
+  command->add_option("--replay-interval", study->replay_interval, "with --study: seconds between replayed states for E_coll")
+      ->check(CLI::Range(0.0, 10.0));
+  command->callback([&runner, session, study, session_option, study_option] {
+    if (session_option->count() == 0 && study_option->count() == 0) {
+      throw InputError("review: expected --session FILE or --study DIR");
+    }
+    if (session_option->count() > 0) {
+      if (!study->csv_dir.empty() || !study->plot.empty() || !study->centres.empty()) {
+        throw InputError("review: --csv-dir, --plot and --centres go with --study");
+      }
+      runner.select([session] { return review(*session); });
+    } else {
+      runner.select([study] { return reviewStudy(*study); });
+    }
+  });
 }
 
 }  // namespace flexirob::cli
