@@ -1,6 +1,8 @@
 // flexirob: the teaching GUI. A thin main: options, the main window, automated screenshots.
 #include <QApplication>
 #include <QCommandLineParser>
+#include <QKeyEvent>
+#include <QKeySequence>
 #include <QSurfaceFormat>
 #include <QTimer>
 #include <cstdio>
@@ -44,6 +46,11 @@ int main(int argc, char** argv) {
   const QCommandLineOption key_map(QStringLiteral("show-keys"), QStringLiteral("Show the key map in the view."));
   const QCommandLineOption fresh_layout(QStringLiteral("default-layout"),
                                         QStringLiteral("Ignore the window layout remembered from the last run."));
+  const QCommandLineOption keys(QStringLiteral("keys"),
+                                QStringLiteral("Type these keys into the window, one every 800 ms from start-up, comma-separated "
+                                               "Qt key names (e.g. F5,Space,Return): a scripted operator for demonstrations."),
+                                QStringLiteral("K"));
+  parser.addOption(keys);
   parser.addOption(backend);
   parser.addOption(key_map);
   parser.addOption(fresh_layout);
@@ -94,6 +101,25 @@ int main(int argc, char** argv) {
   window.show();
   if (parser.isSet(key_map)) {
     QTimer::singleShot(0, &window, [&] { window.toggleKeyMap(true); });
+  }
+
+  if (parser.isSet(keys)) {
+    int delay_ms = 800;
+    for (const QString& name : parser.value(keys).split(QLatin1Char(','), Qt::SkipEmptyParts)) {
+      const QKeySequence sequence = QKeySequence::fromString(name.trimmed());
+      if (sequence.isEmpty()) {
+        std::fprintf(stderr, "error: --keys: unknown key '%s'\n", qPrintable(name));
+        return 2;
+      }
+      const int key = sequence[0].key();
+      QTimer::singleShot(delay_ms, &window, [&window, key] {
+        QKeyEvent press(QEvent::KeyPress, key, Qt::NoModifier);
+        QApplication::sendEvent(&window, &press);
+        QKeyEvent release(QEvent::KeyRelease, key, Qt::NoModifier);
+        QApplication::sendEvent(&window, &release);
+      });
+      delay_ms += 800;
+    }
   }
 
   int exit_code = 0;
