@@ -32,6 +32,7 @@
 #include "ui/live_teaching.hpp"
 #include "ui/mouse_perturbation.hpp"
 #include "ui/osg_view.hpp"
+#include "ui/overlay_menu.hpp"
 #include "ui/parameter_panel.hpp"
 #include "ui/stage_panel.hpp"
 
@@ -65,6 +66,8 @@ MainWindow::MainWindow(const std::string& robot, const std::string& scene, const
   setCentralWidget(view_);
   view_->setSceneRoot(world_.root());
 
+  overlays_ = std::make_unique<render::Overlays>();
+  world_.root()->addChild(overlays_->root());
   force_arrow_ = std::make_unique<ForceArrow>();
   world_.root()->addChild(force_arrow_->node());
   perturbation_ = std::make_unique<MousePerturbation>(
@@ -206,6 +209,14 @@ void MainWindow::stopLive() {
   teleop_.clear();
   if (force_arrow_) force_arrow_->hide();
   shown_cycle_ = ~0ULL;
+  shown_areas_version_ = shown_teach_ins_version_ = shown_itm_version_ = ~0ULL;
+  if (overlays_) {
+    for (const render::OverlayLayer layer : {render::OverlayLayer::kTrainingSamples, render::OverlayLayer::kGhostArms,
+                                             render::OverlayLayer::kTrajectories}) {
+      overlays_->setContent(layer, nullptr);
+    }
+    overlays_->itm().setGraph({}, {});
+  }
 }
 
 void MainWindow::startRecording() {
@@ -415,6 +426,7 @@ void MainWindow::mirror() {
   }
   if (s.cycle != shown_cycle_ && s.dof == model_->dof()) {
     recordState(s);
+    updateOverlays(s);
     shown_cycle_ = s.cycle;
     Eigen::VectorXd q(s.dof);
     for (int j = 0; j < s.dof; ++j) q[j] = s.q[static_cast<std::size_t>(j)];
@@ -521,6 +533,53 @@ void MainWindow::recordTaughtData() {
     const int k = static_cast<int>(recorded_areas_);
     recorder_->recordArea({k, 0.0, area.centre, area.q_fixed});
     for (Eigen::Index l = 0; l < area.X.cols(); ++l) recorder_->recordSample({0.0, k, area.X.col(l), area.Q.col(l)});
+  }
+}
+
+void MainWindow::updateOverlays(const LiveSnapshot& s) {
+  using render::OverlayLayer;
+  if (s.areas_version != shown_areas_version_) {
+    shown_areas_version_ = s.areas_version;
+    std::vector<render::AreaSamples> samples;
+    overlays_->setContent(OverlayLayer::kGhostArms, nullptr);
+    if (s.area_data) {
+      for (std::size_t k = 0; k < s.area_data->size(); ++k) {
+        const app::TrainingArea& area = (*s.area_data)[k];
+        render::AreaSamples cloud;
+        cloud.area = static_cast<int>(k);
+        for (Eigen::Index l = 0; l < area.X.cols(); ++l) cloud.points_W.emplace_back(area.X.col(l));
+        samples.push_back(std::move(cloud));
+        if (area.q_fixed.size() == model_->dof()) {
+          overlays_->addContent(OverlayLayer::kGhostArms, render::makeGhostArm(*model_, area.q_fixed));
+        }
+      }
+    }
+    overlays_->setContent(OverlayLayer::kTrainingSamples, render::makeTrainingSamples(samples));
+  }
+  if (s.teach_ins_version != shown_teach_ins_version_) {
+    shown_teach_ins_version_ = s.teach_ins_version;
+    overlays_->setContent(OverlayLayer::kTrajectories, nullptr);
+    if (s.teach_in_data) {
+      for (const Eigen::MatrixXd& trajectory : *s.teach_in_data) {
+        std::vector<Eigen::Vector3d> points;
+        for (Eigen::Index t = 0; t < trajectory.cols(); ++t) points.emplace_back(trajectory.col(t));
+        overlays_->addContent(OverlayLayer::kTrajectories,
+                              render::makePolyline(points, render::OverlayPalette::teachInTrajectory()));
+      }
+    }
+  }
+  if (s.itm_version != shown_itm_version_ && s.itm) {
+    shown_itm_version_ = s.itm_version;
+    std::vector<std::pair<int, Eigen::Vector3d>> nodes;
+    std::vector<std::pair<int, int>> edges;
+    for (const int id : s.itm->nodeIds()) {
+      const auto omega = s.itm->prototype(id);
+      nodes.emplace_back(id, Eigen::Vector3d(omega[0], omega[1], omega[2]));
+      for (const int other : s.itm->neighbors(id)) {
+        if (other > id && s.itm->isNode(other)) edges.emplace_back(id, other);
+      }
+    }
+    overlays_->itm().setGraph(nodes, edges);
   }
 }
 
@@ -735,6 +794,10 @@ void MainWindow::buildMenus() {
     view_->update();
   });
   view->addAction(tr("&Key map (F1, H)"), this, [this] { toggleKeyMap(!key_map_label_->isVisible()); });
+  auto* overlay_menu = new OverlayMenu(*overlays_, this);
+  overlay_menu->setTitle(tr("&Overlays"));
+  menuBar()->addMenu(overlay_menu);
+  connect(overlay_menu, &OverlayMenu::toggled, this, [this] { view_->update(); });
   QMenu* help = menuBar()->addMenu(tr("&Help"));
   help->addAction(tr("&Mouse"), this, [this] {
     statusBar()->showMessage(tr("Left drag on a link: pull the arm   Left drag elsewhere: orbit   Middle or "

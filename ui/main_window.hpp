@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 
 #include "app/backend_factory.hpp"
+#include "render/overlays.hpp"
 #include "render/world.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/parameters.hpp"
@@ -87,6 +88,7 @@ class MainWindow : public QMainWindow {
   QLabel* keyMapLabel() const { return key_map_label_; }
   QLabel* bannerLabel() const { return banner_label_; }
   render::World& world() { return world_; }
+  render::Overlays& overlays() { return *overlays_; }
   const robot::RobotModel* robotModel() const { return model_.get(); }
   const robot::Kinematics* kinematics() const { return kinematics_.get(); }
   const robot::Scene& scene() const { return scene_; }
@@ -126,6 +128,8 @@ class MainWindow : public QMainWindow {
   void startRecording();
   void handleEvents();
   void recordTaughtData();
+  /// Rebuilds the overlays whose data changed (areas, ghosts, teach-ins, ITM graph).
+  void updateOverlays(const LiveSnapshot& snapshot);
   void driveKeyboard();
   void recordState(const LiveSnapshot& snapshot);
   void showBanner(const QString& warning);
@@ -172,6 +176,8 @@ class MainWindow : public QMainWindow {
   long fps_frames_ = 0;
   double fps_ = 0.0;
   std::vector<std::string> coloured_links_;
+  std::unique_ptr<render::Overlays> overlays_;
+  std::uint64_t shown_areas_version_ = ~0ULL, shown_teach_ins_version_ = ~0ULL, shown_itm_version_ = ~0ULL;
 };
 
 }  // namespace flexirob::ui
