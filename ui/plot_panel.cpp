@@ -38,6 +38,7 @@ TimePlot::TimePlot(const QString& title, const QString& value_label, QWidget* pa
   time_axis_->setLabelFormat(QStringLiteral("%.1f"));
   value_axis_ = new QValueAxis;
   value_axis_->setTitleText(value_label);
+  value_axis_->setLabelFormat(QStringLiteral("%.3g"));
   chart_->addAxis(time_axis_, Qt::AlignBottom);
   chart_->addAxis(value_axis_, Qt::AlignLeft);
   cursor_ = new QLineSeries;
