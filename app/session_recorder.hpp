@@ -62,7 +62,12 @@ struct StageRecord {
 /// A trigger that fired (`on_affected`, `on_converged`, ...) or a button pressed
 /// (`start_configuration`, `finished_configuration`, `start_programming`,
 /// `finished_programming`, ...).
+// The scoped enumerators share their names with the types app::Trigger and app::Button of
+// the workflow; always written SignalKind::Trigger, they cannot be confused with them.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wshadow"
 enum class SignalKind { Trigger = 0, Button = 1 };
+#pragma GCC diagnostic pop
 struct SignalRecord {
   double time = 0.0;  ///< [s]
   SignalKind kind = SignalKind::Trigger;

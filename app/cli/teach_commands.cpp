@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <iostream>
 #include <sstream>
 #include <unistd.h>
 
@@ -13,6 +14,7 @@
 #include "planning/itm_file.hpp"
 #include "app/simulated_tutor.hpp"
 #include "app/workflow.hpp"
+#include "app/workflow_session.hpp"
 #include "robot/errors.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
@@ -45,46 +47,8 @@ std::string readText(const std::filesystem::path& file) {
   return text.str();
 }
 
-std::vector<std::uint8_t> readBytes(const std::filesystem::path& file) {
-  const std::string text = readText(file);
-  return std::vector<std::uint8_t>(text.begin(), text.end());
-}
-
 bool endsWith(const std::string& text, const std::string& suffix) {
   return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-// Writes what the workflow holds (stages, triggers, buttons, areas, samples, model, ITM) into
-// the recorder once the run is over; states were recorded during the run.
-void recordOutcome(app::SessionRecorder& recorder, const app::Workflow& workflow, const std::filesystem::path& scratch) {
-  for (const auto& event : workflow.events()) {
-    using K = app::WorkflowEvent::Kind;
-    if (event.kind == K::kStage) {
-      const auto slash = event.name.find('/');
-      recorder.recordStage({event.time, event.name.substr(0, slash),
-                            slash == std::string::npos ? std::string() : event.name.substr(slash + 1)});
-    } else if (event.kind == K::kTrigger) {
-      recorder.recordTrigger(event.time, event.name);
-    } else if (event.kind == K::kButton) {
-      recorder.recordButton(event.time, event.name);
-    }
-  }
-  for (std::size_t k = 0; k < workflow.areas().size(); ++k) {
-    const app::TrainingArea& area = workflow.areas()[k];
-    recorder.recordArea({static_cast<int>(k), 0.0, area.centre, area.q_fixed});
-    for (Eigen::Index l = 0; l < area.X.cols(); ++l) {
-      recorder.recordSample({0.0, static_cast<int>(k), area.X.col(l), area.Q.col(l)});
-    }
-  }
-  if (const auto model = workflow.model()) {
-    const auto file = scratch / "model.bin";
-    model->save(file);
-    recorder.recordModel({workflow.state().time, model->kind(), static_cast<int>(workflow.trainingSet().size()), 0.0,
-                          readBytes(file)});
-  }
-  const auto graph_file = scratch / "itm.bin";
-  planning::saveItm(workflow.itm(), graph_file);
-  recorder.recordItm({workflow.state().time, workflow.itm().nodeCount(), workflow.itm().edgeCount(), readBytes(graph_file)});
 }
 
 Json runTeach(const TeachOptions& options) {
@@ -116,6 +80,7 @@ Json runTeach(const TeachOptions& options) {
   // The session: SQLite through the session recorder, or JSON for a path ending in .json.
   const bool json_session = endsWith(options.out, ".json");
   std::unique_ptr<app::SessionRecorder> recorder;
+  std::unique_ptr<app::WorkflowSessionWriter> writer;
   if (!json_session) {
     app::SessionMetadata metadata;
     metadata.robot_name = options.robot;
@@ -129,8 +94,24 @@ Json runTeach(const TeachOptions& options) {
     app::RecorderOptions recorder_options;
     recorder_options.overwrite = true;
     recorder = std::make_unique<app::SessionRecorder>(options.out, metadata, recorder_options);
+    // Written as it happens (areas, samples, models, ITM snapshots, collisions): a crash or
+    // kill -9 loses at most the last second.
+    writer = std::make_unique<app::WorkflowSessionWriter>(*recorder, workflow, &sim);
     app::SessionRecorder* sink = recorder.get();
-    tutor_options.on_cycle = [sink](const robot::RobotState& state) { sink->recordState(state); };
+    app::WorkflowSessionWriter* events = writer.get();
+    tutor_options.on_cycle = [sink, events, cycles = std::uint64_t{0}, reported = false](const robot::RobotState& state) mutable {
+      sink->recordState(state);
+      events->poll();
+      // A full disk or an unwritable location: say so once, when it happens; the run goes on
+      // and the recording continues in memory.
+      if (++cycles % 1000 == 0 && !reported) {
+        const app::RecorderStatus status = sink->status();
+        if (!status.message.empty()) {
+          reported = true;
+          std::cerr << "warning: session: " << status.message << " (recording goes on in memory)\n";
+        }
+      }
+    };
   }
   app::SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
 
@@ -214,24 +195,34 @@ Json runTeach(const TeachOptions& options) {
     if (collision_events.size() < 20) {
       collision_events.push_back({{"time_s", event.time}, {"link", body}, {"other", other}, {"depth_m", event.contact.depth}});
     }
-    if (recorder) recorder->recordCollision({event.time, body, other, event.contact.depth, event.contact.p_W});
   }
   std::uint64_t states_dropped = 0;
+  std::string session_error, session_copy;
   if (json_session) {
     std::ofstream file(options.out);
     if (!file) throw InputError("--out: cannot write '" + options.out + "'");
     file << session.dump();
     if (!file) throw InputError("--out: writing '" + options.out + "' failed");
   } else {
-    const std::filesystem::path scratch = std::filesystem::temp_directory_path() /
-                                          ("flexirob-teach-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(scratch);
-    recordOutcome(*recorder, workflow, scratch);
-    std::filesystem::remove_all(scratch);
+    writer->finish();
     recorder->close();
     const app::RecorderStatus status = recorder->status();
     states_dropped = status.states_dropped;
-    if (!status.message.empty()) throw InputError("--out: " + status.message);
+    if (!status.message.empty()) {
+      // The file failed during the run: keep the whole session (file content + what followed
+      // in memory) in the temporary directory, and say where.
+      session_error = status.message;
+      const std::filesystem::path copy =
+          std::filesystem::temp_directory_path() / ("flexirob-teach-" + std::to_string(::getpid()) + ".flexirob");
+      try {
+        recorder->saveCopy(copy);
+        session_copy = copy.string();
+      } catch (const InputError& e) {
+        session_error += std::string("; no copy either: ") + e.what();
+      }
+      std::cerr << "error: --out: " << session_error
+                << (session_copy.empty() ? std::string() : "; the session was saved to " + session_copy) << "\n";
+    }
   }
   int warnings = 0;
   for (const auto& event : workflow.events()) warnings += event.kind == app::WorkflowEvent::Kind::kWarning ? 1 : 0;
@@ -243,6 +234,8 @@ Json runTeach(const TeachOptions& options) {
           {"session", options.out},
           {"session_format", json_session ? "json" : "sqlite"},
           {"states_dropped", states_dropped},
+          {"session_error", session_error},
+          {"session_copy", session_copy},
           {"learner", options.learner},
           {"model_learned", workflow.model() != nullptr},
           {"itm_nodes", itm.nodeCount()},

@@ -1,0 +1,191 @@
+#include "app/workflow_session.hpp"
+
+#include <unistd.h>
+
+#include <fstream>
+#include <iterator>
+#include <system_error>
+
+#include "planning/itm_file.hpp"
+#include "robot/sim/simulation.hpp"
+
+namespace flexirob::app {
+
+WorkflowSessionWriter::WorkflowSessionWriter(SessionRecorder& recorder, const Workflow& workflow,
+                                             robot::Simulation* simulation, WorkflowSessionOptions options)
+    : recorder_(&recorder), workflow_(&workflow), simulation_(simulation), options_(std::move(options)) {
+  scratch_ = options_.scratch_directory.empty()
+                 ? std::filesystem::temp_directory_path() / ("flexirob-session-" + std::to_string(::getpid()) + "-" +
+                                                             std::to_string(reinterpret_cast<std::uintptr_t>(this)))
+                 : options_.scratch_directory;
+  std::filesystem::create_directories(scratch_);
+  itm_version_ = workflow.itmVersion();
+}
+
+WorkflowSessionWriter::~WorkflowSessionWriter() {
+  std::error_code ignored;
+  if (options_.scratch_directory.empty()) std::filesystem::remove_all(scratch_, ignored);
+}
+
+std::vector<std::uint8_t> WorkflowSessionWriter::serialized(
+    const std::string& name, const std::function<void(const std::filesystem::path&)>& save) {
+  const std::filesystem::path file = scratch_ / name;
+  save(file);
+  std::ifstream in(file, std::ios::binary);
+  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::error_code ignored;
+  std::filesystem::remove(file, ignored);
+  return bytes;
+}
+
+void WorkflowSessionWriter::recordModel(double time) {
+  const auto model = workflow_->model();
+  if (!model) return;
+  ModelRecord record;
+  record.time = time;
+  record.learner_kind = model->kind();
+  record.samples = static_cast<int>(workflow_->trainingSet().size());
+  record.train_seconds = workflow_->learningSeconds();
+  record.bytes = serialized("model.bin", [&](const std::filesystem::path& file) { model->save(file); });
+  recorder_->recordModel(std::move(record));
+  ++records_;
+}
+
+void WorkflowSessionWriter::recordItm(double time) {
+  const planning::Itm& itm = workflow_->itm();
+  ItmRecord record;
+  record.time = time;
+  record.nodes = itm.nodeCount();
+  record.edges = itm.edgeCount();
+  record.bytes = serialized("itm.bin", [&](const std::filesystem::path& file) { planning::saveItm(itm, file); });
+  recorder_->recordItm(std::move(record));
+  itm_version_ = workflow_->itmVersion();
+  itm_time_ = time;
+  ++records_;
+}
+
+void WorkflowSessionWriter::recordEvent(const WorkflowEvent& event) {
+  using K = WorkflowEvent::Kind;
+  switch (event.kind) {
+    case K::kStage: {
+      const auto slash = event.name.find('/');
+      recorder_->recordStage({event.time, event.name.substr(0, slash),
+                              slash == std::string::npos ? std::string() : event.name.substr(slash + 1)});
+      break;
+    }
+    case K::kTrigger: recorder_->recordTrigger(event.time, event.name); break;
+    case K::kButton: recorder_->recordButton(event.time, event.name); break;
+    case K::kAreaCreated: {
+      // The area and its samples as soon as the RECORDING ended (a re-taught area is recorded
+      // again under its index; the later record holds).
+      if (event.area < 0 || event.area >= static_cast<int>(workflow_->areas().size())) break;
+      const TrainingArea& area = workflow_->areas()[static_cast<std::size_t>(event.area)];
+      recorder_->recordArea({event.area, event.time, area.centre, area.q_fixed});
+      for (Eigen::Index l = 0; l < area.X.cols(); ++l) {
+        recorder_->recordSample({event.time, event.area, area.X.col(l), area.Q.col(l)});
+      }
+      records_ += static_cast<std::uint64_t>(area.X.cols());
+      break;
+    }
+    case K::kAreaRemoved: recorder_->recordButton(event.time, "remove_area " + std::to_string(event.area)); break;
+    case K::kModelLearned: recordModel(event.time); break;
+    case K::kTeachIn: {
+      if (event.area < 0 || event.area >= static_cast<int>(workflow_->teachIns().size())) break;
+      const Eigen::MatrixXd& points = workflow_->teachIns()[static_cast<std::size_t>(event.area)];
+      TrajectoryRecord record;
+      record.kind = TrajectoryKind::TeachIn;
+      record.name = "teach_in_" + std::to_string(event.area);
+      record.positions = points;
+      // Recorded every sample_period, ending at the event.
+      record.times.resize(points.cols());
+      for (Eigen::Index i = 0; i < points.cols(); ++i) {
+        record.times[i] = event.time - static_cast<double>(points.cols() - 1 - i) * workflow_->options().sample_period;
+      }
+      const std::int64_t id = recorder_->recordTrajectory(std::move(record));
+      teach_in_ids_.resize(workflow_->teachIns().size(), -1);
+      teach_in_ids_[static_cast<std::size_t>(event.area)] = id;
+      break;
+    }
+    case K::kExecution:
+      execution_name_ = event.name == "replay" ? "replay_teach_in_" + std::to_string(event.area) : "planned_motion";
+      execution_reference_ = event.name == "replay" && event.area >= 0 &&
+                                     event.area < static_cast<int>(teach_in_ids_.size())
+                                 ? teach_in_ids_[static_cast<std::size_t>(event.area)]
+                                 : -1;
+      recorder_->recordSignal({event.time, SignalKind::Button, event.name});
+      break;
+    case K::kRefused:
+    case K::kWarning:
+    case K::kCheck:
+      // Kept as free text: "<kind> <name>: <detail>" under a numbered meta key.
+      recorder_->recordMeta("event." + std::to_string(events_seen_),
+                            std::string(toString(event.kind)) + " " + event.name + ": " + event.detail);
+      break;
+  }
+  ++records_;
+}
+
+void WorkflowSessionWriter::trackExecution() {
+  const bool moving = workflow_->stage() == Stage::kExecution && !workflow_->executionDone();
+  const robot::RobotState& state = workflow_->state();
+  if (moving) {
+    if (!executing_) {
+      executing_ = true;
+      execution_times_.clear();
+      execution_positions_.clear();
+      execution_postures_.clear();
+      last_execution_sample_ = -1e9;
+    }
+    if (state.time - last_execution_sample_ >= options_.executed_period - 1e-9) {
+      last_execution_sample_ = state.time;
+      execution_times_.push_back(state.time);
+      execution_positions_.push_back(state.p_WT());
+      execution_postures_.push_back(state.q);
+    }
+    return;
+  }
+  if (!executing_) return;
+  executing_ = false;
+  TrajectoryRecord record;
+  record.kind = TrajectoryKind::Executed;
+  record.name = execution_name_.empty() ? "executed_motion" : execution_name_;
+  record.reference_id = execution_reference_;
+  const auto k = static_cast<Eigen::Index>(execution_times_.size());
+  record.times.resize(k);
+  record.positions.resize(3, k);
+  record.postures.resize(workflow_->robotModel().dof(), k);
+  for (Eigen::Index i = 0; i < k; ++i) {
+    record.times[i] = execution_times_[static_cast<std::size_t>(i)];
+    record.positions.col(i) = execution_positions_[static_cast<std::size_t>(i)];
+    record.postures.col(i) = execution_postures_[static_cast<std::size_t>(i)];
+  }
+  record.outcome = workflow_->stage() == Stage::kExecution ? "reached" : "cancelled";
+  recorder_->recordTrajectory(std::move(record));
+  ++records_;
+}
+
+void WorkflowSessionWriter::poll() {
+  const auto& events = workflow_->events();
+  for (; events_seen_ < events.size(); ++events_seen_) recordEvent(events[events_seen_]);
+  trackExecution();
+  const double time = workflow_->state().time;
+  if (workflow_->itmVersion() != itm_version_ && time - itm_time_ >= options_.itm_period - 1e-9) recordItm(time);
+  if (simulation_ != nullptr) {
+    robot::CollisionWorld* world = simulation_->collisionWorld();
+    const auto& log = simulation_->collisions().eventLog();
+    for (; collisions_seen_ < log.size(); ++collisions_seen_) {
+      if (world == nullptr) continue;
+      const auto& event = log[collisions_seen_];
+      recorder_->recordCollision({event.time, world->bodyName(event.contact.body), world->otherName(event.contact),
+                                  event.contact.depth, event.contact.p_W});
+      ++records_;
+    }
+  }
+}
+
+void WorkflowSessionWriter::finish() {
+  poll();
+  if (workflow_->itmVersion() != itm_version_ || itm_time_ < -1e8) recordItm(workflow_->state().time);
+}
+
+}  // namespace flexirob::app

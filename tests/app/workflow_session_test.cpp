@@ -1,0 +1,95 @@
+// The session is written while the workflow runs: an area, its samples, the learned model and
+// the ITM are in the file as soon as they exist, before the session ends.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <unistd.h>
+
+#include "app/session_reader.hpp"
+#include "app/session_recorder.hpp"
+#include "app/workflow.hpp"
+#include "app/workflow_session.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/sim/reach.hpp"
+#include "robot/sim/simulation.hpp"
+
+namespace flexirob::app {
+namespace {
+
+const robot::RobotModel& lwr4() {
+  static const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  return model;
+}
+
+std::filesystem::path sessionPath(const std::string& name) {
+  return std::filesystem::temp_directory_path() / ("flexirob-" + name + "-" + std::to_string(::getpid()) + ".flexirob");
+}
+
+TEST(WorkflowSession, AreasSamplesModelAndGraphAreInTheFileBeforeTheSessionEnds) {
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  robot::Simulation sim(lwr4(), nullptr, parameters);
+  Eigen::VectorXd q = lwr4().midPosture();
+  q[1] = 0.6;
+  q[3] = -1.4;
+  sim.reset(q);
+  WorkflowOptions options;
+  options.background_learning = false;
+  options.elm.hidden = 30;
+  Workflow workflow(sim, parameters, options);
+
+  const auto file = sessionPath("workflow-session");
+  SessionMetadata metadata;
+  metadata.robot_name = "lwr4";
+  RecorderOptions recorder_options;
+  recorder_options.overwrite = true;
+  SessionRecorder recorder(file, metadata, recorder_options);
+  WorkflowSessionWriter writer(recorder, workflow, &sim);
+  const auto run = [&](double seconds) {
+    for (int i = 0; i < static_cast<int>(seconds / 1e-3); ++i) {
+      workflow.step();
+      recorder.recordState(workflow.state());
+      writer.poll();
+    }
+  };
+
+  // One area through the keyboard triggers; the arm rests, so the samples repeat one posture.
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  ASSERT_TRUE(workflow.fire(Trigger::kOnAffected));
+  run(0.2);
+  ASSERT_TRUE(workflow.fire(Trigger::kOnConverged));
+  ASSERT_TRUE(workflow.fire(Trigger::kOnAffected));
+  run(1.2);
+  ASSERT_TRUE(workflow.fire(Trigger::kOnConverged));
+  run(0.01);
+  ASSERT_EQ(workflow.areas().size(), 1U);
+  recorder.flush();
+  {
+    const SessionReader reader(file);
+    ASSERT_EQ(reader.areas().size(), 1U);
+    EXPECT_TRUE(reader.areas()[0].q_fixed.isApprox(workflow.areas()[0].q_fixed));
+    EXPECT_EQ(static_cast<Eigen::Index>(reader.samples(0).size()), workflow.areas()[0].X.cols());
+    EXPECT_GE(reader.stages().size(), 4U);
+    EXPECT_FALSE(reader.itmSnapshots().empty());  // the ITM after its first second
+    EXPECT_TRUE(reader.models().empty());
+  }
+
+  ASSERT_TRUE(workflow.press(Button::kFinishedConfiguration));
+  run(0.01);
+  recorder.flush();
+  {
+    const SessionReader reader(file);
+    ASSERT_EQ(reader.models().size(), 1U);
+    EXPECT_EQ(reader.models()[0].learner_kind, "elm");
+    EXPECT_FALSE(reader.models()[0].bytes.empty());
+    EXPECT_GT(reader.stateCount(), 1000);
+  }
+  writer.finish();
+  recorder.close();
+  EXPECT_TRUE(recorder.status().message.empty()) << recorder.status().message;
+  std::filesystem::remove(file);
+}
+
+}  // namespace
+}  // namespace flexirob::app
