@@ -30,11 +30,19 @@ CameraPose frameSphere(const Eigen::Vector3d& center_W, double radius, double as
 }
 
 CameraPose frameBox(const Eigen::Vector3d& lower_W, const Eigen::Vector3d& upper_W, double aspect, double margin) {
+  return frameBoxFrom(lower_W, upper_W, aspect, Eigen::Vector3d(-1.0, -0.62, 0.42), Eigen::Vector3d::UnitZ(), margin);
+}
+
+CameraPose frameBoxFrom(const Eigen::Vector3d& lower_W, const Eigen::Vector3d& upper_W, double aspect,
+                        const Eigen::Vector3d& direction_W, const Eigen::Vector3d& up_W, double margin) {
   const Eigen::Vector3d center_W = 0.5 * (lower_W + upper_W);
   const double radius = 0.5 * (upper_W - lower_W).norm();
   // The circumscribed sphere always fits; move closer while every corner still fits.
   CameraPose camera = frameSphere(center_W, radius, aspect);
-  const Eigen::Vector3d direction = (camera.eye_W - center_W).normalized();
+  const Eigen::Vector3d direction =
+      direction_W.norm() > 1e-9 ? Eigen::Vector3d(direction_W.normalized()) : Eigen::Vector3d(-1.0, -0.62, 0.42).normalized();
+  camera.up_W = direction.cross(up_W).norm() > 1e-6 ? up_W : Eigen::Vector3d::UnitZ();
+  camera.eye_W = center_W + (camera.eye_W - center_W).norm() * direction;
   const int height = 1000;
   const int width = std::max(1, static_cast<int>(std::lround(height * (aspect > 1e-3 ? aspect : 1.0))));
   const auto fits = [&](double distance) {
@@ -60,6 +68,27 @@ CameraPose frameBox(const Eigen::Vector3d& lower_W, const Eigen::Vector3d& upper
   }
   camera.eye_W = center_W + far * direction;
   return camera;
+}
+
+void namedView(const std::string& name, Eigen::Vector3d& direction_W, Eigen::Vector3d& up_W) {
+  up_W = Eigen::Vector3d::UnitZ();
+  if (name == "front-left") {
+    direction_W = Eigen::Vector3d(-1.0, -0.62, 0.42);
+  } else if (name == "front") {
+    direction_W = Eigen::Vector3d(-1.0, -0.12, 0.45);
+  } else if (name == "back") {
+    direction_W = Eigen::Vector3d(1.0, 0.12, 0.45);
+  } else if (name == "left") {
+    direction_W = Eigen::Vector3d(-0.25, 1.0, 0.45);
+  } else if (name == "right") {
+    direction_W = Eigen::Vector3d(-0.25, -1.0, 0.45);
+  } else if (name == "top") {
+    // Looking straight down with +x up in the image: the front (-x) at the bottom.
+    direction_W = Eigen::Vector3d::UnitZ();
+    up_W = Eigen::Vector3d::UnitX();
+  } else {
+    throw InputError("--view: unknown view '" + name + "' (front-left, front, back, left, right, top)");
+  }
 }
 
 std::optional<Eigen::Vector2d> projectToPixel(const CameraPose& camera, int width, int height,

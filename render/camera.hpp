@@ -27,6 +27,18 @@ CameraPose frameSphere(const Eigen::Vector3d& center_W, double radius, double as
 CameraPose frameBox(const Eigen::Vector3d& lower_W, const Eigen::Vector3d& upper_W, double aspect,
                     double margin = 0.05);
 
+/// Frames the box as frameBox does, but with the eye on the side `direction_W` (from the box's
+/// centre towards the eye, need not be normalized) and `up_W` as the image's up direction
+/// (must not be parallel to direction_W).
+CameraPose frameBoxFrom(const Eigen::Vector3d& lower_W, const Eigen::Vector3d& upper_W, double aspect,
+                        const Eigen::Vector3d& direction_W, const Eigen::Vector3d& up_W, double margin = 0.05);
+
+/// A named viewing direction for figures: "front-left" (frameSphere's, the default), "front"
+/// (from -x, the tutor's side, slightly above), "back", "left" (+y), "right" (-y), "top"
+/// (straight down, the front at the bottom of the image). Sets direction_W (centre to eye) and
+/// up_W. Throws InputError naming the valid names otherwise.
+void namedView(const std::string& name, Eigen::Vector3d& direction_W, Eigen::Vector3d& up_W);
+
 /// Pixel coordinates (x right, y down, origin at the top-left corner of the image, pixel
 /// centres at +0.5) of the world point p_W for an image of width x height pixels. Returns
 /// nothing for points behind the eye.

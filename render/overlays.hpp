@@ -46,6 +46,8 @@ struct OverlayPalette {
   static Eigen::Vector4f reachable() { return {0.10F, 0.70F, 0.15F, 1.0F}; }
   static Eigen::Vector4f unreachable() { return {0.90F, 0.10F, 0.10F, 1.0F}; }
   static Eigen::Vector4f collision() { return {1.0F, 0.0F, 0.0F, 1.0F}; }
+  /// The points of the implicit scene model S (Eq. 4.1, Fig. 4.6).
+  static Eigen::Vector4f sceneModel() { return {0.22F, 0.22F, 0.28F, 1.0F}; }
   static Eigen::Vector4f force() { return {1.0F, 0.80F, 0.0F, 1.0F}; }
 };
 

@@ -1,11 +1,24 @@
 // `render`: a picture of a robot posture in a scene, drawn offscreen through OSMesa (no X
-// server needed).
+// server needed), optionally with the overlays of a taught session and of the evaluations'
+// results, in the style of the thesis' figures: reachable targets (Fig. 3.10), the implicit
+// scene model (Fig. 4.6), confidence slices (Fig. 6.5), the ITM graph with planned paths
+// (Fig. 7.7, 8.4).
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <unistd.h>
 
 #include "app/cli/cli_support.hpp"
+#include "app/session_reader.hpp"
+#include "learning/confidence.hpp"
+#include "planning/itm.hpp"
+#include "planning/itm_file.hpp"
 #include "render/camera.hpp"
 #include "render/offscreen.hpp"
+#include "render/overlays.hpp"
 #include "render/world.hpp"
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
@@ -17,22 +30,196 @@ namespace flexirob::cli {
 namespace {
 
 struct RenderOptions {
-  std::string robot = "lwr4";
+  std::string robot;
   std::string tip;
   std::string scene;
   std::string out;
   std::string q;
   std::string camera;
+  std::string view;
   int width = 1024;
   int height = 768;
   int supersampling = 2;
   bool no_grid = false;
+  bool no_scene_areas = false;
+  // Overlays from files.
+  std::string session;
+  std::string confidence_heights;
+  int confidence_resolution = 60;
+  std::string reachable;
+  std::string scene_model;
+  std::string plan;
+  int plan_paths = -1;
+  std::string hide;
+  double point_size = 6.0;
+  bool legend = false;
 };
+
+// --- Reading the overlays' files -----------------------------------------------------------
+
+Json readJsonFile(const std::string& file, const std::string& option) {
+  std::ifstream in(file);
+  if (!in) throw InputError(option + ": cannot read '" + file + "'");
+  try {
+    return Json::parse(in);
+  } catch (const std::exception& e) {
+    throw InputError(option + ": '" + file + "' is not JSON (" + std::string(e.what()) + ")");
+  }
+}
+
+double finiteNumber(const Json& value, const std::string& what) {
+  if (!value.is_number()) throw InputError(what + ": expected a number");
+  const double v = value.get<double>();
+  if (!std::isfinite(v)) throw InputError(what + ": non-finite number");
+  return v;
+}
+
+Eigen::Vector3d point3(const Json& value, const std::string& what) {
+  if (!value.is_array() || value.size() != 3) throw InputError(what + ": expected [x, y, z]");
+  return {finiteNumber(value[0], what), finiteNumber(value[1], what), finiteNumber(value[2], what)};
+}
+
+Eigen::VectorXd vectorN(const Json& value, Eigen::Index n, const std::string& what) {
+  if (!value.is_array() || static_cast<Eigen::Index>(value.size()) != n) {
+    throw InputError(what + ": expected " + std::to_string(n) + " numbers");
+  }
+  Eigen::VectorXd v(n);
+  for (Eigen::Index i = 0; i < n; ++i) v[i] = finiteNumber(value[static_cast<std::size_t>(i)], what);
+  return v;
+}
+
+// A field that must be an array of points.
+std::vector<Eigen::Vector3d> pointList(const Json& object, const char* key, const std::string& what) {
+  if (!object.is_object() || !object.contains(key) || !object.at(key).is_array()) {
+    throw InputError(what + ": no '" + key + "' array (written by a current flexirob-cli)");
+  }
+  std::vector<Eigen::Vector3d> points;
+  for (const Json& p : object.at(key)) points.push_back(point3(p, what + ": " + key));
+  return points;
+}
+
+// What the pictures need of a session: the training samples per area, q_fixed per area, the
+// final ITM graph (positions of the nodes, the edges).
+struct SessionOverlay {
+  std::string robot, tip, scene;
+  std::vector<render::AreaSamples> areas;
+  std::vector<Eigen::VectorXd> q_fixed;
+  std::vector<std::pair<int, Eigen::Vector3d>> nodes;
+  std::vector<std::pair<int, int>> edges;
+};
+
+SessionOverlay sessionFromJson(const Json& json, const std::string& file) {
+  if (!json.is_object() || !json.contains("format") || json.at("format") != "flexirob-session-json") {
+    throw InputError("--session: '" + file + "' is not a flexirob session (format flexirob-session-json)");
+  }
+  SessionOverlay session;
+  try {
+    session.robot = json.at("robot").get<std::string>();
+    if (json.contains("tip")) session.tip = json.at("tip").get<std::string>();
+    session.scene = json.at("scene").get<std::string>();
+    int k = 0;
+    for (const Json& area : json.at("areas")) {
+      render::AreaSamples samples;
+      samples.area = k++;
+      samples.points_W = pointList(area, "x", "--session: area");
+      session.areas.push_back(std::move(samples));
+      // q_fixed is checked against the robot once it is known.
+      const Json& q = area.at("q_fixed");
+      if (!q.is_array()) throw InputError("--session: q_fixed: expected numbers");
+      session.q_fixed.push_back(vectorN(q, static_cast<Eigen::Index>(q.size()), "--session: q_fixed"));
+    }
+    const Json& nodes = json.at("itm").at("nodes");
+    int id = 0;
+    for (const Json& node : nodes) session.nodes.emplace_back(id++, point3(node.at("x"), "--session: itm x"));
+    for (const Json& edge : json.at("itm").at("edges")) {
+      const int a = edge.at(0).get<int>();
+      const int b = edge.at(1).get<int>();
+      if (a < 0 || b < 0 || a >= id || b >= id || a == b) throw InputError("--session: ITM edge with a bad node index");
+      session.edges.emplace_back(a, b);
+    }
+  } catch (const Json::exception& e) {
+    throw InputError("--session: malformed session (" + std::string(e.what()) + ")");
+  }
+  return session;
+}
+
+// A session recorded in SQLite (docs/SESSIONS.md).
+SessionOverlay sessionFromRecording(const std::string& file) {
+  const app::SessionReader reader(file);
+  SessionOverlay session;
+  session.robot = reader.meta("robot_name");
+  session.tip = reader.meta("tip_link");
+  session.scene = reader.meta("scene_name", "empty");
+  std::map<int, std::size_t> slot;
+  for (const auto& area : reader.areas()) {
+    slot[area.area] = session.areas.size();
+    session.areas.push_back({area.area, {}});
+    session.q_fixed.push_back(area.q_fixed);
+  }
+  for (const auto& sample : reader.samples()) {
+    if (sample.x.size() < 3 || !sample.x.allFinite()) throw InputError("--session: a sample has no finite position");
+    auto it = slot.find(sample.area);
+    if (it == slot.end()) {
+      it = slot.emplace(sample.area, session.areas.size()).first;
+      session.areas.push_back({sample.area, {}});
+    }
+    session.areas[it->second].points_W.emplace_back(sample.x.head<3>());
+  }
+  const std::vector<app::ItmRecord> graphs = reader.itmSnapshots();
+  if (!graphs.empty()) {
+    // The ITM's own file format is read from a file.
+    const std::filesystem::path scratch =
+        std::filesystem::temp_directory_path() / ("flexirob-render-itm-" + std::to_string(::getpid()) + ".bin");
+    {
+      std::ofstream out(scratch, std::ios::binary);
+      out.write(reinterpret_cast<const char*>(graphs.back().bytes.data()),
+                static_cast<std::streamsize>(graphs.back().bytes.size()));
+    }
+    try {
+      const planning::Itm itm = planning::loadItm(scratch);
+      std::filesystem::remove(scratch);
+      for (const int id : itm.nodeIds()) {
+        session.nodes.emplace_back(id, Eigen::Vector3d(itm.prototype(id).head<3>()));
+        for (const int other : itm.neighbors(id)) {
+          if (other > id) session.edges.emplace_back(id, other);
+        }
+      }
+    } catch (...) {
+      std::filesystem::remove(scratch);
+      throw;
+    }
+  }
+  return session;
+}
+
+SessionOverlay loadSessionOverlay(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError("--session: cannot read '" + file + "'");
+  if (in.peek() != '{') return sessionFromRecording(file);
+  in.close();
+  return sessionFromJson(readJsonFile(file, "--session"), file);
+}
+
+// --- Composing the picture ------------------------------------------------------------------
+
+// Grows a box by points (overlays lie outside the robot and the scene, e.g. a far goal).
+void include(std::pair<Eigen::Vector3d, Eigen::Vector3d>& box, const std::vector<Eigen::Vector3d>& points) {
+  for (const Eigen::Vector3d& p : points) {
+    box.first = box.first.cwiseMin(p);
+    box.second = box.second.cwiseMax(p);
+  }
+}
 
 Json renderPicture(const RenderOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(options.robot), options.tip);
-  const robot::Scene scene = robot::loadScene(options.scene);
+  std::optional<SessionOverlay> session;
+  if (!options.session.empty()) session = loadSessionOverlay(options.session);
+  // Robot and scene: the options', else the session's, else the LWR IV in an empty scene.
+  const std::string robot_name = !options.robot.empty() ? options.robot : session ? session->robot : "lwr4";
+  const std::string tip = !options.tip.empty() ? options.tip : session && options.robot.empty() ? session->tip : "";
+  const std::string scene_name = !options.scene.empty() ? options.scene : session ? session->scene : "";
+  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), tip);
+  robot::Scene scene = robot::loadScene(scene_name);
 
   // Posture: --q, else the scene's home posture if it fits this robot, else the middle of the
   // software limits.
@@ -44,6 +231,21 @@ Json renderPicture(const RenderOptions& options) {
   }
   model.checkPosture(q);
 
+  std::set<render::OverlayLayer> hidden;
+  if (!options.hide.empty()) {
+    std::size_t begin = 0;
+    while (begin <= options.hide.size()) {
+      const std::size_t comma = std::min(options.hide.find(',', begin), options.hide.size());
+      hidden.insert(render::parseOverlayLayer(options.hide.substr(begin, comma - begin)));
+      begin = comma + 1;
+    }
+  }
+  const auto shown = [&](render::OverlayLayer layer) { return hidden.count(layer) == 0; };
+
+  // The scene's suggested training areas would be mistaken for the taught ones.
+  const robot::EvaluationGrid grid = scene.grid.value_or(robot::EvaluationGrid{});
+  if (options.no_scene_areas) scene.training_areas.clear();
+
   render::World world;
   world.setRobot(model);
   world.setScene(scene);
@@ -51,10 +253,153 @@ Json renderPicture(const RenderOptions& options) {
   robot::Kinematics kinematics(model);
   kinematics.update(q);
   world.robot()->setPosture(kinematics);
+  auto box = world.contentBox();
+
+  render::Overlays& overlays = world.overlays();
+  std::vector<render::LegendEntry> legend;
+  const auto size = static_cast<float>(options.point_size);
+  Json drawn = Json::object();
+
+  if (session) {
+    if (shown(render::OverlayLayer::kTrainingSamples)) {
+      overlays.setContent(render::OverlayLayer::kTrainingSamples, render::makeTrainingSamples(session->areas, size));
+      int samples = 0;
+      for (const auto& area : session->areas) {
+        samples += static_cast<int>(area.points_W.size());
+        include(box, area.points_W);
+        legend.push_back({"Area " + std::to_string(area.area + 1) + " samples", render::OverlayPalette::area(area.area)});
+      }
+      drawn["samples"] = samples;
+    }
+    if (shown(render::OverlayLayer::kGhostArms)) {
+      for (const Eigen::VectorXd& q_fixed : session->q_fixed) {
+        if (q_fixed.size() != model.dof()) throw InputError("--session: a q_fixed does not fit the robot");
+        overlays.addContent(render::OverlayLayer::kGhostArms, render::makeGhostArm(model, q_fixed));
+      }
+      if (!session->q_fixed.empty()) legend.push_back({"q_fixed (ghost arms)", render::OverlayPalette::ghost()});
+      drawn["ghosts"] = session->q_fixed.size();
+    }
+    if (shown(render::OverlayLayer::kItmGraph) && !session->nodes.empty()) {
+      overlays.itm().setGraph(session->nodes, session->edges);
+      std::vector<Eigen::Vector3d> nodes;
+      for (const auto& node : session->nodes) nodes.push_back(node.second);
+      include(box, nodes);
+      legend.push_back({"ITM nodes", render::OverlayPalette::itmNode()});
+      legend.push_back({"ITM edges", render::OverlayPalette::itmEdge()});
+      drawn["itm_nodes"] = session->nodes.size();
+      drawn["itm_edges"] = session->edges.size();
+    }
+    if (!options.confidence_heights.empty() && shown(render::OverlayLayer::kConfidence)) {
+      // Eq. 6.6-6.9: one Gaussian per area, d = 15 as in Fig. 6.5.
+      learning::ConfidenceModel confidence(15.0);
+      for (const auto& area : session->areas) {
+        if (area.points_W.empty()) continue;
+        Eigen::MatrixXd samples(3, static_cast<Eigen::Index>(area.points_W.size()));
+        for (std::size_t l = 0; l < area.points_W.size(); ++l) samples.col(static_cast<Eigen::Index>(l)) = area.points_W[l];
+        confidence.addArea(samples);
+      }
+      // The slices span the evaluation grid's x-y extent (the scene's workspace), grown to
+      // hold every sample.
+      Eigen::Vector2d lower = grid.lower.head<2>();
+      Eigen::Vector2d upper = grid.upper.head<2>();
+      for (const auto& area : session->areas) {
+        for (const Eigen::Vector3d& p : area.points_W) {
+          lower = lower.cwiseMin(p.head<2>() - Eigen::Vector2d::Constant(0.1));
+          upper = upper.cwiseMax(p.head<2>() + Eigen::Vector2d::Constant(0.1));
+        }
+      }
+      const Eigen::VectorXd heights = parseNumberList(options.confidence_heights, "--confidence-heights", std::size_t{16});
+      Json slices = Json::array();
+      for (const double z : heights) {
+        if (!std::isfinite(z) || std::abs(z) > 10.0) throw InputError("--confidence-heights: expected heights within 10 m");
+        const render::ConfidenceGrid slice = render::sampleConfidence(
+            [&](const Eigen::Vector3d& p) { return confidence.evaluate(p); }, lower, upper, z,
+            options.confidence_resolution);
+        overlays.addContent(render::OverlayLayer::kConfidence, render::makeConfidenceSlice(slice));
+        include(box, {Eigen::Vector3d(lower.x(), lower.y(), z), Eigen::Vector3d(upper.x(), upper.y(), z)});
+        slices.push_back({{"z", z}, {"max", slice.values.maxCoeff()}, {"mean", slice.values.mean()}});
+      }
+      legend.push_back({"Confidence C = 0", render::confidenceColor(0.0)});
+      legend.push_back({"C = 0.5", render::confidenceColor(0.5)});
+      legend.push_back({"C = 1", render::confidenceColor(1.0)});
+      drawn["confidence_slices"] = slices;
+      drawn["confidence_extent"] = {{"lower", toJson(lower)}, {"upper", toJson(upper)}};
+    }
+  } else if (!options.confidence_heights.empty()) {
+    throw InputError("--confidence-heights needs --session (the confidence model is learned from its samples)");
+  }
+
+  if (!options.reachable.empty() && shown(render::OverlayLayer::kReachability)) {
+    const Json json = readJsonFile(options.reachable, "--reachable");
+    const std::vector<Eigen::Vector3d> points = pointList(json, "target_points", "--reachable");
+    if (!json.contains("target_reached") || !json.at("target_reached").is_array() ||
+        json.at("target_reached").size() != points.size()) {
+      throw InputError("--reachable: 'target_reached' must be an array as long as 'target_points'");
+    }
+    std::vector<bool> reached;
+    for (const Json& r : json.at("target_reached")) {
+      if (!r.is_boolean()) throw InputError("--reachable: 'target_reached' must hold true or false");
+      reached.push_back(r.get<bool>());
+    }
+    overlays.addContent(render::OverlayLayer::kReachability, render::makeReachability(points, reached, size));
+    include(box, points);
+    const auto count = std::count(reached.begin(), reached.end(), true);
+    legend.push_back({"Reached target", render::OverlayPalette::reachable()});
+    legend.push_back({"Not reached", render::OverlayPalette::unreachable()});
+    drawn["targets"] = points.size();
+    drawn["reached"] = count;
+  }
+  if (!options.scene_model.empty() && shown(render::OverlayLayer::kReachability)) {
+    const Json json = readJsonFile(options.scene_model, "--scene-model");
+    const std::vector<Eigen::Vector3d> points = pointList(json, "model", "--scene-model");
+    overlays.addContent(render::OverlayLayer::kReachability, render::makePoints(points, render::OverlayPalette::sceneModel(), size));
+    include(box, points);
+    legend.push_back({"Scene model S (Eq. 4.1)", render::OverlayPalette::sceneModel()});
+    drawn["scene_model_points"] = points.size();
+  }
+  if (!options.plan.empty() && shown(render::OverlayLayer::kGoalAndPath)) {
+    const Json json = readJsonFile(options.plan, "--plan");
+    if (!json.is_object() || !json.contains("motions") || !json.at("motions").is_array()) {
+      throw InputError("--plan: no 'motions' array (written by a current flexirob-cli plan)");
+    }
+    int paths = 0;
+    int collided = 0;
+    for (const Json& motion : json.at("motions")) {
+      if (options.plan_paths >= 0 && paths >= options.plan_paths) break;
+      if (!motion.is_object()) throw InputError("--plan: a motion is not an object");
+      const Eigen::Vector3d goal = point3(motion.contains("goal") ? motion.at("goal") : Json(), "--plan: goal");
+      const std::vector<Eigen::Vector3d> path = pointList(motion, "path", "--plan");
+      const bool hit = motion.contains("collided") && motion.at("collided").is_boolean() && motion.at("collided").get<bool>();
+      collided += hit ? 1 : 0;
+      overlays.addContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(goal, 0.02));
+      overlays.addContent(render::OverlayLayer::kGoalAndPath,
+                          render::makePolyline(path, hit ? render::OverlayPalette::unreachable()
+                                                         : render::OverlayPalette::plannedPath(), 3.0F));
+      include(box, path);
+      include(box, {goal});
+      ++paths;
+    }
+    legend.push_back({"Goal and planned path", render::OverlayPalette::plannedPath()});
+    if (collided > 0) legend.push_back({"Path with a contact", render::OverlayPalette::unreachable()});
+    drawn["paths"] = paths;
+    drawn["paths_with_contact"] = collided;
+  }
 
   const double aspect = static_cast<double>(options.width) / options.height;
-  const render::CameraPose camera =
-      options.camera.empty() ? world.defaultCamera(aspect) : render::parseCamera(options.camera);
+  render::CameraPose camera;
+  if (!options.camera.empty()) {
+    camera = render::parseCamera(options.camera);
+  } else if (!options.view.empty()) {
+    Eigen::Vector3d direction, up;
+    render::namedView(options.view, direction, up);
+    camera = render::frameBoxFrom(box.first, box.second, aspect, direction, up, 0.04);
+  } else {
+    camera = world.defaultCamera(aspect);
+  }
+  if (options.legend && !legend.empty() && shown(render::OverlayLayer::kLegend)) {
+    overlays.setContent(render::OverlayLayer::kLegend, render::makeLegend(legend, options.width, options.height));
+  }
+
   render::OffscreenRenderer renderer(options.width, options.height, options.supersampling);
   const Eigen::Vector4f background = render::Palette::background();
   const render::Image image =
@@ -64,6 +409,10 @@ Json renderPicture(const RenderOptions& options) {
   const std::optional<Eigen::Vector2d> tip_pixel =
       render::projectToPixel(camera, options.width, options.height, kinematics.p_WT());
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  Json legend_json = Json::array();
+  if (options.legend) {
+    for (const auto& entry : legend) legend_json.push_back(entry.label);
+  }
   return {{"width", image.width},
           {"height", image.height},
           {"file", options.out},
@@ -73,7 +422,12 @@ Json renderPicture(const RenderOptions& options) {
           {"tip_position", toJson(kinematics.p_WT())},
           {"tip_pixel", tip_pixel ? toJson(*tip_pixel) : Json(nullptr)},
           {"camera",
-           {{"eye", toJson(camera.eye_W)}, {"center", toJson(camera.center_W)}, {"fovy_deg", camera.fovy_deg}}},
+           {{"eye", toJson(camera.eye_W)},
+            {"center", toJson(camera.center_W)},
+            {"up", toJson(camera.up_W)},
+            {"fovy_deg", camera.fovy_deg}}},
+          {"overlays", drawn},
+          {"legend", legend_json},
           {"seconds", seconds}};
 }
 
@@ -82,9 +436,9 @@ Json renderPicture(const RenderOptions& options) {
 void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
   auto options = std::make_shared<RenderOptions>();
   auto* command = app.add_subcommand("render", "render a robot posture in a scene to a PNG file, offscreen");
-  command->add_option("--robot", options->robot, "built-in robot (lwr4, arm9) or a URDF file")->capture_default_str();
+  command->add_option("--robot", options->robot, "built-in robot (lwr4, arm9) or a URDF file (default: the session's, else lwr4)");
   command->add_option("--tip", options->tip, "tip link (default: the last link of the longest serial chain)");
-  command->add_option("--scene", options->scene, "built-in scene name or a scene file (default: empty)");
+  command->add_option("--scene", options->scene, "built-in scene name or a scene file (default: the session's, else empty)");
   command->add_option("--out", options->out, "PNG file to write")->required();
   command->add_option("--q", options->q, "joint values q1,...,qN [rad] (default: the scene's home posture, else mid-range)");
   command->add_option("--width", options->width, "image width [px]")->capture_default_str()->check(CLI::Range(1, 8192));
@@ -92,10 +446,29 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
   command->add_option("--camera", options->camera,
                       "eye and look-at point in the world frame [m], optionally the vertical field of view "
                       "[deg]: ex,ey,ez,cx,cy,cz[,fovy] (default: front-left, framing robot and scene)");
+  command->add_option("--view", options->view,
+                      "front-left, front, back, left, right or top: frames robot, scene and overlays from that side");
   command->add_option("--supersample", options->supersampling, "anti-aliasing: render at this multiple and average")
       ->capture_default_str()
       ->check(CLI::Range(1, 4));
   command->add_flag("--no-grid", options->no_grid, "hide the ground grid and the world axes");
+  command->add_flag("--no-scene-areas", options->no_scene_areas, "hide the scene file's suggested training areas");
+  command->add_option("--session", options->session,
+                      "session written by teach (JSON or SQLite): training samples per area, q_fixed ghosts, ITM graph");
+  command->add_option("--confidence-heights", options->confidence_heights,
+                      "heights z1,z2,... [m] of confidence slices (Fig. 6.5) from the session's areas");
+  command->add_option("--confidence-resolution", options->confidence_resolution, "grid points per side of a slice")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 400));
+  command->add_option("--reachable", options->reachable, "JSON of eval reachable: reached targets green, others red (Fig. 3.10)");
+  command->add_option("--scene-model", options->scene_model, "JSON of eval scene-model: the points of S (Eq. 4.1, Fig. 4.6)");
+  command->add_option("--plan", options->plan, "JSON of plan: goals and planned paths (Fig. 7.7, 8.4)");
+  command->add_option("--plan-paths", options->plan_paths, "draw only the first N planned paths")->check(CLI::Range(0, 100000));
+  command->add_option("--hide", options->hide, "overlay layers not to draw: samples,ghosts,confidence,itm,path,reachability,legend");
+  command->add_option("--point-size", options->point_size, "size of points [px]")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 64.0));
+  command->add_flag("--legend", options->legend, "draw a legend of the overlays in the top-left corner");
   command->callback([options, &runner] { runner.select([options] { return renderPicture(*options); }); });
 }
 

@@ -1,6 +1,11 @@
 // `flexirob-cli render`, run in-process: its JSON, its picture, its errors.
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <zlib.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
 
 #include <filesystem>
 #include <fstream>
@@ -10,6 +15,9 @@
 #include <vector>
 
 #include "app/cli/cli_support.hpp"
+#include "render/camera.hpp"
+#include "render/overlays.hpp"
+#include "render/world.hpp"
 
 namespace flexirob::cli {
 namespace {
@@ -78,6 +86,282 @@ TEST(RenderCommand, RejectsBadInputWithExitCodeTwo) {
   EXPECT_EQ(unwritable.exit_code, 2);
   EXPECT_NE(unwritable.err.find("cannot write"), std::string::npos) << unwritable.err;
   EXPECT_FALSE(std::filesystem::exists(file));
+}
+
+// --- Overlays from files --------------------------------------------------------------------
+
+// The RGBA PNG the renderer writes (8 bit, filter 0 on every line), decoded with zlib.
+struct Picture {
+  int width = 0;
+  int height = 0;
+  std::vector<unsigned char> rgba;
+  std::array<int, 3> at(const Eigen::Vector2d& pixel) const {
+    const int x = static_cast<int>(pixel.x());
+    const int y = static_cast<int>(pixel.y());
+    const std::size_t i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) * 4;
+    return {rgba[i], rgba[i + 1], rgba[i + 2]};
+  }
+};
+
+Picture readPicture(const std::filesystem::path& file) {
+  std::string bytes(std::filesystem::file_size(file), '\0');
+  std::ifstream(file, std::ios::binary).read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  const auto u32 = [&](std::size_t at) {
+    return (std::uint32_t{static_cast<unsigned char>(bytes[at])} << 24) |
+           (std::uint32_t{static_cast<unsigned char>(bytes[at + 1])} << 16) |
+           (std::uint32_t{static_cast<unsigned char>(bytes[at + 2])} << 8) | std::uint32_t{static_cast<unsigned char>(bytes[at + 3])};
+  };
+  Picture picture;
+  picture.width = static_cast<int>(u32(16));
+  picture.height = static_cast<int>(u32(20));
+  std::string idat;
+  for (std::size_t at = 8; at + 8 <= bytes.size();) {
+    const std::uint32_t length = u32(at);
+    if (bytes.substr(at + 4, 4) == "IDAT") idat += bytes.substr(at + 8, length);
+    at += 12 + length;
+  }
+  const std::size_t stride = static_cast<std::size_t>(picture.width) * 4 + 1;
+  std::vector<unsigned char> raw(stride * static_cast<std::size_t>(picture.height));
+  uLongf raw_size = raw.size();
+  if (uncompress(raw.data(), &raw_size, reinterpret_cast<const Bytef*>(idat.data()), idat.size()) != Z_OK) return {};
+  for (int y = 0; y < picture.height; ++y) {
+    const auto* line = raw.data() + static_cast<std::size_t>(y) * stride;
+    if (line[0] != 0) return {};
+    picture.rgba.insert(picture.rgba.end(), line + 1, line + stride);
+  }
+  return picture;
+}
+
+render::CameraPose cameraOf(const nlohmann::json& json) {
+  const auto vec = [](const nlohmann::json& v) { return Eigen::Vector3d(v[0].get<double>(), v[1].get<double>(), v[2].get<double>()); };
+  render::CameraPose camera;
+  camera.eye_W = vec(json.at("camera").at("eye"));
+  camera.center_W = vec(json.at("camera").at("center"));
+  camera.up_W = vec(json.at("camera").at("up"));
+  camera.fovy_deg = json.at("camera").at("fovy_deg").get<double>();
+  return camera;
+}
+
+std::array<int, 3> bytesOf(const Eigen::Vector4f& rgba) {
+  return {static_cast<int>(std::lround(rgba[0] * 255.0F)), static_cast<int>(std::lround(rgba[1] * 255.0F)),
+          static_cast<int>(std::lround(rgba[2] * 255.0F))};
+}
+
+// The colour at a pixel within `tolerance` per channel of the expected colour.
+::testing::AssertionResult near(const std::array<int, 3>& actual, const std::array<int, 3>& expected, int tolerance = 4) {
+  for (int c = 0; c < 3; ++c) {
+    if (std::abs(actual[static_cast<std::size_t>(c)] - expected[static_cast<std::size_t>(c)]) > tolerance) {
+      return ::testing::AssertionFailure() << "colour (" << actual[0] << ", " << actual[1] << ", " << actual[2]
+                                           << "), expected (" << expected[0] << ", " << expected[1] << ", " << expected[2] << ")";
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+void writeText(const std::filesystem::path& file, const std::string& text) { std::ofstream(file) << text; }
+
+// A hand-made session: one area of samples in front of the LWR IV (in a 4 cm cube centred at
+// (-0.5, 0, 0.4) m) and a three-node ITM graph (a chain) at another height.
+std::string tinySession() {
+  nlohmann::json x = nlohmann::json::array();
+  for (int i = 0; i < 27; ++i) x.push_back({-0.5 + 0.02 * (i % 3 - 1), 0.02 * ((i / 3) % 3 - 1), 0.4 + 0.02 * (i / 9 - 1)});
+  nlohmann::json session = {
+      {"format", "flexirob-session-json"},
+      {"robot", "lwr4"},
+      {"scene", "empty"},
+      {"areas", {{{"q_fixed", {0.0, 0.5, 0.0, -1.5, 0.0, 0.8, 0.0}}, {"x", x}, {"q", nlohmann::json::array()}}}},
+      {"itm",
+       {{"nodes", {{{"x", {-0.6, -0.3, 0.15}}}, {{"x", {-0.6, 0.0, 0.15}}}, {{"x", {-0.6, 0.3, 0.15}}}}},
+        {"edges", {{0, 1}, {1, 2}}}}}};
+  return session.dump();
+}
+
+// Looking at the front of the robot from far in front (-x), so that nothing of the arm stands
+// between the eye and the overlays in front of it.
+const char* kFrontCamera = "-3,0,0.4,-0.5,0,0.4,30";
+
+TEST(RenderCommandOverlays, DrawsTheSessionsSamplesAndItmGraphWhereTheyProject) {
+  const auto session = tempPng("session.json");
+  const auto file = tempPng("session.png");
+  writeText(session, tinySession());
+  const Result result = run({"render", "--session", session.string(), "--out", file.string(), "--width", "320",
+                             "--height", "240", "--supersample", "1", "--no-grid", "--hide", "ghosts", "--camera",
+                             kFrontCamera, "--point-size", "8"});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = nlohmann::json::parse(result.out);
+  EXPECT_EQ(json.at("overlays").at("samples"), 27);
+  EXPECT_EQ(json.at("overlays").at("itm_nodes"), 3);
+  EXPECT_EQ(json.at("overlays").at("itm_edges"), 2);
+  const render::CameraPose camera = cameraOf(json);
+  const Picture picture = readPicture(file);
+  ASSERT_EQ(picture.width, 320);
+  // The front sample (nearest to the eye) in the colour of area 1.
+  const auto sample = render::projectToPixel(camera, 320, 240, Eigen::Vector3d(-0.52, 0.0, 0.4));
+  ASSERT_TRUE(sample);
+  EXPECT_TRUE(near(picture.at(*sample), bytesOf(render::OverlayPalette::area(0))));
+  // The ITM nodes at their projections, an edge half-way between two of them.
+  for (const double y : {-0.3, 0.3}) {
+    const auto node = render::projectToPixel(camera, 320, 240, Eigen::Vector3d(-0.6, y, 0.15));
+    ASSERT_TRUE(node);
+    EXPECT_TRUE(near(picture.at(*node), bytesOf(render::OverlayPalette::itmNode()))) << "node at y = " << y;
+  }
+  const auto edge = render::projectToPixel(camera, 320, 240, Eigen::Vector3d(-0.6, 0.15, 0.15));
+  ASSERT_TRUE(edge);
+  EXPECT_TRUE(near(picture.at(*edge), bytesOf(render::OverlayPalette::itmEdge()), 40));
+  // Away from everything: the background.
+  EXPECT_TRUE(near(picture.at({5.5, 5.5}), bytesOf(render::Palette::background())));
+  std::filesystem::remove(session);
+  std::filesystem::remove(file);
+}
+
+TEST(RenderCommandOverlays, DrawsReachedTargetsGreenUnreachedRedAndTheSceneModel) {
+  const auto reachable = tempPng("reachable.json");
+  const auto model = tempPng("model.json");
+  const auto file = tempPng("reachable.png");
+  writeText(reachable, R"({"target_points": [[-0.6, -0.3, 0.3], [-0.6, 0.3, 0.3]], "target_reached": [true, false]})");
+  writeText(model, R"({"model": [[-0.6, 0.0, 0.1]]})");
+  const Result result = run({"render", "--reachable", reachable.string(), "--scene-model", model.string(), "--out",
+                             file.string(), "--width", "320", "--height", "240", "--supersample", "1", "--no-grid",
+                             "--camera", kFrontCamera, "--point-size", "8", "--legend"});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = nlohmann::json::parse(result.out);
+  EXPECT_EQ(json.at("overlays").at("targets"), 2);
+  EXPECT_EQ(json.at("overlays").at("reached"), 1);
+  EXPECT_EQ(json.at("overlays").at("scene_model_points"), 1);
+  EXPECT_EQ(json.at("legend").size(), 3U);
+  const render::CameraPose camera = cameraOf(json);
+  const Picture picture = readPicture(file);
+  const auto green = render::projectToPixel(camera, 320, 240, Eigen::Vector3d(-0.6, -0.3, 0.3));
+  const auto red = render::projectToPixel(camera, 320, 240, Eigen::Vector3d(-0.6, 0.3, 0.3));
+  const auto dark = render::projectToPixel(camera, 320, 240, Eigen::Vector3d(-0.6, 0.0, 0.1));
+  ASSERT_TRUE(green && red && dark);
+  EXPECT_TRUE(near(picture.at(*green), bytesOf(render::OverlayPalette::reachable())));
+  EXPECT_TRUE(near(picture.at(*red), bytesOf(render::OverlayPalette::unreachable())));
+  EXPECT_TRUE(near(picture.at(*dark), bytesOf(render::OverlayPalette::sceneModel())));
+  for (const auto& f : {reachable, model, file}) std::filesystem::remove(f);
+}
+
+TEST(RenderCommandOverlays, DrawsGoalsAndPlannedPathsWhereTheyProject) {
+  const auto plan = tempPng("plan.json");
+  const auto file = tempPng("plan.png");
+  writeText(plan, R"({"motions": [{"goal": [-0.6, 0.3, 0.2], "collided": false,
+      "path": [[-0.6, -0.3, 0.2], [-0.6, 0.0, 0.2], [-0.6, 0.3, 0.2]]}]})");
+  const Result result = run({"render", "--plan", plan.string(), "--out", file.string(), "--width", "320", "--height",
+                             "240", "--supersample", "1", "--no-grid", "--camera", kFrontCamera});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = nlohmann::json::parse(result.out);
+  EXPECT_EQ(json.at("overlays").at("paths"), 1);
+  const render::CameraPose camera = cameraOf(json);
+  const Picture picture = readPicture(file);
+  // The path's line (unlit) a quarter of the way along; the goal sphere is lit, so only its hue
+  // is checked: magenta, red and blue well above green.
+  const auto line = render::projectToPixel(camera, 320, 240, Eigen::Vector3d(-0.6, -0.15, 0.2));
+  const auto goal = render::projectToPixel(camera, 320, 240, Eigen::Vector3d(-0.6, 0.3, 0.2));
+  ASSERT_TRUE(line && goal);
+  EXPECT_TRUE(near(picture.at(*line), bytesOf(render::OverlayPalette::plannedPath()), 12));
+  const auto g = picture.at(*goal);
+  EXPECT_GT(g[0], g[1] + 60);
+  EXPECT_GT(g[2], g[1] + 20);
+  std::filesystem::remove(plan);
+  std::filesystem::remove(file);
+}
+
+TEST(RenderCommandOverlays, ConfidenceSliceIsBrightAtTheAreaAndDarkFarFromIt) {
+  const auto session = tempPng("confidence.json");
+  const auto file = tempPng("confidence.png");
+  writeText(session, tinySession());
+  // Straight down onto the slice at the area's height, z = 0.4 m.
+  const Result result = run({"render", "--session", session.string(), "--out", file.string(), "--width", "320",
+                             "--height", "240", "--supersample", "1", "--no-grid", "--hide", "samples,ghosts,itm",
+                             "--confidence-heights", "0.4", "--camera", "-0.5,0,3,-0.5,0,0.4,30"});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = nlohmann::json::parse(result.out);
+  const auto& slice = json.at("overlays").at("confidence_slices").at(0);
+  // C(x) = max_k g_k(x) reaches 1 at an area's mean (Eq. 6.9); the grid comes close to it.
+  EXPECT_GT(slice.at("max").get<double>(), 0.9);
+  EXPECT_LE(slice.at("max").get<double>(), 1.0);
+  render::CameraPose camera = cameraOf(json);
+  const Picture picture = readPicture(file);
+  const auto centre = render::projectToPixel(camera, 320, 240, Eigen::Vector3d(-0.5, 0.0, 0.4));
+  const auto far = render::projectToPixel(camera, 320, 240, Eigen::Vector3d(-0.85, -0.5, 0.4));
+  ASSERT_TRUE(centre && far);
+  // Blended over the background with alpha 0.65: yellow (C = 1) at the centre, dark violet
+  // (C = 0) in the far corner of the slice.
+  const Eigen::Vector4f background = render::Palette::background();
+  const auto blend = [&](const Eigen::Vector4f& c) {
+    return bytesOf(Eigen::Vector4f(0.65F * c + 0.35F * background));
+  };
+  EXPECT_TRUE(near(picture.at(*centre), blend(render::confidenceColor(1.0)), 20));
+  EXPECT_TRUE(near(picture.at(*far), blend(render::confidenceColor(0.0)), 6));
+  std::filesystem::remove(session);
+  std::filesystem::remove(file);
+}
+
+TEST(RenderCommandOverlays, RejectsHostileOverlayFilesWithAOneLineErrorAndExitCodeTwo) {
+  const auto file = tempPng("hostile.png");
+  const auto input = tempPng("hostile.json");
+  const auto expectRejected = [&](const std::string& content, const std::vector<std::string>& options) {
+    writeText(input, content);
+    std::vector<std::string> arguments{"render", "--out", file.string(), "--width", "16", "--height", "16"};
+    for (const auto& option : options) arguments.push_back(option == "FILE" ? input.string() : option);
+    const Result result = run(arguments);
+    EXPECT_EQ(result.exit_code, 2) << content;
+    EXPECT_EQ(result.err.rfind("error: ", 0), 0U) << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  };
+  expectRejected("not json", {"--reachable", "FILE"});
+  expectRejected("[]", {"--reachable", "FILE"});
+  expectRejected(R"({"target_points": [[0, 0, 0]]})", {"--reachable", "FILE"});
+  expectRejected(R"({"target_points": [[0, 0, 0]], "target_reached": [true, false]})", {"--reachable", "FILE"});
+  expectRejected(R"({"target_points": [[0, 0]], "target_reached": [true]})", {"--reachable", "FILE"});
+  expectRejected(R"({"target_points": [[0, 0, "a"]], "target_reached": [true]})", {"--reachable", "FILE"});
+  expectRejected(R"({"target_points": [[0, 0, 1e999]], "target_reached": [true]})", {"--reachable", "FILE"});
+  expectRejected(R"({"target_points": [[0, 0, 0]], "target_reached": [1]})", {"--reachable", "FILE"});
+  expectRejected(R"({"model": {"a": 1}})", {"--scene-model", "FILE"});
+  expectRejected(R"({"motions": [{"path": []}]})", {"--plan", "FILE"});
+  expectRejected(R"({"motions": [{"goal": [0, 0, 0]}]})", {"--plan", "FILE"});
+  expectRejected(R"({"motions": [7]})", {"--plan", "FILE"});
+  expectRejected(R"({"format": "something else"})", {"--session", "FILE"});
+  expectRejected(R"({"format": "flexirob-session-json", "robot": "lwr4", "scene": "empty", "areas": [],
+      "itm": {"nodes": [{"x": [0, 0, 0]}], "edges": [[0, 5]]}})", {"--session", "FILE"});
+  expectRejected(R"({"format": "flexirob-session-json", "robot": "lwr4", "scene": "empty",
+      "areas": [{"q_fixed": [0, 0], "x": [[0, 0, 0]]}], "itm": {"nodes": [], "edges": []}})", {"--session", "FILE"});
+  expectRejected(R"({"format": "flexirob-session-json", "robot": "no_such_robot", "scene": "empty", "areas": [],
+      "itm": {"nodes": [], "edges": []}})", {"--session", "FILE"});
+  expectRejected("SQLite format 3 but not really", {"--session", "FILE"});
+  // Options that do not make sense.
+  expectRejected(tinySession(), {"--session", "FILE", "--confidence-heights", "0.3,abc"});
+  expectRejected(tinySession(), {"--session", "FILE", "--hide", "samples,nonsense"});
+  expectRejected("{}", {"--confidence-heights", "0.3"});
+  expectRejected("{}", {"--view", "sideways"});
+  const Result missing = run({"render", "--out", file.string(), "--reachable", "/nonexistent-folder/r.json"});
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find("cannot read"), std::string::npos) << missing.err;
+  EXPECT_FALSE(std::filesystem::exists(file));
+  std::filesystem::remove(input);
+}
+
+TEST(RenderCommandOverlays, NamedViewsFrameTheOverlays) {
+  const auto reachable = tempPng("view.json");
+  const auto file = tempPng("view.png");
+  writeText(reachable, R"({"target_points": [[-1.5, 0.0, 0.3], [0.0, 1.5, 0.3]], "target_reached": [true, true]})");
+  for (const std::string view : {"front-left", "front", "back", "left", "right", "top"}) {
+    const Result result = run({"render", "--reachable", reachable.string(), "--out", file.string(), "--width", "200",
+                               "--height", "150", "--supersample", "1", "--view", view});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const render::CameraPose camera = cameraOf(nlohmann::json::parse(result.out));
+    // Both targets lie far outside the robot's bounds, and still inside the picture.
+    for (const Eigen::Vector3d& p : {Eigen::Vector3d(-1.5, 0.0, 0.3), Eigen::Vector3d(0.0, 1.5, 0.3)}) {
+      const auto pixel = render::projectToPixel(camera, 200, 150, p);
+      ASSERT_TRUE(pixel) << view;
+      EXPECT_GT(pixel->x(), 0.0) << view;
+      EXPECT_LT(pixel->x(), 200.0) << view;
+      EXPECT_GT(pixel->y(), 0.0) << view;
+      EXPECT_LT(pixel->y(), 150.0) << view;
+    }
+  }
+  std::filesystem::remove(reachable);
+  std::filesystem::remove(file);
 }
 
 }  // namespace
