@@ -1,0 +1,213 @@
+// The command-line contract of `eval scene-model`, `eval trajectories` and `sweep`, exercised
+// through the real binary on tiny inputs: the JSON's structure, its values against facts known
+// independently of the evaluation (the scene's boxes, the requested counts, the grid's
+// lattice), and exit code 2 with a one-line reason for bad arguments.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_test_support.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/scene.hpp"
+
+namespace flexirob {
+namespace {
+
+using testing::runCliBinary;
+
+std::filesystem::path scratchDir() {
+  const auto dir = std::filesystem::temp_directory_path() / ("flexirob-eval-cli-test-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+void writeText(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  file << text;
+}
+
+// A session as `teach --out F.json` writes it, made by hand: in each area the postures are
+// q_fixed plus small joint offsets and the task positions their forward kinematics, so the
+// training data are exact; the ITM graph is a chain through some samples.
+std::filesystem::path tinySession(const std::string& scene_name, const std::string& name) {
+  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
+  const robot::Scene scene = robot::loadScene(scene_name);
+  // Two of setup_I's suggested areas (I1 in front, I2 front-right): collision-free postures.
+  const std::vector<Eigen::VectorXd> postures = {
+      (Eigen::VectorXd(7) << 0.1177, 0.6076, 0.0937, -1.7010, 0.0132, 0.9237, 0.0).finished(),
+      (Eigen::VectorXd(7) << 0.4676, 0.5650, 0.3476, -1.3731, 0.0518, 0.8482, 0.0).finished()};
+  robot::Kinematics kinematics(model);
+  nlohmann::json areas = nlohmann::json::array();
+  nlohmann::json nodes = nlohmann::json::array();
+  nlohmann::json edges = nlohmann::json::array();
+  for (const Eigen::VectorXd& q_fixed : postures) {
+    nlohmann::json x = nlohmann::json::array();
+    nlohmann::json q = nlohmann::json::array();
+    for (int l = 0; l < 40; ++l) {
+      Eigen::VectorXd q_l = q_fixed;
+      // Deterministic offsets of up to 0.06 rad on the first four joints.
+      for (int j = 0; j < 4; ++j) q_l[j] += 0.06 * std::sin(0.7 * l + 1.3 * j);
+      kinematics.update(q_l);
+      const Eigen::Vector3d p = kinematics.p_WT();
+      x.push_back({p.x(), p.y(), p.z()});
+      q.push_back(std::vector<double>(q_l.data(), q_l.data() + q_l.size()));
+      if (l % 10 == 0) {
+        if (!nodes.empty()) edges.push_back({nodes.size() - 1, nodes.size()});
+        nodes.push_back({{"x", {p.x(), p.y(), p.z()}}, {"q", q.back()}});
+      }
+    }
+    areas.push_back({{"q_fixed", std::vector<double>(q_fixed.data(), q_fixed.data() + q_fixed.size())}, {"x", x}, {"q", q}});
+  }
+  const nlohmann::json session = {{"format", "flexirob-session-json"},
+                                  {"version", 1},
+                                  {"robot", "lwr4"},
+                                  {"tip", ""},
+                                  {"scene", scene_name},
+                                  {"areas", areas},
+                                  {"itm", {{"nodes", nodes}, {"edges", edges}}}};
+  const auto file = scratchDir() / name;
+  writeText(file, session.dump());
+  return file;
+}
+
+bool insideSomeObstacle(const robot::Scene& scene, const Eigen::Vector3d& p) {
+  for (const auto& obstacle : scene.obstacles) {
+    if (robot::obstacleContains(obstacle, p)) return true;
+  }
+  return false;
+}
+
+TEST(EvalSceneModelCli, ModelPointsLieOnTheGridAndTheEnclosedObstaclePointsInsideTheScenesBoxes) {
+  const auto session = tinySession("setup_I", "scene-model.json");
+  const auto result = runCliBinary("eval scene-model --session " + session.string() + " --spacing 0.2");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json json = result.json();
+  for (const char* key : {"workspace_points", "model_points", "obstacle_points", "obstacle_points_enclosed",
+                          "obstacle_enclosed_fraction", "free_points_in_model", "reachable_fraction", "model"}) {
+    EXPECT_TRUE(json.contains(key)) << key;
+  }
+  EXPECT_EQ(json.at("areas"), 2);
+  EXPECT_DOUBLE_EQ(json.at("spacing_m").get<double>(), 0.2);
+  const nlohmann::json& model = json.at("model");
+  ASSERT_EQ(model.size(), json.at("model_points").get<std::size_t>());
+  EXPECT_LE(json.at("model_points").get<int>(), json.at("workspace_points").get<int>());
+  // Count again, with the scene's own obstacle boxes, which points of S lie inside an obstacle.
+  const robot::Scene scene = robot::loadScene("setup_I");
+  ASSERT_TRUE(scene.grid.has_value());
+  int inside = 0;
+  for (const auto& point : model) {
+    const Eigen::Vector3d p(point.at(0).get<double>(), point.at(1).get<double>(), point.at(2).get<double>());
+    // S is a subset of the grid G (Eq. 4.1): every point on its 0.2 m lattice, within its box.
+    const Eigen::Vector3d steps = (p - scene.grid->lower) / 0.2;
+    EXPECT_NEAR((steps - steps.array().round().matrix()).norm(), 0.0, 1e-6) << p.transpose();
+    EXPECT_TRUE((p.array() >= scene.grid->lower.array() - 1e-9).all() && (p.array() <= scene.grid->upper.array() + 1e-9).all())
+        << p.transpose();
+    inside += insideSomeObstacle(scene, p) ? 1 : 0;
+  }
+  EXPECT_EQ(inside, json.at("obstacle_points_enclosed").get<int>());
+  EXPECT_EQ(json.at("free_points_in_model").get<int>(), json.at("model_points").get<int>() - inside);
+  EXPECT_LE(json.at("obstacle_points_enclosed").get<int>(), json.at("obstacle_points").get<int>());
+  // The box (0.2 x 0.2 x 0.8 m) and the board hold grid points at 0.2 m spacing.
+  EXPECT_GT(json.at("obstacle_points").get<int>(), 0);
+  EXPECT_NEAR(json.at("obstacle_enclosed_fraction").get<double>(),
+              static_cast<double>(inside) / json.at("obstacle_points").get<int>(), 1e-12);
+  std::filesystem::remove(session);
+}
+
+TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
+  // The empty scene lists no trajectories: per area `per-area` are drawn, twice as many between.
+  const auto session = tinySession("empty", "trajectories.json");
+  const auto result = runCliBinary("eval trajectories --session " + session.string() + " --per-area 2 --speed 0.2 --seed 3");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json json = result.json();
+  EXPECT_EQ(json.at("source"), "drawn around the samples");
+  EXPECT_DOUBLE_EQ(json.at("speed_m_s").get<double>(), 0.2);
+  const nlohmann::json& regions = json.at("regions");
+  ASSERT_EQ(regions.size(), 3U);
+  EXPECT_EQ(regions[0].at("region"), "left");
+  EXPECT_EQ(regions[1].at("region"), "right");
+  EXPECT_EQ(regions[2].at("region"), "interpolation");
+  EXPECT_EQ(regions[0].at("trajectories"), 2);
+  EXPECT_EQ(regions[1].at("trajectories"), 2);
+  EXPECT_EQ(regions[2].at("trajectories"), 4);
+  for (const auto& region : regions) {
+    const double mean = region.at("e_task_mean_mm").get<double>();
+    const double max = region.at("e_task_max_mm").get<double>();
+    EXPECT_TRUE(std::isfinite(mean) && mean >= 0.0) << region.dump();
+    EXPECT_GE(max, mean) << region.dump();
+    EXPECT_GE(region.at("e_task_std_mm").get<double>(), 0.0);
+    EXPECT_GE(region.at("e_coll").get<int>(), 0);
+    EXPECT_LE(region.at("e_coll").get<int>(), region.at("trajectories").get<int>());
+  }
+  // Deterministic for a seed.
+  const auto again = runCliBinary("eval trajectories --session " + session.string() + " --per-area 2 --speed 0.2 --seed 3");
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.json().at("regions"), regions);
+  std::filesystem::remove(session);
+}
+
+TEST(SweepCli, WritesOneRowPerRequestedRowAndOnlyTheRequestedTables) {
+  const auto markdown = scratchDir() / "sweep.md";
+  // Tab. 3.3 with at most one area: setup_I and setup_II with one area each, on a coarse grid.
+  const auto result = runCliBinary("sweep --tables 3.3 --max-areas 1 --spacing 0.3 --markdown " + markdown.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json json = result.json();
+  EXPECT_EQ(json.size(), 1U) << json.dump();
+  const nlohmann::json& rows = json.at("tab_3_3");
+  ASSERT_EQ(rows.size(), 2U);
+  EXPECT_EQ(rows[0].at("scene"), "setup_I");
+  EXPECT_EQ(rows[1].at("scene"), "setup_II");
+  for (const auto& row : rows) {
+    EXPECT_EQ(row.at("areas_requested"), 1);
+    EXPECT_LE(row.at("reached").get<int>(), row.at("targets").get<int>());
+    EXPECT_NEAR(row.at("reachable_fraction").get<double>(),
+                row.at("targets").get<int>() > 0 ? row.at("reached").get<double>() / row.at("targets").get<int>() : 0.0, 1e-12);
+    EXPECT_DOUBLE_EQ(row.at("spacing_m").get<double>(), 0.3);
+  }
+  // The markdown holds the same rows: one table line per row after the header and separator.
+  std::ifstream in(markdown);
+  std::string line;
+  int table_rows = 0;
+  while (std::getline(in, line)) table_rows += line.rfind("| setup_", 0) == 0 ? 1 : 0;
+  EXPECT_EQ(table_rows, 2);
+  std::filesystem::remove(markdown);
+}
+
+TEST(EvalCli, BadArgumentsGiveExitCodeTwoAndOneLine) {
+  const auto dir = scratchDir();
+  writeText(dir / "not-a-session.json", R"({"format": "something else"})");
+  writeText(dir / "broken.json", "{ not json");
+  const auto session = tinySession("empty", "bad-args.json");
+  const std::vector<std::string> bad = {
+      "eval scene-model",
+      "eval scene-model --session /nonexistent/session.json",
+      "eval scene-model --session " + (dir / "not-a-session.json").string(),
+      "eval trajectories --session " + (dir / "broken.json").string(),
+      "eval scene-model --session " + session.string() + " --spacing 5",
+      "eval trajectories --session " + session.string() + " --per-area 0",
+      "eval trajectories --session " + session.string() + " --speed -1",
+      "eval trajectories --session " + session.string() + " --learner nonsense",
+      "eval nonsense",
+      "sweep --tables 9.9",
+      "sweep --spacing 0",
+      "sweep --seeds 0"};
+  for (const std::string& arguments : bad) {
+    const auto result = runCliBinary(arguments);
+    EXPECT_EQ(result.exit_code, 2) << arguments << ": " << result.err;
+    EXPECT_EQ(result.err.rfind("error: ", 0), 0U) << arguments << ": " << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << arguments << ": " << result.err;
+    EXPECT_TRUE(result.out.empty()) << arguments;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace flexirob
