@@ -25,15 +25,21 @@
 #include <sstream>
 
 #include "app/session_recorder.hpp"
+#include "learning/confidence.hpp"
+#include "planning/itm_file.hpp"
 #include "robot/resources.hpp"
 #include "robot/sim/reach.hpp"
+#include "ui/confidence_panel.hpp"
 #include "ui/converged_chime.hpp"
+#include "ui/goal_picking.hpp"
 #include "ui/joint_panel.hpp"
 #include "ui/live_teaching.hpp"
 #include "ui/mouse_perturbation.hpp"
 #include "ui/osg_view.hpp"
 #include "ui/overlay_menu.hpp"
 #include "ui/parameter_panel.hpp"
+#include "ui/plot_panel.hpp"
+#include "ui/review_window.hpp"
 #include "ui/stage_panel.hpp"
 
 #ifndef FLEXIROB_VERSION_STRING
@@ -44,6 +50,8 @@ namespace flexirob::ui {
 namespace {
 
 constexpr int kDisplayPeriodMs = 16;  // ~60 Hz mirror
+constexpr int kPlotPeriodMs = 200;    // plots take a sample every 200 ms (5 Hz: smooth, cheap to redraw)
+constexpr qint64 kItmRecordPeriodMs = 1000;  // ITM snapshots into the session at most once a second
 
 std::string readText(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -94,6 +102,10 @@ MainWindow::MainWindow(const std::string& robot, const std::string& scene, const
   key_map_label_->setStyleSheet(QStringLiteral("QLabel { background: rgba(255,255,255,215); color: #202020;"
                                                " border: 1px solid #888; padding: 6px; }"));
   key_map_label_->setVisible(false);
+  confidence_legend_ = new ConfidenceColourBar(view_);
+  confidence_legend_->resize(confidence_legend_->sizeHint());
+  confidence_legend_->setVisible(false);
+  view_->setControlClickHandler([this](const QPointF& position) { clickGoal(position); });
 
   parameters_ = std::make_unique<robot::ParameterSet>(declarations_);
   try {
@@ -173,6 +185,30 @@ void MainWindow::buildDocks() {
   joints_dock->raise();
   connect(parameter_panel_, &ParameterPanel::applyRequested, this,
           [this](const std::map<std::string, double>& values) { applyParameters(values); });
+
+  // The confidence field's slices (Fig. 6.5): heights and the colour map's legend.
+  confidence_panel_ = new ConfidencePanel;
+  auto* confidence_dock = new QDockWidget(tr("Confidence"), this);
+  confidence_dock->setObjectName(QStringLiteral("confidence_dock"));
+  confidence_dock->setWidget(confidence_panel_);
+  addDockWidget(Qt::RightDockWidgetArea, confidence_dock);
+  tabifyDockWidget(joints_dock, confidence_dock);
+  joints_dock->raise();
+  connect(confidence_panel_, &ConfidencePanel::settingsChanged, this, [this] {
+    operator_heights_ = true;
+    if (live_) updateConfidence(live_->snapshot(), true);
+    view_->update();
+  });
+
+  // Live plots (issue #7 item 7): task error, joints against their limits, the control cycle.
+  plot_panel_ = new PlotPanel;
+  plot_panel_->setOrientation(Qt::Horizontal);
+  plot_panel_->setMinimumHeight(230);
+  auto* plot_dock = new QDockWidget(tr("Plots"), this);
+  plot_dock->setObjectName(QStringLiteral("plots_dock"));
+  plot_dock->setWidget(plot_panel_);
+  addDockWidget(Qt::BottomDockWidgetArea, plot_dock);
+  resizeDocks({plot_dock}, {240}, Qt::Vertical);
 }
 
 void MainWindow::resetParameters() {
@@ -202,6 +238,7 @@ void MainWindow::stopLive() {
     handleEvents();
     recordTaughtData();
   }
+  if (live_ && recorder_) recordItm(live_->snapshot(), true);
   live_.reset();
   if (recorder_) recorder_->close();
   recorder_.reset();
@@ -210,9 +247,14 @@ void MainWindow::stopLive() {
   if (force_arrow_) force_arrow_->hide();
   shown_cycle_ = ~0ULL;
   shown_areas_version_ = shown_teach_ins_version_ = shown_itm_version_ = ~0ULL;
+  shown_model_version_ = shown_path_version_ = recorded_itm_version_ = ~0ULL;
+  goal_.reset();
+  confidence_slices_ = 0;
+  if (confidence_legend_ != nullptr) confidence_legend_->setVisible(false);
   if (overlays_) {
     for (const render::OverlayLayer layer : {render::OverlayLayer::kTrainingSamples, render::OverlayLayer::kGhostArms,
-                                             render::OverlayLayer::kTrajectories}) {
+                                             render::OverlayLayer::kTrajectories, render::OverlayLayer::kConfidence,
+                                             render::OverlayLayer::kGoalAndPath}) {
       overlays_->setContent(layer, nullptr);
     }
     overlays_->itm().setGraph({}, {});
@@ -221,6 +263,7 @@ void MainWindow::stopLive() {
 
 void MainWindow::startRecording() {
   recorded_areas_ = 0;
+  recorded_itm_version_ = ~0ULL;  // a new file holds the graph again
   session_file_.clear();
   if (!options_.record_sessions || !model_ || !live_) return;
   const QString directory =
@@ -281,6 +324,7 @@ bool MainWindow::saveSession(const QString& file) {
   // Everything shown so far goes in; saveCopy closes the recorder, so record on into a new file.
   handleEvents();
   recordTaughtData();
+  recordItm(live_->snapshot(), true);
   bool ok = true;
   try {
     recorder_->saveCopy(file.toStdString());
@@ -326,6 +370,18 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
     action->setChecked(action->data().toString().toStdString() == name_or_path);
   }
   key_map_label_->setText(TeleopKeys::keyMapText(model_->dof()));
+  {
+    std::vector<std::string> names;
+    Eigen::VectorXd lower(model_->dof());
+    Eigen::VectorXd upper(model_->dof());
+    for (int j = 0; j < model_->dof(); ++j) {
+      const robot::Joint& joint = model_->joints()[static_cast<std::size_t>(j)];
+      names.push_back(joint.name);
+      lower[j] = joint.limits.lower;
+      upper[j] = joint.limits.upper;
+    }
+    plot_panel_->setJoints(names, lower, upper);
+  }
   key_map_label_->adjustSize();
   resetParameters();
   startLive();
@@ -426,7 +482,11 @@ void MainWindow::mirror() {
   }
   if (s.cycle != shown_cycle_ && s.dof == model_->dof()) {
     recordState(s);
+    recordItm(s, false);
     updateOverlays(s);
+    updateConfidence(s, false);
+    updateGoalAndPath(s);
+    updatePlots(s);
     shown_cycle_ = s.cycle;
     Eigen::VectorXd q(s.dof);
     for (int j = 0; j < s.dof; ++j) q[j] = s.q[static_cast<std::size_t>(j)];
@@ -467,6 +527,7 @@ void MainWindow::mirror() {
   link_label_->setText(QString::fromStdString(link.summary()));
   link_label_->setStyleSheet(link.fault ? QStringLiteral("color: #c00000; font-weight: bold") : QString());
   if (reconnect_action_ != nullptr) reconnect_action_->setEnabled(link.fault);
+  placeViewLabels();
   updateStatus();
   view_->update();
 }
@@ -531,8 +592,10 @@ void MainWindow::recordTaughtData() {
   for (; recorded_areas_ < areas->size(); ++recorded_areas_) {
     const app::TrainingArea& area = (*areas)[recorded_areas_];
     const int k = static_cast<int>(recorded_areas_);
-    recorder_->recordArea({k, 0.0, area.centre, area.q_fixed});
-    for (Eigen::Index l = 0; l < area.X.cols(); ++l) recorder_->recordSample({0.0, k, area.X.col(l), area.Q.col(l)});
+    // Stamped with the time the area is seen (the review shows it, and its samples, from then on).
+    const double time = live_->snapshot().time;
+    recorder_->recordArea({k, time, area.centre, area.q_fixed});
+    for (Eigen::Index l = 0; l < area.X.cols(); ++l) recorder_->recordSample({time, k, area.X.col(l), area.Q.col(l)});
   }
 }
 
@@ -600,7 +663,9 @@ void MainWindow::recordState(const LiveSnapshot& s) {
 
 void MainWindow::driveKeyboard() {
   // Held keys step the targets by velocity × the time since the last tick (Sect. 8.1).
-  const double dt = key_clock_.isValid() ? std::min(0.1, static_cast<double>(key_clock_.restart()) * 1e-3) : 0.0;
+  // A stalled display (a slow software renderer, a busy machine) must not eat the motion of held
+  // keys; beyond 0.25 s (2 cm of target at the task speed) it is a stall, not a tick.
+  const double dt = key_clock_.isValid() ? std::min(0.25, static_cast<double>(key_clock_.restart()) * 1e-3) : 0.0;
   if (!key_clock_.isValid()) key_clock_.start();
   if (!live_ || !model_ || !teleop_.anyHeld() || dt <= 0.0) return;
   if (!keyboard_mode_) {
@@ -714,6 +779,25 @@ void MainWindow::buildMenus() {
     if (!path.isEmpty()) loadScene(path.toStdString());
   });
   file->addSeparator();
+  file->addAction(tr("&Open recording…"), QKeySequence::Open, this, [this] {
+    const QString path = QFileDialog::getOpenFileName(
+        this, tr("Open a session recording"),
+        QStandardPaths::writableLocation(QStandardPaths::AppDataLocation) + QStringLiteral("/sessions"),
+        tr("FlexIRob sessions (*.flexirob *.sqlite *.db);;All files (*)"));
+    if (!path.isEmpty() && openRecording(path) == nullptr) {
+      QMessageBox::warning(this, tr("Open recording"), statusBar()->currentMessage());
+    }
+  });
+  file->addAction(tr("&Review this run"), this, [this] {
+    if (session_file_.isEmpty()) {
+      statusBar()->showMessage(tr("This run is not recorded"), 10000);
+      return;
+    }
+    handleEvents();
+    recordTaughtData();
+    if (live_) recordItm(live_->snapshot(), true);
+    openRecording(session_file_);
+  });
   file->addAction(tr("Save session &as…"), QKeySequence::SaveAs, this, [this] {
     const QString path = QFileDialog::getSaveFileName(this, tr("Save session"), QStringLiteral("session.flexirob"),
                                                       tr("FlexIRob sessions (*.flexirob);;All files (*)"));
@@ -794,6 +878,8 @@ void MainWindow::buildMenus() {
     view_->update();
   });
   view->addAction(tr("&Key map (F1, H)"), this, [this] { toggleKeyMap(!key_map_label_->isVisible()); });
+  view->addSeparator();
+  for (QDockWidget* dock : findChildren<QDockWidget*>()) view->addAction(dock->toggleViewAction());
   auto* overlay_menu = new OverlayMenu(*overlays_, this);
   overlay_menu->setTitle(tr("&Overlays"));
   menuBar()->addMenu(overlay_menu);
@@ -801,9 +887,174 @@ void MainWindow::buildMenus() {
   QMenu* help = menuBar()->addMenu(tr("&Help"));
   help->addAction(tr("&Mouse"), this, [this] {
     statusBar()->showMessage(tr("Left drag on a link: pull the arm   Left drag elsewhere: orbit   Middle or "
-                                "Shift+left drag: pan   Right drag or wheel: zoom   Double click: home view"),
+                                "Shift+left drag: pan   Right drag or wheel: zoom   Double click: home view   "
+                                "Ctrl+click in EXECUTION: set a goal, plan and execute"),
                              15000);
   });
+}
+
+// --- Plots, confidence slices, goals, recordings -------------------------------------------
+
+void MainWindow::updatePlots(const LiveSnapshot& s) {
+  if (plot_clock_.isValid() && plot_clock_.elapsed() < kPlotPeriodMs) return;
+  plot_clock_.start();
+  PlotSample sample;
+  sample.time = s.time;
+  // Task error of the interaction controller: |x_des − x| of the tip [m].
+  sample.task_error = std::sqrt((s.p_des[0] - s.p_WT[0]) * (s.p_des[0] - s.p_WT[0]) +
+                                (s.p_des[1] - s.p_WT[1]) * (s.p_des[1] - s.p_WT[1]) +
+                                (s.p_des[2] - s.p_WT[2]) * (s.p_des[2] - s.p_WT[2]));
+  sample.q.resize(s.dof);
+  for (int j = 0; j < s.dof; ++j) sample.q[j] = s.q[static_cast<std::size_t>(j)];
+  sample.compute_us = s.statistics.last_compute_us;
+  sample.max_compute_us = s.statistics.max_compute_us;
+  sample.deadline_misses = static_cast<double>(s.statistics.deadline_misses);
+  plot_panel_->append(sample);
+}
+
+void MainWindow::updateConfidence(const LiveSnapshot& s, bool force) {
+  if (!force && s.model_version == shown_model_version_) return;
+  shown_model_version_ = s.model_version;
+  const std::shared_ptr<const learning::ConfidenceModel> model = s.confidence;
+  if (!model || model->areas() == 0) {
+    overlays_->setContent(render::OverlayLayer::kConfidence, nullptr);
+    confidence_slices_ = 0;
+    confidence_panel_->setStatus(tr("No training area yet: the confidence field C(x) (Eq. 6.9) appears with the first."));
+    return;
+  }
+  if (!operator_heights_) {
+    // Until the operator picks heights, the middle slice passes through the areas' mean height.
+    const QSignalBlocker block(confidence_panel_);
+    confidence_panel_->setSettings(centredSlices(*model, confidence_panel_->settings()));
+  }
+  const std::vector<render::ConfidenceGrid> slices = confidenceSlices(*model, confidence_panel_->settings());
+  overlays_->setContent(render::OverlayLayer::kConfidence, makeConfidenceOverlay(slices));
+  confidence_slices_ = static_cast<int>(slices.size());
+  double highest = 0.0;
+  double at = 0.0;
+  for (const render::ConfidenceGrid& grid : slices) {
+    if (grid.values.maxCoeff() > highest) {
+      highest = grid.values.maxCoeff();
+      at = grid.z;
+    }
+  }
+  confidence_panel_->setStatus(tr("%n area(s); largest C on the slices %1 at z = %2 m", nullptr, model->areas())
+                                   .arg(highest, 0, 'f', 2)
+                                   .arg(at, 0, 'f', 2));
+}
+
+QWidget* MainWindow::confidenceLegend() const { return confidence_legend_; }
+
+void MainWindow::placeViewLabels() {
+  const bool legend = confidence_slices_ > 0 && overlays_->visible(render::OverlayLayer::kConfidence);
+  if (legend != confidence_legend_->isVisible()) confidence_legend_->setVisible(legend);
+  const QPoint corner(std::max(0, view_->width() - confidence_legend_->width() - 12),
+                      std::max(0, view_->height() - confidence_legend_->height() - 12));
+  if (confidence_legend_->pos() != corner) confidence_legend_->move(corner);
+}
+
+void MainWindow::clickGoal(const QPointF& position) {
+  if (!live_ || !model_) return;
+  const LiveSnapshot& s = live_->snapshot();
+  std::vector<Eigen::Vector3d> nodes;
+  if (s.itm) {
+    for (const int id : s.itm->nodeIds()) {
+      const auto omega = s.itm->prototype(id);
+      nodes.emplace_back(omega[0], omega[1], omega[2]);
+    }
+  }
+  Eigen::Vector3d origin;
+  Eigen::Vector3d direction;
+  view_->ray(position, origin, direction);
+  const std::optional<GoalPick> pick = pickGoal(view_->currentCamera(), view_->width(), view_->height(),
+                                                Eigen::Vector2d(position.x(), position.y()), nodes, origin,
+                                                direction, s.p_WT[2]);
+  if (!pick) {
+    statusBar()->showMessage(tr("No goal there: click on the explored region (the ITM graph)"), 8000);
+    return;
+  }
+  setGoal(pick->goal_W);
+}
+
+bool MainWindow::setGoal(const Eigen::Vector3d& goal_W) {
+  if (!live_ || !goal_W.allFinite()) return false;
+  const bool executing = live_->snapshot().stage == app::Stage::kExecution;
+  if (executing) {
+    goal_ = goal_W;
+    // The goal shows at once; the path joins it when the workflow has planned it.
+    overlays_->setContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(goal_W));
+    statusBar()->showMessage(tr("Goal (%1, %2, %3) m: planning through the ITM graph")
+                                 .arg(goal_W.x(), 0, 'f', 3)
+                                 .arg(goal_W.y(), 0, 'f', 3)
+                                 .arg(goal_W.z(), 0, 'f', 3),
+                             8000);
+  }
+  // Outside EXECUTION the workflow refuses and says why (shown as a warning).
+  const bool posted = live_->planTo(goal_W);
+  view_->update();
+  return posted;
+}
+
+void MainWindow::updateGoalAndPath(const LiveSnapshot& s) {
+  if (s.path_version == shown_path_version_) return;
+  shown_path_version_ = s.path_version;
+  overlays_->setContent(render::OverlayLayer::kGoalAndPath, nullptr);
+  if (goal_) overlays_->addContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(*goal_));
+  if (!s.path || !s.path->found) return;
+  std::vector<Eigen::Vector3d> waypoints;
+  for (Eigen::Index k = 0; k < s.path->waypoints.cols(); ++k) waypoints.emplace_back(s.path->waypoints.col(k));
+  overlays_->addContent(render::OverlayLayer::kGoalAndPath,
+                        render::makePolyline(waypoints, render::OverlayPalette::plannedPath(), 4.0F));
+  overlays_->addContent(render::OverlayLayer::kGoalAndPath,
+                        render::makePoints(waypoints, render::OverlayPalette::plannedPath(), 8.0F));
+}
+
+void MainWindow::recordItm(const LiveSnapshot& s, bool final) {
+  if (!recorder_ || !s.itm || s.itm_version == recorded_itm_version_ || s.itm->nodeCount() == 0) return;
+  if (!final && itm_record_clock_.isValid() && itm_record_clock_.elapsed() < kItmRecordPeriodMs) return;
+  itm_record_clock_.start();
+  recorded_itm_version_ = s.itm_version;
+  // The graph's own file format (planning/itm_file.hpp), through a scratch file.
+  const std::filesystem::path scratch =
+      std::filesystem::temp_directory_path() /
+      ("flexirob-itm-" + std::to_string(QCoreApplication::applicationPid()) + "-" +
+       std::to_string(reinterpret_cast<std::uintptr_t>(this)) + ".itm");
+  try {
+    planning::saveItm(*s.itm, scratch);
+    const std::string bytes = readText(scratch);
+    std::filesystem::remove(scratch);
+    app::ItmRecord record;
+    record.time = s.time;
+    record.nodes = s.itm->nodeCount();
+    record.edges = s.itm->edgeCount();
+    record.bytes.assign(bytes.begin(), bytes.end());
+    recorder_->recordItm(std::move(record));
+  } catch (const std::exception& error) {
+    std::error_code ignored;
+    std::filesystem::remove(scratch, ignored);
+    reportError(tr("Cannot record the ITM graph"), error);
+  }
+}
+
+ReviewWindow* MainWindow::openRecording(const QString& file) {
+  auto* review = new ReviewWindow(this);  // a window of its own, closed with the main window
+  review->setAttribute(Qt::WA_DeleteOnClose);
+  if (!review->open(file.toStdString())) {
+    statusBar()->showMessage(tr("Cannot open %1: %2").arg(file, review->errorString()), 15000);
+    delete review;
+    return nullptr;
+  }
+  review->show();
+  reviews_.emplace_back(review);
+  return review;
+}
+
+std::vector<ReviewWindow*> MainWindow::reviewWindows() const {
+  std::vector<ReviewWindow*> open;
+  for (const QPointer<ReviewWindow>& review : reviews_) {
+    if (!review.isNull()) open.push_back(review.data());
+  }
+  return open;
 }
 
 }  // namespace flexirob::ui

@@ -9,8 +9,10 @@
 // (File ▸ Save session as… keeps a copy); the window's layout is remembered (QSettings).
 #include <QMainWindow>
 #include <QElapsedTimer>
+#include <QPointer>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,6 +47,10 @@ class ParameterPanel;
 class MousePerturbation;
 class ForceArrow;
 class ConvergedChime;
+class PlotPanel;
+class ConfidencePanel;
+class ConfidenceColourBar;
+class ReviewWindow;
 
 class MainWindow : public QMainWindow {
   Q_OBJECT
@@ -107,8 +113,31 @@ class MainWindow : public QMainWindow {
   void toggleKeyMap(bool visible);
 
   /// Writes a copy of the current run's session to `file` and goes on recording into a new one.
-  /// The recording holds the states at display rate, the stages, triggers, buttons and areas.
+  /// The recording holds the states at display rate, the stages, triggers, buttons, areas with
+  /// their samples and ITM snapshots.
   bool saveSession(const QString& file);
+
+  /// Opens a session recording in a review window of its own (File ▸ Open recording…). Null
+  /// and the reason in the status bar if the file is no readable recording.
+  ReviewWindow* openRecording(const QString& file);
+  /// The review windows opened and still open.
+  std::vector<ReviewWindow*> reviewWindows() const;
+
+  /// EXECUTION: sets `goal_W` [m] as the goal, draws it and asks the workflow to plan through
+  /// the ITM graph and execute (Sect. 7.4). Outside EXECUTION the workflow refuses and the
+  /// reason shows as a warning. False if the request could not be posted.
+  bool setGoal(const Eigen::Vector3d& goal_W);
+  /// A Ctrl+click at widget position `position` of the view: the goal under it (ui/goal_picking).
+  void clickGoal(const QPointF& position);
+  /// The goal set last (none before the first).
+  const std::optional<Eigen::Vector3d>& goal() const { return goal_; }
+
+  PlotPanel* plotPanel() const { return plot_panel_; }
+  ConfidencePanel* confidencePanel() const { return confidence_panel_; }
+  /// The colour-map legend drawn over the view while confidence slices are shown.
+  QWidget* confidenceLegend() const;
+  /// Slices of the confidence field drawn now (0 without a confidence model or when hidden).
+  int confidenceSlicesShown() const { return confidence_slices_; }
 
  protected:
   void keyPressEvent(QKeyEvent* event) override;
@@ -135,6 +164,13 @@ class MainWindow : public QMainWindow {
   void showBanner(const QString& warning);
   void applyParameters(const std::map<std::string, double>& values);
   void resetParameters();
+  void updatePlots(const LiveSnapshot& snapshot);
+  /// Rebuilds the confidence slices when the model or the heights changed (or `force`).
+  void updateConfidence(const LiveSnapshot& snapshot, bool force);
+  void updateGoalAndPath(const LiveSnapshot& snapshot);
+  void placeViewLabels();
+  /// Records the ITM graph into the session when it changed (at most once per second, and at the end).
+  void recordItm(const LiveSnapshot& snapshot, bool final);
 
   Options options_;
   render::World world_;
@@ -178,6 +214,16 @@ class MainWindow : public QMainWindow {
   std::vector<std::string> coloured_links_;
   std::unique_ptr<render::Overlays> overlays_;
   std::uint64_t shown_areas_version_ = ~0ULL, shown_teach_ins_version_ = ~0ULL, shown_itm_version_ = ~0ULL;
+  std::uint64_t shown_model_version_ = ~0ULL, shown_path_version_ = ~0ULL, recorded_itm_version_ = ~0ULL;
+  PlotPanel* plot_panel_ = nullptr;
+  QElapsedTimer plot_clock_;
+  ConfidencePanel* confidence_panel_ = nullptr;
+  ConfidenceColourBar* confidence_legend_ = nullptr;
+  int confidence_slices_ = 0;
+  bool operator_heights_ = false;  // the operator chose the slice heights: no automatic centring
+  std::optional<Eigen::Vector3d> goal_;
+  QElapsedTimer itm_record_clock_;
+  std::vector<QPointer<ReviewWindow>> reviews_;
 };
 
 }  // namespace flexirob::ui

@@ -143,6 +143,12 @@ Eigen::Vector3d OsgView::viewDirection() const {
 }
 
 void OsgView::mousePressEvent(QMouseEvent* event) {
+  if (control_click_ && event->button() == Qt::LeftButton && (event->modifiers() & Qt::ControlModifier)) {
+    control_clicking_ = true;
+    control_click_(event->position());
+    update();
+    return;
+  }
   if (grabber_ != nullptr && event->button() == Qt::LeftButton && !(event->modifiers() & Qt::ShiftModifier) &&
       grabber_->press(event->position())) {
     grabbing_ = true;
@@ -156,6 +162,10 @@ void OsgView::mousePressEvent(QMouseEvent* event) {
 }
 
 void OsgView::mouseReleaseEvent(QMouseEvent* event) {
+  if (control_clicking_) {
+    if (event->button() == Qt::LeftButton) control_clicking_ = false;
+    return;
+  }
   if (grabbing_) {
     if (event->button() == Qt::LeftButton) {
       grabbing_ = false;
@@ -171,6 +181,7 @@ void OsgView::mouseReleaseEvent(QMouseEvent* event) {
 }
 
 void OsgView::mouseMoveEvent(QMouseEvent* event) {
+  if (control_clicking_) return;
   if (grabbing_) {
     if (grabber_ != nullptr) grabber_->move(event->position());
     update();

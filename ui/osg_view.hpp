@@ -5,6 +5,7 @@
 #include <QOpenGLWidget>
 #include <osg/Node>
 #include <osg/ref_ptr>
+#include <functional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -53,6 +54,9 @@ class OsgView : public QOpenGLWidget {
   Eigen::Vector3d viewDirection() const;
   /// Null or a grabber that gets left-button drags first (not owned).
   void setMouseGrabber(ViewMouseGrabber* grabber) { grabber_ = grabber; }
+  /// Null or the handler of Ctrl+left clicks (e.g. set a goal): such a click then neither grabs
+  /// the arm nor moves the camera.
+  void setControlClickHandler(std::function<void(const QPointF&)> handler) { control_click_ = std::move(handler); }
 
  protected:
   void initializeGL() override;
@@ -76,6 +80,8 @@ class OsgView : public QOpenGLWidget {
   long frames_ = 0;
   ViewMouseGrabber* grabber_ = nullptr;
   bool grabbing_ = false;
+  std::function<void(const QPointF&)> control_click_;
+  bool control_clicking_ = false;  // swallow the moves and the release of a Ctrl+click
 };
 
 }  // namespace flexirob::ui

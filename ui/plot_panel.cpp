@@ -187,10 +187,28 @@ void PlotPanel::append(const PlotSample& sample) {
   live_ = true;
   samples_.push_back(sample);
   while (!samples_.empty() && samples_.front().time < sample.time - window_seconds_) samples_.pop_front();
-  rebuild();
+  // Hidden (a closed dock), the samples are kept and drawn when the panel shows again.
+  if (isVisible()) {
+    rebuild();
+  } else {
+    stale_ = true;
+  }
+}
+
+void PlotPanel::showEvent(QShowEvent* event) {
+  QWidget::showEvent(event);
+  if (stale_) {
+    stale_ = false;
+    rebuild();
+  }
 }
 
 void PlotPanel::setCycleStatisticsVisible(bool visible) { cycles_->setVisible(visible); }
+
+void PlotPanel::setOrientation(Qt::Orientation orientation) {
+  static_cast<QBoxLayout*>(layout())->setDirection(orientation == Qt::Horizontal ? QBoxLayout::LeftToRight
+                                                                                 : QBoxLayout::TopToBottom);
+}
 
 void PlotPanel::setWindowSeconds(double seconds) { window_seconds_ = std::max(0.5, seconds); }
 

@@ -89,6 +89,8 @@ class PlotPanel : public QWidget {
   /// Appends one sample (live) and shows the last windowSeconds().
   void append(const PlotSample& sample);
   void setWindowSeconds(double seconds);
+  /// Stacks the plots top to bottom (Qt::Vertical, the default) or side by side (a bottom dock).
+  void setOrientation(Qt::Orientation orientation);
   /// Shows or hides the control-cycle plot (recordings hold no cycle statistics).
   void setCycleStatisticsVisible(bool visible);
   double windowSeconds() const { return window_seconds_; }
@@ -109,6 +111,11 @@ class PlotPanel : public QWidget {
  private:
   void rebuild();
 
+ protected:
+  void showEvent(QShowEvent* event) override;
+
+ private:
+
   TimePlot* task_error_ = nullptr;
   TimePlot* joints_ = nullptr;
   TimePlot* cycles_ = nullptr;
@@ -121,6 +128,7 @@ class PlotPanel : public QWidget {
   double window_seconds_ = 20.0;
   double cursor_time_ = 0.0;
   bool live_ = false;
+  bool stale_ = false;  // samples appended while hidden, not drawn yet
 };
 
 }  // namespace flexirob::ui

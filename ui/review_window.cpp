@@ -2,6 +2,8 @@
 
 #include <QComboBox>
 #include <QDateTime>
+#include <QDockWidget>
+#include <QTemporaryDir>
 #include <QHBoxLayout>
 #include <QLabel>
 #include <QMenuBar>
@@ -15,13 +17,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <functional>
+#include <map>
 
 #include "app/session_reader.hpp"
+#include "learning/confidence.hpp"
+#include "planning/itm_file.hpp"
 #include "render/overlays.hpp"
 #include "robot/errors.hpp"
 #include "robot/resources.hpp"
 #include "robot/scene.hpp"
+#include "ui/confidence_panel.hpp"
 #include "ui/osg_view.hpp"
 #include "ui/overlay_menu.hpp"
 #include "ui/plot_panel.hpp"
@@ -154,6 +161,8 @@ struct ReviewWindow::Events {
   std::vector<app::AreaRecord> areas;
   std::vector<app::TrajectoryRecord> trajectories;
   std::vector<app::CollisionRecord> collisions;
+  std::vector<app::ItmRecord> itm;  // in time order, thinned
+  QTemporaryDir scratch;            // the ITM file format is read from a file
 };
 
 ReviewWindow::ReviewWindow(QWidget* parent)
@@ -212,6 +221,17 @@ ReviewWindow::ReviewWindow(QWidget* parent)
   auto* overlay_menu = new OverlayMenu(world_->overlays(), this);
   menuBar()->addMenu(overlay_menu);
   connect(overlay_menu, &OverlayMenu::toggled, view_, [this] { view_->update(); });
+
+  confidence_panel_ = new ConfidencePanel(this);
+  auto* confidence_dock = new QDockWidget(QStringLiteral("Confidence"), this);
+  confidence_dock->setObjectName(QStringLiteral("confidence_dock"));
+  confidence_dock->setWidget(confidence_panel_);
+  addDockWidget(Qt::LeftDockWidgetArea, confidence_dock);
+  connect(confidence_panel_, &ConfidencePanel::settingsChanged, this, [this] {
+    operator_heights_ = true;
+    updateConfidence(true);
+    view_->update();
+  });
   resize(1200, 760);
   statusBar()->showMessage(QStringLiteral("Open a session recording"));
 }
@@ -241,6 +261,19 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     events->areas = reader->areas();
     events->trajectories = reader->trajectories();
     events->collisions = reader->collisions();
+    events->itm = reader->itmSnapshots();
+    std::stable_sort(events->itm.begin(), events->itm.end(),
+                     [](const app::ItmRecord& a, const app::ItmRecord& b) { return a.time < b.time; });
+    if (static_cast<int>(events->itm.size()) > kMaxItmSnapshots) {
+      // Evenly thinned, the last (the final graph) always kept: a long session's graphs would
+      // otherwise hold hundreds of megabytes.
+      std::vector<app::ItmRecord> kept;
+      const std::size_t n = events->itm.size();
+      for (int i = 0; i < kMaxItmSnapshots; ++i) {
+        kept.push_back(std::move(events->itm[static_cast<std::size_t>(i) * (n - 1) / (kMaxItmSnapshots - 1)]));
+      }
+      events->itm = std::move(kept);
+    }
     std::vector<app::StageRecord> stages = reader->stages();
     bands_.clear();
     for (std::size_t i = 0; i < stages.size(); ++i) {
@@ -296,6 +329,10 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     events_ = std::move(events);
     shown_samples_ = shown_areas_ = shown_trajectories_ = static_cast<std::size_t>(-1);
     shown_collisions_.clear();
+    shown_itm_ = -2;
+    shown_confidence_areas_ = static_cast<std::size_t>(-1);
+    confidence_slices_ = 0;
+    operator_heights_ = false;
     error_.clear();
     view_->setHomeCamera(world_->defaultCamera(static_cast<double>(std::max(1, view_->width())) /
                                                std::max(1, view_->height())));
@@ -397,6 +434,88 @@ void ReviewWindow::updateOverlays() {
     render::showCollisions(*world_->robot(), touching);
     shown_collisions_ = touching;
   }
+  updateItm();
+  updateConfidence(false);
+}
+
+int ReviewWindow::itmSnapshots() const { return static_cast<int>(events_->itm.size()); }
+
+int ReviewWindow::itmNodesShown() const {
+  return world_->overlays().itm().nodeCount();
+}
+
+void ReviewWindow::updateItm() {
+  // The last snapshot recorded at or before now (-1: none yet).
+  const auto after = std::upper_bound(events_->itm.begin(), events_->itm.end(), time_,
+                                      [](double t, const app::ItmRecord& record) { return t < record.time; });
+  const std::ptrdiff_t index = (after - events_->itm.begin()) - 1;
+  if (index == shown_itm_) return;
+  shown_itm_ = index;
+  render::ItmGraphOverlay& overlay = world_->overlays().itm();
+  if (index < 0) {
+    overlay.clear();
+    return;
+  }
+  const app::ItmRecord& record = events_->itm[static_cast<std::size_t>(index)];
+  const std::filesystem::path file = events_->scratch.filePath(QStringLiteral("snapshot.itm")).toStdString();
+  try {
+    {
+      std::ofstream out(file, std::ios::binary | std::ios::trunc);
+      out.write(reinterpret_cast<const char*>(record.bytes.data()), static_cast<std::streamsize>(record.bytes.size()));
+      if (!out) throw std::runtime_error("cannot write a scratch file for the ITM snapshot");
+    }
+    const planning::Itm graph = planning::loadItm(file);
+    std::vector<std::pair<int, Eigen::Vector3d>> nodes;
+    std::vector<std::pair<int, int>> edges;
+    for (const int id : graph.nodeIds()) {
+      const auto omega = graph.prototype(id);
+      nodes.emplace_back(id, Eigen::Vector3d(omega[0], omega[1], omega[2]));
+      for (const int other : graph.neighbors(id)) {
+        if (other > id && graph.isNode(other)) edges.emplace_back(id, other);
+      }
+    }
+    overlay.setGraph(nodes, edges);
+  } catch (const std::exception& error) {
+    overlay.clear();
+    statusBar()->showMessage(QStringLiteral("ITM snapshot at %1 s unreadable: %2").arg(record.time).arg(QString::fromUtf8(error.what())),
+                             10000);
+  }
+}
+
+void ReviewWindow::updateConfidence(bool force) {
+  // The areas completed by now, each with all of its samples (an area is recorded when it is done).
+  std::vector<int> complete;
+  for (const app::AreaRecord& area : events_->areas) {
+    if (area.time <= time_) complete.push_back(area.area);
+  }
+  if (!force && complete.size() == shown_confidence_areas_) return;
+  shown_confidence_areas_ = complete.size();
+  // Eq. 6.7 - 6.9 with the workflow's default d = 15 (WorkflowOptions::confidence_d).
+  learning::ConfidenceModel model;
+  for (const int area : complete) {
+    std::vector<Eigen::Vector3d> points;
+    for (const app::SampleRecord& sample : events_->samples) {
+      if (sample.area == area && sample.x.size() >= 3) points.emplace_back(sample.x.head<3>());
+    }
+    if (points.empty()) continue;
+    Eigen::MatrixXd X(3, static_cast<Eigen::Index>(points.size()));
+    for (std::size_t i = 0; i < points.size(); ++i) X.col(static_cast<Eigen::Index>(i)) = points[i];
+    model.addArea(X);
+  }
+  if (model.areas() == 0) {
+    world_->overlays().setContent(render::OverlayLayer::kConfidence, nullptr);
+    confidence_slices_ = 0;
+    confidence_panel_->setStatus(QStringLiteral("No training area complete at this moment."));
+    return;
+  }
+  if (!operator_heights_) {
+    const QSignalBlocker block(confidence_panel_);
+    confidence_panel_->setSettings(centredSlices(model, confidence_panel_->settings()));
+  }
+  const std::vector<render::ConfidenceGrid> slices = confidenceSlices(model, confidence_panel_->settings());
+  world_->overlays().setContent(render::OverlayLayer::kConfidence, makeConfidenceOverlay(slices));
+  confidence_slices_ = static_cast<int>(slices.size());
+  confidence_panel_->setStatus(QStringLiteral("%1 area(s) complete at this moment").arg(model.areas()));
 }
 
 void ReviewWindow::updateLabels() {

@@ -3,7 +3,9 @@
 // A timeline with the stage bands and the trigger and button markers, play/pause, a speed
 // (reverse included) and frame stepping; the arm replayed in a 3D view with the overlays of that
 // moment (training samples recorded so far, the areas' q_fixed ghosts, teach-in and target
-// trajectories, colliding links in red); the plots (ui/plot_panel.hpp) share the time cursor.
+// trajectories, colliding links in red, the ITM graph of the last snapshot recorded before the
+// moment, and slices of the confidence field C(x) of the areas completed by then, Fig. 6.5);
+// the plots (ui/plot_panel.hpp) share the time cursor.
 //
 // Opening reads only the recording's ends, its events and ~2000 states picked through the time
 // index (SessionReader::stateAt), so a 30-minute recording opens in well under 2 s and
@@ -37,6 +39,7 @@ namespace flexirob::ui {
 
 class OsgView;
 class PlotPanel;
+class ConfidencePanel;
 
 /// A stretch of session time spent in one stage (and sub-stage).
 struct StageBand {
@@ -129,10 +132,20 @@ class ReviewWindow : public QMainWindow {
   OsgView* view() const { return view_; }
   render::World& world() { return *world_; }
   const app::SessionReader* reader() const { return reader_.get(); }
+  ConfidencePanel* confidencePanel() const { return confidence_panel_; }
+  /// ITM snapshots kept from the recording (thinned to at most kMaxItmSnapshots), and nodes drawn now.
+  int itmSnapshots() const;
+  int itmNodesShown() const;
+  /// Confidence slices drawn now (0 before the first area is complete).
+  int confidenceSlicesShown() const { return confidence_slices_; }
+
+  static constexpr int kMaxItmSnapshots = 240;
 
  private:
   void advance();
   void updateOverlays();
+  void updateItm();
+  void updateConfidence(bool force);
   void updateLabels();
 
   std::unique_ptr<render::World> world_;
@@ -162,6 +175,11 @@ class ReviewWindow : public QMainWindow {
   std::size_t shown_areas_ = static_cast<std::size_t>(-1);
   std::size_t shown_trajectories_ = static_cast<std::size_t>(-1);
   std::vector<std::string> shown_collisions_;
+  std::ptrdiff_t shown_itm_ = -2;
+  std::size_t shown_confidence_areas_ = static_cast<std::size_t>(-1);
+  ConfidencePanel* confidence_panel_ = nullptr;
+  int confidence_slices_ = 0;
+  bool operator_heights_ = false;
 };
 
 }  // namespace flexirob::ui

@@ -1,0 +1,308 @@
+// The main window's plots, confidence slices, goals and recordings: the plot dock follows the
+// live arm and the control cycle; a taught area shows as confidence slices at the chosen heights
+// with their legend; in EXECUTION a goal (set, or Ctrl+clicked on the ITM graph) is planned and
+// executed; the run's recording opens in a review window with the ITM graph and the slices of
+// the moment; keyboard triggers are counted.
+#include <QApplication>
+#include <QDockWidget>
+#include <QFile>
+#include <QGuiApplication>
+#include <QLineSeries>
+#include <QMouseEvent>
+#include <QSpinBox>
+#include <QStandardPaths>
+#include <QStatusBar>
+#include <QTemporaryDir>
+#include <QTest>
+
+#include <cmath>
+
+#include "app/session_reader.hpp"
+#include "learning/confidence.hpp"
+#include "render/camera.hpp"
+#include "render/overlays.hpp"
+#include "ui/confidence_panel.hpp"
+#include "ui/goal_picking.hpp"
+#include "ui/live_teaching.hpp"
+#include "ui/main_window.hpp"
+#include "ui/osg_view.hpp"
+#include "ui/plot_panel.hpp"
+#include "ui/review_window.hpp"
+
+using flexirob::app::Stage;
+using flexirob::app::SubStage;
+using flexirob::ui::MainWindow;
+
+namespace {
+
+bool canDraw() { return QGuiApplication::platformName() != QStringLiteral("offscreen"); }
+
+MainWindow::Options quietOptions() {
+  MainWindow::Options options;
+  options.record_sessions = false;
+  options.restore_layout = false;
+  return options;
+}
+
+Eigen::Vector3d tip(const flexirob::ui::LiveSnapshot& s) { return {s.p_WT[0], s.p_WT[1], s.p_WT[2]}; }
+
+// With FLEXIROB_SCREENSHOT_DIR set, the scenario leaves screenshots of its moments there (the
+// user guide's pictures are taken this way, under Xvfb).
+void screenshot(QWidget& widget, const char* name) {
+  const QString directory = qEnvironmentVariable("FLEXIROB_SCREENSHOT_DIR");
+  if (directory.isEmpty() || !canDraw()) return;
+  QTest::qWait(300);
+  QVERIFY2(widget.grab().save(directory + QLatin1Char('/') + QLatin1String(name)), name);
+}
+
+int changedPixels(const QImage& a, const QImage& b) {
+  int changed = 0;
+  for (int y = 0; y < a.height(); ++y) {
+    for (int x = 0; x < a.width(); ++x) changed += a.pixel(x, y) != b.pixel(x, y) ? 1 : 0;
+  }
+  return changed;
+}
+
+}  // namespace
+
+class FeaturesTest : public QObject {
+  Q_OBJECT
+
+ private Q_SLOTS:
+  void initTestCase() { QStandardPaths::setTestModeEnabled(true); }
+
+  void aGoalIsTheNodeNearestTheClickElseThePlanePoint() {
+    flexirob::render::CameraPose camera;
+    camera.eye_W = Eigen::Vector3d(0.0, -3.0, 0.5);
+    camera.center_W = Eigen::Vector3d(0.0, 0.0, 0.5);
+    const int width = 400;
+    const int height = 300;
+    // The centre of the picture is the point looked at; a node there is picked from 5 px away.
+    const std::vector<Eigen::Vector3d> nodes = {Eigen::Vector3d(0.0, 0.0, 0.5), Eigen::Vector3d(0.5, 0.0, 0.5)};
+    const auto centre = flexirob::render::projectToPixel(camera, width, height, nodes[0]);
+    QVERIFY(centre.has_value());
+    QVERIFY(std::abs(centre->x() - 200.0) < 1e-6 && std::abs(centre->y() - 150.0) < 1e-6);
+    const Eigen::Vector3d down(0.0, 0.0, -1.0);
+    auto pick = flexirob::ui::pickGoal(camera, width, height, *centre + Eigen::Vector2d(3.0, 4.0), nodes,
+                                       Eigen::Vector3d(0.3, 0.2, 1.0), down, 0.25);
+    QVERIFY(pick.has_value());
+    QCOMPARE(pick->node, 0);
+    QVERIFY(pick->goal_W.isApprox(nodes[0]));
+    // 40 px from every node: the ray (0.3, 0.2, 1) + s (0, 0, -1) meets z = 0.25 at s = 0.75.
+    pick = flexirob::ui::pickGoal(camera, width, height, *centre + Eigen::Vector2d(0.0, 40.0), nodes,
+                                  Eigen::Vector3d(0.3, 0.2, 1.0), down, 0.25);
+    QVERIFY(pick.has_value());
+    QCOMPARE(pick->node, -1);
+    QVERIFY((pick->goal_W - Eigen::Vector3d(0.3, 0.2, 0.25)).norm() < 1e-12);
+    // A horizontal ray never meets the plane; one pointing up never meets a plane below it.
+    QVERIFY(!flexirob::ui::pickGoal(camera, width, height, {0.0, 0.0}, {}, Eigen::Vector3d(0, 0, 1),
+                                    Eigen::Vector3d(1, 0, 0), 0.25)
+                 .has_value());
+    QVERIFY(!flexirob::ui::pickGoal(camera, width, height, {0.0, 0.0}, {}, Eigen::Vector3d(0, 0, 1),
+                                    Eigen::Vector3d(0, 0, 1), 0.25)
+                 .has_value());
+  }
+
+  void confidenceSlicesSampleTheFieldAtTheirHeights() {
+    // One area: samples on a 10 cm square at z = 0.5 (their mean), one more area far away.
+    Eigen::MatrixXd area(3, 4);
+    area << -0.55, -0.45, -0.55, -0.45,  //
+        -0.05, -0.05, 0.05, 0.05,        //
+        0.5, 0.5, 0.5, 0.5;
+    flexirob::learning::ConfidenceModel model;
+    model.addArea(area);
+    model.addArea(area.colwise() + Eigen::Vector3d(0.0, 0.6, 0.2));
+    flexirob::ui::ConfidenceSliceSettings settings;
+    settings.count = 3;
+    settings.spacing = 0.1;
+    settings = flexirob::ui::centredSlices(model, settings);
+    // The middle slice passes through the mean height of the centres, (0.5 + 0.7) / 2.
+    QCOMPARE(settings.heights().size(), std::size_t(3));
+    QVERIFY(std::abs(settings.heights()[1] - 0.6) < 1e-9);
+    QVERIFY(std::abs(settings.heights()[2] - settings.heights()[0] - 0.2) < 1e-9);
+    settings.lowest_z = 0.5;
+    settings.count = 1;
+    settings.resolution = 41;
+    const auto slices = flexirob::ui::confidenceSlices(model, settings);
+    QCOMPARE(slices.size(), std::size_t(1));
+    const auto& grid = slices.front();
+    QCOMPARE(grid.z, 0.5);
+    // The extent holds both areas' centres.
+    QVERIFY(grid.lower_xy.x() < -0.5 && grid.upper_xy.x() > -0.5);
+    QVERIFY(grid.lower_xy.y() < 0.0 && grid.upper_xy.y() > 0.6);
+    // Every value is C at its grid point, and C peaks (= 1) at the first area's mean.
+    Eigen::Index best_i = 0;
+    Eigen::Index best_j = 0;
+    grid.values.maxCoeff(&best_i, &best_j);
+    const auto point = [&](Eigen::Index i, Eigen::Index j) {
+      return Eigen::Vector3d(grid.lower_xy.x() + (grid.upper_xy.x() - grid.lower_xy.x()) * static_cast<double>(i) / 40.0,
+                             grid.lower_xy.y() + (grid.upper_xy.y() - grid.lower_xy.y()) * static_cast<double>(j) / 40.0,
+                             0.5);
+    };
+    for (Eigen::Index i = 0; i < 41; i += 7) {
+      for (Eigen::Index j = 0; j < 41; j += 5) QVERIFY(std::abs(grid.values(i, j) - model.evaluate(point(i, j))) < 1e-12);
+    }
+    const double cell = (grid.upper_xy - grid.lower_xy).maxCoeff() / 40.0;
+    QVERIFY((point(best_i, best_j) - Eigen::Vector3d(-0.5, 0.0, 0.5)).norm() <= cell);
+    // Far from both areas (a corner of the slice) there is next to no confidence.
+    QVERIFY(grid.values(0, 0) < 0.05);
+    // No area: no slice.
+    QVERIFY(flexirob::ui::confidenceSlices(flexirob::learning::ConfidenceModel(), settings).empty());
+  }
+
+  void thePlotsFollowTheLiveArmAndTheControlCycle() {
+    MainWindow window("lwr4", "empty", quietOptions());
+    window.show();  // a hidden panel keeps its samples without drawing them
+    QTRY_VERIFY_WITH_TIMEOUT(window.live() != nullptr && window.live()->snapshot().running, 10000);
+    flexirob::ui::PlotPanel* plots = window.plotPanel();
+    QVERIFY(plots != nullptr);
+    QCOMPARE(plots->jointPlot()->seriesCount(), 7 + 2);  // two limit lines and seven joints
+    QTRY_VERIFY_WITH_TIMEOUT(plots->sampleCount() >= 5, 5000);
+    // The joint lines are the live joints scaled to their limits, inside [0, 1].
+    const QLineSeries* a1 = plots->jointPlot()->series(2);
+    QVERIFY(a1->count() >= 5);
+    const double q1 = window.live()->snapshot().q[0];
+    const auto& joint = window.robotModel()->joints().front();
+    const double expected = (q1 - joint.limits.lower) / (joint.limits.upper - joint.limits.lower);
+    QVERIFY2(std::abs(a1->points().back().y() - expected) < 0.02,
+             qPrintable(QStringLiteral("A1 plotted at %1, expected %2").arg(a1->points().back().y()).arg(expected)));
+    // The control cycle's compute time is plotted (positive, in microseconds).
+    QVERIFY(plots->cyclePlot()->series(0)->count() >= 5);
+    QVERIFY(plots->cyclePlot()->series(0)->points().back().y() > 0.0);
+  }
+
+  void aTaughtAreaShowsAsSlicesAndAGoalIsPlannedAndReviewed() {
+    MainWindow::Options options = quietOptions();
+    options.record_sessions = true;
+    MainWindow window("lwr4", "empty", options);
+    if (canDraw()) {
+      window.show();
+      QVERIFY(QTest::qWaitForWindowExposed(&window));
+    }
+    QTRY_VERIFY_WITH_TIMEOUT(window.live() != nullptr && window.live()->snapshot().running, 10000);
+    const auto& s = window.live()->snapshot();
+    QCOMPARE(window.confidenceSlicesShown(), 0);
+
+    // Keyboard triggers are counted like detected ones.
+    QTest::keyClick(&window, Qt::Key_F5);
+    QTRY_COMPARE(s.stage, Stage::kConfiguration);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
+    QTRY_COMPARE(s.on_affected, std::uint64_t(1));
+    // Approach a posture ~0.3 m away with the keys (0.08 m/s): the ITM graph grows along the
+    // way, a node per e_max = 0.1 m.
+    QTest::keyPress(&window, Qt::Key_Right);
+    QTest::qWait(2500);
+    QTest::keyRelease(&window, Qt::Key_Right);
+    QTest::keyPress(&window, Qt::Key_Up);
+    QTest::qWait(2000);
+    QTest::keyRelease(&window, Qt::Key_Up);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
+    QTRY_COMPARE(s.on_converged, std::uint64_t(1));
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kRecording);
+    QTest::qWait(400);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(s.areas, 1);
+    QTRY_VERIFY(s.itm_nodes >= 2);
+
+    // The area's confidence field: three slices, centred on the area, and the legend.
+    QTRY_COMPARE(window.confidenceSlicesShown(), 3);
+    const auto heights = window.confidencePanel()->settings().heights();
+    QVERIFY(std::abs(heights[1] - s.confidence->mean(0)[2]) < 0.006);
+    window.confidencePanel()->countBox()->setValue(2);
+    QCOMPARE(window.confidenceSlicesShown(), 2);
+    window.confidencePanel()->countBox()->setValue(3);
+    window.findChild<QDockWidget*>(QStringLiteral("confidence_dock"))->raise();
+    screenshot(window, "06-confidence.png");
+    window.findChild<QDockWidget*>(QStringLiteral("joints_dock"))->raise();
+    if (canDraw()) {
+      window.mirror();
+      QVERIFY(window.confidenceLegend()->isVisible());
+      QVERIFY(window.view()->geometry().contains(window.confidenceLegend()->geometry().translated(window.view()->pos())));
+      // The slices are drawn where they are: hiding the layer changes the picture.
+      const QImage with = window.view()->grabFramebuffer();
+      window.overlays().setVisible(flexirob::render::OverlayLayer::kConfidence, false);
+      const QImage without = window.view()->grabFramebuffer();
+      window.overlays().setVisible(flexirob::render::OverlayLayer::kConfidence, true);
+      QVERIFY2(changedPixels(with, without) > 200,
+               qPrintable(QStringLiteral("the slices changed %1 pixels").arg(changedPixels(with, without))));
+    }
+
+    // Learn, skip the teach-in, and go to EXECUTION.
+    QTest::keyClick(&window, Qt::Key_F6);
+    QTRY_VERIFY_WITH_TIMEOUT(s.model_ready && s.stage == Stage::kIdle, 30000);
+    QTest::keyClick(&window, Qt::Key_F7);
+    QTRY_COMPARE(s.stage, Stage::kProgramming);
+    QTest::keyClick(&window, Qt::Key_F8);
+    QTRY_COMPARE(s.stage, Stage::kExecution);
+
+    // The goal: the explored node farthest from the tip, Ctrl+clicked where it is drawn (or set).
+    QVERIFY(s.itm != nullptr);
+    Eigen::Vector3d goal = tip(s);
+    for (const int id : s.itm->nodeIds()) {
+      const Eigen::Vector3d p = s.itm->prototype(id).head<3>();
+      if ((p - tip(s)).norm() > (goal - tip(s)).norm()) goal = p;
+    }
+    QVERIFY2((goal - tip(s)).norm() > 0.05, "the explored region is too small for a goal");
+    const std::uint64_t path_version = s.path_version;
+    if (canDraw()) {
+      window.mirror();
+      flexirob::ui::OsgView* view = window.view();
+      const auto pixel = flexirob::render::projectToPixel(view->currentCamera(), view->width(), view->height(), goal);
+      QVERIFY(pixel.has_value());
+      const QPointF at(pixel->x(), pixel->y());
+      QMouseEvent press(QEvent::MouseButtonPress, at, view->mapToGlobal(at), Qt::LeftButton, Qt::LeftButton,
+                        Qt::ControlModifier);
+      QApplication::sendEvent(view, &press);
+      QMouseEvent release(QEvent::MouseButtonRelease, at, view->mapToGlobal(at), Qt::LeftButton, Qt::NoButton,
+                          Qt::ControlModifier);
+      QApplication::sendEvent(view, &release);
+      QVERIFY(window.goal().has_value());
+      // Some node drawn within the pick radius of the click: the goal is an explored position.
+      const auto picked = flexirob::render::projectToPixel(view->currentCamera(), view->width(), view->height(), *window.goal());
+      QVERIFY(picked.has_value() && (*picked - *pixel).norm() <= 18.0);
+      goal = *window.goal();
+    } else {
+      QVERIFY(window.setGoal(goal));
+    }
+    QTRY_VERIFY_WITH_TIMEOUT(s.path_version != path_version, 5000);
+    QVERIFY(s.path != nullptr && s.path->found);
+    window.mirror();
+    QVERIFY(window.overlays().layer(flexirob::render::OverlayLayer::kGoalAndPath)->getNumChildren() >= 2);
+    // Executed: the tip arrives at the goal.
+    QTRY_VERIFY_WITH_TIMEOUT((tip(s) - goal).norm() < 0.02, 20000);
+    screenshot(window, "07-goal.png");
+
+    // The run's recording in the review window: the graph and the slices of the end.
+    QTemporaryDir directory;
+    const QString file = directory.filePath(QStringLiteral("run.flexirob"));
+    QVERIFY(window.saveSession(file));
+    flexirob::ui::ReviewWindow* review = window.openRecording(file);
+    QVERIFY2(review != nullptr, qPrintable(window.statusBar()->currentMessage()));
+    QCOMPARE(window.reviewWindows().size(), std::size_t(1));
+    QVERIFY(review->itmSnapshots() >= 1);
+    review->setTime(review->reader()->endTime());
+    QVERIFY(review->itmNodesShown() >= 2);
+    QVERIFY(review->confidenceSlicesShown() >= 1);
+    screenshot(*review, "08-review.png");
+    // Before anything was recorded there is neither.
+    review->setTime(review->reader()->startTime());
+    QCOMPARE(review->confidenceSlicesShown(), 0);
+
+    // A file that is no recording is refused with its reason, and no window opens.
+    const QString bogus = directory.filePath(QStringLiteral("bogus.flexirob"));
+    {
+      QFile out(bogus);
+      QVERIFY(out.open(QIODevice::WriteOnly));
+      out.write("not a session");
+    }
+    QVERIFY(window.openRecording(bogus) == nullptr);
+    QVERIFY(window.statusBar()->currentMessage().contains(QStringLiteral("bogus.flexirob")));
+    QCOMPARE(window.reviewWindows().size(), std::size_t(1));
+  }
+};
+
+QTEST_MAIN(FeaturesTest)
+#include "features_test.moc"
