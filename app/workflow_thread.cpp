@@ -419,10 +419,11 @@ void WorkflowThread::loop() {
       const timespec woke = now();
       const double jitter_us = options_.paced ? std::max(0.0, microsBetween(next, woke)) : 0.0;
 
+      // Triggers fired by requests (the keyboard's) count as well as those the workflow detects.
+      const std::size_t events_before = workflow_->events().size();
       WorkflowRequest request;
       for (int i = 0; i < 16 && requests_.pop(request); ++i) apply(request);
       applyHand();
-      const std::size_t events_before = workflow_->events().size();
       workflow_->update();
       for (std::size_t i = events_before; i < workflow_->events().size(); ++i) {
         const WorkflowEvent& event = workflow_->events()[i];
