@@ -74,6 +74,9 @@ void namedView(const std::string& name, Eigen::Vector3d& direction_W, Eigen::Vec
   up_W = Eigen::Vector3d::UnitZ();
   if (name == "front-left") {
     direction_W = Eigen::Vector3d(-1.0, -0.62, 0.42);
+  } else if (name == "front-right") {
+    // Lower than front-left: shows what stands behind obstacles on the robot's left (+y).
+    direction_W = Eigen::Vector3d(-1.0, 0.62, 0.30);
   } else if (name == "front") {
     direction_W = Eigen::Vector3d(-1.0, -0.12, 0.45);
   } else if (name == "back") {
@@ -87,7 +90,7 @@ void namedView(const std::string& name, Eigen::Vector3d& direction_W, Eigen::Vec
     direction_W = Eigen::Vector3d::UnitZ();
     up_W = Eigen::Vector3d::UnitX();
   } else {
-    throw InputError("--view: unknown view '" + name + "' (front-left, front, back, left, right, top)");
+    throw InputError("--view: unknown view '" + name + "' (front-left, front-right, front, back, left, right, top)");
   }
 }
 

@@ -33,7 +33,8 @@ CameraPose frameBox(const Eigen::Vector3d& lower_W, const Eigen::Vector3d& upper
 CameraPose frameBoxFrom(const Eigen::Vector3d& lower_W, const Eigen::Vector3d& upper_W, double aspect,
                         const Eigen::Vector3d& direction_W, const Eigen::Vector3d& up_W, double margin = 0.05);
 
-/// A named viewing direction for figures: "front-left" (frameSphere's, the default), "front"
+/// A named viewing direction for figures: "front-left" (frameSphere's, the default),
+/// "front-right" (from -x, +y, lower), "front"
 /// (from -x, the tutor's side, slightly above), "back", "left" (+y), "right" (-y), "top"
 /// (straight down, the front at the bottom of the image). Sets direction_W (centre to eye) and
 /// up_W. Throws InputError naming the valid names otherwise.

@@ -42,6 +42,8 @@ struct RenderOptions {
   int supersampling = 2;
   bool no_grid = false;
   bool no_scene_areas = false;
+  bool no_robot = false;
+  bool no_obstacles = false;
   // Overlays from files.
   std::string session;
   std::string confidence_heights;
@@ -245,19 +247,25 @@ Json renderPicture(const RenderOptions& options) {
   // The scene's suggested training areas would be mistaken for the taught ones.
   const robot::EvaluationGrid grid = scene.grid.value_or(robot::EvaluationGrid{});
   if (options.no_scene_areas) scene.training_areas.clear();
+  // Fig. 4.6 shows the implicit scene model on its own, where the obstacles would hide it.
+  if (options.no_obstacles) scene.obstacles.clear();
 
   render::World world;
-  world.setRobot(model);
+  if (!options.no_robot) world.setRobot(model);
   world.setScene(scene);
   world.setGridVisible(!options.no_grid);
   robot::Kinematics kinematics(model);
   kinematics.update(q);
-  world.robot()->setPosture(kinematics);
+  if (world.robot() != nullptr) world.robot()->setPosture(kinematics);
   auto box = world.contentBox();
 
   render::Overlays& overlays = world.overlays();
   std::vector<render::LegendEntry> legend;
-  const auto size = static_cast<float>(options.point_size);
+  // Point sizes and line widths are pixels of the render target: with supersampling they scale
+  // with it, so that they keep their size in the picture.
+  const auto scale = static_cast<float>(options.supersampling);
+  const auto size = static_cast<float>(options.point_size) * scale;
+  render::ItmGraphOverlay graph(5.0F * scale, 1.5F * scale);
   Json drawn = Json::object();
 
   if (session) {
@@ -280,7 +288,8 @@ Json renderPicture(const RenderOptions& options) {
       drawn["ghosts"] = session->q_fixed.size();
     }
     if (shown(render::OverlayLayer::kItmGraph) && !session->nodes.empty()) {
-      overlays.itm().setGraph(session->nodes, session->edges);
+      graph.setGraph(session->nodes, session->edges);
+      overlays.addContent(render::OverlayLayer::kItmGraph, graph.node());
       std::vector<Eigen::Vector3d> nodes;
       for (const auto& node : session->nodes) nodes.push_back(node.second);
       include(box, nodes);
@@ -374,7 +383,7 @@ Json renderPicture(const RenderOptions& options) {
       overlays.addContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(goal, 0.02));
       overlays.addContent(render::OverlayLayer::kGoalAndPath,
                           render::makePolyline(path, hit ? render::OverlayPalette::unreachable()
-                                                         : render::OverlayPalette::plannedPath(), 3.0F));
+                                                         : render::OverlayPalette::plannedPath(), 3.0F * scale));
       include(box, path);
       include(box, {goal});
       ++paths;
@@ -447,12 +456,14 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
                       "eye and look-at point in the world frame [m], optionally the vertical field of view "
                       "[deg]: ex,ey,ez,cx,cy,cz[,fovy] (default: front-left, framing robot and scene)");
   command->add_option("--view", options->view,
-                      "front-left, front, back, left, right or top: frames robot, scene and overlays from that side");
+                      "front-left, front-right, front, back, left, right or top: frames robot, scene and overlays from that side");
   command->add_option("--supersample", options->supersampling, "anti-aliasing: render at this multiple and average")
       ->capture_default_str()
       ->check(CLI::Range(1, 4));
   command->add_flag("--no-grid", options->no_grid, "hide the ground grid and the world axes");
   command->add_flag("--no-scene-areas", options->no_scene_areas, "hide the scene file's suggested training areas");
+  command->add_flag("--no-robot", options->no_robot, "leave the robot out (e.g. to look down onto a confidence slice)");
+  command->add_flag("--no-obstacles", options->no_obstacles, "leave the scene's obstacles out (e.g. to see the scene model S)");
   command->add_option("--session", options->session,
                       "session written by teach (JSON or SQLite): training samples per area, q_fixed ghosts, ITM graph");
   command->add_option("--confidence-heights", options->confidence_heights,

@@ -345,7 +345,7 @@ TEST(RenderCommandOverlays, NamedViewsFrameTheOverlays) {
   const auto reachable = tempPng("view.json");
   const auto file = tempPng("view.png");
   writeText(reachable, R"({"target_points": [[-1.5, 0.0, 0.3], [0.0, 1.5, 0.3]], "target_reached": [true, true]})");
-  for (const std::string view : {"front-left", "front", "back", "left", "right", "top"}) {
+  for (const std::string view : {"front-left", "front-right", "front", "back", "left", "right", "top"}) {
     const Result result = run({"render", "--reachable", reachable.string(), "--out", file.string(), "--width", "200",
                                "--height", "150", "--supersample", "1", "--view", view});
     ASSERT_EQ(result.exit_code, 0) << result.err;
@@ -361,6 +361,22 @@ TEST(RenderCommandOverlays, NamedViewsFrameTheOverlays) {
     }
   }
   std::filesystem::remove(reachable);
+  std::filesystem::remove(file);
+}
+
+TEST(RenderCommandOverlays, NoRobotLeavesTheTipsPixelToTheBackground) {
+  const auto file = tempPng("no-robot.png");
+  for (const bool robot : {true, false}) {
+    std::vector<std::string> arguments{"render", "--robot", "lwr4", "--out", file.string(), "--width", "160", "--height",
+                                       "120", "--supersample", "1", "--no-grid", "--q", "0.3,0.6,0,-1.2,0,0.8,0"};
+    if (!robot) arguments.push_back("--no-robot");
+    const Result result = run(arguments);
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const auto json = nlohmann::json::parse(result.out);
+    const Eigen::Vector2d tip(json.at("tip_pixel")[0].get<double>(), json.at("tip_pixel")[1].get<double>());
+    const Picture picture = readPicture(file);
+    EXPECT_EQ(static_cast<bool>(near(picture.at(tip), bytesOf(render::Palette::background()), 2)), !robot) << (robot ? "with" : "without");
+  }
   std::filesystem::remove(file);
 }
 
