@@ -49,6 +49,9 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
           outcome.collided = true;
           const robot::Contact& contact = world->contacts().front();
           outcome.contact = world->bodyName(contact.body) + "/" + world->otherName(contact);
+          outcome.contact_time = k * kDt;
+          kinematics.update(limiter.command());
+          outcome.contact_task_error = (kinematics.p_WT() - target).norm();
           break;  // a collision ends the motion as on the real robot
         }
       }
@@ -124,10 +127,27 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
   return false;
 }
 
+ApproachFrom parseApproach(const std::string& name) {
+  if (name == "learned") return ApproachFrom::kLearnedPosture;
+  if (name == "start") return ApproachFrom::kStartPosture;
+  if (name == "previous") return ApproachFrom::kPreviousTarget;
+  throw InputError("approach: expected learned, start or previous, got '" + name + "'");
+}
+
+std::string approachName(ApproachFrom approach) {
+  switch (approach) {
+    case ApproachFrom::kLearnedPosture: return "learned";
+    case ApproachFrom::kStartPosture: return "start";
+    case ApproachFrom::kPreviousTarget: return "previous";
+  }
+  return "learned";
+}
+
 ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::Scene& scene,
                                   const robot::ParameterSet& parameters, const learning::Learner& map,
                                   const Eigen::VectorXd& q_start, const robot::EvaluationGrid& grid,
-                                  const Eigen::MatrixXd& training_X, const ProgressCallback& progress) {
+                                  const Eigen::MatrixXd& training_X, const ProgressCallback& progress,
+                                  ApproachFrom approach) {
   model.checkPosture(q_start);
   robot::CollisionWorld world(model, scene);
   const auto [shoulder, reach] = shoulderAndReach(model);
@@ -154,15 +174,41 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     targets.push_back(p);
   }
   result.targets = static_cast<int>(targets.size());
+  if (approach == ApproachFrom::kPreviousTarget && !targets.empty()) {
+    // Nearest-neighbour tour from the start posture's tip: consecutive targets one grid step
+    // apart wherever the grid allows, as a person would command them.
+    Eigen::Vector3d from = robot::tipPose(model, q_start).translation();
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      std::size_t best = i;
+      for (std::size_t j = i + 1; j < targets.size(); ++j) {
+        if ((targets[j] - from).squaredNorm() < (targets[best] - from).squaredNorm()) best = j;
+      }
+      std::swap(targets[i], targets[best]);
+      from = targets[i];
+    }
+  }
+  const Eigen::VectorXd lower = model.softLowerLimits();
+  const Eigen::VectorXd upper = model.softUpperLimits();
+  Eigen::VectorXd q_previous = q_start;  // kPreviousTarget: last posture reached without contact
+  Eigen::VectorXd q_c(model.dof());
   int explored = 0;
   for (std::size_t i = 0; i < targets.size(); ++i) {
     const Eigen::Vector3d& p = targets[i];
     const Eigen::Vector3d cell = ((p - grid.lower) / grid.spacing).array().round();
     if (explored_cells.count({std::lround(cell.x()), std::lround(cell.y()), std::lround(cell.z())}) != 0) ++explored;
-    const MotionOutcome outcome = executeMotion(model, parameters, map, q_start, [&](double) { return p; }, 0.0, 3.0, &world);
+    Eigen::VectorXd q_from = q_start;
+    if (approach == ApproachFrom::kLearnedPosture) {
+      map.predict(p, q_c);
+      q_from = q_c.cwiseMax(lower).cwiseMin(upper);
+    } else if (approach == ApproachFrom::kPreviousTarget) {
+      q_from = q_previous;
+    }
+    const MotionOutcome outcome = executeMotion(model, parameters, map, q_from, [&](double) { return p; }, 0.0, 3.0, &world);
     if (outcome.collided) {
       ++result.collided;
       ++result.contacts[outcome.contact];
+    } else {
+      q_previous = outcome.q;
     }
     const bool reached = !outcome.collided && outcome.final_error_m <= grid.tolerance;
     if (reached) ++result.reached;
@@ -338,6 +384,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
       out.e_task_max_mm = std::max(out.e_task_max_mm, 1e3 * outcome.max_error_m);
       if (outcome.collided) {
         ++out.collisions;
+        ++out.contacts[outcome.contact];
         q = q_area;  // after a collision the arm is brought back, as on the real robot
       } else {
         q = outcome.q;
@@ -378,15 +425,36 @@ PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Sce
     const auto t0 = std::chrono::steady_clock::now();
     const planning::PlannedPath path = planning::planPath(graph, p_start, p_goal);
     plan_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    if (!path.found || !path.trajectory) continue;
+    PlannedMotion motion;
+    motion.start_W = p_start;
+    motion.goal_W = p_goal;
+    motion.final_W = p_start;
+    if (!path.found || !path.trajectory) {
+      result.motions.push_back(motion);
+      continue;
+    }
     ++result.found;
     const planning::CubicSplineTrajectory& spline = *path.trajectory;
+    motion.found = true;
+    for (double t = 0.0; t < spline.duration(); t += 0.05) motion.planned_W.emplace_back(spline.position(t).head<3>());
+    motion.planned_W.emplace_back(spline.position(spline.duration()).head<3>());
     const MotionOutcome outcome = executeMotion(
         model, parameters, map, q, [&](double t) { return Eigen::Vector3d(spline.position(t).head<3>()); },
         spline.duration(), 2.0, &world);
     if (!outcome.collided) ++result.collision_free;
     if (!outcome.collided && (robot::tipPose(model, outcome.q).translation() - p_goal).norm() <= 0.01) ++result.reached_1cm;
-    q = outcome.q;
+    motion.final_W = robot::tipPose(model, outcome.q).translation();
+    motion.collided = outcome.collided;
+    motion.contact = outcome.contact;
+    motion.contact_time = outcome.contact_time;
+    motion.contact_path_error = outcome.contact_task_error;
+    if (outcome.collided) ++result.contacts[outcome.contact];
+    motion.reached_1cm = !outcome.collided && (motion.final_W - p_goal).norm() <= 0.01;
+    result.motions.push_back(std::move(motion));
+    // A contact stops the arm in contact; the next goal starts where the last motion without one
+    // ended (the operator frees the arm), not inside the obstacle, which would count every later
+    // motion as collided as well.
+    if (!outcome.collided) q = outcome.q;
     if (progress) progress(static_cast<double>(g + 1) / goals);
   }
   result.mean_plan_ms = plan_ms / goals;

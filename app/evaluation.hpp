@@ -29,6 +29,8 @@ struct MotionOutcome {
   double max_error_m = 0.0;
   bool collided = false;  ///< a contact with an obstacle or the robot itself at a checked sample
   std::string contact;    ///< the first contact, "body/other" (empty without one)
+  double contact_time = 0.0;        ///< [s] when it happened
+  double contact_task_error = 0.0;  ///< [m] |x_des − x| at the contact
   Eigen::VectorXd q;      ///< final posture
 };
 
@@ -61,12 +63,48 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
                                 robot::CollisionWorld& world, const Eigen::Vector3d& p_W,
                                 const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random);
 
-/// Sect. 3.3.2: each target of the grid is approached from `q_start` (settle time 3 s).
+/// Where the arm starts when the reachability evaluation commands it to a target. Sect. 3.3.2
+/// evaluates the learned map as "the inverse kinematic mapping from 3-D task-space to 7-D
+/// joint-space" and Sect. 4.2.2 stores "for each target the resulting posture"; it does not say
+/// from where each target is approached.
+enum class ApproachFrom {
+  /// From the posture the learned map gives for the target, q_c(x_target) (clamped to the soft
+  /// limits): the learned IK mapping evaluated at each target, independent of the order of the
+  /// targets. The controller then corrects the task error; contacts on that way count.
+  kLearnedPosture,
+  /// Every target from the same posture q_start (e.g. the scene's home posture): also tests
+  /// large motions from one place, where the null-space term (κ_q) lags the task term (κ_x).
+  kStartPosture,
+  /// The targets one after another in nearest-neighbour order from q_start, each from where the
+  /// previous one ended (after a contact: from the last posture reached without one).
+  kPreviousTarget,
+};
+
+/// Parses "learned", "start" or "previous"; throws InputError otherwise.
+ApproachFrom parseApproach(const std::string& name);
+std::string approachName(ApproachFrom approach);
+
+/// Sect. 3.3.2: each target of the grid is approached as `approach` says (settle time 3 s).
 /// training_X: 3 x L training inputs (for the explored fraction).
 ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::Scene& scene,
                                   const robot::ParameterSet& parameters, const learning::Learner& map,
                                   const Eigen::VectorXd& q_start, const robot::EvaluationGrid& grid,
-                                  const Eigen::MatrixXd& training_X, const ProgressCallback& progress = {});
+                                  const Eigen::MatrixXd& training_X, const ProgressCallback& progress = {},
+                                  ApproachFrom approach = ApproachFrom::kLearnedPosture);
+
+/// One goal of the planning evaluation, for pictures (Fig. 7.7, 8.4).
+struct PlannedMotion {
+  Eigen::Vector3d start_W = Eigen::Vector3d::Zero();  ///< tip where the motion started [m]
+  Eigen::Vector3d goal_W = Eigen::Vector3d::Zero();   ///< the goal node's position [m]
+  bool found = false;
+  bool collided = false;
+  bool reached_1cm = false;
+  std::vector<Eigen::Vector3d> planned_W;  ///< the planned spline sampled every 50 ms (empty if not found)
+  Eigen::Vector3d final_W = Eigen::Vector3d::Zero();  ///< tip where the executed motion ended [m]
+  std::string contact;  ///< the first contact "body/other" (empty without one)
+  double contact_time = 0.0;  ///< [s] into the motion when it happened
+  double contact_path_error = 0.0;  ///< [m] |x_des − x| of the tip at the contact
+};
 
 struct PlanningResult {
   int goals = 0;
@@ -74,6 +112,8 @@ struct PlanningResult {
   int collision_free = 0; ///< executed without contact
   int reached_1cm = 0;    ///< ended within 1 cm of the goal node
   double mean_plan_ms = 0.0;
+  std::map<std::string, int> contacts;  ///< collided motions per first contact "body/other"
+  std::vector<PlannedMotion> motions;  ///< per goal, in the order visited
 };
 
 /// Sect. 8.3: `goals` random graph nodes (seeded) visited one after another from q_start; each
@@ -105,6 +145,7 @@ struct TrajectoryRegionResult {
   double e_task_std_mm = 0.0;
   double e_task_max_mm = 0.0;   ///< largest error at any sample
   int collisions = 0;           ///< E_coll: trajectories with a contact
+  std::map<std::string, int> contacts;  ///< collided trajectories per first contact "body/other"
 };
 struct TrajectoryResult {
   std::vector<TrajectoryRegionResult> regions;

@@ -88,6 +88,23 @@ bool SimulatedTutor::postureFree(const Eigen::VectorXd& q, double margin) {
   return world_->clearance(std::max(0.05, 2.0 * margin)).distance >= margin;
 }
 
+bool SimulatedTutor::helixFree(const Eigen::VectorXd& q_fixed, const std::vector<Eigen::Vector3d>& helix, double margin) {
+  robot::HierarchicalController controller(*model_, parameters_);
+  const Eigen::VectorXd lower = model_->softLowerLimits();
+  const Eigen::VectorXd upper = model_->softUpperLimits();
+  Eigen::VectorXd q = q_fixed, q_target(q.size());
+  for (const Eigen::Vector3d& p : helix) {
+    // π_rec: Eq. 2.11 with q_fixed as null-space target; iterated to its rest posture at p.
+    for (int it = 0; it < 200; ++it) {
+      controller.target(q, p, q_fixed, 0.02, q_target);
+      q = q_target.cwiseMax(lower).cwiseMin(upper);
+      if (controller.taskError() < 1e-4 && it > 10) break;
+    }
+    if (!postureFree(q, margin)) return false;
+  }
+  return true;
+}
+
 bool SimulatedTutor::segmentFree(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double margin) {
   // Samples every 0.02 rad of the largest joint motion: at the LWR's 1.1 m reach a tip moves
   // at most about 2 cm between samples, the order of the margin.
@@ -198,13 +215,28 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
   best.clearance = -std::numeric_limits<double>::infinity();
   double best_score = -std::numeric_limits<double>::infinity();
   Eigen::VectorXd q(dof), q_target(dof);
+  // A person leads the arm on from the posture of the nearest area already taught and changes
+  // the arm's configuration only where the obstacles ask for it (Sect. 4.2.1: the tutor's
+  // postures share q2 ≈ π/2 over the whole setup): consistent postures let the learner
+  // interpolate between areas instead of averaging different IK families.
+  Eigen::VectorXd q_reference = state_.q.size() == dof ? state_.q : model_->midPosture();
+  double nearest_area = std::numeric_limits<double>::infinity();
+  for (const TrainingArea& area : workflow_->areas()) {
+    const double d = (area.centre - p_W).norm();
+    if (d < nearest_area && area.q_fixed.size() == dof) {
+      nearest_area = d;
+      q_reference = area.q_fixed;
+    }
+  }
   for (int c = 0; c < options_.posture_candidates; ++c) {
-    // Null-space targets: the scene's suggestion, the current posture, then random postures
-    // drawn inside the limits (kept away from them by a fifth of the range).
+    // Null-space targets: the scene's suggestion, the reference posture, the current posture,
+    // then random postures drawn inside the limits (kept away from them by a fifth of the range).
     Eigen::VectorXd q_null(dof);
     if (c == 0 && suggested && suggested->size() == dof) {
       q_null = *suggested;
     } else if (c <= 1) {
+      q_null = q_reference;
+    } else if (c == 2) {
       q_null = state_.q.size() == dof ? state_.q : model_->midPosture();
     } else {
       for (int j = 0; j < dof; ++j) {
@@ -224,9 +256,11 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
     world_->update(q);
     if (!world_->contacts().empty()) continue;
     const double clearance = world_->clearance(0.5).distance;
-    // Prefer clearance; postures near a joint limit are penalized (they would warn).
+    // Clearance up to a comfortable 8 cm counts; beyond it, the posture nearest the reference
+    // (joint-space distance, 0.1 per rad: 4 cm less clearance weigh as much as 5 rad) wins.
+    // Postures near a joint limit are penalized (they would warn).
     const double limit_margin = std::min((q - lower).minCoeff(), (upper - q).minCoeff());
-    const double score = std::min(clearance, 0.3) - (limit_margin < 0.2 ? 0.1 : 0.0);
+    const double score = std::min(clearance, 0.08) / 0.08 - 0.2 * (q - q_reference).norm() - (limit_margin < 0.2 ? 0.5 : 0.0);
     if (score > best_score) {
       best_score = score;
       best.found = clearance >= options_.min_clearance;
@@ -248,8 +282,9 @@ bool SimulatedTutor::waitFor(SubStage sub_stage, double max_time) {
 }
 
 bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) {
-  // A firm touch at the tip while the arm is at rest: on_affected.
-  const double until = sim_->time() + 1.0;
+  // A firm touch at the tip, held until the arm stands still under it: on_affected. A compliant
+  // arm (80 Nm/rad while recording) takes a second or two to come to rest under the hand.
+  const double until = sim_->time() + 3.0;
   while (workflow_->subStage() == sub_stage) {
     if (sim_->time() > until) {
       sim_->clearHandForce();
@@ -387,18 +422,43 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     area.failure = "on_converged did not fire after the approach";
     return false;
   }
-  // Circles around the rest position under π_rec in a random plane; starting off-centre makes
-  // the first touch firm enough for on_affected.
+  // A helix around the rest position under π_rec, as the participants explored an area
+  // (Sect. 3.3.1: "a 3D helix-like trajectory" of 150-300 points): turns about an axis tilted
+  // randomly by up to about 27° from the vertical, rising and falling by half the height range
+  // about the rest height (starting and ending there), the radius growing from a
+  // third to the full one so the inside of the area is covered as well. Starting off-centre makes
+  // the first touch firm enough for on_affected. Like a person who sees the arm, the tutor draws
+  // it smaller where the deflected posture would come near an obstacle.
   const Eigen::Vector3d p0 = state_.p_WT();
-  Eigen::Vector3d normal(random_.uniform(-1, 1), random_.uniform(-1, 1), random_.uniform(-1, 1));
-  if (normal.norm() < 1e-3) normal = Eigen::Vector3d::UnitZ();
-  normal.normalize();
-  const Eigen::Vector3d u = normal.unitOrthogonal();
-  const Eigen::Vector3d w = normal.cross(u);
-  const double radius = 0.5 * options_.circle_diameter;
+  const Eigen::VectorXd q_fixed = state_.q;
+  Eigen::Vector3d axis(random_.uniform(-0.5, 0.5), random_.uniform(-0.5, 0.5), 1.0);
+  axis.normalize();
+  const Eigen::Vector3d u = axis.unitOrthogonal();
+  const Eigen::Vector3d w = axis.cross(u);
   const double omega = 2.0 * std::numbers::pi / options_.circle_period;
-  pushTip([&](double t) { return Eigen::Vector3d(p0 + radius * (std::cos(omega * t) * u + std::sin(omega * t) * w)); },
-          options_.circles * options_.circle_period);
+  const double duration = options_.circles * options_.circle_period;
+  double scale = 1.0;
+  const auto helix = [&](double t) {
+    const double s = std::clamp(t / duration, 0.0, 1.0);
+    const double radius = scale * 0.5 * options_.circle_diameter * (1.0 / 3.0 + 2.0 / 3.0 * s);
+    return Eigen::Vector3d(p0 + radius * (std::cos(omega * t) * u + std::sin(omega * t) * w) +
+                           scale * 0.5 * options_.helix_height * options_.circle_diameter * std::sin(2.0 * std::numbers::pi * s) * axis);
+  };
+  const double smallest = std::min(1.0, 0.02 / options_.circle_diameter);
+  for (; scale > smallest; scale *= 0.7) {
+    std::vector<Eigen::Vector3d> points;
+    for (double t = 0.0; t <= duration; t += 0.05 * options_.circle_period) points.push_back(helix(t));
+    if (helixFree(q_fixed, points, 0.5 * options_.min_clearance)) break;
+  }
+  scale = std::max(scale, smallest);
+  // The recording starts as a person starts it: press the tip and hold until the arm stands
+  // still (on_affected needs τ_ext above threshold while the arm is not moving). A push drawn
+  // from the first cycle on would have the arm moving by the time a robot measures the force.
+  if (!grab(SubStage::kPosed, u)) {
+    area.failure = "on_affected did not fire for the recording";
+    return false;
+  }
+  pushTip(helix, duration);
   if (!waitFor(SubStage::kWaiting, 8.0)) {
     area.failure = "on_converged did not fire after the recording";
     return false;

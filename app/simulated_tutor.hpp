@@ -27,9 +27,13 @@ namespace flexirob::app {
 
 struct TutorOptions {
   std::uint64_t seed = 1;
-  double circle_diameter = 0.04;   ///< [m] of the deflection circles (participants: 0.02-0.32)
-  int circles = 2;                 ///< circles drawn per area
-  double circle_period = 2.0;      ///< [s] per circle
+  /// [m] largest diameter of the deflection helix (participants drew 0.02-0.32 m, Sect. 3.3);
+  /// the tutor draws smaller where the arm would come closer than half min_clearance to an
+  /// obstacle under π_rec, down to 0.02 m.
+  double circle_diameter = 0.3;
+  double helix_height = 0.6;       ///< height range the helix sweeps over its turns, times the diameter
+  int circles = 4;                 ///< turns of the helix per area
+  double circle_period = 4.0;      ///< [s] per turn
   int posture_candidates = 24;     ///< IK solutions tried per area
   double min_clearance = 0.03;     ///< [m] a posture (and the approach) must keep from obstacles
   double approach_speed = 0.4;     ///< [rad/s] of the tutor's joint-space reference
@@ -106,6 +110,9 @@ class SimulatedTutor {
   std::vector<Eigen::VectorXd> planApproach(const Eigen::VectorXd& from, const Eigen::VectorXd& to, double margin);
   bool postureFree(const Eigen::VectorXd& q, double margin);
   bool segmentFree(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double margin);
+  /// Whether the postures π_rec gives (IK with q_fixed as null-space target) along `helix`
+  /// keep `margin` [m] from the obstacles: a person sees how far the arm can be deflected.
+  bool helixFree(const Eigen::VectorXd& q_fixed, const std::vector<Eigen::Vector3d>& helix, double margin);
   void updateReport();
 
   robot::Simulation* sim_;

@@ -163,6 +163,13 @@ Eigen::VectorXd startPosture(const Session& session) {
   return session.q_fixed.empty() ? session.model->midPosture() : session.q_fixed.front();
 }
 
+// Points as [[x, y, z], ...] [m, W], for pictures (render --reachable, --scene-model).
+Json pointsJson(const std::vector<Eigen::Vector3d>& points) {
+  Json out = Json::array();
+  for (const Eigen::Vector3d& p : points) out.push_back({p.x(), p.y(), p.z()});
+  return out;
+}
+
 struct EvalOptions {
   std::string session;
   std::string learner = "elm";
@@ -171,6 +178,7 @@ struct EvalOptions {
   std::uint64_t seed = 1;
   int per_area = 25;
   double speed = 0.1;
+  std::string approach = "learned";  ///< reachable / scene-model: where each target is approached from
 };
 
 Json runReachable(const EvalOptions& options) {
@@ -183,7 +191,8 @@ Json runReachable(const EvalOptions& options) {
   if (options.spacing > 0.0) grid.spacing = options.spacing;
   const app::ReachableResult result =
       app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
-                             session.data.X, [](double f) { reportProgress("eval reachable", f); });
+                             session.data.X, [](double f) { reportProgress("eval reachable", f); },
+                             app::parseApproach(options.approach));
   return {{"targets", result.targets},
           {"reached", result.reached},
           {"reachable_fraction", result.reachable_fraction},
@@ -196,7 +205,10 @@ Json runReachable(const EvalOptions& options) {
           {"areas", session.q_fixed.size()},
           {"samples", session.data.size()},
           {"inaccessible", result.inaccessible},
-          {"contacts", result.contacts}};
+          {"contacts", result.contacts},
+          {"approach", options.approach},
+          {"target_points", pointsJson(result.target_points)},
+          {"target_reached", result.target_reached}};
 }
 
 // The session's areas with their samples, for the trajectory evaluation.
@@ -225,7 +237,8 @@ Json runSceneModel(const EvalOptions& options) {
   // Eq. 4.1 uses the postures the reachability evaluation ends in (Sect. 4.2.2).
   const app::ReachableResult reachable =
       app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
-                             session.data.X, [](double f) { reportProgress("eval scene-model", f); });
+                             session.data.X, [](double f) { reportProgress("eval scene-model", f); },
+                             app::parseApproach(options.approach));
   const app::SceneModelResult model = app::evaluateSceneModel(*session.model, session.scene_data, grid, reachable.final_postures);
   return {{"workspace_points", model.workspace_points},
           {"model_points", model.model_points},
@@ -236,7 +249,8 @@ Json runSceneModel(const EvalOptions& options) {
           {"reachable_fraction", reachable.reachable_fraction},
           {"spacing_m", grid.spacing},
           {"learner", options.learner},
-          {"areas", session.q_fixed.size()}};
+          {"areas", session.q_fixed.size()},
+          {"model", pointsJson(model.model)}};
 }
 
 Json trajectoryJson(const app::TrajectoryResult& result) {
@@ -277,13 +291,28 @@ Json runPlan(const EvalOptions& options) {
   const app::PlanningResult result =
       app::evaluatePlanning(*session.model, session.scene_data, parameters, *learner, *session.itm, start, options.goals,
                             options.seed, [](double f) { reportProgress("plan", f); });
+  Json motions = Json::array();
+  for (const app::PlannedMotion& motion : result.motions) {
+    motions.push_back({{"start", toJson(motion.start_W)},
+                       {"goal", toJson(motion.goal_W)},
+                       {"found", motion.found},
+                       {"collided", motion.collided},
+                       {"reached_1cm", motion.reached_1cm},
+                       {"contact", motion.contact},
+                       {"contact_time_s", motion.contact_time},
+                       {"contact_path_error_m", motion.contact_path_error},
+                       {"final", toJson(motion.final_W)},
+                       {"path", pointsJson(motion.planned_W)}});
+  }
   return {{"goals", result.goals},
           {"found", result.found},
           {"collision_free", result.collision_free},
           {"reached_1cm", result.reached_1cm},
           {"mean_plan_ms", result.mean_plan_ms},
+          {"contacts", result.contacts},
           {"itm_nodes", session.itm->nodeCount()},
-          {"learner", options.learner}};
+          {"learner", options.learner},
+          {"motions", motions}};
 }
 
 }  // namespace
@@ -296,11 +325,17 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   reachable->add_option("--session", options->session, "session file written by teach")->required();
   reachable->add_option("--learner", options->learner, "elm, oselm or llm");
   reachable->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(CLI::Range(0.01, 1.0));
+  reachable->add_option("--approach", options->approach,
+                  "targets approached from the learned posture at the target (learned), the start posture (start) or the previous target (previous)")
+      ->check(CLI::IsMember({"learned", "start", "previous"}));
   reachable->callback([&runner, options] { runner.select([options] { return runReachable(*options); }); });
   CLI::App* scene_model = eval->add_subcommand("scene-model", "implicit scene model S of Eq. 4.1 and how much of the obstacles it encloses");
   scene_model->add_option("--session", options->session, "session file written by teach")->required();
   scene_model->add_option("--learner", options->learner, "elm, oselm or llm");
   scene_model->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(CLI::Range(0.01, 1.0));
+  scene_model->add_option("--approach", options->approach,
+                  "targets approached from the learned posture at the target (learned), the start posture (start) or the previous target (previous)")
+      ->check(CLI::IsMember({"learned", "start", "previous"}));
   scene_model->callback([&runner, options] { runner.select([options] { return runSceneModel(*options); }); });
   CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
   trajectories->add_option("--session", options->session, "session file written by teach")->required();

@@ -5,11 +5,13 @@
 // seeds: E_coll), Tab. 7.1 (ITM statistics for δ = 0, 2, 3, 4, 5) and Sect. 8.3 (9-DoF arm,
 // 8 areas, 100 planned goals). JSON on stdout, a markdown table with `--markdown F`, progress
 // on stderr.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -30,6 +32,8 @@ struct SweepOptions {
   int seeds = 10;              ///< Tab. 3.4 network initializations
   int goals = 100;             ///< Sect. 8.3
   int max_areas = 1000;        ///< Tab. 3.3 rows with more areas are skipped
+  std::string approach = "learned";  ///< Tab. 3.3 / 3.4: where each target is approached from
+  std::vector<std::string> only;     ///< Tab. 3.3 rows to run ("setup_I:4"), empty: all
   std::string markdown;        ///< markdown table file, or empty
   std::string json_out;        ///< JSON file, or empty
 };
@@ -63,6 +67,7 @@ app::TeachSpec teachSpec(int areas) {
 
 // Tab. 3.2: two areas (three for D*), the regions' E_task and E_coll.
 Json table32(std::ostream& md) {
+  std::map<std::string, int> all_contacts;
   const std::vector<std::tuple<std::string, std::string, int>> rows{
       {"A", "setup_A", 2}, {"B", "setup_B", 2}, {"C", "setup_C", 2}, {"D", "setup_D", 2}, {"D*", "setup_D", 3}};
   // Thesis Tab. 3.2 (left / right / interp.): E_task mm, E_coll.
@@ -89,7 +94,9 @@ Json table32(std::ostream& md) {
                 " (" + fixed(region.e_task_max_mm, 1) + ")";
       collisions += (collisions.empty() ? "" : " / ") + std::to_string(region.collisions) + "/" + std::to_string(region.trajectories);
       regions.push_back({{"region", region.name}, {"trajectories", region.trajectories}, {"e_task_mean_mm", region.e_task_mean_mm},
-                         {"e_task_std_mm", region.e_task_std_mm}, {"e_task_max_mm", region.e_task_max_mm}, {"e_coll", region.collisions}});
+                         {"e_task_std_mm", region.e_task_std_mm}, {"e_task_max_mm", region.e_task_max_mm}, {"e_coll", region.collisions},
+                         {"contacts", region.contacts}});
+      for (const auto& [contact, count] : region.contacts) log("Tab. 3.2 " + label + " " + region.name + ": " + contact + " x" + std::to_string(count));
     }
     md << "| " << label << " | " << taught.areas.size() << " | " << taught.data.size() << " | " << errors << " | " << collisions
        << " | " << thesis.at(label) << " |\n";
@@ -106,12 +113,18 @@ Json table33(const SweepOptions& options, std::ostream& md) {
       {"setup_I", 6, "31.0 / 93.0"}, {"setup_I", 12, "? / 97.1"},     {"setup_II", 1, "? / 60+"},
       {"setup_II", 2, "?"},           {"setup_II", 4, "?"},            {"setup_II", 6, "? / 80+"},
       {"setup_II", 21, "? / 94+"}};
-  md << "\n## Tab. 3.3 — reachable workspace (ELM, tutor seed 1), with the implicit scene model (Eq. 4.1)\n\n"
+  const app::ApproachFrom approach = app::parseApproach(options.approach);
+  md << "\n## Tab. 3.3 — reachable workspace (ELM, tutor seed 1, targets approached from: " << options.approach
+     << "), with the implicit scene model (Eq. 4.1)\n\n"
      << "| setup | areas (taught / given up) | samples | targets in T | explored % | reachable % | collided targets | S encloses obstacle points | free points in S | thesis explored / reachable % | wall s |\n"
      << "|---|---|---|---|---|---|---|---|---|---|---|\n";
   Json out = Json::array();
   for (const auto& [scene_name, areas, thesis] : rows) {
     if (areas > options.max_areas) continue;
+    if (!options.only.empty() &&
+        std::find(options.only.begin(), options.only.end(), scene_name + ":" + std::to_string(areas)) == options.only.end()) {
+      continue;
+    }
     log("Tab. 3.3 " + scene_name + " with " + std::to_string(areas) + " areas");
     const auto start = std::chrono::steady_clock::now();
     const Loaded loaded = load(scene_name);
@@ -120,7 +133,7 @@ Json table33(const SweepOptions& options, std::ostream& md) {
     const robot::EvaluationGrid grid = app::sceneGrid(loaded.scene, options.spacing);
     const app::ReachableResult reachable =
         app::evaluateReachable(loaded.model, loaded.scene, app::sceneParameters(loaded.scene), *map, taught.home, grid,
-                               taught.data.X, [&](double f) { reportProgress("Tab. 3.3 " + scene_name, f); });
+                               taught.data.X, [&](double f) { reportProgress("Tab. 3.3 " + scene_name, f); }, approach);
     const app::SceneModelResult model = app::evaluateSceneModel(loaded.model, loaded.scene, grid, reachable.final_postures);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     md << "| " << scene_name << " | " << taught.areas.size() << " / " << taught.areas_given_up << " | " << taught.data.size() << " | "
@@ -136,7 +149,11 @@ Json table33(const SweepOptions& options, std::ostream& md) {
                    {"scene_model_points", model.model_points}, {"obstacle_points", model.obstacle_points},
                    {"obstacle_points_enclosed", model.obstacle_points_enclosed},
                    {"free_points_in_model", model.free_points_in_model}, {"contacts", reachable.contacts},
-                   {"spacing_m", grid.spacing}, {"wall_s", wall}});
+                   {"spacing_m", grid.spacing}, {"wall_s", wall}, {"approach", options.approach}});
+    std::string contacts;
+    for (const auto& [contact, count] : reachable.contacts) contacts += " " + contact + " x" + std::to_string(count);
+    log("Tab. 3.3 " + scene_name + " " + std::to_string(areas) + " areas: reachable " + fixed(100.0 * reachable.reachable_fraction, 1) +
+        " %, explored " + fixed(100.0 * reachable.explored_fraction, 1) + " %, contacts:" + contacts);
   }
   return out;
 }
@@ -169,7 +186,8 @@ Json table34(const SweepOptions& options, std::ostream& md) {
             if (elm) elm_params.epsilon = value; else llm_params.eta = value;
             const auto map = app::fitMap(data, loaded.model.dof(), kind, elm_params, llm_params);
             const app::ReachableResult result =
-                app::evaluateReachable(loaded.model, loaded.scene, parameters, *map, taught.home, grid, data.X);
+                app::evaluateReachable(loaded.model, loaded.scene, parameters, *map, taught.home, grid, data.X, {},
+                                       app::parseApproach(options.approach));
             collided += result.collided;
             reachable += result.reachable_fraction;
           }
@@ -226,6 +244,7 @@ Json section83(const SweepOptions& options, std::ostream& md) {
   const app::PlanningResult result =
       app::evaluatePlanning(loaded.model, loaded.scene, app::sceneParameters(loaded.scene), *map, *taught.itm, start,
                             options.goals, 1, [](double f) { reportProgress("Sect. 8.3", f); });
+  for (const auto& [contact, count] : result.contacts) log("Sect. 8.3 contact " + contact + " x" + std::to_string(count));
   md << "\n## Sect. 8.3 — 9-DoF arm (arm9_areas), 8 areas, " << options.goals << " goals\n\n"
      << "| areas (taught / given up) | ITM nodes | paths found | collision-free | within 1 cm | mean plan ms | thesis |\n|---|---|---|---|---|---|---|\n"
      << "| " << taught.areas.size() << " / " << taught.areas_given_up << " | " << taught.itm->nodeCount() << " | " << result.found
@@ -233,7 +252,8 @@ Json section83(const SweepOptions& options, std::ostream& md) {
      << " | 99/100 collision-free |\n";
   return {{"areas", taught.areas.size()}, {"areas_given_up", taught.areas_given_up}, {"teaching_contacts", taught.tutor.collisions},
           {"itm_nodes", taught.itm->nodeCount()}, {"goals", result.goals}, {"found", result.found},
-          {"collision_free", result.collision_free}, {"reached_1cm", result.reached_1cm}, {"mean_plan_ms", result.mean_plan_ms}};
+          {"collision_free", result.collision_free}, {"reached_1cm", result.reached_1cm}, {"mean_plan_ms", result.mean_plan_ms},
+          {"contacts", result.contacts}};
 }
 
 Json runSweep(const SweepOptions& options) {
@@ -275,6 +295,9 @@ void registerSweepCommand(CLI::App& app, CommandRunner& runner) {
   sweep->add_option("--seeds", options->seeds, "Tab. 3.4 network initializations")->check(CLI::Range(1, 100));
   sweep->add_option("--goals", options->goals, "Sect. 8.3 goals")->check(CLI::Range(1, 10000));
   sweep->add_option("--max-areas", options->max_areas, "skip Tab. 3.3 rows with more areas")->check(CLI::Range(1, 1000));
+  sweep->add_option("--approach", options->approach, "Tab. 3.3/3.4: targets approached from the learned posture at the target (learned), the home posture (start) or the previous target (previous)")
+      ->check(CLI::IsMember({"learned", "start", "previous"}));
+  sweep->add_option("--only", options->only, "Tab. 3.3 rows to run, e.g. setup_I:4,setup_II:1")->delimiter(',');
   sweep->add_option("--markdown", options->markdown, "write the tables as markdown to this file");
   sweep->add_option("--json", options->json_out, "write the JSON result to this file as well");
   sweep->callback([&runner, options] { runner.select([options] { return runSweep(*options); }); });

@@ -34,7 +34,7 @@ struct TeachOptions {
   std::string out;
   bool realtime = false;
   std::string learner = "elm";
-  double diameter = 0.04;
+  double diameter = app::TutorOptions{}.circle_diameter;  // the tutor's default
   int candidates = 24;
 };
 
@@ -260,7 +260,7 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   teach->add_option("--out", options->out, "session file (SQLite; JSON if it ends in .json)")->required();
   teach->add_flag("--realtime", options->realtime, "pace the simulation at wall-clock speed");
   teach->add_option("--learner", options->learner, "elm, oselm or llm");
-  teach->add_option("--diameter", options->diameter, "deflection circle diameter [m]")->check(CLI::Range(0.005, 0.5));
+  teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m]")->check(CLI::Range(0.005, 0.5));
   teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(CLI::Range(1, 1000));
   teach->callback([&runner, options] { runner.select([options] { return runTeach(*options); }); });
 }

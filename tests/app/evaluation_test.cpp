@@ -4,6 +4,9 @@
 
 #include "app/evaluation.hpp"
 #include "learning/elm.hpp"
+#include "robot/collision.hpp"
+#include "robot/controllers.hpp"
+#include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
 #include "robot/sim/reach.hpp"
@@ -92,6 +95,104 @@ TEST(Evaluation, ExploredFractionCountsCellsHoldingSamples) {
   EXPECT_DOUBLE_EQ(result.explored_fraction, 0.5);
   EXPECT_EQ(result.collided, 0);
   EXPECT_EQ(result.reached, 6);  // free space in front of the robot
+}
+
+// IK with the hierarchical controller (Eq. 2.11) from q0 with q0 as null-space target: an
+// independent posture for a tip position, not the map's.
+Eigen::VectorXd solveIk(const Eigen::VectorXd& q0, const Eigen::Vector3d& p_W) {
+  Parameters s;
+  robot::HierarchicalController controller(lwr4(), s.parameters);
+  Eigen::VectorXd q = q0, q_next(q0.size());
+  for (int it = 0; it < 2000; ++it) {
+    controller.target(q, p_W, q0, 0.01, q_next);
+    q = q_next;
+  }
+  return q;
+}
+
+// A map that gives the posture q everywhere near the evaluation points.
+std::unique_ptr<learning::Learner> mapOf(const Eigen::VectorXd& q, const Eigen::Vector3d& around) {
+  learning::TrainingSet data;
+  data.X.resize(3, 8);
+  data.Y.resize(7, 8);
+  for (int l = 0; l < 8; ++l) {
+    data.X.col(l) = around + Eigen::Vector3d(0.1 * (l % 2) - 0.05, 0.1 * ((l / 2) % 2) - 0.05, 0.1 * (l / 4) - 0.05);
+    data.Y.col(l) = q;
+  }
+  auto elm = std::make_unique<learning::Elm>(3, 7);
+  elm->fit(data);
+  return elm;
+}
+
+TEST(Evaluation, ReachabilityStartsEachTargetInTheLearnedPostureUnlessAskedForTheStartPosture) {
+  Parameters s;
+  const Eigen::Vector3d start = robot::tipPose(lwr4(), ready()).translation();
+  const Eigen::Vector3d target = start + Eigen::Vector3d(0.0, 0.3, 0.0);
+  const Eigen::VectorXd q_target = solveIk(ready(), target);
+  ASSERT_LT((robot::tipPose(lwr4(), q_target).translation() - target).norm(), 1e-4);
+  // A small box halfway along the tip's straight way from the start posture to the target.
+  robot::Scene scene;
+  robot::Obstacle box;
+  box.name = "box";
+  box.size = Eigen::Vector3d(0.08, 0.04, 0.08);
+  box.X_WO.translation() = 0.5 * (start + target);
+  scene.obstacles.push_back(box);
+  robot::CollisionWorld world(lwr4(), scene);
+  world.update(q_target);
+  ASSERT_TRUE(world.contacts().empty()) << "the posture at the target must be free for this test";
+  world.update(ready());
+  ASSERT_TRUE(world.contacts().empty());
+  const auto map = mapOf(q_target, target);
+  robot::EvaluationGrid grid;
+  grid.lower = grid.upper = target;
+  grid.spacing = 0.1;
+  // From the learned posture q_c(target) the arm is already there: reached, no contact.
+  const ReachableResult learned = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0), {},
+                                                    ApproachFrom::kLearnedPosture);
+  ASSERT_EQ(learned.targets, 1);
+  EXPECT_EQ(learned.reached, 1);
+  EXPECT_EQ(learned.collided, 0);
+  ASSERT_EQ(learned.final_postures.size(), 1U);
+  EXPECT_LT((learned.final_postures[0] - q_target).norm(), 0.05);
+  // From the start posture the tip runs into the box on its way: a collision on the way counts.
+  const ReachableResult from_start = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0),
+                                                       {}, ApproachFrom::kStartPosture);
+  ASSERT_EQ(from_start.targets, 1);
+  EXPECT_EQ(from_start.collided, 1);
+  EXPECT_EQ(from_start.reached, 0);
+  ASSERT_EQ(from_start.contacts.size(), 1U);
+  EXPECT_NE(from_start.contacts.begin()->first.find("/box"), std::string::npos) << from_start.contacts.begin()->first;
+}
+
+TEST(Evaluation, ReachabilityFromThePreviousTargetVisitsNeighboursInTurn) {
+  Parameters s;
+  const auto map = constantMap();
+  robot::Scene empty;
+  robot::EvaluationGrid grid;
+  grid.lower = Eigen::Vector3d(-0.6, -0.2, 0.3);
+  grid.upper = Eigen::Vector3d(-0.4, 0.2, 0.3);
+  grid.spacing = 0.1;
+  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0), {},
+                                                   ApproachFrom::kPreviousTarget);
+  ASSERT_EQ(result.targets, 15);
+  EXPECT_EQ(result.reached, 15);
+  // Nearest-neighbour order: each target visited once, nearly always one grid step after the
+  // one before (a greedy tour on a 3 x 5 grid needs at most a couple of longer jumps).
+  int single_steps = 0;
+  for (std::size_t i = 1; i < result.target_points.size(); ++i) {
+    const double step = (result.target_points[i] - result.target_points[i - 1]).norm();
+    EXPECT_GT(step, 0.05) << "target " << i << " visited twice";
+    single_steps += std::abs(step - 0.1) < 1e-6 ? 1 : 0;
+  }
+  EXPECT_GE(single_steps, 12);
+}
+
+TEST(Evaluation, ApproachNamesParseAndUnknownOnesAreRefused) {
+  EXPECT_EQ(parseApproach("learned"), ApproachFrom::kLearnedPosture);
+  EXPECT_EQ(parseApproach("start"), ApproachFrom::kStartPosture);
+  EXPECT_EQ(parseApproach("previous"), ApproachFrom::kPreviousTarget);
+  EXPECT_EQ(approachName(ApproachFrom::kPreviousTarget), "previous");
+  EXPECT_THROW(parseApproach("home"), InputError);
 }
 
 }  // namespace

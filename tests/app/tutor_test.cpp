@@ -1,8 +1,10 @@
 // The simulated tutor teaching the simulated LWR IV in setup A through the workflow.
 #include <gtest/gtest.h>
 
+#include "app/evaluation.hpp"
 #include "app/simulated_tutor.hpp"
 #include "app/workflow.hpp"
+#include "robot/collision.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/scene.hpp"
@@ -110,6 +112,49 @@ TEST(SimulatedTutor, GuidesATeachInTrajectoryInProgramming) {
   sim.readState(state);
   EXPECT_LT((state.p_WT() - goal).norm(), 0.01);
   EXPECT_EQ(sim.collisions().events(), 0U);
+}
+
+// The areas are explored like the participants' helices (Sect. 3.3.1): wider than the old 4 cm
+// circles and at several heights, never closer to an obstacle than the tutor allows (no contact).
+TEST(SimulatedTutor, ExploresEachAreaWithAHelixAtSeveralHeights) {
+  const TeachRun run = teachSetupA(3);
+  ASSERT_EQ(run.areas.size(), 2U);
+  EXPECT_EQ(run.report.collisions, 0U);
+  double widest = 0.0;
+  for (const auto& area : run.areas) {
+    const Eigen::Vector3d extent = area.X.rowwise().maxCoeff() - area.X.rowwise().minCoeff();
+    widest = std::max(widest, extent.head<2>().maxCoeff());
+    EXPECT_GE(extent.head<2>().maxCoeff(), 0.015) << "an area hardly deflected";
+    EXPECT_GE(extent.z(), 0.01) << "the samples lie at one height only";
+  }
+  EXPECT_GE(widest, 0.06);  // at least one area wider than the former 4 cm circles
+}
+
+// Sect. 3.3.1 (setup A, Tab. 3.2): with the map learned from two taught areas, the straight
+// motion from one area's centre to the other's stays collision-free (checked every 10 ms in the
+// collision world) and accurate up to the controller's lag v/κ_x.
+TEST(SimulatedTutor, LearnedMapMovesStraightBetweenTwoTaughtAreasWithoutCollision) {
+  const TeachRun run = teachSetupA(3);
+  ASSERT_EQ(run.areas.size(), 2U);
+  ASSERT_NE(run.model, nullptr);
+  const robot::Scene scene = robot::loadScene("setup_A");
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  parameters.applyOverrides(scene.parameters);
+  robot::CollisionWorld world(lwr4(), scene);
+  const Eigen::Vector3d from = run.areas[0].centre;
+  const Eigen::Vector3d to = run.areas[1].centre;
+  const MotionOutcome settled = executeMotion(lwr4(), parameters, *run.model, run.areas[0].q_fixed,
+                                              [&](double) { return from; }, 0.0, 3.0, &world);
+  ASSERT_FALSE(settled.collided) << settled.contact;
+  const double speed = 0.05;
+  const double duration = (to - from).norm() / speed;
+  const MotionOutcome moved = executeMotion(
+      lwr4(), parameters, *run.model, settled.q, [&](double t) { return Eigen::Vector3d(from + (to - from) * (t / duration)); },
+      duration, 2.0, &world);
+  EXPECT_FALSE(moved.collided) << moved.contact << " at " << moved.contact_time << " s";
+  EXPECT_LT(moved.final_error_m, 0.01);
+  EXPECT_LT(moved.max_error_m, speed / parameters.get("hierarchical.kappa_x") + 0.005);
 }
 
 TEST(SimulatedTutor, IsDeterministicForAFixedSeed) {
