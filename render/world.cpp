@@ -210,12 +210,12 @@ std::pair<Eigen::Vector3d, double> World::contentBound() const {
   return {Eigen::Vector3d(c.x(), c.y(), c.z()), std::max(0.1F, box.radius())};
 }
 
-std::pair<Eigen::Vector3d, Eigen::Vector3d> World::contentBox() const {
+std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> World::contentBox() const {
   osg::ComputeBoundsVisitor visitor;
   content_->accept(visitor);
   const osg::BoundingBox& box = visitor.getBoundingBox();
-  if (!box.valid()) return {Eigen::Vector3d(-1.0, -1.0, -0.5), Eigen::Vector3d(1.0, 1.0, 1.5)};
-  return {Eigen::Vector3d(box.xMin(), box.yMin(), box.zMin()), Eigen::Vector3d(box.xMax(), box.yMax(), box.zMax())};
+  if (!box.valid()) return std::nullopt;
+  return std::make_pair(Eigen::Vector3d(box.xMin(), box.yMin(), box.zMin()), Eigen::Vector3d(box.xMax(), box.yMax(), box.zMax()));
 }
 
 CameraPose World::defaultCamera(double aspect) const {

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 
 #include "render/camera.hpp"
 #include "render/overlays.hpp"
@@ -54,8 +55,8 @@ class World {
   /// Bounding sphere (centre in W, radius in m) of the robot and the scene, grid excluded.
   std::pair<Eigen::Vector3d, double> contentBound() const;
   /// Axis-aligned bounding box (lower, upper corners in W, m) of the robot and the scene, grid
-  /// excluded; a 2 m box around (0, 0, 0.5) when there is nothing.
-  std::pair<Eigen::Vector3d, Eigen::Vector3d> contentBox() const;
+  /// excluded; nothing when there is neither.
+  std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> contentBox() const;
   /// A camera that shows the robot and the scene from the front-left, slightly above.
   CameraPose defaultCamera(double aspect) const;
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <unistd.h>
@@ -257,7 +258,11 @@ Json renderPicture(const RenderOptions& options) {
   robot::Kinematics kinematics(model);
   kinematics.update(q);
   if (world.robot() != nullptr) world.robot()->setPosture(kinematics);
-  auto box = world.contentBox();
+  // What the named views frame: robot and scene, grown by every overlay drawn (empty at first
+  // when there is neither robot nor scene, so that the overlays alone are framed).
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> box = world.contentBox().value_or(
+      std::make_pair(Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()),
+                     Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity())));
 
   render::Overlays& overlays = world.overlays();
   std::vector<render::LegendEntry> legend;
@@ -401,6 +406,7 @@ Json renderPicture(const RenderOptions& options) {
   } else if (!options.view.empty()) {
     Eigen::Vector3d direction, up;
     render::namedView(options.view, direction, up);
+    if (!(box.first.array() <= box.second.array()).all()) box = {Eigen::Vector3d(-1.0, -1.0, 0.0), Eigen::Vector3d(1.0, 1.0, 1.0)};
     camera = render::frameBoxFrom(box.first, box.second, aspect, direction, up, 0.04);
   } else {
     camera = world.defaultCamera(aspect);
