@@ -257,7 +257,7 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
     if (!world_->contacts().empty()) continue;
     const double clearance = world_->clearance(0.5).distance;
     // Clearance up to a comfortable 8 cm counts; beyond it, the posture nearest the reference
-    // (joint-space distance, 0.1 per rad: 4 cm less clearance weigh as much as 5 rad) wins.
+    // (joint-space distance, 0.2 per rad: 4 cm less clearance weigh as much as 2.5 rad) wins.
     // Postures near a joint limit are penalized (they would warn).
     const double limit_margin = std::min((q - lower).minCoeff(), (upper - q).minCoeff());
     const double score = std::min(clearance, 0.08) / 0.08 - 0.2 * (q - q_reference).norm() - (limit_margin < 0.2 ? 0.5 : 0.0);
