@@ -16,6 +16,7 @@
 #include <QTest>
 
 #include <cmath>
+#include <utility>
 
 #include "app/session_reader.hpp"
 #include "learning/confidence.hpp"
@@ -189,20 +190,24 @@ class FeaturesTest : public QObject {
     QTest::keyClick(&window, Qt::Key_Space);
     QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
     QTRY_COMPARE(s.on_affected, std::uint64_t(1));
-    // Approach a posture ~0.3 m away with the keys (0.08 m/s): the ITM graph grows along the
-    // way, a node per e_max = 0.1 m.
-    QTest::keyPress(&window, Qt::Key_Right);
-    QTest::qWait(2500);
-    QTest::keyRelease(&window, Qt::Key_Right);
-    QTest::keyPress(&window, Qt::Key_Up);
-    QTest::qWait(2000);
-    QTest::keyRelease(&window, Qt::Key_Up);
+    // Approach a posture ~0.4 m away with the keys (0.08 m/s), out of the upright start and
+    // down: the ITM graph grows along the way, a node per e_max = 0.1 m.
+    for (const auto& [key, ms] : {std::pair{Qt::Key_Right, 2500}, std::pair{Qt::Key_PageDown, 1500}, std::pair{Qt::Key_Up, 1500}}) {
+      QTest::keyPress(&window, key);
+      QTest::qWait(ms);
+      QTest::keyRelease(&window, key);
+    }
     QTest::keyClick(&window, Qt::Key_Return);
     QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
     QTRY_COMPARE(s.on_converged, std::uint64_t(1));
     QTest::keyClick(&window, Qt::Key_Space);
     QTRY_COMPARE(s.sub_stage, SubStage::kRecording);
-    QTest::qWait(400);
+    // Move about inside the area while it records (samples every 20 ms).
+    for (const Qt::Key key : {Qt::Key_Left, Qt::Key_Down, Qt::Key_PageUp}) {
+      QTest::keyPress(&window, key);
+      QTest::qWait(600);
+      QTest::keyRelease(&window, key);
+    }
     QTest::keyClick(&window, Qt::Key_Return);
     QTRY_COMPARE(s.areas, 1);
     QTRY_VERIFY(s.itm_nodes >= 2);
@@ -215,6 +220,12 @@ class FeaturesTest : public QObject {
     QCOMPARE(window.confidenceSlicesShown(), 2);
     window.confidencePanel()->countBox()->setValue(3);
     window.findChild<QDockWidget*>(QStringLiteral("confidence_dock"))->raise();
+    if (!qEnvironmentVariableIsEmpty("FLEXIROB_SCREENSHOT_DIR")) {
+      // The pictures look at the explored region from closer than the home view does.
+      const Eigen::Vector3d centre = s.confidence->mean(0) + Eigen::Vector3d(-0.1, 0.0, -0.15);
+      window.view()->setHomeCamera(flexirob::render::frameSphere(
+          centre, 0.45, static_cast<double>(window.view()->width()) / window.view()->height()));
+    }
     screenshot(window, "06-confidence.png");
     window.findChild<QDockWidget*>(QStringLiteral("joints_dock"))->raise();
     if (canDraw()) {
