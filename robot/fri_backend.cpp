@@ -78,6 +78,10 @@ FriBackend::FriBackend(RobotModel model, FriBackendConfig config, UdpSocket sock
     throw InputError("FRI backend: expected watchdog cycles in [1, 1000], got " +
                      std::to_string(config_.watchdog_cycles));
   }
+  if (config_.lockstep && !(config_.lockstep_timeout >= 1e-3 && config_.lockstep_timeout <= 3600.0)) {
+    throw InputError("FRI backend: expected a lockstep timeout in [0.001, 3600] s, got " +
+                     std::to_string(config_.lockstep_timeout));
+  }
   if (!plausibleCycle(config_.nominal_cycle)) {
     throw InputError("FRI backend: expected a nominal cycle in [1e-4, 0.1] s, got " +
                      std::to_string(config_.nominal_cycle));
@@ -246,11 +250,13 @@ bool FriBackend::accept(const fri::MeasurementDatagram& measurement, int gap) {
     state_.qd = (state_.q - previous_q_) / (gap * cycle_);
     cycles_since_start_ += static_cast<std::uint64_t>(gap);
   } else {
-    // No sequence to go by: no velocity estimate; the clock advances by the wall-clock gap.
+    // No sequence to go by: no velocity estimate; the clock advances by the wall-clock gap
+    // (by one cycle in lockstep, where the wall clock says nothing about the KRC's cycles).
     state_.qd.setZero();
     if (status_.counters.measurements_accepted > 0) {
       const double silence = std::chrono::duration<double>(now - previous_time).count();
-      cycles_since_start_ += static_cast<std::uint64_t>(std::max(1.0, std::round(silence / cycle_)));
+      cycles_since_start_ +=
+          config_.lockstep ? 1U : static_cast<std::uint64_t>(std::max(1.0, std::round(silence / cycle_)));
     }
   }
   previous_q_ = state_.q;

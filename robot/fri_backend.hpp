@@ -21,7 +21,8 @@
 //    (kReject); anything else is rejected and the previous posture is held;
 //  - the watchdog: `watchdog_cycles` measurements in a row missing (lost in transit, none for
 //    (watchdog_cycles + 0.5) cycles after the later of the last measurement and our answer to
-//    it, or left unanswered because our loop was late) trip it:
+//    it, or left unanswered because our loop was late) trip it (with a lockstep robot side the
+//    cycles are counted by the KRC's sequence counter only, see FriBackendConfig::lockstep):
 //    the backend stops forwarding commands, answers the KRC with the held posture, and reports
 //    the fault until the operator calls confirmReconnect().
 // Not thread-safe: one control thread calls step(), readState(), writeCommand() and reads
@@ -68,6 +69,14 @@ struct FriBackendConfig {
   /// Slack on the velocity check for float rounding: |Δq| <= v_max·T·(1 + tolerance).
   double velocity_tolerance = 1e-6;
   FriVelocityPolicy velocity_policy = FriVelocityPolicy::kRateLimit;
+  /// The robot side waits for each of our answers before it sends the next measurement (the
+  /// simulated controller's lockstep mode, tests only; never the real KRC). Its cycles then
+  /// pass in computing time, not in wall-clock time, so the watchdog counts missing
+  /// measurements by the KRC's sequence counter only (gaps of more than watchdog_cycles) and
+  /// its wall-clock timeout is off: a slow stand-in (a sanitizer build, a loaded machine) is no
+  /// fault. A robot side silent for `lockstep_timeout` [s] counts as gone (measurement timeout).
+  bool lockstep = false;
+  double lockstep_timeout = 10.0;
 };
 
 /// The backend choice "fri://HOST[:PORT]" (the GUI's and flexirob's --backend) as a
@@ -187,7 +196,11 @@ class FriBackend final : public RobotBackend {
   void tripWatchdog(FriFault fault);
   bool commandingPermitted() const;
   void updateLink();
-  double watchdogTimeout() const { return (config_.watchdog_cycles + 0.5) * cycle_; }
+  /// [s] of wall-clock silence that trips the watchdog: (watchdog_cycles + 0.5) cycles, or in
+  /// lockstep the time after which the robot side counts as gone.
+  double watchdogTimeout() const {
+    return config_.lockstep ? config_.lockstep_timeout : (config_.watchdog_cycles + 0.5) * cycle_;
+  }
 
   RobotModel model_;
   FriBackendConfig config_;

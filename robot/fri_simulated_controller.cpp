@@ -56,7 +56,7 @@ FriSimulatedController::FriSimulatedController(RobotModel model, FriSimulatedCon
   requireRange(config_.viscous_damping, 0.0, 1e3, "viscous damping [Nm s/rad]");
   requireRange(config_.krl_stiffness, 0.0, kKrcMaxStiffness, "KRL stiffness [Nm/rad]");
   requireRange(config_.krl_damping, 0.0, 1.0, "KRL damping");
-  requireRange(config_.lockstep_patience, 1e-3, 60.0, "lockstep patience [s]");
+  requireRange(config_.lockstep_patience, 0.0, 3600.0, "lockstep patience [s]");
   const int dof = model_.dof();
   if (config_.q_initial.size() == 0) {
     q_ = model_.midPosture();
@@ -175,14 +175,18 @@ void FriSimulatedController::runLockstep(double seconds) {
     cycle(now);
     const std::uint16_t awaited = send_seq_;
     sendDue(now + config_.delay);  // no wall-clock delay to wait out: the clock is simulated
-    // Wait for the PC's answer to this measurement (one lost or held back gets none: go on).
+    // Wait for the PC's answer to this measurement, however long the PC takes (a measurement
+    // lost or held back gets none, and an answer the loss injection dropped never arrives: go on).
+    answer_lost_ = false;
     const double wait_start = elapsed();
-    while (measurement_left_ && !stop_requested_ && last_reflected_seq_ != awaited) {
+    const bool patient = config_.lockstep_patience <= 0.0;
+    const auto answered = [&] { return last_reflected_seq_ == awaited || (answer_lost_ && lost_answer_seq_ == awaited); };
+    while (measurement_left_ && !stop_requested_ && !answered()) {
       receiveCommands(now);
-      if (last_reflected_seq_ == awaited) break;
+      if (answered()) break;
       const double waited = elapsed() - wait_start;
-      if (waited >= config_.lockstep_patience) break;
-      socket_.waitReadable(std::min(kPoll, config_.lockstep_patience - waited));
+      if (!patient && waited >= config_.lockstep_patience) break;
+      socket_.waitReadable(patient ? kPoll : std::min(kPoll, config_.lockstep_patience - waited));
     }
     receiveCommands(now);
   }
@@ -288,13 +292,20 @@ void FriSimulatedController::receiveCommands(double now) {
       ++stats_.commands_foreign;
       continue;
     }
+    const bool valid =
+        !received->truncated &&
+        fri::decode(std::span<const std::uint8_t>(buffer_.data(), received->size), command) == fri::DecodeStatus::kOk;
     if (config_.loss > 0.0 && uniform_(random_) < config_.loss) {
+      // Lost in transit; lockstep must not wait for it.
+      if (valid) {
+        answer_lost_ = true;
+        lost_answer_seq_ = command.header.refl_seq;
+      }
       std::lock_guard lock(mutex_);
       ++stats_.commands_lost;
       continue;
     }
-    if (received->truncated ||
-        fri::decode(std::span<const std::uint8_t>(buffer_.data(), received->size), command) != fri::DecodeStatus::kOk) {
+    if (!valid) {
       std::lock_guard lock(mutex_);
       ++stats_.commands_malformed;
       continue;

@@ -52,11 +52,16 @@ struct FriSimulatedControllerConfig {
   double krl_damping = 0.7;
   /// Faster than real time, for tests of whole teaching runs: the next measurement leaves as
   /// soon as the PC has answered the previous one, and the measurement timestamps count
-  /// simulated cycles. If no answer comes within `lockstep_patience` [s] of wall-clock time the
-  /// controller goes on like the KRC (next cycle, the answer counts as missed). Loss, delay and
-  /// reordering act as in real time.
+  /// simulated cycles. The controller waits for that answer as long as the PC takes (the PC may
+  /// plan, learn or run under a sanitizer in between), unless the answer cannot come: the
+  /// measurement or the answer was dropped by the loss injection, or the measurement is held
+  /// back for reordering. Loss, delay and reordering act as in real time otherwise. The PC's
+  /// backend must be told (FriBackendConfig::lockstep), so that its watchdog counts missing
+  /// measurements by the sequence counter rather than by the wall clock.
   bool lockstep = false;
-  double lockstep_patience = 1.0;
+  /// [s] of wall-clock time after which a lockstep controller stops waiting for an answer and
+  /// goes on like the KRC (next cycle, the answer counts as missed); 0: wait as long as it takes.
+  double lockstep_patience = 0.0;
 };
 
 struct FriSimulatedControllerStats {
@@ -155,6 +160,8 @@ class FriSimulatedController {
   std::uint16_t send_seq_ = 0;
   std::uint16_t last_command_seq_ = 0;
   std::uint16_t last_reflected_seq_ = 0;  // the PC's reflection of our counter, latest command
+  std::uint16_t lost_answer_seq_ = 0;     // what the latest answer dropped by the loss injection reflected
+  bool answer_lost_ = false;              // lost_answer_seq_ is valid
   std::uint64_t lockstep_cycles_ = 0;     // cycles run in lockstep: the simulated clock
   bool measurement_left_ = false;         // this cycle's measurement was sent (not lost, not held)
   std::vector<SentRecord> sent_;  // ring of the last measurements, for the answer rate

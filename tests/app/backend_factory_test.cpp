@@ -101,6 +101,7 @@ struct FriLink {
     choice.kind = BackendKind::kFri;
     choice.fri.robot = controller->localEndpoint();
     choice.fri.watchdog_cycles = watchdog_cycles;
+    choice.fri.lockstep = sim.lockstep;  // a lockstep stand-in: the watchdog counts by sequence number
     choice.text = "fri://" + choice.fri.robot.toString();
     connection = std::make_unique<RobotConnection>(
         choice, std::make_unique<robot::FriBackend>(lwr4(), choice.fri, std::move(socket)));
@@ -185,9 +186,10 @@ TEST(RobotConnection, DrivesTheBulletArmThroughTheLockstepControllerStandIn) {
   robot::FriSimulatedControllerConfig sim;
   sim.cycle = bullet->cycleTime();
   sim.lockstep = true;
-  // The watchdog runs on the wall clock; on a loaded machine a thread switch may take longer
-  // than 3.5 cycles of 1 ms, which lockstep would not make a real fault: a generous limit.
-  FriLink link(sim, 1000, std::move(bullet));
+  // The default watchdog (3 cycles): in lockstep it counts missing measurements by the KRC's
+  // sequence counter, so however slow either side runs (a sanitizer build, a loaded machine),
+  // it trips only on measurements really lost.
+  FriLink link(sim, 3, std::move(bullet));
   ASSERT_TRUE(link.stepUntil([](const LinkStatus& s) { return s.commanding; }, 500));
   robot::RobotState state;
   state.resize(7);

@@ -475,6 +475,59 @@ TEST(FriBackend, TimeoutTripsWatchdogAndReconnectNeedsFreshMeasurements) {
   EXPECT_EQ(link.backend->status().link, FriLink::kMonitoring);
 }
 
+// Lockstep (tests of whole runs): the stand-in waits for every answer, so a slow PC side is no
+// lost cycle: the watchdog counts measurements by the KRC's sequence counter, trips on a burst
+// really lost, and never on the wall clock.
+TEST(FriBackend, LockstepWatchdogTripsOnLostMeasurementsButNotOnASlowLoop) {
+  FriSimulatedControllerConfig sim = simConfig(1e-3, true);
+  sim.lockstep = true;
+  FriBackendConfig config = backendConfig(3);
+  config.lockstep = true;
+  Link link(sim, config);
+  ASSERT_TRUE(link.stepUntil([&] { return link.backend->status().link == FriLink::kCommanding; }, 300));
+  const Eigen::VectorXd q_cmd = link.backend->heldPosture();
+  // Our loop stalls for 30 ms, thirty cycles and far beyond the 3.5-cycle timeout of a real
+  // link, between taking a measurement in and answering it: the stand-in waits, nothing trips.
+  for (int i = 0; i < 3; ++i) {
+    const std::uint64_t cycles = link.controller->stats().cycles;
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    EXPECT_EQ(link.controller->stats().cycles, cycles);  // no cycle passes without our answer
+    ASSERT_EQ(link.backend->writeCommand(impedance(q_cmd)), CommandStatus::kAccepted);
+    link.backend->step();
+  }
+  EXPECT_EQ(link.backend->status().link, FriLink::kCommanding);
+  EXPECT_EQ(link.backend->status().counters.watchdog_trips, 0U);
+  EXPECT_EQ(link.backend->status().counters.step_timeouts, 0U);
+
+  // Three measurements lost in a row: the sequence gap trips the watchdog as on a real link.
+  link.controller->dropNextMeasurements(3);
+  ASSERT_TRUE(link.stepUntil([&] { return link.backend->status().link == FriLink::kFault; }, 20));
+  EXPECT_EQ(link.backend->status().fault, FriFault::kMeasurementsLost);
+  EXPECT_EQ(link.backend->status().counters.lost_measurements, 3U);
+  EXPECT_EQ(link.backend->status().counters.watchdog_trips, 1U);
+  ASSERT_TRUE(link.backend->confirmReconnect());
+  EXPECT_EQ(link.backend->status().link, FriLink::kCommanding);
+}
+
+// A lockstep stand-in whose answers the loss injection drops goes on instead of waiting for
+// them; the run continues and the losses are counted on both sides.
+TEST(FriBackend, LockstepGoesOnWhenAnswersAreLost) {
+  FriSimulatedControllerConfig sim = simConfig(1e-3, false);
+  sim.lockstep = true;
+  sim.loss = 0.1;
+  sim.seed = 4;
+  FriBackendConfig config = backendConfig(50);
+  config.lockstep = true;
+  Link link(sim, config);
+  link.steps(500);
+  const FriSimulatedControllerStats stats = link.controller->stats();
+  EXPECT_GT(stats.commands_lost, 10U);
+  EXPECT_GT(stats.measurements_lost, 10U);
+  // Every step took exactly one measurement in: the stand-in never waited for a lost answer.
+  EXPECT_EQ(link.backend->status().counters.measurements_accepted, 500U);
+  EXPECT_EQ(link.backend->status().counters.step_timeouts, 0U);
+}
+
 TEST(FriBackend, IgnoresDatagramsFromForeignEndpoints) {
   Link link(simConfig(5e-3, false), backendConfig(50));
   ASSERT_TRUE(link.stepUntil([&] { return link.backend->hasMeasurement(); }, 100));
