@@ -9,6 +9,7 @@
 #include <sstream>
 #include <unistd.h>
 
+#include "app/backend_factory.hpp"
 #include "app/cli/cli_support.hpp"
 #include "app/session_recorder.hpp"
 #include "planning/itm_file.hpp"
@@ -16,6 +17,7 @@
 #include "app/workflow.hpp"
 #include "app/workflow_session.hpp"
 #include "robot/errors.hpp"
+#include "robot/fri_simulated_controller.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/scene.hpp"
@@ -36,6 +38,7 @@ struct TeachOptions {
   std::string learner = "elm";
   double diameter = app::TutorOptions{}.circle_diameter;  // the tutor's default
   int candidates = 24;
+  std::string backend = "sim";
 };
 
 Json matrixColumns(const Eigen::MatrixXd& m) { return toJsonRows(m.transpose()); }
@@ -60,15 +63,47 @@ Json runTeach(const TeachOptions& options) {
   robot::ParameterSet parameters(declarations);
   parameters.applyOverrides(scene.parameters);
 
-  robot::Simulation sim(model, &scene, parameters);
+  if (options.backend != "sim" && options.backend != "fri-sim") {
+    throw InputError("--backend: expected sim or fri-sim, got '" + options.backend + "'");
+  }
+  auto owned_sim = std::make_unique<robot::Simulation>(model, &scene, parameters);
+  robot::Simulation& sim = *owned_sim;
   if (scene.home_posture && scene.home_posture->size() == model.dof()) sim.reset(*scene.home_posture);
+  // fri-sim: the same Bullet arm behind the FRI controller stand-in in lockstep, in-process; the
+  // workflow drives it through RobotConnection and the FRI backend over UDP loopback, as it
+  // drives the real LWR IV, while the tutor's hands push the arm behind the stand-in.
+  std::unique_ptr<robot::FriSimulatedController> controller;
+  std::unique_ptr<app::RobotConnection> connection;
+  robot::RobotBackend* backend = owned_sim.get();
+  if (options.backend == "fri-sim") {
+    if (model.dof() != robot::fri::kJoints) throw InputError("--backend fri-sim: needs the 7-joint LWR IV (--robot lwr4)");
+    robot::UdpSocket socket("127.0.0.1", 0);
+    robot::FriSimulatedControllerConfig stand_in;
+    stand_in.peer = socket.localEndpoint();
+    stand_in.cycle = sim.cycleTime();
+    stand_in.lockstep = true;
+    controller = std::make_unique<robot::FriSimulatedController>(model, stand_in, std::move(owned_sim));
+    app::BackendChoice choice;
+    choice.kind = app::BackendKind::kFri;
+    choice.fri.robot = controller->localEndpoint();
+    choice.fri.lockstep = true;
+    choice.text = "fri-sim";
+    connection = std::make_unique<app::RobotConnection>(
+        choice, std::make_unique<robot::FriBackend>(model, choice.fri, std::move(socket)));
+    controller->start();
+    for (int i = 0; i < 1000 && !connection->status().commanding; ++i) connection->step();
+    if (!connection->status().commanding) {
+      throw InputError("--backend fri-sim: the link did not reach command mode (" + connection->status().summary() + ")");
+    }
+    backend = connection.get();
+  }
 
   app::WorkflowOptions workflow_options;
   workflow_options.learner = learner;
   workflow_options.elm.seed = options.seed;
   workflow_options.llm.seed = options.seed;
   workflow_options.check_scene = &scene;
-  app::Workflow workflow(sim, parameters, workflow_options);
+  app::Workflow workflow(*backend, parameters, workflow_options);
 
   app::TutorOptions tutor_options;
   tutor_options.seed = options.seed;
@@ -226,7 +261,24 @@ Json runTeach(const TeachOptions& options) {
   }
   int warnings = 0;
   for (const auto& event : workflow.events()) warnings += event.kind == app::WorkflowEvent::Kind::kWarning ? 1 : 0;
+  Json link = nullptr;
+  if (connection) {
+    const app::LinkStatus status = connection->status();
+    const robot::FriSimulatedControllerStats krc = controller->stats();
+    link = {{"link", status.link},
+            {"quality", status.quality},
+            {"measurements", status.measurements},
+            {"lost_measurements", status.lost_measurements},
+            {"watchdog_trips", status.watchdog_trips},
+            {"commands_rejected", status.commands_rejected},
+            {"commands_rate_limited", connection->fri()->status().counters.commands_rate_limited},
+            {"commands_refused_by_controller", krc.commands_refused},
+            {"commands_applied_by_controller", krc.commands_applied}};
+    controller->stop();
+  }
   return {{"areas", workflow.areas().size()},
+          {"backend", options.backend},
+          {"fri_link", link},
           {"samples", samples},
           {"collisions", report.collisions},
           {"colliding_steps", report.colliding_steps},
@@ -262,6 +314,9 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   teach->add_option("--learner", options->learner, "elm, oselm or llm");
   teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m]")->check(CLI::Range(0.005, 0.5));
   teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(CLI::Range(1, 1000));
+  teach->add_option("--backend", options->backend,
+                    "sim (the Bullet simulation) or fri-sim (the same arm behind the FRI controller stand-in, "
+                    "driven over UDP loopback through the FRI backend)");
   teach->callback([&runner, options] { runner.select([options] { return runTeach(*options); }); });
 }
 
