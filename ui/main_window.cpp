@@ -663,9 +663,10 @@ void MainWindow::recordState(const LiveSnapshot& s) {
 
 void MainWindow::driveKeyboard() {
   // Held keys step the targets by velocity × the time since the last tick (Sect. 8.1).
-  // A stalled display (a slow software renderer, a busy machine) must not eat the motion of held
-  // keys; beyond 0.25 s (2 cm of target at the task speed) it is a stall, not a tick.
-  const double dt = key_clock_.isValid() ? std::min(0.25, static_cast<double>(key_clock_.restart()) * 1e-3) : 0.0;
+  // A slow display (a software renderer at a few frames per second, a busy machine) must not eat
+  // the motion of held keys; beyond 0.5 s (4 cm of target at the task speed) it is a stall, not
+  // a tick.
+  const double dt = key_clock_.isValid() ? std::min(0.5, static_cast<double>(key_clock_.restart()) * 1e-3) : 0.0;
   if (!key_clock_.isValid()) key_clock_.start();
   if (!live_ || !model_ || !teleop_.anyHeld() || dt <= 0.0) return;
   if (!keyboard_mode_) {
@@ -720,6 +721,11 @@ void MainWindow::keyReleaseEvent(QKeyEvent* event) {
   if (event->isAutoRepeat()) {
     event->accept();
     return;
+  }
+  if (TeleopKeys::actionOf(event->key()) && !(event->modifiers() & (Qt::ControlModifier | Qt::AltModifier))) {
+    // The time the key was held since the last display tick moves the target too: on a slow
+    // display, most of a short press falls between ticks.
+    driveKeyboard();
   }
   if (teleop_.release(event->key())) {
     event->accept();
