@@ -53,18 +53,19 @@ void SimulatedTutor::tick() {
   ++ticks_;
   if (options_.realtime) {
     const double now = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-    if (wall_start_ < 0.0) wall_start_ = now - sim_->time();
-    const double ahead = sim_->time() - (now - wall_start_);
+    if (wall_start_ < 0.0) wall_start_ = now - arm()->time();
+    const double ahead = arm()->time() - (now - wall_start_);
     if (ahead > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(ahead));
   }
-  sim_->readState(state_);
+  const LockedArm held = arm();
+  held->readState(state_);
   if (options_.on_cycle) options_.on_cycle(state_);
 }
 
 void SimulatedTutor::updateReport() {
-  report_.collisions = sim_->collisions().events();
-  report_.colliding_steps = sim_->collisions().collidingSteps();
-  report_.simulated_time = sim_->time();
+  report_.collisions = arm()->collisions().events();
+  report_.colliding_steps = arm()->collisions().collidingSteps();
+  report_.simulated_time = arm()->time();
 }
 
 double SimulatedTutor::pathClearance(const std::vector<Eigen::VectorXd>& path) {
@@ -272,10 +273,10 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
 }
 
 bool SimulatedTutor::waitFor(SubStage sub_stage, double max_time) {
-  sim_->clearHandForce();
-  const double until = sim_->time() + max_time;
+  arm()->clearHandForce();
+  const double until = arm()->time() + max_time;
   while (workflow_->subStage() != sub_stage) {
-    if (sim_->time() > until) return false;
+    if (arm()->time() > until) return false;
     tick();
   }
   return true;
@@ -284,13 +285,13 @@ bool SimulatedTutor::waitFor(SubStage sub_stage, double max_time) {
 bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) {
   // A firm touch at the tip, held until the arm stands still under it: on_affected. A compliant
   // arm (80 Nm/rad while recording) takes a second or two to come to rest under the hand.
-  const double until = sim_->time() + 3.0;
+  const double until = arm()->time() + 3.0;
   while (workflow_->subStage() == sub_stage) {
-    if (sim_->time() > until) {
-      sim_->clearHandForce();
+    if (arm()->time() > until) {
+      arm()->clearHandForce();
       return false;
     }
-    sim_->setHandForce(model_->dof(), state_.p_WT(), 15.0 * direction.normalized());
+    arm()->setHandForce(model_->dof(), state_.p_WT(), 15.0 * direction.normalized());
     tick();
   }
   return true;
@@ -311,14 +312,14 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
   Eigen::VectorXd q_ref = state_.q;
   Eigen::VectorXd integral = Eigen::VectorXd::Zero(dof);
   std::size_t next = 1;
-  const double dt = sim_->cycleTime();
+  const double dt = arm()->cycleTime();
   double path_length = 0.0;  // [rad] of the largest joint, what the reference needs speed for
   for (std::size_t i = 0; i + 1 < path.size(); ++i) path_length += (path[i + 1] - path[i]).cwiseAbs().maxCoeff();
-  const double deadline = sim_->time() + path_length / speed + options_.max_phase_time;
+  const double deadline = arm()->time() + path_length / speed + options_.max_phase_time;
   int phase = 0;
   while (true) {
-    if (sim_->time() > deadline) {
-      sim_->clearHandForce();
+    if (arm()->time() > deadline) {
+      arm()->clearHandForce();
       last_failure_detail_ = "in " + workflow_->stateName() + ", posture error " +
                              std::to_string((state_.q - q_ref).cwiseAbs().maxCoeff()) + " rad, path point " +
                              [&] { std::ostringstream o; o << (q_ref - state_.q).transpose() << " | " << integral.transpose(); return o.str(); }() + " " +
@@ -337,7 +338,7 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
         q_ref += to * (step / to.cwiseAbs().maxCoeff());
       }
     } else if ((state_.q - q_ref).cwiseAbs().maxCoeff() < 0.005 && state_.qd.cwiseAbs().maxCoeff() < 0.01) {
-      sim_->clearHandForce();
+      arm()->clearHandForce();
       return true;
     }
     // Every few cycles, the forces that realize the PD torque (minimum norm).
@@ -345,7 +346,7 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
       // Scaled by the joint inertia, as a person pushes a light wrist more gently than the
       // shoulder (and so that the explicit PD stays stable on light joints).
       // A person who feels the arm lag pushes harder: an integral term, bounded.
-      const Eigen::VectorXd& inertia = sim_->inertiaDiagonal();
+      const Eigen::VectorXd inertia = arm()->inertiaDiagonal();
       const Eigen::VectorXd error = q_ref - state_.q;
       integral = (integral + error * (dt * m)).cwiseMax(-1.0).cwiseMin(1.0);
       const Eigen::VectorXd push = inertia.cwiseMax(0.2).cwiseProduct(kJointStiffness * error + kJointIntegral * integral);
@@ -368,25 +369,25 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
     const auto i = static_cast<std::size_t>(phase % m);
     kinematics_.update(state_.q);
     const Eigen::Vector3d p = kinematics_.X_WB(bodies[i]) * offset(static_cast<int>(i));
-    sim_->setHandForce(bodies[i], p, forces[i]);
+    arm()->setHandForce(bodies[i], p, forces[i]);
     ++phase;
     tick();
   }
 }
 
 void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref, double duration) {
-  const double start = sim_->time();
+  const double start = arm()->time();
   Eigen::Vector3d p_last = state_.p_WT();
-  while (sim_->time() - start < duration) {
+  while (arm()->time() - start < duration) {
     const Eigen::Vector3d p = state_.p_WT();
-    const Eigen::Vector3d v = (p - p_last) / sim_->cycleTime();
+    const Eigen::Vector3d v = (p - p_last) / arm()->cycleTime();
     p_last = p;
-    Eigen::Vector3d F = kTipStiffness * (p_ref(sim_->time() - start) - p) - kTipDamping * v;
+    Eigen::Vector3d F = kTipStiffness * (p_ref(arm()->time() - start) - p) - kTipDamping * v;
     if (F.norm() > kMaxTipForce) F *= kMaxTipForce / F.norm();
-    sim_->setHandForce(model_->dof(), p, F);
+    arm()->setHandForce(model_->dof(), p, F);
     tick();
   }
-  sim_->clearHandForce();
+  arm()->clearHandForce();
 }
 
 bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested) {
@@ -469,7 +470,7 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
 
 TutorReport SimulatedTutor::configure(int area_count) {
   if (area_count < 1 || area_count > 200) throw InputError("areas: expected 1..200, got " + std::to_string(area_count));
-  sim_->readState(state_);
+  arm()->readState(state_);
   const RequestResult started = workflow_->press(Button::kStartConfiguration);
   if (!started) throw InputError("tutor: " + started.reason);
   const robot::EvaluationGrid grid = scene_->grid.value_or(robot::EvaluationGrid{});
@@ -507,7 +508,7 @@ TutorReport SimulatedTutor::configure(int area_count) {
 
 bool SimulatedTutor::program(const std::vector<Eigen::Vector3d>& waypoints) {
   if (waypoints.empty()) throw InputError("tutor: a trajectory needs at least one waypoint");
-  sim_->readState(state_);
+  arm()->readState(state_);
   if (!workflow_->press(Button::kStartProgramming)) return false;
   const double speed = 0.05;  // [m/s] of the tutor's hand
   auto guide = [&](const std::vector<Eigen::Vector3d>& points) {

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,6 +43,10 @@ struct TutorOptions {
   bool realtime = false;           ///< pace at wall-clock speed
   /// Called with the measured state after every control cycle (a session recorder); may be empty.
   std::function<void(const robot::RobotState&)> on_cycle;
+  /// Set when another thread steps the arm (the FRI controller stand-in,
+  /// robot::FriSimulatedController::armMutex()): the tutor holds it for every touch of the
+  /// arm, as that thread does for each integration step. on_cycle runs under it as well.
+  std::mutex* arm_mutex = nullptr;
   /// Progress callback (what, fraction in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
 };
@@ -114,6 +119,20 @@ class SimulatedTutor {
   /// keep `margin` [m] from the obstacles: a person sees how far the arm can be deflected.
   bool helixFree(const Eigen::VectorXd& q_fixed, const std::vector<Eigen::Vector3d>& helix, double margin);
   void updateReport();
+
+  /// The arm held under TutorOptions::arm_mutex (if set) for one full expression,
+  /// `arm()->time()`; never two in one expression.
+  class LockedArm {
+   public:
+    LockedArm(robot::Simulation* sim, std::mutex* mutex)
+        : sim_(sim), lock_(mutex != nullptr ? std::unique_lock(*mutex) : std::unique_lock<std::mutex>()) {}
+    robot::Simulation* operator->() const { return sim_; }
+
+   private:
+    robot::Simulation* sim_;
+    std::unique_lock<std::mutex> lock_;
+  };
+  LockedArm arm() const { return LockedArm(sim_, options_.arm_mutex); }
 
   robot::Simulation* sim_;
   Workflow* workflow_;

@@ -377,6 +377,7 @@ void FriSimulatedController::applyCommand(const fri::CommandDatagram& command) {
 
 void FriSimulatedController::integrate(double dt) {
   if (arm_) {
+    const std::lock_guard arm_lock(arm_mutex_);
     // The external arm runs its own joint impedance law around the command in force.
     arm_command_.q_cmd = q_desired_;
     arm_command_.stiffness = stiffness_;

@@ -121,6 +121,10 @@ class FriSimulatedController {
   void injectRaw(std::vector<std::uint8_t> bytes);
   /// External joint torques [Nm] on the arm, e.g. a hand pushing it; thread-safe.
   void setExternalTorque(const Eigen::VectorXd& tau_ext);
+  /// The external arm is stepped by the controller's thread. Another thread that touches it
+  /// (a simulated person's hands: SimulatedTutor, TutorOptions::arm_mutex) holds this mutex
+  /// while it does, briefly; the controller takes it for each cycle's integration.
+  std::mutex& armMutex() { return arm_mutex_; }
 
  private:
   struct Outgoing {
@@ -176,6 +180,7 @@ class FriSimulatedController {
   int arm_steps_per_cycle_ = 1;
   RobotState arm_state_;
   JointImpedanceCommand arm_command_;
+  std::mutex arm_mutex_;
 
   mutable std::mutex mutex_;  // guards stats_, injected_, external_torque_
   FriSimulatedControllerStats stats_;

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <optional>
 #include <iostream>
+#include <mutex>
 #include <sstream>
 #include <unistd.h>
 
@@ -111,6 +112,7 @@ Json runTeach(const TeachOptions& options) {
   tutor_options.circle_diameter = options.diameter;
   tutor_options.posture_candidates = options.candidates;
   tutor_options.progress = [](const std::string& what, double fraction) { reportProgress(what, fraction); };
+  if (controller) tutor_options.arm_mutex = &controller->armMutex();  // the stand-in's thread steps the arm
 
   // The session: SQLite through the session recorder, or JSON for a path ending in .json.
   const bool json_session = endsWith(options.out, ".json");
@@ -222,6 +224,8 @@ Json runTeach(const TeachOptions& options) {
                         {"simulated_time_s", report.simulated_time}};
   // Contacts during teaching (E_coll): the first events with the bodies involved.
   Json collision_events = Json::array();
+  std::unique_lock<std::mutex> arm_lock;  // fri-sim: the stand-in's thread steps the arm
+  if (controller) arm_lock = std::unique_lock(controller->armMutex());
   robot::CollisionWorld* world = sim.collisionWorld();
   for (const auto& event : sim.collisions().eventLog()) {
     if (world == nullptr) break;

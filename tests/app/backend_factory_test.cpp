@@ -213,7 +213,10 @@ TEST(RobotConnection, DrivesTheBulletArmThroughTheLockstepControllerStandIn) {
   // One simulated cycle per step, whatever the wall clock did.
   EXPECT_NEAR(state.time - t0, kSteps * sim.cycle, 1e-6);  // the cycle travels as a float
   EXPECT_NEAR(state.q[0], target, 0.01);
-  EXPECT_NEAR(link.arm->time() - t0, kSteps * sim.cycle, 2 * sim.cycle);
+  {
+    std::lock_guard arm_lock(link.controller->armMutex());  // the stand-in's thread steps the arm
+    EXPECT_NEAR(link.arm->time() - t0, kSteps * sim.cycle, 2 * sim.cycle);
+  }
   const LinkStatus status = link.connection->status();
   const robot::FriSimulatedControllerStats controller = link.controller->stats();
   EXPECT_EQ(status.watchdog_trips, 0U);

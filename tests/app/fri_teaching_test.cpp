@@ -88,6 +88,7 @@ TEST(FriTeaching, TutorTeachesProgramsAndExecutesThroughTheFriBackendAndTheContr
   tutor_options.seed = 3;
   tutor_options.circles = 1;
   tutor_options.posture_candidates = 8;
+  tutor_options.arm_mutex = &rig.controller->armMutex();  // the stand-in's thread steps the arm
   SimulatedTutor tutor(*rig.arm, workflow, scene, parameters, tutor_options);
 
   // CONFIGURATION: two areas, each approached, posed and recorded through the triggers that
@@ -158,6 +159,7 @@ TEST(FriTeaching, TutorTeachesProgramsAndExecutesThroughTheFriBackendAndTheContr
   EXPECT_EQ(krc.command_mode_exits, 0U);
   EXPECT_EQ(krc.quality, robot::fri::Quality::kPerfect);
   EXPECT_GT(krc.commands_applied, 20000U);  // tens of simulated seconds at 1 kHz
+  const std::lock_guard arm_lock(rig.controller->armMutex());  // the stand-in's thread steps the arm
   EXPECT_EQ(rig.arm->collisions().events(), 0U);
 }
 
