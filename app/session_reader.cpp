@@ -2,6 +2,7 @@
 
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <fstream>
@@ -69,12 +70,12 @@ StateRecord readState(const SqliteStatement& st) {
   StateRecord s;
   s.time = st.columnDouble(0);
   const auto dof = st.columnInt(1);
-  if (dof < 0 || dof > kMaxRecordedJoints) throw SqliteError("state row with " + std::to_string(dof) + " joints", SQLITE_CORRUPT);
+  if (dof < 1 || dof > kMaxRecordedJoints) throw SqliteError("state row with " + std::to_string(dof) + " joints", SQLITE_CORRUPT);
   s.dof = static_cast<std::int32_t>(dof);
   const auto copy = [&st](int column, double* out, Eigen::Index expected) {
     const Eigen::VectorXd v = st.columnDoubles(column);
     if (v.size() != expected) throw SqliteError("state row with a wrongly sized vector", SQLITE_CORRUPT);
-    std::memcpy(out, v.data(), static_cast<std::size_t>(expected) * sizeof(double));
+    std::copy_n(v.data(), expected, out);
   };
   copy(2, s.q.data(), dof);
   copy(3, s.q_cmd.data(), dof);

@@ -351,6 +351,33 @@ TEST_F(SessionTest, RefusesNewerSchemaAndMissingTables) {
   EXPECT_NE(refusal(damaged).find("lacks the table 'sample'"), std::string::npos);
 }
 
+// A damaged state row (no joints, empty or short vectors) is refused when it is read, with the
+// reason; the reader never copies from the empty blob SQLite returns as a null pointer.
+TEST_F(SessionTest, RefusesDamagedStateRowsWhenTheyAreRead) {
+  const auto file = path("damaged_rows.flexirob");
+  writeStates(file, 10);
+  const auto readFirstState = [&file]() -> std::string {
+    try {
+      SessionReader reader(file);
+      (void)reader.stateAt(0.0);
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "";
+  };
+  ASSERT_EQ(readFirstState(), "");
+  {
+    SqliteDatabase db(file.string(), 0x00000002);
+    db.exec("UPDATE state SET dof = 0, q = x'', q_cmd = x'', tau_ext = x''");
+  }
+  EXPECT_NE(readFirstState().find("state row with 0 joints"), std::string::npos);
+  {
+    SqliteDatabase db(file.string(), 0x00000002);
+    db.exec("UPDATE state SET dof = 7, q = x''");
+  }
+  EXPECT_NE(readFirstState().find("wrongly sized vector"), std::string::npos);
+}
+
 TEST_F(SessionTest, RefusesTruncatedSession) {
   const auto file = path("truncated.flexirob");
   writeStates(file, 20000);
