@@ -77,7 +77,7 @@ struct SignalRecord {
 /// A training area as the tutor chose it: where it started and the posture shown there.
 struct AreaRecord {
   int area = 0;             ///< area index (0-based, as in the training samples)
-  double time = 0.0;        ///< [s] when the area's RECORDING started
+  double time = 0.0;        ///< [s] when the area's RECORDING ended (the area was created)
   Eigen::VectorXd x_init;   ///< task-space position (M = 3) or pose the area is centred at
   Eigen::VectorXd q_fixed;  ///< the posture the tutor chose there [rad] (N)
 };

@@ -41,28 +41,31 @@ class Writer {
 
 class Reader {
  public:
-  Reader(const std::vector<char>& data, std::size_t end, std::string file) : data_(data), end_(end), file_(std::move(file)) {}
+  Reader(const char* data, std::size_t end, std::string source) : data_(data), end_(end), source_(std::move(source)) {}
   template <class T>
   T get() {
     if (end_ - position_ < sizeof(T)) fail("file ends early (truncated)");
     T value;
-    std::memcpy(&value, data_.data() + position_, sizeof(T));
+    std::memcpy(&value, data_ + position_, sizeof(T));
     position_ += sizeof(T);
     return value;
   }
   std::size_t remaining() const { return end_ - position_; }
-  [[noreturn]] void fail(const std::string& what) const { throw ItmFileError("ITM graph file '" + file_ + "': " + what); }
+  [[noreturn]] void fail(const std::string& what) const { throw ItmFileError(source_ + ": " + what); }
 
  private:
-  const std::vector<char>& data_;
+  const char* data_;
   std::size_t end_;
   std::size_t position_ = 0;
-  std::string file_;
+  std::string source_;
 };
+
+// Parses a whole encoded graph; `source` names it in errors (a file, a session record).
+Itm decodeItm(const char* data, std::size_t size, const std::string& source);
 
 }  // namespace
 
-void saveItm(const Itm& graph, const std::filesystem::path& path) {
+std::vector<std::uint8_t> itmToBytes(const Itm& graph) {
   const ItmParameters& p = graph.parameters();
   const std::vector<int> ids = graph.nodeIds();
   std::vector<int> index_of(static_cast<std::size_t>(graph.slotCount()), -1);
@@ -104,13 +107,17 @@ void saveItm(const Itm& graph, const std::filesystem::path& path) {
   for (double value : samples) out.put(value);
   const std::uint64_t checksum = fnv1a(out.buffer().data(), out.buffer().size());
   out.put(checksum);
+  return std::vector<std::uint8_t>(out.buffer().begin(), out.buffer().end());
+}
 
+void saveItm(const Itm& graph, const std::filesystem::path& path) {
+  const std::vector<std::uint8_t> bytes = itmToBytes(graph);
   std::filesystem::path temporary = path;
   temporary += ".tmp";
   {
     std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
     if (!file) throw ItmFileError("cannot write ITM graph file '" + temporary.string() + "'");
-    file.write(out.buffer().data(), static_cast<std::streamsize>(out.buffer().size()));
+    file.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
     if (!file) throw ItmFileError("cannot write ITM graph file '" + temporary.string() + "'");
   }
   std::error_code error;
@@ -143,9 +150,19 @@ Itm loadItm(const std::filesystem::path& path) {
     file.read(data.data(), static_cast<std::streamsize>(data.size()));
     if (static_cast<std::uintmax_t>(file.gcount()) != size) throw ItmFileError("cannot read ITM graph file '" + name + "'");
   }
+  return decodeItm(data.data(), data.size(), "ITM graph file '" + name + "'");
+}
 
-  Reader in(data, data.size(), name);
-  if (data.size() < sizeof kMagic || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0) {
+Itm itmFromBytes(const std::uint8_t* bytes, std::size_t size, const std::string& source) {
+  if (size > kMaxFileBytes) throw ItmFileError(source + ": larger than 1 GiB");
+  return decodeItm(reinterpret_cast<const char*>(bytes), size, source);
+}
+
+namespace {
+
+Itm decodeItm(const char* data, std::size_t size, const std::string& source) {
+  Reader in(data, size, source);
+  if (size < sizeof kMagic || std::memcmp(data, kMagic, sizeof kMagic) != 0) {
     in.fail("not an ITM graph (bad magic)");
   }
   for (std::size_t i = 0; i < sizeof kMagic; ++i) in.get<char>();
@@ -153,10 +170,10 @@ Itm loadItm(const std::filesystem::path& path) {
   if (version != kItmFileVersion) {
     in.fail("unsupported version " + std::to_string(version) + " (expected " + std::to_string(kItmFileVersion) + ")");
   }
-  if (data.size() < 8) in.fail("file ends early (truncated)");
+  if (size < 8) in.fail("file ends early (truncated)");
   // Checksum before interpreting any count, so that a damaged file never drives an allocation.
   std::uint64_t stored_checksum;
-  std::memcpy(&stored_checksum, data.data() + data.size() - 8, 8);
+  std::memcpy(&stored_checksum, data + size - 8, 8);
   const auto variant = in.get<std::uint32_t>();
   const auto task_space = in.get<std::uint32_t>();
   const auto joint_count = in.get<std::uint32_t>();
@@ -198,7 +215,7 @@ Itm loadItm(const std::filesystem::path& path) {
   budget -= static_cast<std::size_t>(sample_count) * 24;
   if (budget != 0) in.fail(std::to_string(budget) + " unexpected bytes after the samples");
   if (node_count > 0x7fffffffULL) in.fail("too many nodes");
-  if (fnv1a(data.data(), data.size() - 8) != stored_checksum) in.fail("checksum mismatch (the file is damaged)");
+  if (fnv1a(data, size - 8) != stored_checksum) in.fail("checksum mismatch (the file is damaged)");
 
   Itm graph(p, static_cast<int>(joint_count));
   Eigen::VectorXd omega(static_cast<Eigen::Index>(task_size));
@@ -232,5 +249,7 @@ Itm loadItm(const std::filesystem::path& path) {
   graph.restoreSamples(std::move(samples), real_samples, bootstrap_samples);
   return graph;
 }
+
+}  // namespace
 
 }  // namespace flexirob::planning

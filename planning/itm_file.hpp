@@ -15,8 +15,11 @@
 //
 // Loading checks sizes against the file length before allocating anything and refuses
 // anything malformed with an ItmFileError naming the file and the defect.
+#include <cstdint>
 #include <filesystem>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "planning/itm.hpp"
 
@@ -30,6 +33,11 @@ class ItmFileError : public std::runtime_error {
 inline constexpr std::uint32_t kItmFileVersion = 1;
 
 /// Writes graph to path (through a temporary file renamed into place). Node ids are compacted.
+/// The graph in the file format above, in memory (session recordings store these bytes).
+std::vector<std::uint8_t> itmToBytes(const Itm& graph);
+/// Parses bytes written by itmToBytes with the checks of loadItm; `source` names them in errors.
+Itm itmFromBytes(const std::uint8_t* bytes, std::size_t size, const std::string& source);
+
 void saveItm(const Itm& graph, const std::filesystem::path& path);
 
 /// Reads a graph written by saveItm.

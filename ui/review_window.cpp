@@ -3,7 +3,6 @@
 #include <QComboBox>
 #include <QDateTime>
 #include <QDockWidget>
-#include <QTemporaryDir>
 #include <QHBoxLayout>
 #include <QLabel>
 #include <QMenuBar>
@@ -19,6 +18,7 @@
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 
 #include "app/session_reader.hpp"
@@ -162,7 +162,6 @@ struct ReviewWindow::Events {
   std::vector<app::TrajectoryRecord> trajectories;
   std::vector<app::CollisionRecord> collisions;
   std::vector<app::ItmRecord> itm;  // in time order, thinned
-  QTemporaryDir scratch;            // the ITM file format is read from a file
 };
 
 ReviewWindow::ReviewWindow(QWidget* parent)
@@ -457,14 +456,8 @@ void ReviewWindow::updateItm() {
     return;
   }
   const app::ItmRecord& record = events_->itm[static_cast<std::size_t>(index)];
-  const std::filesystem::path file = events_->scratch.filePath(QStringLiteral("snapshot.itm")).toStdString();
   try {
-    {
-      std::ofstream out(file, std::ios::binary | std::ios::trunc);
-      out.write(reinterpret_cast<const char*>(record.bytes.data()), static_cast<std::streamsize>(record.bytes.size()));
-      if (!out) throw std::runtime_error("cannot write a scratch file for the ITM snapshot");
-    }
-    const planning::Itm graph = planning::loadItm(file);
+    const planning::Itm graph = planning::itmFromBytes(record.bytes.data(), record.bytes.size(), "ITM snapshot");
     std::vector<std::pair<int, Eigen::Vector3d>> nodes;
     std::vector<std::pair<int, int>> edges;
     for (const int id : graph.nodeIds()) {
@@ -483,19 +476,26 @@ void ReviewWindow::updateItm() {
 }
 
 void ReviewWindow::updateConfidence(bool force) {
-  // The areas completed by now, each with all of its samples (an area is recorded when it is done).
-  std::vector<int> complete;
-  for (const app::AreaRecord& area : events_->areas) {
-    if (area.time <= time_) complete.push_back(area.area);
+  // The areas completed by now, each with the samples of its latest take (app/session_teaching.hpp):
+  // an area record ends a RECORDING; a re-taught area's take lies after its previous record.
+  std::map<int, std::pair<double, double>> takes;  // area -> (previous record, latest record) times
+  std::size_t records_now = 0;
+  for (const app::AreaRecord& area : events_->areas) {  // in time order
+    if (area.time > time_) continue;
+    ++records_now;
+    auto [it, inserted] = takes.try_emplace(area.area, -std::numeric_limits<double>::infinity(), area.time);
+    if (!inserted) it->second = {it->second.second, area.time};
   }
-  if (!force && complete.size() == shown_confidence_areas_) return;
-  shown_confidence_areas_ = complete.size();
+  if (!force && records_now == shown_confidence_areas_) return;
+  shown_confidence_areas_ = records_now;
   // Eq. 6.7 - 6.9 with the workflow's default d = 15 (WorkflowOptions::confidence_d).
   learning::ConfidenceModel model;
-  for (const int area : complete) {
+  for (const auto& [area, window] : takes) {
     std::vector<Eigen::Vector3d> points;
     for (const app::SampleRecord& sample : events_->samples) {
-      if (sample.area == area && sample.x.size() >= 3) points.emplace_back(sample.x.head<3>());
+      if (sample.area == area && sample.x.size() >= 3 && sample.time > window.first && sample.time <= window.second) {
+        points.emplace_back(sample.x.head<3>());
+      }
     }
     if (points.empty()) continue;
     Eigen::MatrixXd X(3, static_cast<Eigen::Index>(points.size()));

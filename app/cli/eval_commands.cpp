@@ -11,6 +11,7 @@
 #include "app/evaluation.hpp"
 #include "app/experiments.hpp"
 #include "app/session_reader.hpp"
+#include "app/session_teaching.hpp"
 #include "planning/itm_file.hpp"
 #include "app/workflow.hpp"
 #include "planning/itm.hpp"
@@ -46,46 +47,39 @@ struct Session {
   std::unique_ptr<planning::Itm> itm;
 };
 
-// A session recorded in SQLite by the session recorder.
+// A session recorded in SQLite by the session recorder: the complete areas' latest takes.
 Session loadRecordedSession(const std::string& file) {
-  const app::SessionReader reader(file);
+  app::RecordedTeaching teaching = app::readRecordedTeaching(app::SessionReader(file));
   Session session;
-  session.robot = reader.meta("robot_name");
-  session.tip = reader.meta("tip_link");
-  session.scene = reader.meta("scene_name", "empty");
+  session.robot = teaching.robot;
+  session.tip = teaching.tip;
+  session.scene = teaching.scene;
   session.model = std::make_unique<robot::RobotModel>(
       robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
   session.scene_data = robot::loadScene(session.scene);
   const int n = session.model->dof();
-  for (const auto& area : reader.areas()) {
-    if (area.q_fixed.size() != n) throw InputError("session: an area's q_fixed has the wrong size");
+  Eigen::Index count = 0;
+  for (const app::RecordedArea& area : teaching.areas) {
+    if (!area.complete) continue;  // a RECORDING the session ended in taught nothing
+    if (area.q_fixed.size() != n || (area.Q.cols() > 0 && area.Q.rows() != n)) {
+      throw InputError("session: area " + std::to_string(area.index) + " does not fit the robot's " + std::to_string(n) + " joints");
+    }
     session.q_fixed.push_back(area.q_fixed);
+    count += area.X.cols();
   }
-  const std::vector<app::SampleRecord> samples = reader.samples();
-  if (samples.empty()) throw InputError("session: no training samples");
-  session.data.X.resize(3, static_cast<Eigen::Index>(samples.size()));
-  session.data.Y.resize(n, static_cast<Eigen::Index>(samples.size()));
-  for (std::size_t l = 0; l < samples.size(); ++l) {
-    if (samples[l].x.size() != 3 || samples[l].q.size() != n) throw InputError("session: a sample has the wrong size");
-    session.data.X.col(static_cast<Eigen::Index>(l)) = samples[l].x;
-    session.data.Y.col(static_cast<Eigen::Index>(l)) = samples[l].q;
-    session.data.area.push_back(samples[l].area);
+  if (count == 0) throw InputError("session: no training samples");
+  session.data.X.resize(3, count);
+  session.data.Y.resize(n, count);
+  Eigen::Index l = 0;
+  for (const app::RecordedArea& area : teaching.areas) {
+    if (!area.complete) continue;
+    session.data.X.middleCols(l, area.X.cols()) = area.X;
+    session.data.Y.middleCols(l, area.X.cols()) = area.Q;
+    session.data.area.insert(session.data.area.end(), static_cast<std::size_t>(area.X.cols()), area.index);
+    l += area.X.cols();
   }
-  const std::vector<app::ItmRecord> graphs = reader.itmSnapshots();
-  if (graphs.empty()) throw InputError("session: no ITM graph recorded");
-  const std::filesystem::path scratch =
-      std::filesystem::temp_directory_path() / ("flexirob-eval-itm-" + std::to_string(::getpid()) + ".bin");
-  {
-    std::ofstream out(scratch, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(graphs.back().bytes.data()), static_cast<std::streamsize>(graphs.back().bytes.size()));
-  }
-  try {
-    session.itm = std::make_unique<planning::Itm>(planning::loadItm(scratch));
-  } catch (...) {
-    std::filesystem::remove(scratch);
-    throw;
-  }
-  std::filesystem::remove(scratch);
+  if (!teaching.itm) throw InputError("session: no ITM graph recorded");
+  session.itm = std::make_unique<planning::Itm>(std::move(*teaching.itm));
   return session;
 }
 

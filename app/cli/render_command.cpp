@@ -14,6 +14,7 @@
 
 #include "app/cli/cli_support.hpp"
 #include "app/session_reader.hpp"
+#include "app/session_teaching.hpp"
 #include "learning/confidence.hpp"
 #include "planning/itm.hpp"
 #include "planning/itm_file.hpp"
@@ -146,50 +147,29 @@ SessionOverlay sessionFromJson(const Json& json, const std::string& file) {
   return session;
 }
 
-// A session recorded in SQLite (docs/SESSIONS.md).
+// A session recorded in SQLite (docs/SESSIONS.md): each area's latest take, and the samples of
+// a RECORDING the session ended in.
 SessionOverlay sessionFromRecording(const std::string& file) {
-  const app::SessionReader reader(file);
+  const app::RecordedTeaching teaching = app::readRecordedTeaching(app::SessionReader(file));
   SessionOverlay session;
-  session.robot = reader.meta("robot_name");
-  session.tip = reader.meta("tip_link");
-  session.scene = reader.meta("scene_name", "empty");
-  std::map<int, std::size_t> slot;
-  for (const auto& area : reader.areas()) {
-    slot[area.area] = session.areas.size();
-    session.areas.push_back({area.area, {}});
-    session.q_fixed.push_back(area.q_fixed);
+  session.robot = teaching.robot;
+  session.tip = teaching.tip;
+  session.scene = teaching.scene;
+  for (const app::RecordedArea& area : teaching.areas) {
+    render::AreaSamples cloud;
+    cloud.area = area.index;
+    for (Eigen::Index l = 0; l < area.X.cols(); ++l) cloud.points_W.emplace_back(area.X.col(l));
+    for (Eigen::Index l = 0; l < area.unfinished_X.cols(); ++l) cloud.points_W.emplace_back(area.unfinished_X.col(l));
+    session.areas.push_back(std::move(cloud));
+    if (area.complete) session.q_fixed.push_back(area.q_fixed);
   }
-  for (const auto& sample : reader.samples()) {
-    if (sample.x.size() < 3 || !sample.x.allFinite()) throw InputError("--session: a sample has no finite position");
-    auto it = slot.find(sample.area);
-    if (it == slot.end()) {
-      it = slot.emplace(sample.area, session.areas.size()).first;
-      session.areas.push_back({sample.area, {}});
-    }
-    session.areas[it->second].points_W.emplace_back(sample.x.head<3>());
-  }
-  const std::vector<app::ItmRecord> graphs = reader.itmSnapshots();
-  if (!graphs.empty()) {
-    // The ITM's own file format is read from a file.
-    const std::filesystem::path scratch =
-        std::filesystem::temp_directory_path() / ("flexirob-render-itm-" + std::to_string(::getpid()) + ".bin");
-    {
-      std::ofstream out(scratch, std::ios::binary);
-      out.write(reinterpret_cast<const char*>(graphs.back().bytes.data()),
-                static_cast<std::streamsize>(graphs.back().bytes.size()));
-    }
-    try {
-      const planning::Itm itm = planning::loadItm(scratch);
-      std::filesystem::remove(scratch);
-      for (const int id : itm.nodeIds()) {
-        session.nodes.emplace_back(id, Eigen::Vector3d(itm.prototype(id).head<3>()));
-        for (const int other : itm.neighbors(id)) {
-          if (other > id) session.edges.emplace_back(id, other);
-        }
+  if (teaching.itm) {
+    const planning::Itm& itm = *teaching.itm;
+    for (const int id : itm.nodeIds()) {
+      session.nodes.emplace_back(id, Eigen::Vector3d(itm.prototype(id).head<3>()));
+      for (const int other : itm.neighbors(id)) {
+        if (other > id) session.edges.emplace_back(id, other);
       }
-    } catch (...) {
-      std::filesystem::remove(scratch);
-      throw;
     }
   }
   return session;
