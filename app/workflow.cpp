@@ -447,6 +447,7 @@ void Workflow::onTrigger(Trigger trigger) {
       emit(WorkflowEvent::Kind::kTrigger, toString(trigger), from);
       if (stage_ == Stage::kConfiguration) {
         recording_q_fixed_ = q_fixed_;
+        ++recording_serial_;
         setState(stage_, SubStage::kRecording);
       } else {
         setState(stage_, SubStage::kTeachIn);

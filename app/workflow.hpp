@@ -220,6 +220,20 @@ class Workflow {
   /// Events since the last call (for a recorder draining them).
   std::vector<WorkflowEvent> takeNewEvents();
 
+  /// The RECORDING in progress (CONFIGURATION), for a recorder that streams its samples as they
+  /// come: columns [0, recordingSamples()) of recordingX() / recordingQ(), the newest taken at
+  /// lastSampleTime(); the index of the area it will create; a serial number that increases
+  /// with every RECORDING started. recordingSamples() is 0 outside RECORDING.
+  Eigen::Index recordingSamples() const { return sub_stage_ == SubStage::kRecording ? recording_samples_ : 0; }
+  const Eigen::MatrixXd& recordingX() const { return recording_X_; }
+  const Eigen::MatrixXd& recordingQ() const { return recording_Q_; }
+  double lastSampleTime() const { return last_sample_time_; }
+  int recordingArea() const {
+    const int next = static_cast<int>(areas_.size());
+    return reteach_index_ >= 0 && reteach_index_ < next ? reteach_index_ : next;
+  }
+  std::uint64_t recordingSerial() const { return recording_serial_; }
+
   /// The training set of all areas (3 x L, N x L, area labels).
   learning::TrainingSet trainingSet() const;
 
@@ -281,6 +295,7 @@ class Workflow {
   Eigen::VectorXd recording_q_fixed_;
   Eigen::MatrixXd recording_X_, recording_Q_;
   Eigen::Index recording_samples_ = 0;
+  std::uint64_t recording_serial_ = 0;
   bool recording_full_ = false;
   int reteach_index_ = -1;
   std::vector<Eigen::MatrixXd> teach_ins_;

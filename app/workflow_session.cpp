@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 #include <system_error>
@@ -57,7 +58,7 @@ void WorkflowSessionWriter::recordItm(double time) {
   record.time = time;
   record.nodes = itm.nodeCount();
   record.edges = itm.edgeCount();
-  record.bytes = serialized("itm.bin", [&](const std::filesystem::path& file) { planning::saveItm(itm, file); });
+  record.bytes = planning::itmToBytes(itm);
   recorder_->recordItm(std::move(record));
   itm_version_ = workflow_->itmVersion();
   itm_time_ = time;
@@ -75,18 +76,11 @@ void WorkflowSessionWriter::recordEvent(const WorkflowEvent& event) {
     }
     case K::kTrigger: recorder_->recordTrigger(event.time, event.name); break;
     case K::kButton: recorder_->recordButton(event.time, event.name); break;
-    case K::kAreaCreated: {
-      // The area and its samples as soon as the RECORDING ended (a re-taught area is recorded
-      // again under its index; the later record holds).
-      if (event.area < 0 || event.area >= static_cast<int>(workflow_->areas().size())) break;
-      const TrainingArea& area = workflow_->areas()[static_cast<std::size_t>(event.area)];
-      recorder_->recordArea({event.area, event.time, area.centre, area.q_fixed});
-      for (Eigen::Index l = 0; l < area.X.cols(); ++l) {
-        recorder_->recordSample({event.time, event.area, area.X.col(l), area.Q.col(l)});
-      }
-      records_ += static_cast<std::uint64_t>(area.X.cols());
+    case K::kAreaCreated:
+      // A re-taught area is recorded again under its index; the later take holds
+      // (app/session_teaching.hpp).
+      records_ += samples_.finishArea(*workflow_, *recorder_, event.area, event.time);
       break;
-    }
     case K::kAreaRemoved: recorder_->recordButton(event.time, "remove_area " + std::to_string(event.area)); break;
     case K::kModelLearned: recordModel(event.time); break;
     case K::kTeachIn: {
@@ -164,9 +158,59 @@ void WorkflowSessionWriter::trackExecution() {
   ++records_;
 }
 
+std::uint64_t TrainingSampleStream::stream(const Workflow& workflow, SessionRecorder& recorder) {
+  const Eigen::Index count = workflow.recordingSamples();
+  if (count == 0) return 0;
+  if (serial_ != workflow.recordingSerial() || area_ != workflow.recordingArea()) {
+    serial_ = workflow.recordingSerial();
+    area_ = workflow.recordingArea();
+    written_ = 0;
+  }
+  // Samples are taken every sample_period, the newest at lastSampleTime().
+  const double period = workflow.options().sample_period;
+  const Eigen::Index first = written_;
+  for (Eigen::Index l = first; l < count; ++l) {
+    const double t = workflow.lastSampleTime() - static_cast<double>(count - 1 - l) * period;
+    recorder.recordSample({t, area_, workflow.recordingX().col(l), workflow.recordingQ().col(l)});
+  }
+  written_ = count;
+  return static_cast<std::uint64_t>(count - first);
+}
+
+std::uint64_t TrainingSampleStream::finishArea(const Workflow& workflow, SessionRecorder& recorder, int area, double time) {
+  if (area < 0 || area >= static_cast<int>(workflow.areas().size())) return 0;
+  const TrainingArea& created = workflow.areas()[static_cast<std::size_t>(area)];
+  const bool streamed = serial_ == workflow.recordingSerial() && area_ == area;
+  const Eigen::Index first = streamed ? std::min(written_, created.X.cols()) : 0;
+  const double period = workflow.options().sample_period;
+  for (Eigen::Index l = first; l < created.X.cols(); ++l) {
+    const double t = time - static_cast<double>(created.X.cols() - 1 - l) * period;
+    recorder.recordSample({t, area, created.X.col(l), created.Q.col(l)});
+  }
+  recorder.recordArea({area, time, created.centre, created.q_fixed});
+  area_ = -1;
+  written_ = 0;
+  return static_cast<std::uint64_t>(created.X.cols() - first) + 1;
+}
+
+std::uint64_t TrainingSampleStream::writeAreas(const Workflow& workflow, SessionRecorder& recorder, double time) {
+  std::uint64_t records = 0;
+  for (std::size_t k = 0; k < workflow.areas().size(); ++k) {
+    const TrainingArea& area = workflow.areas()[k];
+    const int index = static_cast<int>(k);
+    // Samples and record stamped `time`: the take is every sample up to its record.
+    for (Eigen::Index l = 0; l < area.X.cols(); ++l) recorder.recordSample({time, index, area.X.col(l), area.Q.col(l)});
+    recorder.recordArea({index, time, area.centre, area.q_fixed});
+    records += static_cast<std::uint64_t>(area.X.cols()) + 1;
+  }
+  return records;
+}
+
 void WorkflowSessionWriter::poll() {
   const auto& events = workflow_->events();
   for (; events_seen_ < events.size(); ++events_seen_) recordEvent(events[events_seen_]);
+  // After the events: an area that ended in this cycle took its remaining samples with it.
+  records_ += samples_.stream(*workflow_, *recorder_);
   trackExecution();
   const double time = workflow_->state().time;
   if (workflow_->itmVersion() != itm_version_ && time - itm_time_ >= options_.itm_period - 1e-9) recordItm(time);

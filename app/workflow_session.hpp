@@ -1,8 +1,8 @@
 #pragma once
-// Writes a teaching session as it happens: stages, buttons, triggers, areas with their samples,
-// learned models, teach-ins, executed motions, ITM snapshots and collisions go to the
-// SessionRecorder when they occur, not at the end, so that a crash or kill -9 loses at most the
-// recorder's commit interval (100 ms) plus the ITM snapshot period. The recorder never blocks
+// Writes a teaching session as it happens: stages, buttons, triggers, training samples while
+// they are recorded, areas, learned models, teach-ins, executed motions, ITM snapshots and
+// collisions go to the SessionRecorder when they occur, not at the end, so that a crash or
+// kill -9 loses at most the recorder's commit interval (100 ms) plus the ITM snapshot period. The recorder never blocks
 // (bounded queues) and reports a full disk or a read-only location in its status while the
 // session goes on in memory.
 //
@@ -30,6 +30,26 @@ struct WorkflowSessionOptions {
   double executed_period = 0.02;  ///< [s] between recorded points of an executed motion
   /// Where models and graphs are serialized before they are recorded (created, removed after).
   std::filesystem::path scratch_directory;
+};
+
+/// Streams the training samples of each RECORDING to a recorder as they are taken and ends each
+/// take with its area record (docs/SESSIONS.md), so that a kill -9 mid-RECORDING keeps the
+/// samples taken so far. Only the recorder's non-blocking pushes: WorkflowSessionWriter uses it
+/// between cycles, WorkflowThread inside the control cycle.
+class TrainingSampleStream {
+ public:
+  /// The samples of the RECORDING in progress taken since the last call; returns how many.
+  std::uint64_t stream(const Workflow& workflow, SessionRecorder& recorder);
+  /// At the workflow's area_created event for `area` at `time`: the samples not streamed yet
+  /// (those of the RECORDING's last cycles), then the area record. Returns the records written.
+  std::uint64_t finishArea(const Workflow& workflow, SessionRecorder& recorder, int area, double time);
+  /// Every area the workflow holds, whole (a recorder attached after they were taught).
+  std::uint64_t writeAreas(const Workflow& workflow, SessionRecorder& recorder, double time);
+
+ private:
+  std::uint64_t serial_ = 0;  // of the RECORDING being streamed
+  int area_ = -1;             // the area it will create
+  Eigen::Index written_ = 0;  // its samples written so far
 };
 
 class WorkflowSessionWriter {
@@ -74,6 +94,7 @@ class WorkflowSessionWriter {
   std::vector<Eigen::Vector3d> execution_positions_;
   std::vector<Eigen::VectorXd> execution_postures_;
   std::vector<std::int64_t> teach_in_ids_;
+  TrainingSampleStream samples_;
 };
 
 }  // namespace flexirob::app

@@ -7,6 +7,7 @@
 
 #include "app/session_reader.hpp"
 #include "app/session_recorder.hpp"
+#include "app/session_teaching.hpp"
 #include "app/workflow.hpp"
 #include "app/workflow_session.hpp"
 #include "robot/resources.hpp"
@@ -88,6 +89,98 @@ TEST(WorkflowSession, AreasSamplesModelAndGraphAreInTheFileBeforeTheSessionEnds)
   writer.finish();
   recorder.close();
   EXPECT_TRUE(recorder.status().message.empty()) << recorder.status().message;
+  std::filesystem::remove(file);
+}
+
+// kill -9 in the middle of a RECORDING: what the file holds then is what was flushed. The samples
+// taken so far are there (an unfinished take); once the area ends they are its take; a re-taught
+// area's later take replaces the first one.
+TEST(WorkflowSession, StreamsTheSamplesOfARecordingAndKeepsTheLatestTakeOfAReTaughtArea) {
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  robot::Simulation sim(lwr4(), nullptr, parameters);
+  Eigen::VectorXd q = lwr4().midPosture();
+  q[1] = 0.6;
+  q[3] = -1.4;
+  sim.reset(q);
+  WorkflowOptions options;
+  options.background_learning = false;
+  options.elm.hidden = 30;
+  Workflow workflow(sim, parameters, options);
+
+  const auto file = sessionPath("workflow-streaming");
+  SessionMetadata metadata;
+  metadata.robot_name = "lwr4";
+  RecorderOptions recorder_options;
+  recorder_options.overwrite = true;
+  SessionRecorder recorder(file, metadata, recorder_options);
+  WorkflowSessionWriter writer(recorder, workflow, &sim);
+  const auto run = [&](double seconds) {
+    for (int i = 0; i < static_cast<int>(seconds / 1e-3); ++i) {
+      workflow.step();
+      writer.poll();
+    }
+  };
+  const auto teaching = [&]() {
+    recorder.flush();
+    return readRecordedTeaching(SessionReader(file));
+  };
+  const auto record = [&](double seconds, bool finish) {
+    ASSERT_TRUE(workflow.fire(Trigger::kOnAffected));
+    run(0.1);
+    ASSERT_TRUE(workflow.fire(Trigger::kOnConverged));
+    ASSERT_TRUE(workflow.fire(Trigger::kOnAffected));
+    run(seconds);
+    if (finish) {
+      ASSERT_TRUE(workflow.fire(Trigger::kOnConverged));
+      run(0.01);
+    }
+  };
+
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  record(0.5, false);
+  ASSERT_EQ(workflow.subStage(), SubStage::kRecording);
+  const Eigen::Index so_far = workflow.recordingSamples();
+  ASSERT_GE(so_far, 20);
+  {
+    const RecordedTeaching mid = teaching();
+    ASSERT_EQ(mid.areas.size(), 1U);
+    EXPECT_FALSE(mid.areas[0].complete);
+    EXPECT_EQ(mid.areas[0].X.cols(), 0);
+    ASSERT_EQ(mid.areas[0].unfinished_X.cols(), so_far);
+    EXPECT_TRUE(mid.areas[0].unfinished_X.isApprox(workflow.recordingX().leftCols(so_far)));
+  }
+  ASSERT_TRUE(workflow.fire(Trigger::kOnConverged));
+  run(0.01);
+  ASSERT_EQ(workflow.areas().size(), 1U);
+  const Eigen::Index first_take = workflow.areas()[0].X.cols();
+  {
+    const RecordedTeaching done = teaching();
+    ASSERT_EQ(done.areas.size(), 1U);
+    EXPECT_TRUE(done.areas[0].complete);
+    EXPECT_EQ(done.areas[0].unfinished_X.cols(), 0);
+    ASSERT_EQ(done.areas[0].X.cols(), first_take);
+    EXPECT_TRUE(done.areas[0].X.isApprox(workflow.areas()[0].X));
+    EXPECT_TRUE(done.areas[0].Q.isApprox(workflow.areas()[0].Q));
+    EXPECT_TRUE(done.areas[0].q_fixed.isApprox(workflow.areas()[0].q_fixed));
+  }
+
+  ASSERT_TRUE(workflow.reteachArea(0));
+  record(0.3, true);
+  ASSERT_EQ(workflow.areas().size(), 1U);
+  const Eigen::Index second_take = workflow.areas()[0].X.cols();
+  ASSERT_LT(second_take, first_take);
+  {
+    const RecordedTeaching retaught = teaching();
+    ASSERT_EQ(retaught.areas.size(), 1U);
+    EXPECT_TRUE(retaught.areas[0].complete);
+    EXPECT_EQ(retaught.areas[0].X.cols(), second_take);
+    EXPECT_EQ(retaught.areas[0].unfinished_X.cols(), 0);
+    // Every sample is in the file once: both takes.
+    EXPECT_EQ(static_cast<Eigen::Index>(SessionReader(file).samples(0).size()), first_take + second_take);
+  }
+  writer.finish();
+  recorder.close();
   std::filesystem::remove(file);
 }
 
