@@ -404,6 +404,34 @@ void WorkflowThread::publish(const CycleStatistics& statistics) {
   snapshots_.publish();
 }
 
+void WorkflowThread::setRecorder(SessionRecorder* recorder) {
+  const std::lock_guard lock(recorder_mutex_);
+  recorder_ = recorder;
+  recorder_new_ = recorder != nullptr;
+  recorder_samples_ = TrainingSampleStream{};
+}
+
+void WorkflowThread::recordCycle(std::size_t events_before) {
+  std::unique_lock lock(recorder_mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) {
+    recorder_skips_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  if (recorder_ == nullptr) return;
+  const robot::RobotState& state = workflow_->state();
+  if (recorder_new_) {
+    recorder_new_ = false;
+    recorder_samples_.writeAreas(*workflow_, *recorder_, state.time);
+  } else {
+    for (std::size_t i = events_before; i < workflow_->events().size(); ++i) {
+      const WorkflowEvent& event = workflow_->events()[i];
+      if (event.kind == WorkflowEvent::Kind::kAreaCreated) recorder_samples_.finishArea(*workflow_, *recorder_, event.area, event.time);
+    }
+  }
+  recorder_samples_.stream(*workflow_, *recorder_);
+  recorder_->recordState(state);
+}
+
 void WorkflowThread::loop() {
   const long period_ns = std::lround(options_.period * 1e9);
   timespec next = now();
@@ -430,6 +458,7 @@ void WorkflowThread::loop() {
         if (event.kind != WorkflowEvent::Kind::kTrigger) continue;
         (event.name == toString(Trigger::kOnAffected) ? on_affected_ : on_converged_)++;
       }
+      recordCycle(events_before);
       workflow_->backend().step();
       refreshHeavyData();
 

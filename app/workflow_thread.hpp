@@ -12,17 +12,20 @@
 // itm_publish_period) — the only allocations of the loop, at those moments.
 //
 // The thread never waits for the GUI, the disk or learning: batch learning runs on the
-// workflow's own thread; a session recorder drains the events and samples from another thread
-// through the recorder's own queue (SessionRecorder), never from here.
+// workflow's own thread. With a session recorder attached (setRecorder), each cycle pushes the
+// robot state (1 kHz), the training samples as they are taken and the area records into the
+// recorder's lock-free queues; its own thread writes them to disk.
 #include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <thread>
 #include <vector>
 
 #include "app/control_thread.hpp"
 #include "app/workflow.hpp"
+#include "app/workflow_session.hpp"
 #include "planning/itm.hpp"
 #include "planning/path_planner.hpp"
 #include "robot/kinematics.hpp"
@@ -183,12 +186,21 @@ class WorkflowThread {
   const WorkflowSnapshot& snapshot() { return snapshots_.read(); }
   CycleStatistics statistics() const;
 
+  /// Attaches a session recorder (null detaches; it must stay alive until detached). From the
+  /// next cycle on, every cycle records the robot state, the samples of a RECORDING as they are
+  /// taken and each area when it is created; the areas taught before are written whole at the
+  /// first cycle. The caller may wait a moment for the lock; the cycle never does: a cycle that
+  /// finds it taken records nothing and counts it (recorderSkips()).
+  void setRecorder(SessionRecorder* recorder);
+  std::uint64_t recorderSkips() const { return recorder_skips_.load(std::memory_order_relaxed); }
+
  private:
   void loop();
   void apply(const WorkflowRequest& request);
   void applyHand();
   void publish(const CycleStatistics& statistics);
   void refreshHeavyData();
+  void recordCycle(std::size_t events_before);
 
   Workflow* workflow_;
   robot::Simulation* simulation_;
@@ -229,6 +241,12 @@ class WorkflowThread {
   std::uint64_t areas_version_ = ~0ULL, teach_ins_version_ = ~0ULL, model_version_ = ~0ULL, itm_version_ = ~0ULL,
                 path_version_ = ~0ULL;
   double itm_published_time_ = -1e9;
+  // Session recording: the GUI swaps the recorder under the mutex; the loop only try-locks it.
+  std::mutex recorder_mutex_;
+  SessionRecorder* recorder_ = nullptr;  // guarded by recorder_mutex_
+  bool recorder_new_ = false;            // guarded: write the areas taught so far
+  TrainingSampleStream recorder_samples_;  // guarded
+  std::atomic<std::uint64_t> recorder_skips_{0};
   // Statistics (loop writes, any thread reads).
   std::atomic<std::uint64_t> cycles_{0}, deadline_misses_{0};
   std::atomic<double> last_compute_us_{0.0}, max_compute_us_{0.0}, sum_compute_us_{0.0}, max_jitter_us_{0.0};

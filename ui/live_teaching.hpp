@@ -85,6 +85,9 @@ class LiveTeaching {
   /// Workflow events not returned before (at most the snapshot's ring back).
   std::vector<LiveEvent> takeEvents();
   app::CycleStatistics statistics() const { return thread_->statistics(); }
+  /// The session recorder the control thread records into (null: none); see
+  /// app::WorkflowThread::setRecorder. It must stay alive until detached or stop().
+  void setRecorder(app::SessionRecorder* recorder) { thread_->setRecorder(recorder); }
 
   bool simulated() const { return simulation_ != nullptr; }
   bool grabbing() const { return grab_body_ > 0; }

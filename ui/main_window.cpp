@@ -235,8 +235,8 @@ void MainWindow::applyParameters(const std::map<std::string, double>& values) {
 void MainWindow::stopLive() {
   if (live_) {
     live_->stop();
+    live_->setRecorder(nullptr);
     handleEvents();
-    recordTaughtData();
   }
   if (live_ && recorder_) recordItm(live_->snapshot(), true);
   live_.reset();
@@ -262,7 +262,6 @@ void MainWindow::stopLive() {
 }
 
 void MainWindow::startRecording() {
-  recorded_areas_ = 0;
   recorded_itm_version_ = ~0ULL;  // a new file holds the graph again
   session_file_.clear();
   if (!options_.record_sessions || !model_ || !live_) return;
@@ -292,6 +291,9 @@ void MainWindow::startRecording() {
     metadata.software_version = FLEXIROB_VERSION_STRING;
     recorder_ = std::make_unique<app::SessionRecorder>(file.toStdString(), metadata);
     session_file_ = file;
+    // The control thread records the robot state of every cycle, the training samples and the
+    // areas; this window adds stages, signals, models and graphs.
+    live_->setRecorder(recorder_.get());
   } catch (const std::exception& error) {
     reportError(tr("Cannot record the session"), error);
     recorder_.reset();
@@ -323,8 +325,8 @@ bool MainWindow::saveSession(const QString& file) {
   }
   // Everything shown so far goes in; saveCopy closes the recorder, so record on into a new file.
   handleEvents();
-  recordTaughtData();
   recordItm(live_->snapshot(), true);
+  live_->setRecorder(nullptr);
   bool ok = true;
   try {
     recorder_->saveCopy(file.toStdString());
@@ -474,14 +476,12 @@ void MainWindow::mirror() {
   driveKeyboard();
   const LiveSnapshot& s = live_->snapshot();
   handleEvents();
-  recordTaughtData();
   stage_panel_->showSnapshot(s);
   if (s.failed) {
     const auto end = std::find(s.failure.begin(), s.failure.end(), '\0');
     last_warning_ = tr("The robot stopped: %1").arg(QString::fromStdString(std::string(s.failure.begin(), end)));
   }
   if (s.cycle != shown_cycle_ && s.dof == model_->dof()) {
-    recordState(s);
     recordItm(s, false);
     updateOverlays(s);
     updateConfidence(s, false);
@@ -585,20 +585,6 @@ void MainWindow::handleEvents() {
   }
 }
 
-void MainWindow::recordTaughtData() {
-  if (!live_ || !recorder_) return;
-  const auto areas = live_->snapshot().area_data;  // immutable; held while read
-  if (!areas) return;
-  for (; recorded_areas_ < areas->size(); ++recorded_areas_) {
-    const app::TrainingArea& area = (*areas)[recorded_areas_];
-    const int k = static_cast<int>(recorded_areas_);
-    // Stamped with the time the area is seen (the review shows it, and its samples, from then on).
-    const double time = live_->snapshot().time;
-    recorder_->recordArea({k, time, area.centre, area.q_fixed});
-    for (Eigen::Index l = 0; l < area.X.cols(); ++l) recorder_->recordSample({time, k, area.X.col(l), area.Q.col(l)});
-  }
-}
-
 void MainWindow::updateOverlays(const LiveSnapshot& s) {
   using render::OverlayLayer;
   if (s.areas_version != shown_areas_version_) {
@@ -644,21 +630,6 @@ void MainWindow::updateOverlays(const LiveSnapshot& s) {
     }
     overlays_->itm().setGraph(nodes, edges);
   }
-}
-
-void MainWindow::recordState(const LiveSnapshot& s) {
-  if (!recorder_) return;
-  app::StateRecord record;
-  record.time = s.time;
-  record.dof = std::min<std::int32_t>(s.dof, static_cast<std::int32_t>(record.q.size()));
-  for (int j = 0; j < record.dof; ++j) {
-    const auto i = static_cast<std::size_t>(j);
-    record.q[i] = s.q[i];
-    record.q_cmd[i] = s.q_cmd[i];
-    record.tau_ext[i] = s.tau_ext[i];
-  }
-  record.p_WT = s.p_WT;
-  recorder_->recordState(record);
 }
 
 void MainWindow::driveKeyboard() {
@@ -800,8 +771,8 @@ void MainWindow::buildMenus() {
       return;
     }
     handleEvents();
-    recordTaughtData();
     if (live_) recordItm(live_->snapshot(), true);
+    if (recorder_) recorder_->flush();  // the review opens what is on disk
     openRecording(session_file_);
   });
   file->addAction(tr("Save session &as…"), QKeySequence::SaveAs, this, [this] {
@@ -1020,24 +991,14 @@ void MainWindow::recordItm(const LiveSnapshot& s, bool final) {
   if (!final && itm_record_clock_.isValid() && itm_record_clock_.elapsed() < kItmRecordPeriodMs) return;
   itm_record_clock_.start();
   recorded_itm_version_ = s.itm_version;
-  // The graph's own file format (planning/itm_file.hpp), through a scratch file.
-  const std::filesystem::path scratch =
-      std::filesystem::temp_directory_path() /
-      ("flexirob-itm-" + std::to_string(QCoreApplication::applicationPid()) + "-" +
-       std::to_string(reinterpret_cast<std::uintptr_t>(this)) + ".itm");
   try {
-    planning::saveItm(*s.itm, scratch);
-    const std::string bytes = readText(scratch);
-    std::filesystem::remove(scratch);
     app::ItmRecord record;
     record.time = s.time;
     record.nodes = s.itm->nodeCount();
     record.edges = s.itm->edgeCount();
-    record.bytes.assign(bytes.begin(), bytes.end());
+    record.bytes = planning::itmToBytes(*s.itm);  // the graph's own format (planning/itm_file.hpp)
     recorder_->recordItm(std::move(record));
   } catch (const std::exception& error) {
-    std::error_code ignored;
-    std::filesystem::remove(scratch, ignored);
     reportError(tr("Cannot record the ITM graph"), error);
   }
 }

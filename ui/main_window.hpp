@@ -156,11 +156,9 @@ class MainWindow : public QMainWindow {
   void startLive();
   void startRecording();
   void handleEvents();
-  void recordTaughtData();
   /// Rebuilds the overlays whose data changed (areas, ghosts, teach-ins, ITM graph).
   void updateOverlays(const LiveSnapshot& snapshot);
   void driveKeyboard();
-  void recordState(const LiveSnapshot& snapshot);
   void showBanner(const QString& warning);
   void applyParameters(const std::map<std::string, double>& values);
   void resetParameters();
@@ -184,7 +182,6 @@ class MainWindow : public QMainWindow {
   std::unique_ptr<app::SessionRecorder> recorder_;
   std::unique_ptr<LiveTeaching> live_;
   QString session_file_;
-  std::size_t recorded_areas_ = 0;
   std::uint64_t shown_cycle_ = ~0ULL;
   int chimes_ = 0;
 

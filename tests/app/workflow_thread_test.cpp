@@ -4,10 +4,15 @@
 
 #include <chrono>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <thread>
+#include <unistd.h>
 
+#include "app/session_reader.hpp"
+#include "app/session_recorder.hpp"
+#include "app/session_teaching.hpp"
 #include "app/workflow_thread.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
@@ -91,6 +96,78 @@ TEST(WorkflowThread, ButtonsThroughTheQueueDriveTheStages) {
   EXPECT_EQ(s.controller, InteractionController::kCompliantRecording);
   thread.stop();
   EXPECT_EQ(workflow.subStage(), SubStage::kPosed);
+}
+
+// The control thread records into an attached session: the state of every cycle, the samples of a
+// RECORDING while it runs, the area when it ends; a recorder attached later gets the areas taught.
+TEST(WorkflowThread, RecordsEveryCycleAndTheTrainingSamplesIntoAnAttachedSession) {
+  Rig rig;
+  Workflow workflow(rig.sim, rig.parameters, rig.options());
+  WorkflowThread thread(workflow, &rig.sim, fast());
+  const auto file = std::filesystem::temp_directory_path() / ("flexirob-thread-" + std::to_string(::getpid()) + ".flexirob");
+  const auto later_file = std::filesystem::temp_directory_path() / ("flexirob-thread-later-" + std::to_string(::getpid()) + ".flexirob");
+  std::filesystem::remove(file);
+  std::filesystem::remove(later_file);
+  SessionMetadata metadata;
+  metadata.robot_name = "lwr4";
+  RecorderOptions recorder_options;
+  recorder_options.state_capacity = 1 << 17;  // the unpaced loop runs far faster than 1 kHz
+  auto recorder = std::make_unique<SessionRecorder>(file, metadata, recorder_options);
+  thread.setRecorder(recorder.get());
+  thread.start();
+  handled(thread, thread.post(WorkflowRequest::press(Button::kStartConfiguration)));
+  handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnAffected)));
+  handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnConverged)));
+  WorkflowSnapshot s = handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnAffected)));
+  ASSERT_EQ(s.sub_stage, SubStage::kRecording);
+  const double recording_start = s.time;
+  s = waitFor(thread, [recording_start](const WorkflowSnapshot& x) { return x.time > recording_start + 0.5; });
+  recorder->flush();
+  {
+    // Mid-RECORDING, as a kill -9 would leave the file: the samples taken so far are there.
+    const RecordedTeaching mid = readRecordedTeaching(SessionReader(file));
+    ASSERT_EQ(mid.areas.size(), 1U);
+    EXPECT_FALSE(mid.areas[0].complete);
+    EXPECT_GE(mid.areas[0].unfinished_X.cols(), 20);  // 0.5 s at one sample per 20 ms
+  }
+  s = handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnConverged)));
+  ASSERT_EQ(s.areas, 1);
+  const std::uint64_t cycles_attached = thread.statistics().cycles;  // each of them recorded
+  thread.setRecorder(nullptr);
+
+  // A second file attached after the area was taught receives it whole.
+  auto later = std::make_unique<SessionRecorder>(later_file, metadata, recorder_options);
+  thread.setRecorder(later.get());
+  const double attached = thread.snapshot().time;
+  waitFor(thread, [attached](const WorkflowSnapshot& x) { return x.time > attached + 0.05; });
+  thread.stop();
+  thread.setRecorder(nullptr);
+  const std::uint64_t cycles_run = thread.statistics().cycles;
+  recorder->close();
+  later->close();
+
+  ASSERT_EQ(workflow.areas().size(), 1U);
+  const TrainingArea& taught = workflow.areas()[0];
+  for (const auto& path : {file, later_file}) {
+    const SessionReader reader(path);
+    const RecordedTeaching teaching = readRecordedTeaching(reader);
+    ASSERT_EQ(teaching.areas.size(), 1U) << path;
+    EXPECT_TRUE(teaching.areas[0].complete);
+    ASSERT_EQ(teaching.areas[0].X.cols(), taught.X.cols()) << path;
+    EXPECT_TRUE(teaching.areas[0].X.isApprox(taught.X));
+    EXPECT_TRUE(teaching.areas[0].q_fixed.isApprox(taught.q_fixed));
+    EXPECT_EQ(teaching.areas[0].unfinished_X.cols(), 0);
+  }
+  // One state per cycle while attached (none dropped with this ring), in time order.
+  const SessionReader reader(file);
+  EXPECT_EQ(reader.meta("states_dropped", "0"), "0");
+  const auto states = reader.states(0.0, 1e9);
+  ASSERT_GT(states.size(), 500U);
+  EXPECT_LE(states.size(), cycles_run);
+  EXPECT_GE(states.size() + thread.recorderSkips(), cycles_attached);  // attached before the first cycle
+  for (std::size_t i = 1; i < states.size(); ++i) ASSERT_GT(states[i].time, states[i - 1].time);
+  std::filesystem::remove(file);
+  std::filesystem::remove(later_file);
 }
 
 TEST(WorkflowThread, RefusedRequestsCarryTheReasonAndChangeNothing) {
