@@ -13,6 +13,9 @@ constexpr std::array kTriggerParameters{
                          "stiffly held arm deflects it slowly)"},
     ParameterDeclaration{"triggers.converged_time", 2.0, 0.0, 60.0, "s",
                          "on_converged: not moving for this long after on_affected (App. A.3)"},
+    ParameterDeclaration{"triggers.onset_window", 0.1, 0.0, 1.0, "s",
+                         "on_affected: the touch must begin within this time of the robot's last still "
+                         "measurement (a compliant arm yields to the hand before tau_ext shows it)"},
 };
 
 }  // namespace
@@ -26,12 +29,14 @@ const char* toString(TriggerKind kind) {
 InteractionTriggers::InteractionTriggers(const ParameterSet& parameters)
     : torque_threshold_(parameters.get("triggers.torque_threshold")),
       still_velocity_(parameters.get("triggers.still_velocity")),
-      converged_time_(parameters.get("triggers.converged_time")) {}
+      converged_time_(parameters.get("triggers.converged_time")),
+      onset_window_(parameters.get("triggers.onset_window")) {}
 
 void InteractionTriggers::reset() {
   affected_ = false;
   armed_ = true;
   last_moving_time_ = 0.0;
+  last_still_time_ = -1e9;
 }
 
 void InteractionTriggers::markAffected(double time) {
@@ -44,9 +49,18 @@ std::optional<TriggerEvent> InteractionTriggers::update(const RobotState& state)
   const bool finite = state.qd.allFinite() && state.tau_ext.allFinite();
   const bool moving = !finite || (state.qd.size() > 0 && state.qd.cwiseAbs().maxCoeff() > still_velocity_);
   const bool touched = finite && state.tau_ext.size() > 0 && state.tau_ext.cwiseAbs().maxCoeff() > torque_threshold_;
-  if (moving) last_moving_time_ = state.time;
+  if (moving) {
+    last_moving_time_ = state.time;
+  } else {
+    last_still_time_ = state.time;
+  }
   if (!touched) armed_ = true;
-  if (touched && !moving && armed_ && !affected_) {
+  // App. A.3 asks for a touch on a robot that is not moving. Read causally: the touch began
+  // while the robot was still. Under gravity compensation the arm yields to the hand within a
+  // cycle, and τ_ext of a real (or FRI) measurement shows the push only after it has acted, so
+  // "still at this very measurement" would never hold for a push on a compliant arm.
+  const bool began_still = state.time - last_still_time_ <= onset_window_ + 1e-9;
+  if (touched && began_still && armed_ && !affected_) {
     affected_ = true;
     armed_ = false;
     last_moving_time_ = state.time;  // stillness is counted from the touch on

@@ -1,6 +1,6 @@
 #pragma once
 // The physical interaction triggers of App. A.3: `on_affected` fires when max |τ_ext| exceeds
-// 1.5 Nm while the robot is not moving; `on_converged` fires when, after `on_affected`, the
+// 1.5 Nm on a robot that was not moving when the touch began (within triggers.onset_window); `on_converged` fires when, after `on_affected`, the
 // robot has not moved for 2 s. Events carry the robot's time stamps. Allocation-free.
 #include <Eigen/Core>
 #include <cstdint>
@@ -41,10 +41,11 @@ class InteractionTriggers {
   std::uint64_t count(TriggerKind kind) const { return kind == TriggerKind::kOnAffected ? affected_count_ : converged_count_; }
 
  private:
-  double torque_threshold_, still_velocity_, converged_time_;
+  double torque_threshold_, still_velocity_, converged_time_, onset_window_;
   bool affected_ = false;
   bool armed_ = true;  // torque has been below the threshold since the last on_affected
   double last_moving_time_ = 0.0;
+  double last_still_time_ = -1e9;  // of the last measurement in which the robot was not moving
   std::uint64_t affected_count_ = 0;
   std::uint64_t converged_count_ = 0;
 };

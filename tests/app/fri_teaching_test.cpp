@@ -114,15 +114,21 @@ TEST(FriTeaching, TutorTeachesProgramsAndExecutesThroughTheFriBackendAndTheContr
     EXPECT_LT(error, 0.2 * apart) << area.name;
   }
 
-  // PROGRAMMING: the tutor touches the arm (WAITING -> APPROACHING) and guides the tip to the
-  // right area's centre under assisted gravity compensation, lets go (-> POSED). (The teach-in
-  // itself does not start over FRI: see docs/REAL_ROBOT.md; the stage goes on to EXECUTION.)
+  // PROGRAMMING: the tutor touches the arm (WAITING -> APPROACHING), guides the tip to the
+  // right area's centre under assisted gravity compensation and lets go (-> POSED), presses
+  // again (-> TEACH-IN) and guides it along the line to the middle, lets go (-> WAITING).
   const Eigen::Vector3d start(-0.55, -0.3, 0.3);
-  tutor.program({start, Eigen::Vector3d(-0.55, 0.0, 0.3)});
-  bool posed = false;
-  for (const auto& event : workflow.events()) posed = posed || event.detail == "PROGRAMMING/APPROACHING";
-  EXPECT_TRUE(posed) << lastEvents(workflow, 12);
+  const Eigen::Vector3d end(-0.55, 0.0, 0.3);
+  EXPECT_TRUE(tutor.program({start, end})) << lastEvents(workflow, 12);
   ASSERT_EQ(workflow.stage(), Stage::kExecution) << lastEvents(workflow, 12);
+  ASSERT_EQ(workflow.teachIns().size(), 1U) << lastEvents(workflow, 12);
+  const Eigen::MatrixXd& teach_in = workflow.teachIns().front();
+  ASSERT_GE(teach_in.cols(), 50);  // one sample per 20 ms over the 6 s of the guided line
+  EXPECT_LT((teach_in.leftCols<1>() - start).norm(), 0.03);
+  EXPECT_LT((teach_in.rightCols<1>() - end).norm(), 0.03);
+  double length = 0.0;
+  for (Eigen::Index i = 1; i < teach_in.cols(); ++i) length += (teach_in.col(i) - teach_in.col(i - 1)).norm();
+  EXPECT_GT(length, 0.9 * (end - start).norm());
 
   // EXECUTION: the hierarchical controller with the learned map drives the tip over the middle
   // to the left area; the task error |x_des − x| is measured on the FRI measurements, all along.

@@ -59,6 +59,38 @@ TEST(InteractionTriggers, NeitherFiresWhileMovingNorTwiceForOneTouch) {
   EXPECT_FALSE(fresh.update(stateAt(0.0, 0.0, 1.5)).has_value());
 }
 
+// A compliant arm yields to the hand at once, and a measured τ_ext shows the push one cycle (or
+// more) after it acted: the touch counts when it began on a still robot (triggers.onset_window).
+TEST(InteractionTriggers, ATouchThatBeganOnAStillRobotFiresEvenWhenTheArmYieldsFirst) {
+  const ParameterSet parameters(triggerParameters());
+  const double window = parameters.get("triggers.onset_window");
+  ASSERT_GT(window, 0.002);
+  InteractionTriggers triggers(parameters);
+  std::vector<TriggerEvent> events;
+  for (int k = 0; k < 1500; ++k) {
+    const double t = k * 1e-3;
+    // Still until 1.000 s; from then on the arm moves under the hand; τ_ext shows it from 1.001 s.
+    const double speed = t >= 1.0 - 1e-9 ? 0.5 : 0.0;
+    const double torque = t >= 1.001 - 1e-9 ? 4.0 : 0.0;
+    if (auto event = triggers.update(stateAt(t, speed, torque))) events.push_back(*event);
+  }
+  ASSERT_EQ(events.size(), 1U);
+  EXPECT_EQ(events[0].kind, TriggerKind::kOnAffected);
+  EXPECT_NEAR(events[0].time, 1.001, 1e-9);
+
+  // The same push, but τ_ext rises only after the arm has moved for longer than the window: it
+  // is not a touch of a still robot (e.g. the robot was already moving), so nothing fires.
+  InteractionTriggers late(parameters);
+  int fired = 0;
+  for (int k = 0; k < 1500; ++k) {
+    const double t = k * 1e-3;
+    const double speed = t >= 1.0 - 1e-9 ? 0.5 : 0.0;
+    const double torque = t >= 1.0 + window + 0.01 ? 4.0 : 0.0;
+    if (late.update(stateAt(t, speed, torque))) ++fired;
+  }
+  EXPECT_EQ(fired, 0);
+}
+
 TEST(InteractionTriggers, FireWhenATutorPushesAndReleasesTheSimulatedArm) {
   const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
   Simulation sim(model, nullptr, ParameterSet(simulationParameters()));
