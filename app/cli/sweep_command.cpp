@@ -86,7 +86,7 @@ Json table32(std::ostream& md) {
     const auto map = app::fitMap(taught.data, loaded.model.dof(), app::LearnerKind::kElm, {}, {});
     const app::TrajectoryResult result = app::evaluateTrajectories(
         loaded.model, loaded.scene, app::sceneParameters(loaded.scene), *map, app::evaluatedAreas(taught), 25, 0.1, 1,
-        [&](double f) { reportProgress("Tab. 3.2 " + label, f); });
+        [&, row = label](double f) { reportProgress("Tab. 3.2 " + row, f); });
     std::string errors, collisions;
     Json regions = Json::array();
     for (const auto& region : result.regions) {
@@ -133,7 +133,7 @@ Json table33(const SweepOptions& options, std::ostream& md) {
     const robot::EvaluationGrid grid = app::sceneGrid(loaded.scene, options.spacing);
     const app::ReachableResult reachable =
         app::evaluateReachable(loaded.model, loaded.scene, app::sceneParameters(loaded.scene), *map, taught.home, grid,
-                               taught.data.X, [&](double f) { reportProgress("Tab. 3.3 " + scene_name, f); }, approach);
+                               taught.data.X, [&, row = scene_name](double f) { reportProgress("Tab. 3.3 " + row, f); }, approach);
     const app::SceneModelResult model = app::evaluateSceneModel(loaded.model, loaded.scene, grid, reachable.final_postures);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     md << "| " << scene_name << " | " << taught.areas.size() << " / " << taught.areas_given_up << " | " << taught.data.size() << " | "
