@@ -283,8 +283,9 @@ bool SimulatedTutor::waitFor(SubStage sub_stage, double max_time) {
 }
 
 bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) {
-  // A firm touch at the tip, held until the arm stands still under it: on_affected. A compliant
-  // arm (80 Nm/rad while recording) takes a second or two to come to rest under the hand.
+  // A firm touch at the tip, held until the workflow takes it (on_affected, which fires for a
+  // touch that began on a still arm; one that began while the arm moved waits until the arm has
+  // come to rest under the hand, a second or two on an 80 Nm/rad arm).
   const double until = arm()->time() + 3.0;
   while (workflow_->subStage() == sub_stage) {
     if (arm()->time() > until) {
