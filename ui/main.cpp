@@ -53,6 +53,14 @@ int main(int argc, char** argv) {
   format.setSamples(samples);
   QSurfaceFormat::setDefaultFormat(format);
 
+  // --help and --version print and exit: they must work without a display (a terminal over
+  // ssh, a CI log), so the window system is not needed for them.
+  for (int i = 1; i < argc; ++i) {
+    const std::string argument = argv[i];
+    if (argument == "--help" || argument == "-h" || argument == "--help-all" || argument == "--version" || argument == "-v") {
+      if (std::getenv("DISPLAY") == nullptr && std::getenv("WAYLAND_DISPLAY") == nullptr) setenv("QT_QPA_PLATFORM", "offscreen", 1);
+    }
+  }
   QApplication app(argc, argv);
   QApplication::setApplicationName(QStringLiteral("flexirob"));
   QApplication::setApplicationVersion(QStringLiteral(FLEXIROB_VERSION_STRING));
@@ -99,6 +107,10 @@ int main(int argc, char** argv) {
   const QCommandLineOption review(QStringLiteral("review"),
                                   QStringLiteral("Review a session recording F in the review window."), QStringLiteral("F"));
   parser.addOption(review);
+  const QCommandLineOption no_record(QStringLiteral("no-record"),
+                                     QStringLiteral("Do not record this run into a session file (by default every run is "
+                                                    "recorded under the user's data directory, sessions/)."));
+  parser.addOption(no_record);
   parser.process(app);
 
   int quit_ms = -1;
@@ -135,6 +147,7 @@ int main(int argc, char** argv) {
   flexirob::ui::MainWindow::Options window_options;
   window_options.backend = parser.value(backend).toStdString();
   window_options.restore_layout = !parser.isSet(fresh_layout) && !parser.isSet(screenshot);
+  window_options.record_sessions = !parser.isSet(no_record);
   flexirob::ui::MainWindow window(parser.value(robot).toStdString(), parser.value(scene).toStdString(), window_options);
   window.show();
   if (parser.isSet(key_map)) {
