@@ -207,7 +207,7 @@ std::pair<Eigen::Vector3d, double> World::contentBound() const {
   const osg::BoundingBox& box = visitor.getBoundingBox();
   if (!box.valid()) return {Eigen::Vector3d(0.0, 0.0, 0.5), 1.0};
   const osg::Vec3 c = box.center();
-  return {Eigen::Vector3d(c.x(), c.y(), c.z()), std::max(0.1F, box.radius())};
+  return {Eigen::Vector3f(c.x(), c.y(), c.z()).cast<double>(), static_cast<double>(std::max(0.1F, box.radius()))};
 }
 
 std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> World::contentBox() const {
@@ -215,7 +215,8 @@ std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> World::contentBox() c
   content_->accept(visitor);
   const osg::BoundingBox& box = visitor.getBoundingBox();
   if (!box.valid()) return std::nullopt;
-  return std::make_pair(Eigen::Vector3d(box.xMin(), box.yMin(), box.zMin()), Eigen::Vector3d(box.xMax(), box.yMax(), box.zMax()));
+  return std::make_pair(Eigen::Vector3f(box.xMin(), box.yMin(), box.zMin()).cast<double>(),
+                        Eigen::Vector3f(box.xMax(), box.yMax(), box.zMax()).cast<double>());
 }
 
 CameraPose World::defaultCamera(double aspect) const {

@@ -27,33 +27,63 @@ std::filesystem::path sessionPath(const std::string& name) {
   return std::filesystem::temp_directory_path() / ("flexirob-" + name + "-" + std::to_string(::getpid()) + ".flexirob");
 }
 
-TEST(WorkflowSession, AreasSamplesModelAndGraphAreInTheFileBeforeTheSessionEnds) {
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-  robot::ParameterSet parameters(declarations);
-  robot::Simulation sim(lwr4(), nullptr, parameters);
-  Eigen::VectorXd q = lwr4().midPosture();
-  q[1] = 0.6;
-  q[3] = -1.4;
-  sim.reset(q);
-  WorkflowOptions options;
-  options.background_learning = false;
-  options.elm.hidden = 30;
-  Workflow workflow(sim, parameters, options);
-
-  const auto file = sessionPath("workflow-session");
-  SessionMetadata metadata;
-  metadata.robot_name = "lwr4";
-  RecorderOptions recorder_options;
-  recorder_options.overwrite = true;
-  SessionRecorder recorder(file, metadata, recorder_options);
-  WorkflowSessionWriter writer(recorder, workflow, &sim);
-  const auto run = [&](double seconds) {
+// The simulated LWR IV at rest, its workflow, and a session recorded by the writer.
+struct RecordedRig {
+  explicit RecordedRig(const std::string& name)
+      : declarations(robot::reachParameters()), parameters(declarations), sim(lwr4(), nullptr, parameters),
+        workflow(rest(sim), parameters, options()), file(sessionPath(name)),
+        recorder(file, metadata(), recorderOptions()), writer(recorder, workflow, &sim) {}
+  ~RecordedRig() {
+    writer.finish();
+    recorder.close();
+    std::filesystem::remove(file);
+  }
+  static robot::Simulation& rest(robot::Simulation& sim) {
+    Eigen::VectorXd q = lwr4().midPosture();
+    q[1] = 0.6;
+    q[3] = -1.4;
+    sim.reset(q);
+    return sim;
+  }
+  static WorkflowOptions options() {
+    WorkflowOptions options;
+    options.background_learning = false;
+    options.elm.hidden = 30;
+    return options;
+  }
+  static SessionMetadata metadata() {
+    SessionMetadata metadata;
+    metadata.robot_name = "lwr4";
+    return metadata;
+  }
+  static RecorderOptions recorderOptions() {
+    RecorderOptions options;
+    options.overwrite = true;
+    return options;
+  }
+  /// Control cycles for `seconds` of simulated time, the state and the writer after each.
+  void run(double seconds) {
     for (int i = 0; i < static_cast<int>(seconds / 1e-3); ++i) {
       workflow.step();
       recorder.recordState(workflow.state());
       writer.poll();
     }
-  };
+  }
+  std::vector<robot::ParameterDeclaration> declarations;
+  robot::ParameterSet parameters;
+  robot::Simulation sim;
+  Workflow workflow;
+  std::filesystem::path file;
+  SessionRecorder recorder;
+  WorkflowSessionWriter writer;
+};
+
+TEST(WorkflowSession, AreasSamplesModelAndGraphAreInTheFileBeforeTheSessionEnds) {
+  RecordedRig rig("workflow-session");
+  Workflow& workflow = rig.workflow;
+  SessionRecorder& recorder = rig.recorder;
+  const auto& file = rig.file;
+  const auto run = [&rig](double seconds) { rig.run(seconds); };
 
   // One area through the keyboard triggers; the arm rests, so the samples repeat one posture.
   ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
@@ -86,41 +116,20 @@ TEST(WorkflowSession, AreasSamplesModelAndGraphAreInTheFileBeforeTheSessionEnds)
     EXPECT_FALSE(reader.models()[0].bytes.empty());
     EXPECT_GT(reader.stateCount(), 1000);
   }
-  writer.finish();
+  rig.writer.finish();
   recorder.close();
   EXPECT_TRUE(recorder.status().message.empty()) << recorder.status().message;
-  std::filesystem::remove(file);
 }
 
 // kill -9 in the middle of a RECORDING: what the file holds then is what was flushed. The samples
 // taken so far are there (an unfinished take); once the area ends they are its take; a re-taught
 // area's later take replaces the first one.
 TEST(WorkflowSession, StreamsTheSamplesOfARecordingAndKeepsTheLatestTakeOfAReTaughtArea) {
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-  robot::ParameterSet parameters(declarations);
-  robot::Simulation sim(lwr4(), nullptr, parameters);
-  Eigen::VectorXd q = lwr4().midPosture();
-  q[1] = 0.6;
-  q[3] = -1.4;
-  sim.reset(q);
-  WorkflowOptions options;
-  options.background_learning = false;
-  options.elm.hidden = 30;
-  Workflow workflow(sim, parameters, options);
-
-  const auto file = sessionPath("workflow-streaming");
-  SessionMetadata metadata;
-  metadata.robot_name = "lwr4";
-  RecorderOptions recorder_options;
-  recorder_options.overwrite = true;
-  SessionRecorder recorder(file, metadata, recorder_options);
-  WorkflowSessionWriter writer(recorder, workflow, &sim);
-  const auto run = [&](double seconds) {
-    for (int i = 0; i < static_cast<int>(seconds / 1e-3); ++i) {
-      workflow.step();
-      writer.poll();
-    }
-  };
+  RecordedRig rig("workflow-streaming");
+  Workflow& workflow = rig.workflow;
+  SessionRecorder& recorder = rig.recorder;
+  const auto& file = rig.file;
+  const auto run = [&rig](double seconds) { rig.run(seconds); };
   const auto teaching = [&]() {
     recorder.flush();
     return readRecordedTeaching(SessionReader(file));
@@ -179,9 +188,6 @@ TEST(WorkflowSession, StreamsTheSamplesOfARecordingAndKeepsTheLatestTakeOfAReTau
     // Every sample is in the file once: both takes.
     EXPECT_EQ(static_cast<Eigen::Index>(SessionReader(file).samples(0).size()), first_take + second_take);
   }
-  writer.finish();
-  recorder.close();
-  std::filesystem::remove(file);
 }
 
 }  // namespace
