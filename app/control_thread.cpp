@@ -1,48 +1,20 @@
 #include "app/control_thread.hpp"
 
-#include <pthread.h>
-#include <sched.h>
-#include <time.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <stdexcept>
 
+#include "app/realtime.hpp"
+
 namespace flexirob::app {
 namespace {
 
-constexpr long kNanosPerSecond = 1'000'000'000L;
-
-timespec now() {
-  timespec t{};
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return t;
-}
-
-void advance(timespec& t, long nanos) {
-  t.tv_nsec += nanos;
-  while (t.tv_nsec >= kNanosPerSecond) {
-    t.tv_nsec -= kNanosPerSecond;
-    ++t.tv_sec;
-  }
-}
-
-double microsBetween(const timespec& from, const timespec& to) {
-  return static_cast<double>(to.tv_sec - from.tv_sec) * 1e6 + static_cast<double>(to.tv_nsec - from.tv_nsec) * 1e-3;
-}
-
-void atomicMax(std::atomic<double>& target, double value) {
-  double current = target.load(std::memory_order_relaxed);
-  while (value > current && !target.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
-  }
-}
-
-template <typename Array>
-void copyInto(Array& destination, const Eigen::VectorXd& source) {
-  const auto n = std::min<std::size_t>(destination.size(), static_cast<std::size_t>(source.size()));
-  for (std::size_t i = 0; i < n; ++i) destination[i] = source[static_cast<Eigen::Index>(i)];
-}
+using realtime::advance;
+using realtime::atomicMax;
+using realtime::copyInto;
+using realtime::microsBetween;
+using realtime::now;
 
 }  // namespace
 
@@ -78,9 +50,7 @@ void ControlThread::start(robot::InteractionMode mode) {
   publish();
   thread_ = std::thread([this] { loop(); });
   if (options_.realtime_priority) {
-    sched_param parameter{};
-    parameter.sched_priority = sched_get_priority_max(SCHED_FIFO) - 1;
-    pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &parameter);  // without privileges: stays normal
+    realtime::requestRealtimePriority(thread_);
   }
 }
 

@@ -1,9 +1,5 @@
 #include "app/workflow_thread.hpp"
 
-#include <pthread.h>
-#include <sched.h>
-#include <time.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -11,37 +7,18 @@
 #include <exception>
 #include <string_view>
 
+#include "app/realtime.hpp"
 #include "robot/errors.hpp"
 #include "robot/sim/simulation.hpp"
 
 namespace flexirob::app {
 namespace {
 
-constexpr long kNanosPerSecond = 1'000'000'000L;
-
-timespec now() {
-  timespec t{};
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return t;
-}
-
-void advance(timespec& t, long nanos) {
-  t.tv_nsec += nanos;
-  while (t.tv_nsec >= kNanosPerSecond) {
-    t.tv_nsec -= kNanosPerSecond;
-    ++t.tv_sec;
-  }
-}
-
-double microsBetween(const timespec& from, const timespec& to) {
-  return static_cast<double>(to.tv_sec - from.tv_sec) * 1e6 + static_cast<double>(to.tv_nsec - from.tv_nsec) * 1e-3;
-}
-
-void atomicMax(std::atomic<double>& target, double value) {
-  double current = target.load(std::memory_order_relaxed);
-  while (value > current && !target.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
-  }
-}
+using realtime::advance;
+using realtime::atomicMax;
+using realtime::copyInto;
+using realtime::microsBetween;
+using realtime::now;
 
 /// Copies text into a fixed, zero-terminated buffer (cut if too long).
 template <std::size_t N>
@@ -49,12 +26,6 @@ void copyText(std::array<char, N>& destination, std::string_view text) {
   const std::size_t n = std::min(text.size(), N - 1);
   std::memcpy(destination.data(), text.data(), n);
   destination[n] = '\0';
-}
-
-template <typename Array>
-void copyInto(Array& destination, const Eigen::VectorXd& source) {
-  const auto n = std::min<std::size_t>(destination.size(), static_cast<std::size_t>(source.size()));
-  for (std::size_t i = 0; i < n; ++i) destination[i] = source[static_cast<Eigen::Index>(i)];
 }
 
 void copyInto(std::array<double, 3>& destination, const Eigen::Vector3d& source) {
@@ -189,9 +160,7 @@ void WorkflowThread::start() {
   running_.store(true, std::memory_order_release);
   thread_ = std::thread([this] { loop(); });
   if (options_.realtime_priority) {
-    sched_param parameter{};
-    parameter.sched_priority = sched_get_priority_max(SCHED_FIFO) - 1;
-    pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &parameter);  // without privileges: stays normal
+    realtime::requestRealtimePriority(thread_);
   }
 }
 
