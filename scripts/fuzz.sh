@@ -43,7 +43,11 @@ for target in "${targets[@]}"; do
   mkdir -p "$work" "$artifacts"
   # -rss_limit_mb and -malloc_limit_mb: an input that makes a parser allocate more than 2 GB
   # is a finding (absurd sizes must be refused before allocating), not an out-of-memory kill.
-  if ! "$dir/fuzz/fuzz_$target" "$work" "$root/fuzz/corpus/$target" -max_total_time="$seconds" \
+  # The regression inputs join the seed corpus: every input that once crashed is run again
+  # under ASan and UBSan, and mutated further.
+  corpora=("$root/fuzz/corpus/$target")
+  [ -d "$root/fuzz/regressions/$target" ] && corpora+=("$root/fuzz/regressions/$target")
+  if ! "$dir/fuzz/fuzz_$target" "$work" "${corpora[@]}" -max_total_time="$seconds" \
       -rss_limit_mb=2560 -malloc_limit_mb=2048 -timeout=10 -max_len=131072 -print_final_stats=1 \
       -artifact_prefix="$artifacts" 2>"$dir/fuzz-$target.log"; then
     status=1
