@@ -1,6 +1,7 @@
 #pragma once
-// Paths through the ITM (Sect. 7.4): the nearest nodes to start and goal, A* between them, and
-// a smooth time-parametrized spline through the waypoints for the hierarchical controller.
+// Paths through the ITM (Sect. 7.4): the nearest nodes to start and goal, A* between them, the
+// node path shortened where a straight segment stays inside the space the ITM has mapped, and a
+// smooth time-parametrized spline through the waypoints for the hierarchical controller.
 #include <Eigen/Core>
 #include <optional>
 #include <vector>
@@ -16,6 +17,28 @@ struct PathOptions {
   /// Begin the waypoints at the requested start and end them at the requested goal (the robot is
   /// at the start and should reach the goal); otherwise they are the graph nodes only.
   bool include_endpoints = true;
+
+  /// Shortcut ("string-pull") the A* node path: two waypoints of it are joined directly, skipping
+  /// the nodes between them, only when (a) every point of the straight segment lies within
+  /// shortcut_radius of some ITM node whose joint configuration is closer than d_theta_max to the
+  /// joint configurations at both ends (so the segment stays in mapped space of one redundancy
+  /// resolution), and (b) the two ends themselves are closer than d_theta_max in joint space
+  /// (the ITM's edge criterion, Sect. 7.3.1). Consecutive waypoints of the node path are graph
+  /// edges and always kept as they are. Off: the waypoints are the A* nodes, as in Sect. 7.4.
+  bool shortcut = true;
+  /// Radius of the mapped space around each node, as a fraction of e_max, in (0, 1]. The ITM
+  /// creates a node whenever a sample lies farther than e_max from every node, so the space the
+  /// tutor visited lies within about e_max of the nodes; nodes are at least e_max apart, so a
+  /// radius below about 0.6 e_max would not even cover a straight chain of them and 0.75 joins
+  /// chains up to 1.35 e_max apart and planar patches up to 0.95 e_max apart (square lattice).
+  double shortcut_radius = 0.75;
+  /// Points the spline passes through along a shortcut are at most this fraction of e_max apart,
+  /// so that the spline follows the straight segment as closely as it followed the node path
+  /// (whose waypoints are about e_max apart) and does not swing wide at the corners. In (0, 1].
+  double shortcut_waypoint_spacing = 0.5;
+
+  /// Throws std::invalid_argument naming the first option out of range.
+  void validate() const;
 };
 
 struct PlannedPath {
@@ -24,11 +47,19 @@ struct PlannedPath {
   int goal_node = -1;
   double start_gap = 0.0;   ///< translational distance start -> its nearest node [m]
   double goal_gap = 0.0;    ///< translational distance goal -> its nearest node [m]
-  std::vector<int> nodes;   ///< graph nodes along the path
-  Eigen::MatrixXd waypoints;       ///< 3 x K positions [m] the spline passes through
+  std::vector<int> nodes;   ///< graph nodes along the A* path (consecutive nodes share an edge)
+  Eigen::MatrixXd waypoints;       ///< 3 x K positions [m] the spline passes through (shortened)
   Eigen::MatrixXd orientations;    ///< 4 x K quaternions [w,x,y,z] per waypoint (pose graphs)
+  /// Per waypoint: the graph node it is, or -1 for the requested start / goal and for points
+  /// inserted along a shortcut.
+  std::vector<int> waypoint_nodes;
+  /// 3 x L positions of the unshortened path: [start,] the prototypes of nodes [, goal] (for
+  /// display). Equal to waypoints when shortcut is off.
+  Eigen::MatrixXd raw_waypoints;
   Eigen::MatrixXd node_joints;     ///< N x nodes.size(): q of each node [rad]
   double length = 0.0;             ///< polyline length of the waypoints [m]
+  double raw_length = 0.0;         ///< polyline length of raw_waypoints [m]
+  int shortcuts = 0;               ///< straight segments that replaced two or more graph edges
   double graph_cost = 0.0;         ///< A* cost (sum of D_xi over the node path)
   double max_joint_step = 0.0;     ///< largest D_theta between consecutive nodes [rad]
   int expanded = 0;                ///< A* expansions
@@ -37,7 +68,8 @@ struct PlannedPath {
 
 /// Plans from start to goal. start/goal have taskSize() numbers, or 3 (positions) on a pose
 /// graph, in which case the nearest node is taken by position alone. found is false when the
-/// graph is empty or start and goal nodes lie in different components.
+/// graph is empty or start and goal nodes lie in different components. Throws
+/// std::invalid_argument for points of the wrong size, non-finite points and bad options.
 PlannedPath planPath(const Itm& graph, const Eigen::VectorXd& start, const Eigen::VectorXd& goal,
                      const PathOptions& options = {});
 
