@@ -258,6 +258,17 @@ std::vector<ModelRecord> SessionReader::models() const {
   return out;
 }
 
+std::optional<ItmRecord> SessionReader::lastItmSnapshot() const {
+  SqliteStatement st(impl_->db, "SELECT t, nodes, edges, bytes FROM itm ORDER BY id DESC LIMIT 1");
+  if (!st.step()) return std::nullopt;
+  return ItmRecord{st.columnDouble(0), static_cast<int>(st.columnInt(1)), static_cast<int>(st.columnInt(2)), st.columnBlob(3)};
+}
+
+std::int64_t SessionReader::itmSnapshotCount() const {
+  SqliteStatement st(impl_->db, "SELECT count(*) FROM itm");
+  return st.step() ? st.columnInt(0) : 0;
+}
+
 std::vector<ItmRecord> SessionReader::itmSnapshots() const {
   std::vector<ItmRecord> out;
   SqliteStatement st(impl_->db, "SELECT t, nodes, edges, bytes FROM itm ORDER BY id");

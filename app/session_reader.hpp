@@ -56,6 +56,9 @@ class SessionReader {
   /// Models in the order they were recorded (with their bytes).
   std::vector<ModelRecord> models() const;
   std::vector<ItmRecord> itmSnapshots() const;
+  /// The newest ITM snapshot alone (a long session holds many; only its bytes are read).
+  std::optional<ItmRecord> lastItmSnapshot() const;
+  std::int64_t itmSnapshotCount() const;
   /// All trajectories, or those of one kind.
   std::vector<TrajectoryRecord> trajectories() const;
   std::vector<TrajectoryRecord> trajectories(TrajectoryKind kind) const;

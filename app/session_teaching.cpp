@@ -8,7 +8,7 @@
 
 namespace flexirob::app {
 
-RecordedTeaching readRecordedTeaching(const SessionReader& reader) {
+RecordedTeaching readRecordedTeaching(const SessionReader& reader, bool read_graph) {
   RecordedTeaching teaching;
   teaching.robot = reader.meta("robot_name");
   teaching.tip = reader.meta("tip_link");
@@ -73,10 +73,10 @@ RecordedTeaching readRecordedTeaching(const SessionReader& reader) {
     teaching.areas.push_back(std::move(area));
   }
 
-  const std::vector<ItmRecord> graphs = reader.itmSnapshots();
-  if (!graphs.empty()) {
+  const std::optional<ItmRecord> graph = read_graph ? reader.lastItmSnapshot() : std::nullopt;
+  if (graph) {
     try {
-      teaching.itm = planning::itmFromBytes(graphs.back().bytes.data(), graphs.back().bytes.size(), "the session's ITM snapshot");
+      teaching.itm = planning::itmFromBytes(graph->bytes.data(), graph->bytes.size(), "the session's ITM snapshot");
     } catch (const planning::ItmFileError& e) {
       throw InputError(std::string("session: ") + e.what());
     }

@@ -34,8 +34,8 @@ struct RecordedTeaching {
   std::optional<planning::Itm> itm; ///< the last ITM snapshot, if any
 };
 
-/// Reads the teaching of a session. Throws InputError on samples or areas of the wrong size or
-/// with non-finite values and on a damaged ITM snapshot.
-RecordedTeaching readRecordedTeaching(const SessionReader& reader);
+/// Reads the teaching of a session (the ITM snapshot only with read_graph). Throws InputError on
+/// samples or areas of the wrong size or with non-finite values and on a damaged ITM snapshot.
+RecordedTeaching readRecordedTeaching(const SessionReader& reader, bool read_graph = true);
 
 }  // namespace flexirob::app

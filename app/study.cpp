@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "app/session_reader.hpp"
+#include "app/session_teaching.hpp"
 #include "app/study_metrics.hpp"
 #include "robot/collision.hpp"
 #include "robot/errors.hpp"
@@ -235,12 +236,13 @@ ParticipantResult analyseSession(const SessionReader& reader, double replay_inte
   result.closed_cleanly = !reader.meta("end_time_utc").empty();
   result.duration_s = reader.endTime() - reader.startTime();
 
-  for (const auto& area : reader.areas()) result.q_fixed[area.area] = area.q_fixed;
-  for (const auto& [area, count] : reader.sampleCounts()) result.samples += count;
-  std::set<int> areas;
-  for (const auto& [area, q] : result.q_fixed) areas.insert(area);
-  for (const auto& [area, count] : reader.sampleCounts()) areas.insert(area);
-  result.areas = static_cast<int>(areas.size());
+  // Each area's latest take; a RECORDING the session ended in taught nothing (session_teaching.hpp).
+  for (const RecordedArea& area : readRecordedTeaching(reader, /*read_graph=*/false).areas) {
+    if (!area.complete) continue;
+    result.q_fixed[area.index] = area.q_fixed;
+    result.samples += area.X.cols();
+    ++result.areas;
+  }
 
   // E_task over executed motions; shape metrics of teach-ins against their targets.
   const auto trajectories = reader.trajectories();
@@ -394,7 +396,8 @@ StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions
   std::vector<std::filesystem::path> files;
   for (const auto& entry : std::filesystem::directory_iterator(folder)) {
     const std::string extension = entry.path().extension().string();
-    if (entry.is_regular_file() && (extension == ".db" || extension == ".sqlite" || extension == ".session")) {
+    if (entry.is_regular_file() && (extension == ".flexirob" || extension == ".db" || extension == ".sqlite" ||
+                                     extension == ".session")) {
       files.push_back(entry.path());
     }
   }
@@ -412,7 +415,7 @@ StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions
   if (options.progress) options.progress("clustering", 1.0);
   if (study.participants.empty()) {
     throw InputError("study: no readable session in '" + folder.string() + "' (" + std::to_string(files.size()) +
-                     " candidate files; sessions end in .db, .sqlite or .session)");
+                     " candidate files; sessions end in .flexirob, .db, .sqlite or .session)");
   }
   clusterStudy(study, options);
   return study;

@@ -131,8 +131,8 @@ struct StudyResult {
 /// Metrics of one recording, E_coll replayed every `replay_interval` seconds of states.
 ParticipantResult analyseSession(const SessionReader& reader, double replay_interval);
 
-/// Every session database in `folder` (files ending in .db, .sqlite or .session, sorted by
-/// name), analysed, clustered and combined. Unreadable files are listed in `skipped`. Throws
+/// Every session database in `folder` (files ending in .flexirob, .db, .sqlite or .session,
+/// sorted by name), analysed, clustered and combined. Unreadable files are listed in `skipped`. Throws
 /// InputError if the folder does not exist or holds no readable session.
 StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions& options = {});
 

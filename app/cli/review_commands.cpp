@@ -13,6 +13,7 @@
 
 #include "app/cli/cli_support.hpp"
 #include "app/session_reader.hpp"
+#include "app/session_teaching.hpp"
 #include "app/study.hpp"
 #include "app/study_metrics.hpp"
 #include "render/offscreen.hpp"
@@ -76,20 +77,21 @@ Json review(const std::string& file) {
   out["duration_s"] = reader.endTime() - reader.startTime();
   out["states"] = reader.stateCount();
 
-  // Training areas and samples.
-  const auto counts = reader.sampleCounts();
-  std::set<int> areas;
-  for (const auto& area : reader.areas()) areas.insert(area.area);
+  // Training areas and samples: each area's latest take (a re-taught area counts once), and the
+  // samples of a RECORDING the session ended in apart (app/session_teaching.hpp).
+  const app::RecordedTeaching teaching = app::readRecordedTeaching(reader, /*read_graph=*/false);
   std::int64_t samples = 0;
+  std::int64_t unfinished = 0;
   Json per_area = Json::object();
-  for (const auto& [area, count] : counts) {
-    areas.insert(area);
-    samples += count;
-    per_area[std::to_string(area)] = count;
+  for (const app::RecordedArea& area : teaching.areas) {
+    samples += area.X.cols();
+    unfinished += area.unfinished_X.cols();
+    if (area.complete) per_area[std::to_string(area.index)] = area.X.cols();
   }
-  out["areas"] = areas.size();
+  out["areas"] = std::count_if(teaching.areas.begin(), teaching.areas.end(), [](const app::RecordedArea& a) { return a.complete; });
   out["samples"] = samples;
   out["samples_per_area"] = per_area;
+  out["unfinished_recording_samples"] = unfinished;
 
   // E_task (Eq. 3.20) over every executed motion that names its reference trajectory.
   const auto trajectories = reader.trajectories();
@@ -152,9 +154,8 @@ Json review(const std::string& file) {
                          {"train_seconds", models.back().train_seconds},
                          {"bytes", models.back().bytes.size()}};
   }
-  const auto graphs = reader.itmSnapshots();
-  out["itm_snapshots"] = graphs.size();
-  if (!graphs.empty()) out["itm"] = {{"nodes", graphs.back().nodes}, {"edges", graphs.back().edges}};
+  out["itm_snapshots"] = reader.itmSnapshotCount();
+  if (const auto graph = reader.lastItmSnapshot()) out["itm"] = {{"nodes", graph->nodes}, {"edges", graph->edges}};
   // Written at close; a killed session has none (null).
   const auto count = [&reader](const std::string& key) -> Json {
     const std::string text = reader.meta(key);
@@ -279,7 +280,7 @@ void registerReviewCommands(CLI::App& app, CommandRunner& runner) {
   auto session = std::make_shared<std::string>();
   auto study = std::make_shared<StudyArguments>();
   auto* session_option = command->add_option("--session", *session, "session database written by teach or the GUI");
-  auto* study_option = command->add_option("--study", study->folder, "folder of session databases (*.db, *.sqlite, *.session)");
+  auto* study_option = command->add_option("--study", study->folder, "folder of session databases (*.flexirob as the GUI writes them, *.db, *.sqlite, *.session)");
   session_option->excludes(study_option);
   command->add_option("--csv-dir", study->csv_dir, "with --study: write every table as CSV into this folder");
   command->add_option("--plot", study->plot, "with --study: write the MDS scatter plot of the postures (PNG)");
