@@ -26,6 +26,7 @@
 #include "ui/goal_picking.hpp"
 #include "ui/live_teaching.hpp"
 #include "ui/main_window.hpp"
+#include "tests/ui/ui_test_support.hpp"
 #include "ui/osg_view.hpp"
 #include "ui/plot_panel.hpp"
 #include "ui/review_window.hpp"
@@ -36,14 +37,10 @@ using flexirob::ui::MainWindow;
 
 namespace {
 
-bool canDraw() { return QGuiApplication::platformName() != QStringLiteral("offscreen"); }
+using flexirob::ui::testing::canDraw;
+using flexirob::ui::testing::quietOptions;
 
-MainWindow::Options quietOptions() {
-  MainWindow::Options options;
-  options.record_sessions = false;
-  options.restore_layout = false;
-  return options;
-}
+
 
 Eigen::Vector3d tip(const flexirob::ui::LiveSnapshot& s) { return {s.p_WT[0], s.p_WT[1], s.p_WT[2]}; }
 

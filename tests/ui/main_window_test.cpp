@@ -15,11 +15,16 @@
 #include "robot/scene.hpp"
 #include "ui/joint_panel.hpp"
 #include "ui/main_window.hpp"
+#include "tests/ui/ui_test_support.hpp"
 #include "ui/osg_view.hpp"
 
 using flexirob::ui::MainWindow;
 
 namespace {
+
+using flexirob::ui::testing::canDraw;
+using flexirob::ui::testing::quietOptions;
+using flexirob::ui::testing::showIfDrawable;
 
 QStringList actionNames(const QMenu* menu) {
   QStringList names;
@@ -33,20 +38,8 @@ QStringList toQStringList(const std::vector<std::string>& names) {
   return list;
 }
 
-// Qt's offscreen platform has no OpenGL: a shown QOpenGLWidget would crash there in Qt itself.
-bool canDraw() { return QGuiApplication::platformName() != QStringLiteral("offscreen"); }
 
-// No session files and no layout of an earlier run.
-MainWindow::Options quietOptions() {
-  MainWindow::Options options;
-  options.record_sessions = false;
-  options.restore_layout = false;
-  return options;
-}
 
-void showIfDrawable(QWidget& window) {
-  if (canDraw()) window.show();
-}
 
 // Largest entry-wise difference between two OSG matrices.
 double maxDifference(const osg::Matrixd& a, const osg::Matrixd& b) {

@@ -17,6 +17,7 @@
 #include "ui/joint_panel.hpp"
 #include "ui/live_teaching.hpp"
 #include "ui/main_window.hpp"
+#include "tests/ui/ui_test_support.hpp"
 #include "ui/mouse_perturbation.hpp"
 #include "ui/osg_view.hpp"
 #include "ui/parameter_panel.hpp"
@@ -30,14 +31,10 @@ using flexirob::ui::MainWindow;
 
 namespace {
 
-bool canDraw() { return QGuiApplication::platformName() != QStringLiteral("offscreen"); }
+using flexirob::ui::testing::canDraw;
+using flexirob::ui::testing::quietOptions;
 
-MainWindow::Options quietOptions() {
-  MainWindow::Options options;
-  options.record_sessions = false;
-  options.restore_layout = false;
-  return options;
-}
+
 
 Eigen::Vector3d tip(MainWindow& window) {
   const auto& s = window.live()->snapshot();
