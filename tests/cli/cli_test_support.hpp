@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 
 namespace flexirob::testing {
 
@@ -39,6 +41,18 @@ inline CliResult runCliBinary(const std::string& arguments) {
   }
   std::remove(err_file.c_str());
   return result;
+}
+
+/// A scratch folder of this test process for `suite` (created; left for the OS to clean).
+inline std::filesystem::path scratchDir(const std::string& suite) {
+  const auto dir = std::filesystem::temp_directory_path() / ("flexirob-" + suite + "-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+inline void writeText(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  file << text;
 }
 
 }  // namespace flexirob::testing

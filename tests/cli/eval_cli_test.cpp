@@ -23,16 +23,8 @@ namespace {
 
 using testing::runCliBinary;
 
-std::filesystem::path scratchDir() {
-  const auto dir = std::filesystem::temp_directory_path() / ("flexirob-eval-cli-test-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return dir;
-}
-
-void writeText(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  file << text;
-}
+std::filesystem::path scratchDir() { return testing::scratchDir("eval-cli-test"); }
+using testing::writeText;
 
 // A session as `teach --out F.json` writes it, made by hand: in each area the postures are
 // q_fixed plus small joint offsets and the task positions their forward kinematics, so the

@@ -17,16 +17,8 @@ namespace {
 
 using testing::runCliBinary;
 
-std::filesystem::path scratchDir() {
-  const auto dir = std::filesystem::temp_directory_path() / ("flexirob-itm-cli-test-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return dir;
-}
-
-void writeText(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  file << text;
-}
+std::filesystem::path scratchDir() { return testing::scratchDir("itm-cli-test"); }
+using testing::writeText;
 
 // A U-shaped stream: down the left arm, along the bottom, up the right arm (x,y,z,q1..q7).
 std::filesystem::path writeUStream() {
