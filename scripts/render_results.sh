@@ -40,34 +40,44 @@ step() { echo "render_results: $*" >&2; }
 render_sized() { local w="$1" h="$2"; shift 2; "$cli" render --width "$w" --height "$h" --supersample 2 --no-scene-areas "$@" >/dev/null; }
 render() { render_sized "$width" "$height" "$@"; }
 
+# produce FILE LABEL COMMAND...: runs COMMAND, which writes FILE, unless REUSE=1 and FILE is
+# there from an earlier run.
+produce() {
+  local file="$1" label="$2"
+  shift 2
+  if [[ -n "${REUSE:-}" && -s "$file" ]]; then
+    step "reusing $file"
+    return
+  fi
+  step "$label"
+  "$@"
+}
+# to_file FILE COMMAND...: COMMAND's stdout into FILE, complete or not at all.
+to_file() {
+  local file="$1"
+  shift
+  "$@" >"$file.part"
+  mv "$file.part" "$file"
+}
+
 # --- Sessions -------------------------------------------------------------------------------
-# teach NAME ARGS...: writes $data_dir/NAME.session.json (kept from an earlier run with REUSE=1).
+# teach NAME ARGS...: $data_dir/NAME.session.json
 teach() {
   local name="$1"
   shift
-  if [[ -n "${REUSE:-}" && -s "$data_dir/$name.session.json" ]]; then
-    step "reusing $data_dir/$name.session.json"
-    return
-  fi
-  step "teach $name"
-  "$cli" teach "$@" --seed 1 --out "$data_dir/$name.session.json" >"$work/teach_$name.json"
+  local file="$data_dir/$name.session.json"
+  produce "$file" "teach $name" to_file "$work/teach_$name.json" "$cli" teach "$@" --seed 1 --out "$file"
 }
 teach setup_I_1areas --robot lwr4 --scene setup_I --areas 1
 teach setup_I_4areas --robot lwr4 --scene setup_I --areas 4
 teach arm9_8areas --robot arm9 --scene arm9_areas --areas 8
 
 # --- Evaluations ----------------------------------------------------------------------------
-# evaluate FILE ARGS...: flexirob-cli ARGS > FILE (kept from an earlier run with REUSE=1).
+# evaluate FILE ARGS...: flexirob-cli ARGS > FILE
 evaluate() {
   local file="$1"
   shift
-  if [[ -n "${REUSE:-}" && -s "$file" ]]; then
-    step "reusing $file"
-    return
-  fi
-  step "$1 $2 -> $(basename "$file")"
-  "$cli" "$@" >"$file.part"
-  mv "$file.part" "$file"
+  produce "$file" "$1 $2 -> $(basename "$file")" to_file "$file" "$cli" "$@"
 }
 for areas in 1 4; do
   session="$data_dir/setup_I_${areas}areas.session.json"
