@@ -55,6 +55,8 @@ LiveTeaching::LiveTeaching(const robot::RobotModel& model, const robot::Scene& s
   workflow_ = std::make_unique<app::Workflow>(driven, parameters_, std::move(workflow_options));
   app::WorkflowThread::Options thread_options;
   thread_options.paced = options.paced;
+  // Only paced: an unpaced loop (tests) never sleeps and would starve its core at FIFO priority.
+  thread_options.realtime_priority = options.paced && options.realtime_priority;
   thread_ = std::make_unique<app::WorkflowThread>(*workflow_, simulation_, thread_options);
 }
 

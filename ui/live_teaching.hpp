@@ -46,6 +46,9 @@ class LiveTeaching {
   struct Options {
     bool paced = true;             ///< real time; off: as fast as possible (tests)
     double max_hand_force = 80.0;  ///< [N] the mouse spring's force is clipped to this
+    /// The control thread asks for SCHED_FIFO (granted to root or with an rtprio limit, else it
+    /// runs at normal priority): the GUI's rendering must not delay the 1 ms cycle.
+    bool realtime_priority = true;
   };
 
   /// Model and scene must outlive this object. The simulation starts at the scene's home
