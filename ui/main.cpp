@@ -1,5 +1,8 @@
 // flexirob: the teaching GUI. A thin main: options, the main window, automated screenshots.
 #include <QApplication>
+#include <QOffscreenSurface>
+#include <QOpenGLContext>
+#include <QOpenGLFunctions>
 #include <QCommandLineParser>
 #include <QKeyEvent>
 #include <QKeySequence>
@@ -15,8 +18,11 @@
 
 namespace {
 
-// --msaa N is read before QApplication exists: the GL surface format must be set before any
-// context is made. Returns the samples (default 4), or -1 with the reason printed.
+constexpr int kAutomaticSamples = -2;
+
+// --msaa N is read before QApplication exists: the GL surface format must be set before the
+// view's context is made. Returns the samples, kAutomaticSamples when not given, or -1 with the
+// reason printed.
 int multisamplesOption(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string argument = argv[i];
@@ -36,21 +42,34 @@ int multisamplesOption(int argc, char** argv) {
     }
     return static_cast<int>(samples);
   }
-  return 4;
+  return kAutomaticSamples;
+}
+
+// A software rasterizer (Mesa's llvmpipe under Xvfb, a VM without a GPU) pays for every sample
+// on the CPU: multisampling there halves the frame rate, so it is used only on hardware. Asks a
+// throw-away context which renderer this display gives.
+bool softwareRenderer() {
+  QOffscreenSurface surface;
+  surface.create();
+  QOpenGLContext context;
+  if (!context.create() || !context.makeCurrent(&surface)) return false;
+  const auto* renderer = reinterpret_cast<const char*>(context.functions()->glGetString(GL_RENDERER));
+  const QString name = renderer != nullptr ? QString::fromLatin1(renderer).toLower() : QString();
+  context.doneCurrent();
+  return name.contains(QStringLiteral("llvmpipe")) || name.contains(QStringLiteral("softpipe")) ||
+         name.contains(QStringLiteral("software")) || name.contains(QStringLiteral("swiftshader"));
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Depth buffer and multisampling for the 3D view; set before any GL context exists. A software
-  // renderer (Mesa's llvmpipe under Xvfb) pays for every sample: --msaa 0 trades the smooth
-  // edges for frame rate there.
-  const int samples = multisamplesOption(argc, argv);
-  if (samples < 0) return 2;
+  // Depth buffer and multisampling for the 3D view; set before the view's context exists.
+  int samples = multisamplesOption(argc, argv);
+  if (samples == -1) return 2;
   QSurfaceFormat format;
   format.setDepthBufferSize(24);
   format.setStencilBufferSize(8);
-  format.setSamples(samples);
+  format.setSamples(samples == kAutomaticSamples ? 4 : samples);
   QSurfaceFormat::setDefaultFormat(format);
 
   // --help and --version print and exit: they must work without a display (a terminal over
@@ -65,6 +84,10 @@ int main(int argc, char** argv) {
   QApplication::setApplicationName(QStringLiteral("flexirob"));
   QApplication::setApplicationVersion(QStringLiteral(FLEXIROB_VERSION_STRING));
   QApplication::setOrganizationName(QStringLiteral("flexirob"));
+  if (samples == kAutomaticSamples && QGuiApplication::platformName() != QStringLiteral("offscreen") && softwareRenderer()) {
+    format.setSamples(0);
+    QSurfaceFormat::setDefaultFormat(format);
+  }
 
   QCommandLineParser parser;
   parser.setApplicationDescription(QStringLiteral("FlexIRob: teaching redundant robot arms"));
@@ -94,8 +117,8 @@ int main(int argc, char** argv) {
                                 QStringLiteral("K"));
   parser.addOption(keys);
   const QCommandLineOption msaa(QStringLiteral("msaa"),
-                                QStringLiteral("Multisamples of the 3D view (default 4; 0 is faster on a software renderer)."),
-                                QStringLiteral("N"), QStringLiteral("4"));
+                                QStringLiteral("Multisamples of the 3D view (default: 4 on graphics hardware, 0 on a software renderer such as llvmpipe under Xvfb)."),
+                                QStringLiteral("N"));
   parser.addOption(msaa);
   parser.addOption(backend);
   parser.addOption(key_map);
