@@ -51,6 +51,14 @@ inline void requestRealtimePriority(std::thread& thread) {
   pthread_setschedparam(thread.native_handle(), SCHED_FIFO, &parameter);
 }
 
+/// The calling thread back at normal priority: a thread started from the real-time loop
+/// inherits SCHED_FIFO, and background work (learning) must never compete with the loop.
+inline void runAtNormalPriority() {
+  sched_param parameter{};
+  parameter.sched_priority = 0;
+  pthread_setschedparam(pthread_self(), SCHED_OTHER, &parameter);
+}
+
 /// Copies as many values as both hold into a fixed-size snapshot array.
 template <typename Array>
 void copyInto(Array& destination, const Eigen::VectorXd& source) {

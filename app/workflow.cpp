@@ -7,6 +7,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "app/realtime.hpp"
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
 
@@ -610,7 +611,11 @@ void Workflow::startLearning() {
     learning_done_.store(true, std::memory_order_release);
   };
   if (options_.background_learning) {
-    learning_thread_ = std::thread(std::move(job));
+    learning_thread_ = std::thread([job = std::move(job)]() mutable {
+      // Started from the control loop, which may run at SCHED_FIFO (WorkflowThread).
+      realtime::runAtNormalPriority();
+      job();
+    });
   } else {
     job();
     collectLearning();

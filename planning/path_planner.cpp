@@ -65,7 +65,7 @@ class Shortcutter {
       const Eigen::VectorXd p = interpolate(a, b, t);
       const int c = graph_.nearestNode(p);
       const double d = graph_.distanceTo(c, p);
-      if (d > radius_ - margin_) return false;
+      if (!(d <= radius_ - margin_)) return false;  // NaN fails too
       if (!(graph_.jointDistance(c, joints_a) < d_theta_max_ && graph_.jointDistance(c, joints_b) < d_theta_max_)) return false;
       if (t >= 1.0) return true;
       t = std::min(1.0, t + (radius_ - d) / total);
