@@ -4,11 +4,14 @@
 // every consumer that re-learns, renders or evaluates a recording, so that they agree on which
 // samples belong to an area.
 //
-// Samples are recorded while a RECORDING runs, the area record when it ends (time T). An area
-// re-taught later has records at T_1 < T_2 < ...; its latest take is the samples with
-// T_{n-1} < t <= T_n. Samples after an area's last record (or of an area without any record)
-// are a RECORDING the session ended in (a crash, kill -9): kept as an incomplete take.
+// Samples are recorded while a RECORDING runs, the area record when it ends; a removed area is
+// a button signal "remove_area k" (later indices shift down by one, as in the workflow). The
+// records are replayed in time order (at equal times samples before area records before
+// removals): an area record closes the take of the samples of that area since its last record;
+// samples not closed by a record are a RECORDING the session ended in (a crash, kill -9), kept
+// as an unfinished take. Files that stamp every sample with its area's time read the same way.
 #include <Eigen/Core>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -33,6 +36,12 @@ struct RecordedTeaching {
   std::vector<RecordedArea> areas;  ///< by index, ascending
   std::optional<planning::Itm> itm; ///< the last ITM snapshot, if any
 };
+
+/// The replay on records already read, up to and including `until` [s] (the review of a moment).
+/// Areas without any record or sample are left out. Throws InputError like readRecordedTeaching.
+std::vector<RecordedArea> replayTeaching(const std::vector<AreaRecord>& areas, const std::vector<SampleRecord>& samples,
+                                         const std::vector<SignalRecord>& signals,
+                                         double until = std::numeric_limits<double>::infinity());
 
 /// Reads the teaching of a session (the ITM snapshot only with read_graph). Throws InputError on
 /// samples or areas of the wrong size or with non-finite values and on a damaged ITM snapshot.

@@ -22,6 +22,7 @@
 #include <map>
 
 #include "app/session_reader.hpp"
+#include "app/session_teaching.hpp"
 #include "learning/confidence.hpp"
 #include "planning/itm_file.hpp"
 #include "render/overlays.hpp"
@@ -159,6 +160,7 @@ void Timeline::mouseMoveEvent(QMouseEvent* event) {
 struct ReviewWindow::Events {
   std::vector<app::SampleRecord> samples;
   std::vector<app::AreaRecord> areas;
+  std::vector<app::SignalRecord> signals;
   std::vector<app::TrajectoryRecord> trajectories;
   std::vector<app::CollisionRecord> collisions;
   std::vector<app::ItmRecord> itm;  // in time order, thinned
@@ -258,6 +260,7 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     auto events = std::make_unique<Events>();
     events->samples = reader->samples();
     events->areas = reader->areas();
+    events->signals = reader->signals();
     events->trajectories = reader->trajectories();
     events->collisions = reader->collisions();
     events->itm = reader->itmSnapshots();
@@ -476,31 +479,21 @@ void ReviewWindow::updateItm() {
 }
 
 void ReviewWindow::updateConfidence(bool force) {
-  // The areas completed by now, each with the samples of its latest take (app/session_teaching.hpp):
-  // an area record ends a RECORDING; a re-taught area's take lies after its previous record.
-  std::map<int, std::pair<double, double>> takes;  // area -> (previous record, latest record) times
+  // The areas completed by now, each with the samples of its latest take, replayed as every
+  // reader of a recording does (app/session_teaching.hpp).
   std::size_t records_now = 0;
-  for (const app::AreaRecord& area : events_->areas) {  // in time order
-    if (area.time > time_) continue;
-    ++records_now;
-    auto [it, inserted] = takes.try_emplace(area.area, -std::numeric_limits<double>::infinity(), area.time);
-    if (!inserted) it->second = {it->second.second, area.time};
-  }
+  for (const app::AreaRecord& area : events_->areas) records_now += area.time <= time_ ? 1 : 0;
+  for (const app::SignalRecord& signal : events_->signals) records_now += signal.time <= time_ ? 1 : 0;
   if (!force && records_now == shown_confidence_areas_) return;
   shown_confidence_areas_ = records_now;
   // Eq. 6.7 - 6.9 with the workflow's default d = 15 (WorkflowOptions::confidence_d).
   learning::ConfidenceModel model;
-  for (const auto& [area, window] : takes) {
-    std::vector<Eigen::Vector3d> points;
-    for (const app::SampleRecord& sample : events_->samples) {
-      if (sample.area == area && sample.x.size() >= 3 && sample.time > window.first && sample.time <= window.second) {
-        points.emplace_back(sample.x.head<3>());
-      }
+  try {
+    for (const app::RecordedArea& area : app::replayTeaching(events_->areas, events_->samples, events_->signals, time_)) {
+      if (area.complete && area.X.cols() > 0) model.addArea(area.X);
     }
-    if (points.empty()) continue;
-    Eigen::MatrixXd X(3, static_cast<Eigen::Index>(points.size()));
-    for (std::size_t i = 0; i < points.size(); ++i) X.col(static_cast<Eigen::Index>(i)) = points[i];
-    model.addArea(X);
+  } catch (const std::exception& error) {
+    statusBar()->showMessage(QStringLiteral("Training areas unreadable: %1").arg(QString::fromUtf8(error.what())), 10000);
   }
   if (model.areas() == 0) {
     world_->overlays().setContent(render::OverlayLayer::kConfidence, nullptr);

@@ -58,12 +58,15 @@ Session loadRecordedSession(const std::string& file) {
       robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
   session.scene_data = robot::loadScene(session.scene);
   const int n = session.model->dof();
+  // The complete areas with samples, labelled by their position here: q_fixed[k] is area k's.
+  std::vector<const app::RecordedArea*> taught;
   Eigen::Index count = 0;
   for (const app::RecordedArea& area : teaching.areas) {
-    if (!area.complete) continue;  // a RECORDING the session ended in taught nothing
-    if (area.q_fixed.size() != n || (area.Q.cols() > 0 && area.Q.rows() != n)) {
+    if (!area.complete || area.X.cols() == 0) continue;  // a RECORDING the session ended in taught nothing
+    if (area.q_fixed.size() != n || area.Q.rows() != n) {
       throw InputError("session: area " + std::to_string(area.index) + " does not fit the robot's " + std::to_string(n) + " joints");
     }
+    taught.push_back(&area);
     session.q_fixed.push_back(area.q_fixed);
     count += area.X.cols();
   }
@@ -71,11 +74,11 @@ Session loadRecordedSession(const std::string& file) {
   session.data.X.resize(3, count);
   session.data.Y.resize(n, count);
   Eigen::Index l = 0;
-  for (const app::RecordedArea& area : teaching.areas) {
-    if (!area.complete) continue;
+  for (std::size_t k = 0; k < taught.size(); ++k) {
+    const app::RecordedArea& area = *taught[k];
     session.data.X.middleCols(l, area.X.cols()) = area.X;
     session.data.Y.middleCols(l, area.X.cols()) = area.Q;
-    session.data.area.insert(session.data.area.end(), static_cast<std::size_t>(area.X.cols()), area.index);
+    session.data.area.insert(session.data.area.end(), static_cast<std::size_t>(area.X.cols()), static_cast<int>(k));
     l += area.X.cols();
   }
   if (!teaching.itm) throw InputError("session: no ITM graph recorded");

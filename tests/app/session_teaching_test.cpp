@@ -97,6 +97,34 @@ TEST_F(SessionTeaching, SamplesStampedWithTheirAreasTimeBelongToThatTake) {
   EXPECT_DOUBLE_EQ(teaching.areas[0].X(1, 0), 20.0);
 }
 
+// The workflow renumbers the areas above a removed one; the replay does the same, so a later
+// area that takes a freed index is not mistaken for a re-take of another.
+TEST_F(SessionTeaching, ARemovedAreaShiftsTheLaterIndicesDownAsTheWorkflowDoes) {
+  for (int l = 0; l < 2; ++l) sample(1.0 + 0.01 * l, 0, l);
+  area(1.1, 0, 0.1);
+  for (int l = 0; l < 3; ++l) sample(2.0 + 0.01 * l, 1, l);
+  area(2.1, 1, 0.2);
+  for (int l = 0; l < 4; ++l) sample(3.0 + 0.01 * l, 2, l);
+  area(3.1, 2, 0.3);
+  ASSERT_TRUE(recorder_->recordButton(4.0, "remove_area 1"));  // old area 2 is area 1 from now on
+  for (int l = 0; l < 5; ++l) sample(5.0 + 0.01 * l, 2, l);     // the next area: index 2 again
+  area(5.1, 2, 0.4);
+  const RecordedTeaching teaching = read();
+  ASSERT_EQ(teaching.areas.size(), 3U);
+  EXPECT_EQ(teaching.areas[0].X.cols(), 2);
+  EXPECT_DOUBLE_EQ(teaching.areas[0].q_fixed[0], 0.1);
+  EXPECT_EQ(teaching.areas[1].X.cols(), 4);
+  EXPECT_DOUBLE_EQ(teaching.areas[1].q_fixed[0], 0.3);
+  EXPECT_EQ(teaching.areas[2].X.cols(), 5);
+  EXPECT_DOUBLE_EQ(teaching.areas[2].q_fixed[0], 0.4);
+  for (const RecordedArea& area : teaching.areas) EXPECT_TRUE(area.complete);
+  // The same records seen at 3.5 s: three areas, none removed yet.
+  SessionReader reader(file_);
+  const auto earlier = replayTeaching(reader.areas(), reader.samples(), reader.signals(), 3.5);
+  ASSERT_EQ(earlier.size(), 3U);
+  EXPECT_EQ(earlier[1].X.cols(), 3);
+}
+
 TEST_F(SessionTeaching, ReadsTheLastItmSnapshot) {
   planning::Itm graph(planning::ItmParameters{}, 3);
   graph.insert(Eigen::Vector3d(0.0, 0.0, 0.5), Eigen::VectorXd::Zero(3));
