@@ -180,7 +180,9 @@ std::uint64_t TrainingSampleStream::stream(const Workflow& workflow, SessionReco
 std::uint64_t TrainingSampleStream::finishArea(const Workflow& workflow, SessionRecorder& recorder, int area, double time) {
   if (area < 0 || area >= static_cast<int>(workflow.areas().size())) return 0;
   const TrainingArea& created = workflow.areas()[static_cast<std::size_t>(area)];
-  const bool streamed = serial_ == workflow.recordingSerial() && area_ == area;
+  // The samples written so far belong to this area's RECORDING, the last one streamed (a
+  // RECORDING started since, between two calls, has not been streamed yet).
+  const bool streamed = area_ == area;
   const Eigen::Index first = streamed ? std::min(written_, created.X.cols()) : 0;
   const double period = workflow.options().sample_period;
   for (Eigen::Index l = first; l < created.X.cols(); ++l) {
@@ -193,17 +195,34 @@ std::uint64_t TrainingSampleStream::finishArea(const Workflow& workflow, Session
   return static_cast<std::uint64_t>(created.X.cols() - first) + 1;
 }
 
-std::uint64_t TrainingSampleStream::writeAreas(const Workflow& workflow, SessionRecorder& recorder, double time) {
-  std::uint64_t records = 0;
-  for (std::size_t k = 0; k < workflow.areas().size(); ++k) {
-    const TrainingArea& area = workflow.areas()[k];
-    const int index = static_cast<int>(k);
-    // Samples and record stamped `time`: the take is every sample up to its record.
-    for (Eigen::Index l = 0; l < area.X.cols(); ++l) recorder.recordSample({time, index, area.X.col(l), area.Q.col(l)});
-    recorder.recordArea({index, time, area.centre, area.q_fixed});
-    records += static_cast<std::uint64_t>(area.X.cols()) + 1;
+void TrainingSampleStream::restart() { *this = TrainingSampleStream{}; backlog_done_ = false; backlog_version_ = ~0ULL; }
+
+bool TrainingSampleStream::writeAreasBacklog(const Workflow& workflow, SessionRecorder& recorder, int budget) {
+  if (backlog_done_) return true;
+  if (workflow.areasVersion() != backlog_version_) {
+    // (Re)start: stamped now, or before the first sample of a RECORDING in progress, so that a
+    // re-taught area's new take stays after its old copy. Areas do not change during a RECORDING.
+    backlog_version_ = workflow.areasVersion();
+    backlog_area_ = 0;
+    backlog_sample_ = 0;
+    const Eigen::Index recording = workflow.recordingSamples();
+    const double period = workflow.options().sample_period;
+    backlog_time_ = recording > 0 ? workflow.lastSampleTime() - static_cast<double>(recording) * period : workflow.state().time;
   }
-  return records;
+  const auto& areas = workflow.areas();
+  while (backlog_area_ < areas.size()) {
+    const TrainingArea& area = areas[backlog_area_];
+    const int index = static_cast<int>(backlog_area_);
+    for (; backlog_sample_ < area.X.cols() && budget > 0; ++backlog_sample_, --budget) {
+      recorder.recordSample({backlog_time_, index, area.X.col(backlog_sample_), area.Q.col(backlog_sample_)});
+    }
+    if (backlog_sample_ < area.X.cols()) return false;
+    recorder.recordArea({index, backlog_time_, area.centre, area.q_fixed});
+    ++backlog_area_;
+    backlog_sample_ = 0;
+  }
+  backlog_done_ = true;
+  return true;
 }
 
 void WorkflowSessionWriter::poll() {

@@ -43,13 +43,25 @@ class TrainingSampleStream {
   /// At the workflow's area_created event for `area` at `time`: the samples not streamed yet
   /// (those of the RECORDING's last cycles), then the area record. Returns the records written.
   std::uint64_t finishArea(const Workflow& workflow, SessionRecorder& recorder, int area, double time);
-  /// Every area the workflow holds, whole (a recorder attached after they were taught).
-  std::uint64_t writeAreas(const Workflow& workflow, SessionRecorder& recorder, double time);
+  /// The areas the workflow holds, whole, for a recorder attached after they were taught: at most
+  /// `budget` samples per call (each area's record after its last sample), stamped before the
+  /// RECORDING in progress if any. Call once per cycle until it returns true. Starts over with a
+  /// later stamp when the areas change meanwhile (the later copy is the take that holds).
+  bool writeAreasBacklog(const Workflow& workflow, SessionRecorder& recorder, int budget);
+  /// Forgets everything (a new recorder): the RECORDING in progress is streamed from its first
+  /// sample and the areas taught so far are written by writeAreasBacklog.
+  void restart();
 
  private:
   std::uint64_t serial_ = 0;  // of the RECORDING being streamed
   int area_ = -1;             // the area it will create
   Eigen::Index written_ = 0;  // its samples written so far
+  // The backlog of areas taught before the recorder: next area and sample, stamp, areas version.
+  bool backlog_done_ = true;
+  std::size_t backlog_area_ = 0;
+  Eigen::Index backlog_sample_ = 0;
+  double backlog_time_ = 0.0;
+  std::uint64_t backlog_version_ = 0;
 };
 
 class WorkflowSessionWriter {

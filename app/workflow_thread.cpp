@@ -376,29 +376,30 @@ void WorkflowThread::publish(const CycleStatistics& statistics) {
 void WorkflowThread::setRecorder(SessionRecorder* recorder) {
   const std::lock_guard lock(recorder_mutex_);
   recorder_ = recorder;
-  recorder_new_ = recorder != nullptr;
-  recorder_samples_ = TrainingSampleStream{};
+  recorder_samples_.restart();
 }
 
 void WorkflowThread::recordCycle(std::size_t events_before) {
+  // A few samples of the areas taught before the recorder per cycle: the queue stays far from
+  // full and the cycle's work bounded.
+  constexpr int kBacklogSamplesPerCycle = 32;
   std::unique_lock lock(recorder_mutex_, std::try_to_lock);
   if (!lock.owns_lock()) {
     recorder_skips_.fetch_add(1, std::memory_order_relaxed);
     return;
   }
   if (recorder_ == nullptr) return;
-  const robot::RobotState& state = workflow_->state();
-  if (recorder_new_) {
-    recorder_new_ = false;
-    recorder_samples_.writeAreas(*workflow_, *recorder_, state.time);
-  } else {
-    for (std::size_t i = events_before; i < workflow_->events().size(); ++i) {
-      const WorkflowEvent& event = workflow_->events()[i];
-      if (event.kind == WorkflowEvent::Kind::kAreaCreated) recorder_samples_.finishArea(*workflow_, *recorder_, event.area, event.time);
+  for (std::size_t i = events_before; i < workflow_->events().size(); ++i) {
+    const WorkflowEvent& event = workflow_->events()[i];
+    if (event.kind == WorkflowEvent::Kind::kAreaCreated) {
+      recorder_samples_.finishArea(*workflow_, *recorder_, event.area, event.time);
+    } else if (event.kind == WorkflowEvent::Kind::kAreaRemoved) {
+      recorder_->recordButton(event.time, "remove_area " + std::to_string(event.area));  // indices above shift down
     }
   }
+  recorder_samples_.writeAreasBacklog(*workflow_, *recorder_, kBacklogSamplesPerCycle);
   recorder_samples_.stream(*workflow_, *recorder_);
-  recorder_->recordState(state);
+  recorder_->recordState(workflow_->state());
 }
 
 void WorkflowThread::loop() {

@@ -13,8 +13,9 @@
 //
 // The thread never waits for the GUI, the disk or learning: batch learning runs on the
 // workflow's own thread. With a session recorder attached (setRecorder), each cycle pushes the
-// robot state (1 kHz), the training samples as they are taken and the area records into the
-// recorder's lock-free queues; its own thread writes them to disk.
+// robot state (1 kHz, a fixed-size record into a ring: no allocation) and, every 20 ms while a
+// RECORDING runs, a training sample (a record that allocates its vectors) into the recorder's
+// lock-free queues; its own thread writes them to disk.
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -188,8 +189,8 @@ class WorkflowThread {
 
   /// Attaches a session recorder (null detaches; it must stay alive until detached). From the
   /// next cycle on, every cycle records the robot state, the samples of a RECORDING as they are
-  /// taken and each area when it is created; the areas taught before are written whole at the
-  /// first cycle. The caller may wait a moment for the lock; the cycle never does: a cycle that
+  /// taken and each area when it is created or removed; the areas taught before are written
+  /// whole, a few samples per cycle. The caller may wait a moment for the lock; the cycle never does: a cycle that
   /// finds it taken records nothing and counts it (recorderSkips()).
   void setRecorder(SessionRecorder* recorder);
   std::uint64_t recorderSkips() const { return recorder_skips_.load(std::memory_order_relaxed); }
@@ -244,7 +245,6 @@ class WorkflowThread {
   // Session recording: the GUI swaps the recorder under the mutex; the loop only try-locks it.
   std::mutex recorder_mutex_;
   SessionRecorder* recorder_ = nullptr;  // guarded by recorder_mutex_
-  bool recorder_new_ = false;            // guarded: write the areas taught so far
   TrainingSampleStream recorder_samples_;  // guarded
   std::atomic<std::uint64_t> recorder_skips_{0};
   // Statistics (loop writes, any thread reads).
