@@ -64,7 +64,9 @@ osg::ref_ptr<osg::Geode> makePrimitive(PrimitiveShape shape, const Eigen::Vector
       break;
   }
   osg::ref_ptr<osg::TessellationHints> hints = new osg::TessellationHints();
-  hints->setDetailRatio(2.0F);  // smooth silhouettes for spheres and cylinders
+  // OSG's default tessellation (40 segments around) keeps silhouettes smooth at the view's sizes;
+  // each doubling quadruples the triangles a software renderer has to set up every frame.
+  hints->setDetailRatio(1.0F);
   osg::ref_ptr<osg::ShapeDrawable> drawable = new osg::ShapeDrawable(osg_shape.get(), hints.get());
   drawable->setColor(toOsgColor(rgba));
   osg::ref_ptr<osg::Geode> geode = new osg::Geode();

@@ -211,8 +211,8 @@ int main(int argc, char** argv) {
       // Figures for the operator's record: display rate and the control worker's punctuality.
       if (window.live() != nullptr) {
         const flexirob::app::CycleStatistics stats = window.live()->statistics();
-        std::fprintf(stderr, "view %.1f fps; control %llu cycles, %llu deadline misses, max cycle %.0f us\n",
-                     window.framesPerSecond(), static_cast<unsigned long long>(stats.cycles),
+        std::fprintf(stderr, "view %.1f fps (%.1f in the last second); control %llu cycles, %llu deadline misses, max cycle %.0f us\n",
+                     window.meanFramesPerSecond(), window.framesPerSecond(), static_cast<unsigned long long>(stats.cycles),
                      static_cast<unsigned long long>(stats.deadline_misses), stats.max_compute_us);
       }
       window.close();

@@ -197,7 +197,7 @@ void MainWindow::buildDocks() {
   connect(confidence_panel_, &ConfidencePanel::settingsChanged, this, [this] {
     operator_heights_ = true;
     if (live_) updateConfidence(live_->snapshot(), true);
-    view_->update();
+    view_->requestFrame();
   });
 
   // Live plots (issue #7 item 7): task error, joints against their limits, the control cycle.
@@ -452,10 +452,19 @@ void MainWindow::setPosture(const Eigen::VectorXd& q) {
   world_.robot()->setPosture(*kinematics_);
   if (joint_panel_->posture() != q) joint_panel_->setPosture(q);
   updateStatus();
-  view_->update();
+  view_->requestFrame();
+}
+
+double MainWindow::meanFramesPerSecond() const {
+  if (!run_clock_.isValid() || run_clock_.elapsed() <= 0) return 0.0;
+  return 1000.0 * static_cast<double>(view_->framesDrawn() - run_first_frame_) / static_cast<double>(run_clock_.elapsed());
 }
 
 void MainWindow::mirror() {
+  if (!run_clock_.isValid()) {
+    run_clock_.start();
+    run_first_frame_ = view_->framesDrawn();
+  }
   // Frame rate of the 3D view, over windows of at least one second.
   const qint64 elapsed_ms = fps_clock_.elapsed();
   if (elapsed_ms >= 1000) {
@@ -465,7 +474,7 @@ void MainWindow::mirror() {
   }
   if (!live_ || !model_) {
     link_label_->setText(tr("no robot running"));
-    view_->update();
+    view_->requestFrame();
     return;
   }
   live_->tick();
@@ -529,7 +538,7 @@ void MainWindow::mirror() {
   if (reconnect_action_ != nullptr) reconnect_action_->setEnabled(link.fault);
   placeViewLabels();
   updateStatus();
-  view_->update();
+  view_->requestFrame();
 }
 
 void MainWindow::showBanner(const QString& warning) {
@@ -852,7 +861,7 @@ void MainWindow::buildMenus() {
   grid->setChecked(true);
   connect(grid, &QAction::toggled, this, [this](bool on) {
     world_.setGridVisible(on);
-    view_->update();
+    view_->requestFrame();
   });
   view->addAction(tr("&Key map (F1, H)"), this, [this] { toggleKeyMap(!key_map_label_->isVisible()); });
   view->addSeparator();
@@ -860,7 +869,7 @@ void MainWindow::buildMenus() {
   auto* overlay_menu = new OverlayMenu(*overlays_, this);
   overlay_menu->setTitle(tr("&Overlays"));
   menuBar()->addMenu(overlay_menu);
-  connect(overlay_menu, &OverlayMenu::toggled, this, [this] { view_->update(); });
+  connect(overlay_menu, &OverlayMenu::toggled, this, [this] { view_->requestFrame(); });
   QMenu* help = menuBar()->addMenu(tr("&Help"));
   help->addAction(tr("&Mouse"), this, [this] {
     statusBar()->showMessage(tr("Left drag on a link: pull the arm   Left drag elsewhere: orbit   Middle or "
@@ -968,7 +977,7 @@ bool MainWindow::setGoal(const Eigen::Vector3d& goal_W) {
   }
   // Outside EXECUTION the workflow refuses and says why (shown as a warning).
   const bool posted = live_->planTo(goal_W);
-  view_->update();
+  view_->requestFrame();
   return posted;
 }
 

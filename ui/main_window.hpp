@@ -108,6 +108,8 @@ class MainWindow : public QMainWindow {
   int chimes() const { return chimes_; }
   /// Frames per second of the 3D view over the last seconds (0 before the first second).
   double framesPerSecond() const { return fps_; }
+  /// Frames of the 3D view per second since the window started mirroring the robot.
+  double meanFramesPerSecond() const;
 
   /// Shows (or hides) the key map over the view.
   void toggleKeyMap(bool visible);
@@ -207,6 +209,8 @@ class MainWindow : public QMainWindow {
   QString last_warning_;
   QElapsedTimer fps_clock_;
   long fps_frames_ = 0;
+  QElapsedTimer run_clock_;  // since the first mirrored frame
+  long run_first_frame_ = 0;
   double fps_ = 0.0;
   std::vector<std::string> coloured_links_;
   std::unique_ptr<render::Overlays> overlays_;

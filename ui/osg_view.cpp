@@ -1,7 +1,11 @@
 #include "ui/osg_view.hpp"
 
 #include <QMouseEvent>
+#include <QOffscreenSurface>
 #include <QOpenGLContext>
+#include <QOpenGLFramebufferObject>
+#include <QOpenGLFunctions>
+#include <QPainter>
 #include <QWheelEvent>
 #include <algorithm>
 #include <osgUtil/IntersectionVisitor>
@@ -13,8 +17,10 @@
 namespace flexirob::ui {
 
 OsgView::OsgView(QWidget* parent)
-    : QOpenGLWidget(parent), viewer_(new osgViewer::Viewer), manipulator_(new osgGA::OrbitManipulator) {
+    : QWidget(parent), viewer_(new osgViewer::Viewer), manipulator_(new osgGA::OrbitManipulator) {
   setMinimumSize(320, 240);
+  // Every pixel comes from the frame: Qt need not clear behind it.
+  setAttribute(Qt::WA_OpaquePaintEvent);
   setFocusPolicy(Qt::StrongFocus);
   setMouseTracking(false);
   viewer_->setThreadingModel(osgViewer::Viewer::SingleThreaded);
@@ -31,15 +37,22 @@ OsgView::OsgView(QWidget* parent)
 
 OsgView::~OsgView() {
   // OSG frees its GL objects while our context is current.
-  makeCurrent();
+  const bool current = makeContextCurrent();
   viewer_ = nullptr;
   window_ = nullptr;
-  doneCurrent();
+  framebuffer_.reset();
+  resolved_.reset();
+  if (current) context_->doneCurrent();
+}
+
+void OsgView::requestFrame() {
+  frame_due_ = true;
+  update();
 }
 
 void OsgView::setSceneRoot(osg::Node* root) {
   viewer_->setSceneData(root);
-  update();
+  requestFrame();
 }
 
 void OsgView::setHomeCamera(const render::CameraPose& camera) {
@@ -51,8 +64,8 @@ void OsgView::resetCamera() {
   manipulator_->setHomePosition(render::toOsg(home_.eye_W), render::toOsg(home_.center_W),
                                 render::toOsg(home_.up_W), false);
   manipulator_->home(0.0);
-  resizeGL(width(), height());  // field of view of the home camera
-  update();
+  updateProjection();  // field of view of the home camera
+  requestFrame();
 }
 
 render::CameraPose OsgView::currentCamera() const {
@@ -67,11 +80,9 @@ render::CameraPose OsgView::currentCamera() const {
   return camera;
 }
 
-void OsgView::initializeGL() {}
-
-void OsgView::resizeGL(int width, int height) {
-  const int w = std::max(1, static_cast<int>(width * scale()));
-  const int h = std::max(1, static_cast<int>(height * scale()));
+void OsgView::updateProjection() {
+  const int w = std::max(1, static_cast<int>(width() * scale()));
+  const int h = std::max(1, static_cast<int>(height() * scale()));
   window_->resized(0, 0, w, h);
   events()->windowResize(0, 0, w, h);
   osg::Camera* camera = viewer_->getCamera();
@@ -79,13 +90,88 @@ void OsgView::resizeGL(int width, int height) {
   camera->setProjectionMatrixAsPerspective(home_.fovy_deg, static_cast<double>(w) / h, 0.01, 100.0);
 }
 
-void OsgView::paintGL() {
-  // Platforms without OpenGL (e.g. Qt's offscreen platform) give no context: draw nothing.
-  if (context() == nullptr || !context()->isValid()) return;
-  // QOpenGLWidget draws into its own framebuffer object, not into framebuffer 0.
-  window_->setDefaultFboId(defaultFramebufferObject());
+void OsgView::resizeEvent(QResizeEvent* event) {
+  QWidget::resizeEvent(event);
+  updateProjection();
+  frame_due_ = true;
+}
+
+bool OsgView::makeContextCurrent() {
+  if (gl_failed_) return false;
+  if (!context_) {
+    // Platforms without OpenGL (e.g. Qt's offscreen platform) give no context: draw nothing.
+    context_ = std::make_unique<QOpenGLContext>();
+    context_->setFormat(QSurfaceFormat::defaultFormat());
+    surface_ = std::make_unique<QOffscreenSurface>();
+    if (!context_->create()) {
+      gl_failed_ = true;
+      return false;
+    }
+    surface_->setFormat(context_->format());
+    surface_->create();
+  }
+  if (!surface_->isValid() || !context_->makeCurrent(surface_.get())) {
+    gl_failed_ = true;
+    return false;
+  }
+  return true;
+}
+
+void OsgView::renderFrame() {
+  if (!makeContextCurrent()) return;
+  const QSize size(std::max(1, static_cast<int>(width() * scale())), std::max(1, static_cast<int>(height() * scale())));
+  if (!framebuffer_ || framebuffer_->size() != size) {
+    QOpenGLFramebufferObjectFormat format;
+    format.setAttachment(QOpenGLFramebufferObject::CombinedDepthStencil);
+    format.setSamples(std::max(0, context_->format().samples()));
+    framebuffer_ = std::make_unique<QOpenGLFramebufferObject>(size, format);
+    resolved_.reset();
+    if (format.samples() > 0) resolved_ = std::make_unique<QOpenGLFramebufferObject>(size);
+    // One buffer for the life of this size: a fresh megabyte per frame would be mapped and
+    // unmapped by the allocator every frame, and the page-table lock that takes stalls the
+    // control thread.
+    frame_ = QImage(size, QImage::Format_RGBA8888_Premultiplied);
+    frame_.setDevicePixelRatio(scale());
+    frame_.fill(palette().window().color());
+  }
+  framebuffer_->bind();
+  window_->setDefaultFboId(framebuffer_->handle());
   viewer_->frame();
+  QOpenGLFramebufferObject* source = framebuffer_.get();
+  if (resolved_) {
+    QOpenGLFramebufferObject::blitFramebuffer(resolved_.get(), framebuffer_.get());
+    source = resolved_.get();
+  }
+  source->bind();
+  QOpenGLFunctions* gl = context_->functions();
+  gl->glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  gl->glReadPixels(0, 0, size.width(), size.height(), GL_RGBA, GL_UNSIGNED_BYTE, frame_.bits());
+  source->release();
+  context_->doneCurrent();
+  // OpenGL's rows run bottom-up, the image's top-down.
+  const auto row_bytes = static_cast<std::size_t>(frame_.bytesPerLine());
+  for (int top = 0, bottom = size.height() - 1; top < bottom; ++top, --bottom) {
+    std::swap_ranges(frame_.scanLine(top), frame_.scanLine(top) + row_bytes, frame_.scanLine(bottom));
+  }
+  frame_due_ = false;
   ++frames_;
+}
+
+QImage OsgView::grabFramebuffer() {
+  renderFrame();
+  return frame_;
+}
+
+void OsgView::paintEvent(QPaintEvent* /*event*/) {
+  const QSize size(std::max(1, static_cast<int>(width() * scale())), std::max(1, static_cast<int>(height() * scale())));
+  if (frame_due_ || frame_.size() != size) renderFrame();
+  QPainter painter(this);
+  if (frame_.isNull()) {
+    painter.fillRect(rect(), palette().window());
+    painter.drawText(rect(), Qt::AlignCenter, tr("No OpenGL on this platform: the 3D view cannot draw."));
+    return;
+  }
+  painter.drawImage(QPointF(0.0, 0.0), frame_);
 }
 
 int OsgView::osgButton(const QMouseEvent* event) const {
@@ -146,19 +232,19 @@ void OsgView::mousePressEvent(QMouseEvent* event) {
   if (control_click_ && event->button() == Qt::LeftButton && (event->modifiers() & Qt::ControlModifier)) {
     control_clicking_ = true;
     control_click_(event->position());
-    update();
+    requestFrame();
     return;
   }
   if (grabber_ != nullptr && event->button() == Qt::LeftButton && !(event->modifiers() & Qt::ShiftModifier) &&
       grabber_->press(event->position())) {
     grabbing_ = true;
-    update();
+    requestFrame();
     return;
   }
   const QPointF p = event->position() * scale();
   events()->mouseButtonPress(static_cast<float>(p.x()), static_cast<float>(p.y()),
                              static_cast<unsigned int>(osgButton(event)));
-  update();
+  requestFrame();
 }
 
 void OsgView::mouseReleaseEvent(QMouseEvent* event) {
@@ -171,25 +257,25 @@ void OsgView::mouseReleaseEvent(QMouseEvent* event) {
       grabbing_ = false;
       if (grabber_ != nullptr) grabber_->release();
     }
-    update();
+    requestFrame();
     return;
   }
   const QPointF p = event->position() * scale();
   events()->mouseButtonRelease(static_cast<float>(p.x()), static_cast<float>(p.y()),
                                static_cast<unsigned int>(osgButton(event)));
-  update();
+  requestFrame();
 }
 
 void OsgView::mouseMoveEvent(QMouseEvent* event) {
   if (control_clicking_) return;
   if (grabbing_) {
     if (grabber_ != nullptr) grabber_->move(event->position());
-    update();
+    requestFrame();
     return;
   }
   const QPointF p = event->position() * scale();
   events()->mouseMotion(static_cast<float>(p.x()), static_cast<float>(p.y()));
-  update();
+  requestFrame();
 }
 
 void OsgView::mouseDoubleClickEvent(QMouseEvent* event) {
@@ -203,7 +289,7 @@ void OsgView::wheelEvent(QWheelEvent* event) {
   if (delta != 0) {
     events()->mouseScroll(delta > 0 ? osgGA::GUIEventAdapter::SCROLL_DOWN : osgGA::GUIEventAdapter::SCROLL_UP);
   }
-  update();
+  requestFrame();
 }
 
 }  // namespace flexirob::ui

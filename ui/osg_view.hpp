@@ -1,11 +1,16 @@
 #pragma once
-// The 3D view: an OpenSceneGraph viewer drawing into a QOpenGLWidget through an embedded
-// graphics window (no window of OSG's own), rendering in paintGL. The mouse orbits (left
-// button), pans (middle, or left with Shift) and zooms (right button, wheel) around the scene.
-#include <QOpenGLWidget>
+// The 3D view: an OpenSceneGraph viewer drawing through an embedded graphics window (no window
+// of OSG's own) into a framebuffer object of the view's own OpenGL context; the frame is read
+// back and painted as an image. A QOpenGLWidget would make Qt compose the whole window through
+// OpenGL on every frame; on a software renderer (llvmpipe under Xvfb) that composition cost as
+// much as drawing the scene. The mouse orbits (left button), pans (middle, or left with Shift)
+// and zooms (right button, wheel) around the scene.
+#include <QImage>
+#include <QWidget>
 #include <osg/Node>
 #include <osg/ref_ptr>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -14,6 +19,10 @@
 #include <osgViewer/Viewer>
 
 #include "render/camera.hpp"
+
+class QOffscreenSurface;
+class QOpenGLContext;
+class QOpenGLFramebufferObject;
 
 namespace flexirob::ui {
 
@@ -27,7 +36,7 @@ class ViewMouseGrabber {
   virtual void release() = 0;
 };
 
-class OsgView : public QOpenGLWidget {
+class OsgView : public QWidget {
   Q_OBJECT
 
  public:
@@ -44,6 +53,13 @@ class OsgView : public QOpenGLWidget {
   render::CameraPose currentCamera() const;
   /// Frames drawn so far (for tests and frame-rate figures).
   long framesDrawn() const { return frames_; }
+  /// Asks for a new frame at the next paint (the scene, the camera or the arm changed). Other
+  /// repaints, e.g. under a label laid over the view, show the last frame again.
+  void requestFrame();
+  /// Draws a frame now and returns it (empty where the platform has no OpenGL).
+  QImage grabFramebuffer();
+  /// False where no OpenGL context could be made (e.g. Qt's offscreen platform): nothing is drawn.
+  bool canRender() const { return !gl_failed_; }
 
   /// The nearest surface under widget position `position` that belongs to one of `bodies`:
   /// its index in `bodies` and the hit point [m, W]; -1 if none.
@@ -59,9 +75,8 @@ class OsgView : public QOpenGLWidget {
   void setControlClickHandler(std::function<void(const QPointF&)> handler) { control_click_ = std::move(handler); }
 
  protected:
-  void initializeGL() override;
-  void resizeGL(int width, int height) override;
-  void paintGL() override;
+  void paintEvent(QPaintEvent* event) override;
+  void resizeEvent(QResizeEvent* event) override;
   void mousePressEvent(QMouseEvent* event) override;
   void mouseReleaseEvent(QMouseEvent* event) override;
   void mouseMoveEvent(QMouseEvent* event) override;
@@ -72,12 +87,22 @@ class OsgView : public QOpenGLWidget {
   osgGA::EventQueue* events() const { return window_->getEventQueue(); }
   int osgButton(const QMouseEvent* event) const;
   double scale() const { return devicePixelRatioF(); }
+  void updateProjection();
+  bool makeContextCurrent();
+  void renderFrame();
 
   osg::ref_ptr<osgViewer::Viewer> viewer_;
   osg::ref_ptr<osgViewer::GraphicsWindowEmbedded> window_;
   osg::ref_ptr<osgGA::OrbitManipulator> manipulator_;
   render::CameraPose home_;
   long frames_ = 0;
+  std::unique_ptr<QOpenGLContext> context_;
+  std::unique_ptr<QOffscreenSurface> surface_;
+  std::unique_ptr<QOpenGLFramebufferObject> framebuffer_;
+  std::unique_ptr<QOpenGLFramebufferObject> resolved_;  // multisampling resolved, to read from
+  QImage frame_;          // the last frame drawn, top row first
+  bool frame_due_ = true;
+  bool gl_failed_ = false;
   ViewMouseGrabber* grabber_ = nullptr;
   bool grabbing_ = false;
   std::function<void(const QPointF&)> control_click_;

@@ -221,7 +221,7 @@ ReviewWindow::ReviewWindow(QWidget* parent)
   connect(plots_, &PlotPanel::cursorTimeChanged, this, &ReviewWindow::setTime);
   auto* overlay_menu = new OverlayMenu(world_->overlays(), this);
   menuBar()->addMenu(overlay_menu);
-  connect(overlay_menu, &OverlayMenu::toggled, view_, [this] { view_->update(); });
+  connect(overlay_menu, &OverlayMenu::toggled, view_, [this] { view_->requestFrame(); });
 
   confidence_panel_ = new ConfidencePanel(this);
   auto* confidence_dock = new QDockWidget(QStringLiteral("Confidence"), this);
@@ -231,7 +231,7 @@ ReviewWindow::ReviewWindow(QWidget* parent)
   connect(confidence_panel_, &ConfidencePanel::settingsChanged, this, [this] {
     operator_heights_ = true;
     updateConfidence(true);
-    view_->update();
+    view_->requestFrame();
   });
   resize(1200, 760);
   statusBar()->showMessage(QStringLiteral("Open a session recording"));
@@ -370,7 +370,7 @@ void ReviewWindow::setTime(double time) {
   timeline_->setTime(time);
   plots_->setCursorTime(time);
   updateLabels();
-  view_->update();
+  view_->requestFrame();
 }
 
 void ReviewWindow::updateOverlays() {

@@ -8,7 +8,7 @@
 
 namespace flexirob::ui::testing {
 
-// Qt's offscreen platform has no OpenGL: a shown QOpenGLWidget would crash there in Qt itself.
+// Qt's offscreen platform has no OpenGL: the 3D view draws nothing there.
 inline bool canDraw() { return QGuiApplication::platformName() != QStringLiteral("offscreen"); }
 
 // No session files and no layout of an earlier run.
