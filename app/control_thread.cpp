@@ -49,6 +49,7 @@ void ControlThread::start(robot::InteractionMode mode) {
   running_.store(true, std::memory_order_release);
   publish();
   thread_ = std::thread([this] { loop(); });
+  realtime::nameThread(thread_, "fr-control");
   if (options_.realtime_priority) {
     realtime::requestRealtimePriority(thread_);
   }

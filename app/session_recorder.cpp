@@ -1,5 +1,7 @@
 #include "app/session_recorder.hpp"
 
+#include <pthread.h>
+
 #include <sqlite3.h>
 
 #include <algorithm>
@@ -387,6 +389,7 @@ SessionRecorder::SessionRecorder(const std::filesystem::path& file, const Sessio
   impl_ = std::make_unique<Impl>(options, metadata);
   impl_->open(file);
   impl_->thread = std::thread([this] { impl_->run(); });
+  pthread_setname_np(impl_->thread.native_handle(), "fr-recorder");
 }
 
 SessionRecorder::~SessionRecorder() { close(); }

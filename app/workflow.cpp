@@ -616,6 +616,7 @@ void Workflow::startLearning() {
       realtime::runAtNormalPriority();
       job();
     });
+    realtime::nameThread(learning_thread_, "fr-learning");
   } else {
     job();
     collectLearning();

@@ -159,6 +159,7 @@ void WorkflowThread::start() {
   stop_requested_.store(false);
   running_.store(true, std::memory_order_release);
   thread_ = std::thread([this] { loop(); });
+  realtime::nameThread(thread_, "fr-workflow");
   if (options_.realtime_priority) {
     realtime::requestRealtimePriority(thread_);
   }
