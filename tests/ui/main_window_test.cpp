@@ -142,6 +142,32 @@ class MainWindowTest : public QObject {
     QVERIFY2(shown.pixel(p) != hidden.pixel(p), "the elbow is not drawn where the camera projects it");
   }
 
+  void windowScreenshotShowsTheViewsLastFrameWithoutDrawingAgain() {
+    if (!canDraw()) QSKIP("no OpenGL on Qt's offscreen platform");
+    MainWindow window("lwr4", "empty", quietOptions());
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    const QImage frame = window.view()->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    if (frame.isNull()) QSKIP("no OpenGL context on this platform");
+    const long frames = window.view()->framesDrawn();
+    // A repaint that asks for no new frame (a label over the view, a screenshot) shows the last one.
+    const QRect view_rect(window.view()->mapTo(&window, QPoint(0, 0)), window.view()->size());
+    const QImage shot = window.grab(view_rect).toImage().convertToFormat(QImage::Format_RGB32);
+    QCOMPARE(window.view()->framesDrawn(), frames);
+    QCOMPARE(shot.size(), frame.size());
+    int equal = 0;
+    for (int y = 0; y < frame.height(); ++y) {
+      for (int x = 0; x < frame.width(); ++x) equal += shot.pixel(x, y) == frame.pixel(x, y) ? 1 : 0;
+    }
+    // Everything but the labels laid over the view (stage banner, legend) is the frame itself.
+    const double fraction = static_cast<double>(equal) / (frame.width() * frame.height());
+    QVERIFY2(fraction > 0.8, qPrintable(QStringLiteral("only %1 of the screenshot is the view's frame").arg(fraction)));
+    // Asking for a frame draws one.
+    window.view()->requestFrame();
+    window.grab(view_rect);
+    QCOMPARE(window.view()->framesDrawn(), frames + 1);
+  }
+
   void mouseOrbitsPansAndZooms() {
     if (!canDraw()) QSKIP("no OpenGL on Qt's offscreen platform");
     MainWindow window("lwr4", "empty", quietOptions());
