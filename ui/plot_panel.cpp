@@ -166,6 +166,12 @@ void PlotPanel::setJoints(const std::vector<std::string>& names, const Eigen::Ve
   fresh->addSeries(QString(), QColor(200, 30, 30), Qt::DashLine, 1.0);
   fresh->hideFromLegend(1);  // one legend entry for both limit lines
   for (std::size_t j = 0; j < names.size(); ++j) fresh->addSeries(QString::fromStdString(names[j]), jointColor(static_cast<int>(j)));
+  if (names.size() > 7) {
+    // The legend does not wrap: beyond seven joints its labels would be elided to nothing.
+    QFont font = fresh->chart()->legend()->font();
+    font.setPointSizeF(font.pointSizeF() * 7.0 / static_cast<double>(names.size()));
+    fresh->chart()->legend()->setFont(font);
+  }
   static_cast<QVBoxLayout*>(layout())->replaceWidget(joints_, fresh);
   joints_->deleteLater();
   joints_ = fresh;
