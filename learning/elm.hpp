@@ -19,7 +19,7 @@ struct ElmParams {
   int hidden = 100;                 ///< R: see docs/LEARNING.md for the measurement behind it
   double epsilon = 0.01;            ///< ridge ε of Eq. 3.12/3.13 (thesis default, Tab. 3.4)
   std::uint64_t seed = 1;
-  double input_weight_range = 1.0;
+  double input_weight_range = 0.5;  ///< smoother maps between and beyond the areas: docs/LEARNING.md
   double gain_min = 1.0;
   double gain_max = 2.0;
   double bias_range = 1.0;
