@@ -411,12 +411,13 @@ void WorkflowThread::loop() {
     while (!stop_requested_.load(std::memory_order_acquire)) {
       // Absolute schedule: lateness of one cycle does not shift the next ones.
       advance(next, period_ns);
-      if (options_.paced) {
+      const bool sleeps = options_.paced && !options_.backend_paces;
+      if (sleeps) {
         while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr) == EINTR) {
         }
       }
       const timespec woke = now();
-      const double jitter_us = options_.paced ? std::max(0.0, microsBetween(next, woke)) : 0.0;
+      const double jitter_us = sleeps ? std::max(0.0, microsBetween(next, woke)) : 0.0;
 
       // Triggers fired by requests (the keyboard's) count as well as those the workflow detects.
       const std::size_t events_before = workflow_->events().size();
@@ -430,20 +431,24 @@ void WorkflowThread::loop() {
         (event.name == toString(Trigger::kOnAffected) ? on_affected_ : on_converged_)++;
       }
       recordCycle(events_before);
+      const timespec step_start = now();
       workflow_->backend().step();
+      const double waited_us = options_.backend_paces ? microsBetween(step_start, now()) : 0.0;
       refreshHeavyData();
 
       const timespec done = now();
-      const double compute_us = microsBetween(woke, done);
+      const double compute_us = microsBetween(woke, done) - waited_us;
       cycles_.fetch_add(1, std::memory_order_relaxed);
       last_compute_us_.store(compute_us, std::memory_order_relaxed);
       atomicMax(max_compute_us_, compute_us);
       sum_compute_us_.store(sum_compute_us_.load(std::memory_order_relaxed) + compute_us, std::memory_order_relaxed);
-      if (options_.paced) {
+      if (sleeps) {
         atomicMax(max_jitter_us_, jitter_us);
         timespec deadline = next;
         advance(deadline, period_ns);
         if (microsBetween(deadline, done) > 0.0) deadline_misses_.fetch_add(1, std::memory_order_relaxed);
+      } else if (options_.backend_paces && compute_us > options_.period * 1e6) {
+        deadline_misses_.fetch_add(1, std::memory_order_relaxed);
       }
       statistics.cycles = cycles_.load(std::memory_order_relaxed);
       statistics.deadline_misses = deadline_misses_.load(std::memory_order_relaxed);

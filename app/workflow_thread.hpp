@@ -164,6 +164,12 @@ class WorkflowThread {
   struct Options {
     double period = 1e-3;         ///< [s]
     bool paced = true;            ///< sleep to absolute period starts (off: as fast as possible)
+    /// The backend's step() waits for the robot's next measurement (FRI): the robot
+    /// controller's clock paces the loop, which then sleeps on no clock of its own (two clocks
+    /// at the same rate beat, and the loop falls behind the measurements), and the wait is not
+    /// counted as computing. A cycle then misses its deadline when computing took longer than
+    /// the period.
+    bool backend_paces = false;
     bool realtime_priority = false;
     double itm_publish_period = 0.1;  ///< [s] of backend time between ITM snapshots
   };

@@ -55,8 +55,11 @@ LiveTeaching::LiveTeaching(const robot::RobotModel& model, const robot::Scene& s
   workflow_ = std::make_unique<app::Workflow>(driven, parameters_, std::move(workflow_options));
   app::WorkflowThread::Options thread_options;
   thread_options.paced = options.paced;
-  // Only paced: an unpaced loop (tests) never sleeps and would starve its core at FIFO priority.
-  thread_options.realtime_priority = options.paced && options.realtime_priority;
+  // A real robot's measurements pace the loop (the FRI backend waits for each).
+  thread_options.backend_paces = simulation_ == nullptr;
+  // Only a loop that waits, on its clock or for the robot: an unpaced loop on the simulation
+  // (tests) never sleeps and would starve its core at FIFO priority.
+  thread_options.realtime_priority = options.realtime_priority && (options.paced || thread_options.backend_paces);
   thread_ = std::make_unique<app::WorkflowThread>(*workflow_, simulation_, thread_options);
 }
 

@@ -76,6 +76,43 @@ bool hasEvent(const WorkflowSnapshot& snapshot, const std::string& name) {
   return false;
 }
 
+// The simulation behind a robot controller's clock: step() first waits for the next
+// "measurement", as the FRI backend does.
+class WaitingBackend final : public robot::RobotBackend {
+ public:
+  WaitingBackend(robot::RobotBackend& arm, std::chrono::microseconds wait) : arm_(arm), wait_(wait) {}
+  const robot::RobotModel& model() const override { return arm_.model(); }
+  double cycleTime() const override { return arm_.cycleTime(); }
+  void readState(robot::RobotState& state) const override { arm_.readState(state); }
+  robot::CommandStatus writeCommand(const robot::JointImpedanceCommand& command) override { return arm_.writeCommand(command); }
+  void step() override {
+    std::this_thread::sleep_for(wait_);
+    arm_.step();
+  }
+
+ private:
+  robot::RobotBackend& arm_;
+  std::chrono::microseconds wait_;
+};
+
+TEST(WorkflowThread, ARobotThatPacesTheLoopIsWaitedForWithoutCountingTheWaitAsComputing) {
+  Rig rig;
+  // The robot's measurements come every 3 ms: three times the loop's period.
+  WaitingBackend robot(rig.sim, std::chrono::microseconds(3000));
+  Workflow workflow(robot, rig.parameters, rig.options());
+  WorkflowThread::Options options;
+  options.backend_paces = true;
+  WorkflowThread thread(workflow, nullptr, options);
+  thread.start();
+  const WorkflowSnapshot snapshot = waitFor(thread, [](const WorkflowSnapshot& s) { return s.cycle >= 40; });
+  thread.stop();
+  ASSERT_GE(snapshot.cycle, 40U);
+  // Computing is what the loop does between measurements, not the 3 ms it waits for them;
+  // counted with the wait, every cycle would take 3 ms and miss the 1 ms period.
+  EXPECT_LT(snapshot.statistics.max_compute_us, 2500.0);
+  EXPECT_LT(snapshot.statistics.deadline_misses, snapshot.statistics.cycles / 4);
+}
+
 TEST(WorkflowThread, ButtonsThroughTheQueueDriveTheStages) {
   Rig rig;
   Workflow workflow(rig.sim, rig.parameters, rig.options());
