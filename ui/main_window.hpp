@@ -102,6 +102,10 @@ class MainWindow : public QMainWindow {
   QMenu* robotMenu() const { return robot_menu_; }
   QMenu* sceneMenu() const { return scene_menu_; }
   QMenu* backendMenu() const { return backend_menu_; }
+  /// The status bar's link line (backend, FRI state and quality; red on a fault).
+  QLabel* linkLabel() const { return link_label_; }
+  /// "Confirm reconnect after a fault": enabled only while the watchdog holds the robot.
+  QAction* reconnectAction() const { return reconnect_action_; }
   /// The session file the current run records into (empty when not recording).
   QString sessionFile() const { return session_file_; }
   /// on_converged acknowledgements played so far.

@@ -1,6 +1,7 @@
 // The operator's interactions with the live robot: the stage panel's buttons drive the teaching
 // workflow, the keyboard moves the 9-DoF arm, a mouse drag on a link pulls it, the force arrow
 // and the key map show in the window, the joint-limit bars, parameters and sessions.
+#include <QAction>
 #include <QApplication>
 #include <QDoubleSpinBox>
 #include <QGuiApplication>
@@ -12,6 +13,10 @@
 #include <QTest>
 
 #include "app/session_reader.hpp"
+#include "robot/fri_protocol.hpp"
+#include "robot/fri_simulated_controller.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
 #include "render/camera.hpp"
 #include "robot/kinematics.hpp"
 #include "ui/joint_panel.hpp"
@@ -33,6 +38,7 @@ namespace {
 
 using flexirob::ui::testing::canDraw;
 using flexirob::ui::testing::quietOptions;
+using flexirob::ui::testing::showIfDrawable;
 
 
 
@@ -306,6 +312,56 @@ class OperatorTest : public QObject {
     // Recording goes on into a new file.
     QVERIFY(!window.sessionFile().isEmpty());
     QVERIFY(window.sessionFile() != file);
+  }
+
+  void theRobotOverFriIsMirroredItsLinkShownAndDisconnected() {
+    // The robot controller's stand-in on loopback, talking to the GUI's FRI port as a KRC would.
+    const auto model = flexirob::robot::RobotModel::fromUrdfFile(flexirob::resolveRobotPath("lwr4"));
+    flexirob::robot::FriSimulatedControllerConfig krc;
+    krc.peer = flexirob::robot::UdpEndpoint::parse("127.0.0.1", flexirob::robot::fri::kDefaultPcPort, "pc");
+    // The slowest cycle FRI allows (10 ms): the watchdog then forgives a GUI thread's 30 ms, which
+    // a loaded test machine without a real-time kernel does not always keep below 3 ms.
+    krc.cycle = 0.01;
+    krc.q_initial = Eigen::VectorXd(7);
+    krc.q_initial << 0.4, 0.5, -0.2, -1.3, 0.1, 0.9, 0.3;
+    flexirob::robot::FriSimulatedController controller(model, krc);
+    controller.start();
+
+    MainWindow window("lwr4", "empty", quietOptions());
+    showIfDrawable(window);
+    const std::string address = "fri://" + controller.localEndpoint().toString();
+    if (!window.setBackend(address)) QSKIP("the FRI port 49938 is taken on this machine");
+    QVERIFY(!window.reconnectAction()->isEnabled());
+    // Monitor mode, then command mode once our answers make the quality good enough.
+    QTRY_VERIFY2_WITH_TIMEOUT(window.live()->linkStatus().link == "commanding", window.live()->linkStatus().summary().c_str(), 10000);
+    QTRY_VERIFY(window.linkLabel()->text().contains(QStringLiteral("commanding")));
+    QVERIFY(window.linkLabel()->text().contains(QString::fromStdString(address)));
+    // The mirror shows the real arm's posture (the stand-in's, as its measurements report it),
+    // which starts away from the simulation's home posture.
+    const auto mirrored = [&] {
+      const auto& snapshot = window.live()->snapshot();
+      const Eigen::VectorXd real = controller.stats().q;
+      double largest = 0.0;
+      for (int j = 0; j < 7; ++j) largest = std::max(largest, std::abs(snapshot.q[static_cast<std::size_t>(j)] - real[j]));
+      return largest;
+    };
+    QTRY_VERIFY_WITH_TIMEOUT(mirrored() < 0.01, 5000);
+    flexirob::robot::Kinematics kinematics(model);
+    kinematics.update(controller.stats().q);
+    QTRY_VERIFY((window.kinematics()->p_WT() - kinematics.p_WT()).norm() < 0.01);
+
+    // A burst of lost measurements: the watchdog stops commanding, the link turns red and the
+    // operator is asked to confirm a reconnect.
+    controller.dropNextMeasurements(200);
+    QTRY_VERIFY_WITH_TIMEOUT(window.live()->linkStatus().fault, 5000);
+    QTRY_VERIFY(window.reconnectAction()->isEnabled());
+    QVERIFY(window.linkLabel()->styleSheet().contains(QStringLiteral("#c00000")));
+
+    // Disconnect: back to the simulation, the fault gone with the link.
+    QVERIFY(window.setBackend("sim"));
+    QCOMPARE(window.live()->linkStatus().link, std::string("simulated"));
+    QTRY_VERIFY(!window.reconnectAction()->isEnabled());
+    controller.stop();
   }
 };
 
