@@ -765,6 +765,16 @@ std::unique_ptr<learning::OsElm> Workflow::makeOnlineLearner() const {
 
 void Workflow::update() {
   backend_->readState(state_);
+  if (!measured_ && state_.time > 0.0) {
+    // The first measurement: hold where the robot is. A real robot's backend reports a zero
+    // posture until its controller has sent one, and holding that would pull the arm towards
+    // the stretched posture.
+    measured_ = true;
+    hold_q_ = state_.q;
+    if (stage_ == Stage::kIdle) q_fixed_ = state_.q;
+    interaction_.setFixedPosture(controller_ == InteractionController::kCompliantRecording ? q_fixed_ : hold_q_);
+    interaction_.start(controller_, state_);
+  }
   collectLearning();
   if (stage_ == Stage::kConfiguration || stage_ == Stage::kProgramming) {
     if (const auto event = triggers_.update(state_)) onTrigger(event->kind);

@@ -287,6 +287,7 @@ class Workflow {
   SubStage sub_stage_ = SubStage::kNone;
   InteractionController controller_ = InteractionController::kHierarchicalControl;
   Eigen::VectorXd hold_q_;      // posture held in WAITING / IDLE (null-space target without a map)
+  bool measured_ = false;  // a state with time > 0 came in: hold_q_ is where the robot is
   Eigen::VectorXd q_fixed_;     // π_rec target
   double last_sample_time_ = -1e9;
 

@@ -110,6 +110,24 @@ Eigen::VectorXd posture(double a1) {
   return q;
 }
 
+
+TEST(Workflow, HoldsWhereTheFirstMeasurementPutsTheRobotNotTheZerosBeforeIt) {
+  Fixture f;
+  // A real robot's backend before its controller's first measurement: time 0, every joint 0.
+  f.backend.move(Eigen::VectorXd::Zero(7), 0.0);
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  Eigen::VectorXd measured(7);
+  measured << 0.4, 0.5, -0.2, -1.3, 0.1, 0.9, 0.3;
+  f.backend.move(measured, 0.0);
+  f.backend.rest();
+  run(workflow, 1.0);
+  ASSERT_EQ(workflow.stage(), Stage::kIdle);
+  // IDLE holds the measured posture; holding the zeros would drag the arm towards the stretched
+  // posture, 0.5 rad/s within a second.
+  EXPECT_LT((f.backend.last().q_cmd - measured).cwiseAbs().maxCoeff(), 1e-3) << f.backend.last().q_cmd.transpose();
+  EXPECT_LT((workflow.taskTarget() - f.backend.state().p_WT()).norm(), 1e-6);
+}
+
 TEST(Workflow, RefusesProgrammingBeforeConfigurationWithoutChangingState) {
   Fixture f;
   Workflow workflow(f.backend, f.parameters, syncOptions());
