@@ -223,9 +223,13 @@ void Workflow::setState(Stage stage, SubStage sub_stage) {
   hold_q_ = state_.q;
   const bool mapped = controller_ != InteractionController::kHierarchicalControl || stage == Stage::kExecution;
   interaction_.setRedundancyMap(mapped ? &posture_map_ : nullptr);
+  restartController();
+  emit(WorkflowEvent::Kind::kStage, stateName(), std::string("controller ") + toString(controller_));
+}
+
+void Workflow::restartController() {
   interaction_.setFixedPosture(controller_ == InteractionController::kCompliantRecording ? q_fixed_ : hold_q_);
   interaction_.start(controller_, state_);
-  emit(WorkflowEvent::Kind::kStage, stateName(), std::string("controller ") + toString(controller_));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -772,8 +776,7 @@ void Workflow::update() {
     measured_ = true;
     hold_q_ = state_.q;
     if (stage_ == Stage::kIdle) q_fixed_ = state_.q;
-    interaction_.setFixedPosture(controller_ == InteractionController::kCompliantRecording ? q_fixed_ : hold_q_);
-    interaction_.start(controller_, state_);
+    restartController();
   }
   collectLearning();
   if (stage_ == Stage::kConfiguration || stage_ == Stage::kProgramming) {

@@ -261,6 +261,8 @@ class Workflow {
   };
 
   void setState(Stage stage, SubStage sub_stage);
+  /// Starts the current controller from the state of now, aimed at q_fixed (recording) or the held posture.
+  void restartController();
   void emit(WorkflowEvent::Kind kind, std::string name, std::string detail, int area = -1);
   RequestResult refuse(const std::string& request, std::string reason);
   void onTrigger(Trigger trigger);

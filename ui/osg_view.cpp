@@ -80,9 +80,13 @@ render::CameraPose OsgView::currentCamera() const {
   return camera;
 }
 
+QSize OsgView::pixelSize() const {
+  return {std::max(1, static_cast<int>(width() * scale())), std::max(1, static_cast<int>(height() * scale()))};
+}
+
 void OsgView::updateProjection() {
-  const int w = std::max(1, static_cast<int>(width() * scale()));
-  const int h = std::max(1, static_cast<int>(height() * scale()));
+  const int w = pixelSize().width();
+  const int h = pixelSize().height();
   window_->resized(0, 0, w, h);
   events()->windowResize(0, 0, w, h);
   osg::Camera* camera = viewer_->getCamera();
@@ -119,7 +123,7 @@ bool OsgView::makeContextCurrent() {
 
 void OsgView::renderFrame() {
   if (!makeContextCurrent()) return;
-  const QSize size(std::max(1, static_cast<int>(width() * scale())), std::max(1, static_cast<int>(height() * scale())));
+  const QSize size = pixelSize();
   if (!framebuffer_ || framebuffer_->size() != size) {
     QOpenGLFramebufferObjectFormat format;
     format.setAttachment(QOpenGLFramebufferObject::CombinedDepthStencil);
@@ -163,7 +167,7 @@ QImage OsgView::grabFramebuffer() {
 }
 
 void OsgView::paintEvent(QPaintEvent* /*event*/) {
-  const QSize size(std::max(1, static_cast<int>(width() * scale())), std::max(1, static_cast<int>(height() * scale())));
+  const QSize size = pixelSize();
   if (frame_due_ || frame_.size() != size) renderFrame();
   QPainter painter(this);
   if (frame_.isNull()) {

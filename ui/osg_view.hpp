@@ -87,6 +87,7 @@ class OsgView : public QWidget {
   osgGA::EventQueue* events() const { return window_->getEventQueue(); }
   int osgButton(const QMouseEvent* event) const;
   double scale() const { return devicePixelRatioF(); }
+  QSize pixelSize() const;  ///< the view in device pixels, at least 1 x 1
   void updateProjection();
   bool makeContextCurrent();
   void renderFrame();
