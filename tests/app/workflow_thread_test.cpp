@@ -108,8 +108,9 @@ TEST(WorkflowThread, ARobotThatPacesTheLoopIsWaitedForWithoutCountingTheWaitAsCo
   thread.stop();
   ASSERT_GE(snapshot.cycle, 40U);
   // Computing is what the loop does between measurements, not the 3 ms it waits for them;
-  // counted with the wait, every cycle would take 3 ms and miss the 1 ms period.
-  EXPECT_LT(snapshot.statistics.max_compute_us, 2500.0);
+  // counted with the wait, every cycle would take 3 ms and miss the 1 ms period. The mean,
+  // not the maximum: one preempted cycle on a loaded machine may take longer than the wait.
+  EXPECT_LT(snapshot.statistics.mean_compute_us, 1500.0);
   EXPECT_LT(snapshot.statistics.deadline_misses, snapshot.statistics.cycles / 4);
 }
 
