@@ -67,9 +67,6 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
   return outcome;
 }
 
-namespace {
-
-// Largest distance of the tip from joint 2's axis point over the stretched posture: the reach.
 std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& model) {
   const Eigen::VectorXd q = Eigen::VectorXd::Zero(model.dof())
                                 .cwiseMax(model.softLowerLimits())
@@ -82,6 +79,8 @@ std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& mod
   reach = std::max(reach, (kinematics.p_WT() - shoulder).norm());
   return {shoulder, reach};
 }
+
+namespace {
 
 // Points of the arm in posture q: body origins, the tip and every 2 cm between consecutive ones.
 void armPoints(robot::Kinematics& kinematics, int dof, std::vector<Eigen::Vector3d>& out) {

@@ -34,6 +34,10 @@ struct MotionOutcome {
   Eigen::VectorXd q;      ///< final posture
 };
 
+/// The arm's shoulder (joint 2's axis point in the stretched posture) and its reach from there:
+/// the largest distance of a body origin or the tip from the shoulder [m].
+std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& model);
+
 /// Drives the command from q_start towards p_des(t) (t in [0, duration], held after) for
 /// duration + settle seconds at 1 kHz; checks contacts every 10 ms. `world` may be null.
 MotionOutcome executeMotion(const robot::RobotModel& model, const robot::ParameterSet& parameters,

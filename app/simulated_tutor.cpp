@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "app/evaluation.hpp"
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
 
@@ -43,6 +44,7 @@ SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const
     throw InputError("tutor: circle diameter must be in (0, 0.5] m");
   }
   if (options_.circles < 1 || options_.posture_candidates < 1) throw InputError("tutor: circles and candidates must be >= 1");
+  if (options_.check_points < 0) throw InputError("tutor: check points must be >= 0");
   state_.resize(model_->dof());
 }
 
@@ -469,6 +471,89 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
   return true;
 }
 
+void SimulatedTutor::drawCheckPoints() {
+  const robot::EvaluationGrid grid = scene_->grid.value_or(robot::EvaluationGrid{});
+  const auto [shoulder, reach] = shoulderAndReach(*model_);
+  learning::UniformRandom draw(options_.seed + 0x5eed);
+  const Eigen::VectorXd q_start = scene_->home_posture && scene_->home_posture->size() == model_->dof() ? *scene_->home_posture : model_->midPosture();
+  check_points_.clear();
+  for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < 100 * options_.check_points; ++k) {
+    Eigen::Vector3d x;
+    for (int a = 0; a < 3; ++a) x[a] = draw.uniform(grid.lower[a], grid.upper[a]);
+    if ((x - shoulder).norm() > reach) continue;
+    bool inside = false;
+    for (const auto& obstacle : scene_->obstacles) inside = inside || robot::obstacleContains(obstacle, x, 0.05);
+    // Only where some posture reaches without a contact (a person sees the arm cannot get there).
+    if (!inside && (scene_->obstacles.empty() || accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw))) {
+      check_points_.push_back(x);
+    }
+  }
+  check_failed_.assign(check_points_.size(), true);
+}
+
+int SimulatedTutor::mapFailures() {
+  check_failed_.assign(check_points_.size(), true);
+  if (workflow_->areas().empty()) return static_cast<int>(check_points_.size());
+  const int dof = model_->dof();
+  std::unique_ptr<learning::Learner> map = makeLearner(workflow_->options(), dof);
+  map->fit(workflow_->trainingSet());
+  const Eigen::VectorXd lower = model_->softLowerLimits();
+  const Eigen::VectorXd upper = model_->softUpperLimits();
+  const double tolerance = scene_->grid.value_or(robot::EvaluationGrid{}).tolerance;
+  Eigen::VectorXd q(dof);
+  int failures = 0;
+  for (std::size_t i = 0; i < check_points_.size(); ++i) {
+    const Eigen::Vector3d& x = check_points_[i];
+    map->predict(x, q);
+    const MotionOutcome outcome = executeMotion(*model_, parameters_, *map, q.cwiseMax(lower).cwiseMin(upper),
+                                                [&x](double) { return x; }, 0.0, 3.0, world_.get());
+    check_failed_[i] = outcome.collided || outcome.final_error_m > tolerance;
+    if (check_failed_[i]) ++failures;
+  }
+  return failures;
+}
+
+Eigen::Vector3d SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid& grid, const std::vector<Eigen::Vector3d>& tried,
+                                                    bool where_it_fails) {
+  const auto near_tried = [&tried](const Eigen::Vector3d& x) {
+    return std::any_of(tried.begin(), tried.end(), [&x](const Eigen::Vector3d& t) { return (t - x).norm() < 0.1; });
+  };
+  int best = -1;
+  int best_neighbours = -1;
+  if (where_it_fails && !workflow_->areas().empty()) {
+    for (std::size_t i = 0; i < check_points_.size(); ++i) {
+      if (!check_failed_[i] || near_tried(check_points_[i])) continue;
+      // An area needs room for the arm around the tip (the random places keep 0.1 m as well).
+      if (!roomyForAnArea(check_points_[i])) continue;
+      int neighbours = 0;
+      for (std::size_t j = 0; j < check_points_.size(); ++j) {
+        if (check_failed_[j] && (check_points_[j] - check_points_[i]).norm() < 0.2) ++neighbours;
+      }
+      if (neighbours > best_neighbours) {
+        best_neighbours = neighbours;
+        best = static_cast<int>(i);
+      }
+    }
+  }
+  if (best >= 0) return check_points_[static_cast<std::size_t>(best)];
+  // A point of the workspace box away from the obstacles.
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();
+  for (int tries = 0; tries < 100; ++tries) {
+    for (int a = 0; a < 3; ++a) target[a] = random_.uniform(grid.lower[a], grid.upper[a]);
+    if (roomyForAnArea(target) && !near_tried(target)) break;
+  }
+  return target;
+}
+
+bool SimulatedTutor::roomyForAnArea(const Eigen::Vector3d& p_W) const {
+  // Room for the arm around the tip: 0.1 m from every obstacle, and off the robot's own base
+  // and the table it stands on, where the hands cannot lead the arm through a helix.
+  for (const auto& obstacle : scene_->obstacles) {
+    if (robot::obstacleContains(obstacle, p_W, 0.1)) return false;
+  }
+  return p_W.z() >= 0.08 && p_W.head<2>().norm() >= 0.2;
+}
+
 TutorReport SimulatedTutor::configure(int area_count) {
   if (area_count < 1 || area_count > 200) throw InputError("areas: expected 1..200, got " + std::to_string(area_count));
   arm()->readState(state_);
@@ -477,26 +562,54 @@ TutorReport SimulatedTutor::configure(int area_count) {
   const robot::EvaluationGrid grid = scene_->grid.value_or(robot::EvaluationGrid{});
   int listed = 0;
   int attempts = 0;
+  int failures = -1;  // check points the map misses; -1: not counted yet
+  std::vector<Eigen::Vector3d> tried;
+  bool last_automatic_taught = true;
   while (static_cast<int>(workflow_->areas().size()) < area_count && attempts < 4 * area_count + 8) {
     ++attempts;
     TutorAreaReport area;
     std::optional<Eigen::VectorXd> suggested;
-    if (listed < static_cast<int>(scene_->training_areas.size())) {
+    const bool automatic = listed >= static_cast<int>(scene_->training_areas.size());
+    if (!automatic) {
       const robot::Area& scene_area = scene_->training_areas[static_cast<std::size_t>(listed++)];
       area.name = scene_area.name;
       area.target = scene_area.p_WA;
       suggested = scene_area.posture;
     } else {
-      // Chosen automatically: a point of the evaluation grid's box away from the obstacles.
+      // Sect. 3.3.2: the tutor taught the areas "he found to be relevant", looking at where the
+      // robot failed; a place taught for its own sake can bend the map into an obstacle for
+      // its neighbours, so the area is checked and taken back if the map got worse (kept if it
+      // is no worse: it adds taught space).
       area.name = "auto_" + std::to_string(attempts);
-      for (int tries = 0; tries < 100; ++tries) {
-        for (int a = 0; a < 3; ++a) area.target[a] = random_.uniform(grid.lower[a], grid.upper[a]);
-        bool free = true;
-        for (const auto& obstacle : scene_->obstacles) free = free && !robot::obstacleContains(obstacle, area.target, 0.1);
-        if (free) break;
+      if (options_.check_points > 0 && failures < 0) {
+        drawCheckPoints();
+        failures = mapFailures();
       }
+      area.automatic = true;
+      // Where the map fails may be where no posture can be taught (cramped, or out of the
+      // hands' reach): after a place that could not be taught, a random one.
+      area.target = nextAutomaticTarget(grid, tried, last_automatic_taught);
+      tried.push_back(area.target);
     }
     teachArea(area, suggested);
+    if (automatic) last_automatic_taught = area.taught;
+    // A recording that has not come to rest holds the arm under π_rec, against which the next
+    // approach cannot lead it: hands off until it ends.
+    if (workflow_->subStage() == SubStage::kRecording) waitFor(SubStage::kWaiting, 10.0);
+    if (automatic && area.taught && options_.check_points > 0) {
+      const std::vector<bool> failed_without = check_failed_;
+      const int with_area = mapFailures();
+      area.map_failures_before = failures;
+      area.map_failures_with = with_area;
+      if (with_area > failures && workflow_->removeArea(static_cast<int>(workflow_->areas().size()) - 1)) {
+        area.taught = false;
+        area.failure = "taken back: the learned map missed " + std::to_string(with_area) + " of " +
+                       std::to_string(check_points_.size()) + " check points with it, " + std::to_string(failures) + " without";
+        check_failed_ = failed_without;
+      } else {
+        failures = with_area;
+      }
+    }
     report_.areas.push_back(area);
     if (options_.progress) options_.progress("teach", static_cast<double>(workflow_->areas().size()) / area_count);
   }

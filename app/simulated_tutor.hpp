@@ -41,6 +41,11 @@ struct TutorOptions {
   double max_phase_time = 30.0;    ///< [s] a phase may take beyond its planned duration before the tutor gives up
   int approach_iterations = 4000;  ///< RRT-Connect iterations for a way around obstacles
   bool realtime = false;           ///< pace at wall-clock speed
+  /// Areas chosen automatically (beyond the scene's list) are checked on this many points drawn
+  /// over the scene's workspace: the tutor teaches where the learned map fails and takes an area
+  /// back when the map fails at more check points with it than without (the report says so, and
+  /// the configuration may end with fewer areas than asked). 0: random places, all kept.
+  int check_points = 150;
   /// Called with the measured state after every control cycle (a session recorder); may be empty.
   std::function<void(const robot::RobotState&)> on_cycle;
   /// Set when another thread steps the arm (the FRI controller stand-in,
@@ -59,6 +64,11 @@ struct TutorAreaReport {
   double clearance = 0.0;                            ///< its clearance [m]
   bool taught = false;
   std::string failure;                               ///< why not, if not taught
+  bool automatic = false;                            ///< chosen by the tutor, not the scene's list
+  /// Automatic areas: check points the learned map missed before the area and with it
+  /// (TutorOptions::check_points); -1 where not checked.
+  int map_failures_before = -1;
+  int map_failures_with = -1;
 };
 
 struct TutorReport {
@@ -119,6 +129,18 @@ class SimulatedTutor {
   /// keep `margin` [m] from the obstacles: a person sees how far the arm can be deflected.
   bool helixFree(const Eigen::VectorXd& q_fixed, const std::vector<Eigen::Vector3d>& helix, double margin);
   void updateReport();
+  /// The check points of automatic areas: drawn over the scene's workspace box, within reach
+  /// and 5 cm outside the obstacles (seeded; the same for the whole configuration).
+  void drawCheckPoints();
+  /// Fits the workflow's learner to what was taught and marks the check points the arm does not
+  /// reach from the learned posture (as `eval reachable` does); returns how many.
+  int mapFailures();
+  /// Where to teach next automatically: with `where_it_fails`, the failing check point with the
+  /// most failing neighbours within 0.2 m, 0.1 m clear of the obstacles and of earlier attempts;
+  /// otherwise, or before any map, or when none is left, a random free point of the workspace box.
+  bool roomyForAnArea(const Eigen::Vector3d& p_W) const;
+  Eigen::Vector3d nextAutomaticTarget(const robot::EvaluationGrid& grid, const std::vector<Eigen::Vector3d>& tried,
+                                      bool where_it_fails);
 
   /// The arm held under TutorOptions::arm_mutex (if set) for one full expression,
   /// `arm()->time()`; never two in one expression.
@@ -148,6 +170,8 @@ class SimulatedTutor {
   std::uint64_t ticks_ = 0;
   double wall_start_ = -1.0;
   std::string last_failure_detail_;
+  std::vector<Eigen::Vector3d> check_points_;
+  std::vector<bool> check_failed_;
 };
 
 }  // namespace flexirob::app

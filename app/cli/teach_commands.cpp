@@ -39,6 +39,7 @@ struct TeachOptions {
   std::string learner = "elm";
   double diameter = app::TutorOptions{}.circle_diameter;  // the tutor's default
   int candidates = 24;
+  int check_points = app::TutorOptions{}.check_points;
   std::string backend = "sim";
 };
 
@@ -111,6 +112,7 @@ Json runTeach(const TeachOptions& options) {
   tutor_options.realtime = options.realtime;
   tutor_options.circle_diameter = options.diameter;
   tutor_options.posture_candidates = options.candidates;
+  tutor_options.check_points = options.check_points;
   tutor_options.progress = [](const std::string& what, double fraction) { reportProgress(what, fraction); };
   if (controller) tutor_options.arm_mutex = &controller->armMutex();  // the stand-in's thread steps the arm
 
@@ -205,7 +207,10 @@ Json runTeach(const TeachOptions& options) {
                            {"target", toJson(area.target)},
                            {"taught", area.taught},
                            {"clearance_m", area.clearance},
-                           {"failure", area.failure}});
+                           {"failure", area.failure},
+                           {"automatic", area.automatic},
+                           {"map_failures_before", area.map_failures_before},
+                           {"map_failures_with", area.map_failures_with}});
   }
   const Json session = {{"format", "flexirob-session-json"},
                         {"version", 1},
@@ -318,6 +323,10 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   teach->add_option("--learner", options->learner, "elm, oselm or llm");
   teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m]")->check(CLI::Range(0.005, 0.5));
   teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(CLI::Range(1, 1000));
+  teach->add_option("--check-points", options->check_points,
+                    "points on which areas beyond the scene's list are checked and taken back if the map got worse (0: random places, kept)")
+      ->check(CLI::Range(0, 10000))
+      ->capture_default_str();
   teach->add_option("--backend", options->backend,
                     "sim (the Bullet simulation) or fri-sim (the same arm behind the FRI controller stand-in, "
                     "driven over UDP loopback through the FRI backend)");

@@ -201,5 +201,57 @@ TEST(SimulatedTutor, LeadsTheArmAroundTheBoardToAnAreaUnderIt) {
   EXPECT_LT((workflow.areas()[0].centre - under_board.p_WA).norm(), 0.05);
 }
 
+
+// Beyond the scene's list the tutor chooses where to teach: where the learned map fails, and an
+// area that makes the map miss more of its check points than before is taken back (removed from
+// the workflow), so no area it keeps made the map worse on them.
+TEST(SimulatedTutor, KeepsAnAutomaticAreaOnlyWhenTheLearnedMapGetsNoWorseWithIt) {
+  robot::Scene scene = robot::loadScene("setup_A");
+  scene.training_areas.resize(1);
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  robot::Simulation sim(lwr4(), &scene, parameters);
+  sim.reset(*scene.home_posture);
+  WorkflowOptions options;
+  options.background_learning = false;
+  Workflow workflow(sim, parameters, options);
+  TutorOptions tutor_options;
+  tutor_options.circles = 1;
+  tutor_options.posture_candidates = 8;
+  tutor_options.check_points = 40;
+  SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
+  const TutorReport report = tutor.configure(2);
+
+  int taught = 0, checked = 0, taken_back = 0;
+  int failures = -1;
+  for (const TutorAreaReport& area : report.areas) {
+    taught += area.taught ? 1 : 0;
+    if (!area.automatic) {
+      EXPECT_EQ(area.map_failures_before, -1) << area.name;
+      continue;
+    }
+    if (area.map_failures_with < 0) continue;  // not taught at all: nothing to check
+    ++checked;
+    EXPECT_GE(area.map_failures_before, 0) << area.name;
+    EXPECT_LE(area.map_failures_before, 40) << area.name;
+    if (failures >= 0) EXPECT_EQ(area.map_failures_before, failures) << area.name << ": counted against the map kept last";
+    if (area.taught) {
+      EXPECT_LE(area.map_failures_with, area.map_failures_before) << area.name;
+      failures = area.map_failures_with;
+    } else {
+      EXPECT_GT(area.map_failures_with, area.map_failures_before) << area.name;
+      EXPECT_NE(area.failure.find("taken back"), std::string::npos) << area.failure;
+      ++taken_back;
+      failures = area.map_failures_before;
+    }
+  }
+  EXPECT_GE(checked, 1);
+  EXPECT_EQ(static_cast<int>(workflow.areas().size()), taught);
+  int removed = 0;
+  for (const auto& event : workflow.events()) removed += event.kind == WorkflowEvent::Kind::kAreaRemoved ? 1 : 0;
+  EXPECT_EQ(removed, taken_back);
+  EXPECT_EQ(report.collisions, 0U);
+}
+
 }  // namespace
 }  // namespace flexirob::app
