@@ -510,6 +510,9 @@ int SimulatedTutor::mapFailures() {
     check_failed_[i] = outcome.collided || outcome.final_error_m > tolerance;
     if (check_failed_[i]) ++failures;
   }
+  // The simulation stood still while the tutor checked; --realtime paces on from here instead of
+  // racing to catch up with the wall clock.
+  wall_start_ = -1.0;
   return failures;
 }
 
