@@ -1,4 +1,5 @@
 // The simulated tutor teaching the simulated LWR IV in setup A through the workflow.
+#include <memory>
 #include <gtest/gtest.h>
 
 #include "app/evaluation.hpp"
@@ -177,30 +178,44 @@ namespace {
 // Setup I's area I3 lies under the board, on the far side of it from the home posture: the
 // straight joint-space way there runs into the board, so the tutor has to lead the arm around
 // it (the approach planner) and does so without a contact.
+// A short teaching run on `scene`: learning in the caller's thread, one helix turn per area,
+// eight posture candidates.
+struct ShortTeaching {
+  explicit ShortTeaching(robot::Scene scene_in)
+      : scene(std::move(scene_in)), declarations(robot::reachParameters()), parameters(declarations), sim(lwr4(), &scene, parameters) {
+    sim.reset(*scene.home_posture);
+    WorkflowOptions options;
+    options.background_learning = false;
+    workflow = std::make_unique<Workflow>(sim, parameters, options);
+    tutor_options.circles = 1;
+    tutor_options.posture_candidates = 8;
+  }
+  TutorReport configure(int areas) {
+    SimulatedTutor tutor(sim, *workflow, scene, parameters, tutor_options);
+    return tutor.configure(areas);
+  }
+
+  robot::Scene scene;
+  std::vector<robot::ParameterDeclaration> declarations;
+  robot::ParameterSet parameters;
+  robot::Simulation sim;
+  std::unique_ptr<Workflow> workflow;
+  TutorOptions tutor_options;
+};
+
 TEST(SimulatedTutor, LeadsTheArmAroundTheBoardToAnAreaUnderIt) {
   robot::Scene scene = robot::loadScene("setup_I");
   const robot::Area under_board = scene.training_areas.at(2);
   ASSERT_EQ(under_board.name, "I3");
   scene.training_areas = {under_board};
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-  robot::ParameterSet parameters(declarations);
-  robot::Simulation sim(lwr4(), &scene, parameters);
-  sim.reset(*scene.home_posture);
-  WorkflowOptions options;
-  options.background_learning = false;
-  Workflow workflow(sim, parameters, options);
-  TutorOptions tutor_options;
-  tutor_options.circles = 1;
-  tutor_options.posture_candidates = 8;
-  SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
-  const TutorReport report = tutor.configure(1);
+  ShortTeaching teaching(scene);
+  const TutorReport report = teaching.configure(1);
   ASSERT_EQ(report.areas.size(), 1U);
   EXPECT_TRUE(report.areas[0].taught) << report.areas[0].failure;
   EXPECT_EQ(report.collisions, 0U);
-  ASSERT_EQ(workflow.areas().size(), 1U);
-  EXPECT_LT((workflow.areas()[0].centre - under_board.p_WA).norm(), 0.05);
+  ASSERT_EQ(teaching.workflow->areas().size(), 1U);
+  EXPECT_LT((teaching.workflow->areas()[0].centre - under_board.p_WA).norm(), 0.05);
 }
-
 
 // Beyond the scene's list the tutor chooses where to teach: where the learned map fails, and an
 // area that makes the map miss more of its check points than before is taken back (removed from
@@ -208,19 +223,10 @@ TEST(SimulatedTutor, LeadsTheArmAroundTheBoardToAnAreaUnderIt) {
 TEST(SimulatedTutor, KeepsAnAutomaticAreaOnlyWhenTheLearnedMapGetsNoWorseWithIt) {
   robot::Scene scene = robot::loadScene("setup_A");
   scene.training_areas.resize(1);
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-  robot::ParameterSet parameters(declarations);
-  robot::Simulation sim(lwr4(), &scene, parameters);
-  sim.reset(*scene.home_posture);
-  WorkflowOptions options;
-  options.background_learning = false;
-  Workflow workflow(sim, parameters, options);
-  TutorOptions tutor_options;
-  tutor_options.circles = 1;
-  tutor_options.posture_candidates = 8;
-  tutor_options.check_points = 40;
-  SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
-  const TutorReport report = tutor.configure(2);
+  ShortTeaching teaching(scene);
+  teaching.tutor_options.check_points = 40;
+  const TutorReport report = teaching.configure(2);
+  const Workflow& workflow = *teaching.workflow;
 
   int taught = 0, checked = 0, taken_back = 0;
   int failures = -1;
