@@ -1,6 +1,7 @@
 // The simulated tutor teaching the simulated LWR IV in setup A through the workflow.
-#include <memory>
 #include <gtest/gtest.h>
+
+#include <memory>
 
 #include "app/evaluation.hpp"
 #include "app/simulated_tutor.hpp"
