@@ -237,6 +237,10 @@ TEST(SimulatedTutor, KeepsAnAutomaticAreaOnlyWhenTheLearnedMapGetsNoWorseWithIt)
       EXPECT_EQ(area.map_failures_before, -1) << area.name;
       continue;
     }
+    // Every place chosen has room for an area: 0.1 m to the obstacles, off the base and the table.
+    for (const auto& obstacle : scene.obstacles) EXPECT_FALSE(robot::obstacleContains(obstacle, area.target, 0.1)) << area.name;
+    EXPECT_GE(area.target.z(), 0.08) << area.name;
+    EXPECT_GE(area.target.head<2>().norm(), 0.2) << area.name;
     if (area.map_failures_with < 0) continue;  // not taught at all: nothing to check
     ++checked;
     EXPECT_GE(area.map_failures_before, 0) << area.name;
