@@ -67,6 +67,18 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
   return outcome;
 }
 
+Eigen::VectorXd learnedPosture(const robot::RobotModel& model, const learning::Learner& map, const Eigen::Vector3d& p_W) {
+  Eigen::VectorXd q_c(model.dof());
+  map.predict(p_W, q_c);
+  return q_c.cwiseMax(model.softLowerLimits()).cwiseMin(model.softUpperLimits());
+}
+
+MotionOutcome approachTarget(const robot::RobotModel& model, const robot::ParameterSet& parameters,
+                             const learning::Learner& map, const Eigen::VectorXd& q_start, const Eigen::Vector3d& p_W,
+                             robot::CollisionWorld* world) {
+  return executeMotion(model, parameters, map, q_start, [&p_W](double) { return p_W; }, 0.0, 3.0, world);
+}
+
 std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& model) {
   const Eigen::VectorXd q = Eigen::VectorXd::Zero(model.dof())
                                 .cwiseMax(model.softLowerLimits())
@@ -186,23 +198,16 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
       from = targets[i];
     }
   }
-  const Eigen::VectorXd lower = model.softLowerLimits();
-  const Eigen::VectorXd upper = model.softUpperLimits();
   Eigen::VectorXd q_previous = q_start;  // kPreviousTarget: last posture reached without contact
-  Eigen::VectorXd q_c(model.dof());
   int explored = 0;
   for (std::size_t i = 0; i < targets.size(); ++i) {
     const Eigen::Vector3d& p = targets[i];
     const Eigen::Vector3d cell = ((p - grid.lower) / grid.spacing).array().round();
     if (explored_cells.count({std::lround(cell.x()), std::lround(cell.y()), std::lround(cell.z())}) != 0) ++explored;
-    Eigen::VectorXd q_from = q_start;
-    if (approach == ApproachFrom::kLearnedPosture) {
-      map.predict(p, q_c);
-      q_from = q_c.cwiseMax(lower).cwiseMin(upper);
-    } else if (approach == ApproachFrom::kPreviousTarget) {
-      q_from = q_previous;
-    }
-    const MotionOutcome outcome = executeMotion(model, parameters, map, q_from, [&](double) { return p; }, 0.0, 3.0, &world);
+    const Eigen::VectorXd& q_from = approach == ApproachFrom::kLearnedPosture   ? learnedPosture(model, map, p)
+                                    : approach == ApproachFrom::kPreviousTarget ? q_previous
+                                                                                : q_start;
+    const MotionOutcome outcome = approachTarget(model, parameters, map, q_from, p, &world);
     if (outcome.collided) {
       ++result.collided;
       ++result.contacts[outcome.contact];

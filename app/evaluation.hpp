@@ -34,6 +34,16 @@ struct MotionOutcome {
   Eigen::VectorXd q;      ///< final posture
 };
 
+/// The learned posture q_c(p_W), clamped to the soft limits: where the reachability evaluation
+/// starts the arm for a target (ApproachFrom::kLearnedPosture).
+Eigen::VectorXd learnedPosture(const robot::RobotModel& model, const learning::Learner& map, const Eigen::Vector3d& p_W);
+
+/// One target of the reachability evaluation (Sect. 3.3.2): from q_start to the fixed target p_W,
+/// settle time 3 s.
+MotionOutcome approachTarget(const robot::RobotModel& model, const robot::ParameterSet& parameters,
+                             const learning::Learner& map, const Eigen::VectorXd& q_start, const Eigen::Vector3d& p_W,
+                             robot::CollisionWorld* world);
+
 /// The arm's shoulder (joint 2's axis point in the stretched posture) and its reach from there:
 /// the largest distance of a body origin or the tip from the shoulder [m].
 std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& model);

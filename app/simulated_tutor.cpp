@@ -494,19 +494,13 @@ void SimulatedTutor::drawCheckPoints() {
 int SimulatedTutor::mapFailures() {
   check_failed_.assign(check_points_.size(), true);
   if (workflow_->areas().empty()) return static_cast<int>(check_points_.size());
-  const int dof = model_->dof();
-  std::unique_ptr<learning::Learner> map = makeLearner(workflow_->options(), dof);
+  std::unique_ptr<learning::Learner> map = makeLearner(workflow_->options(), model_->dof());
   map->fit(workflow_->trainingSet());
-  const Eigen::VectorXd lower = model_->softLowerLimits();
-  const Eigen::VectorXd upper = model_->softUpperLimits();
   const double tolerance = scene_->grid.value_or(robot::EvaluationGrid{}).tolerance;
-  Eigen::VectorXd q(dof);
   int failures = 0;
   for (std::size_t i = 0; i < check_points_.size(); ++i) {
     const Eigen::Vector3d& x = check_points_[i];
-    map->predict(x, q);
-    const MotionOutcome outcome = executeMotion(*model_, parameters_, *map, q.cwiseMax(lower).cwiseMin(upper),
-                                                [&x](double) { return x; }, 0.0, 3.0, world_.get());
+    const MotionOutcome outcome = approachTarget(*model_, parameters_, *map, learnedPosture(*model_, *map, x), x, world_.get());
     check_failed_[i] = outcome.collided || outcome.final_error_m > tolerance;
     if (check_failed_[i]) ++failures;
   }

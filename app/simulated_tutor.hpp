@@ -135,10 +135,12 @@ class SimulatedTutor {
   /// Fits the workflow's learner to what was taught and marks the check points the arm does not
   /// reach from the learned posture (as `eval reachable` does); returns how many.
   int mapFailures();
-  /// Where to teach next automatically: with `where_it_fails`, the failing check point with the
-  /// most failing neighbours within 0.2 m, 0.1 m clear of the obstacles and of earlier attempts;
-  /// otherwise, or before any map, or when none is left, a random free point of the workspace box.
+  /// Whether an area centred at p_W leaves the arm room: 0.1 m to the obstacles, off the base
+  /// and the table.
   bool roomyForAnArea(const Eigen::Vector3d& p_W) const;
+  /// Where to teach next automatically: with `where_it_fails`, the failing check point with the
+  /// most failing neighbours within 0.2 m that is roomy and 0.1 m from earlier attempts;
+  /// otherwise, or before any map, or when none is left, a random roomy point of the workspace box.
   Eigen::Vector3d nextAutomaticTarget(const robot::EvaluationGrid& grid, const std::vector<Eigen::Vector3d>& tried,
                                       bool where_it_fails);
 

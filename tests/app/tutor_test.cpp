@@ -245,7 +245,9 @@ TEST(SimulatedTutor, KeepsAnAutomaticAreaOnlyWhenTheLearnedMapGetsNoWorseWithIt)
     ++checked;
     EXPECT_GE(area.map_failures_before, 0) << area.name;
     EXPECT_LE(area.map_failures_before, 40) << area.name;
-    if (failures >= 0) EXPECT_EQ(area.map_failures_before, failures) << area.name << ": counted against the map kept last";
+    if (failures >= 0) {
+      EXPECT_EQ(area.map_failures_before, failures) << area.name << ": counted against the map kept last";
+    }
     if (area.taught) {
       EXPECT_LE(area.map_failures_with, area.map_failures_before) << area.name;
       failures = area.map_failures_with;
