@@ -2,6 +2,7 @@
 # Renders the pictures of docs/results/ (issue #6 item 5) in the style of the thesis' figures:
 #   fig3_10_*  reachable targets after teaching setup I with 1 and 4 areas (Fig. 3.10)
 #   fig4_6_*   the implicit scene model S of Eq. 4.1 for the same sessions (Fig. 4.6)
+#   fig3_11_*, fig4_7_*  the same for setup II with 21 areas (Fig. 3.11 right, Fig. 4.7 right)
 #   fig6_5_*   confidence slices C(x) at several heights (Fig. 6.5), with the arm and from above
 #   fig7_7_*   the ITM graph of setup I (4 areas) with planned paths (Fig. 7.7)
 #   fig8_4_*   the ITM graph of the 9-DoF arm (8 areas) with planned paths (Fig. 8.4)
@@ -70,6 +71,7 @@ teach() {
 }
 teach setup_I_1areas --robot lwr4 --scene setup_I --areas 1
 teach setup_I_4areas --robot lwr4 --scene setup_I --areas 4
+teach setup_II_21areas --robot lwr4 --scene setup_II --areas 21
 teach arm9_8areas --robot arm9 --scene arm9_areas --areas 8
 
 # --- Evaluations ----------------------------------------------------------------------------
@@ -79,10 +81,10 @@ evaluate() {
   shift
   produce "$file" "$1 $2 -> $(basename "$file")" to_file "$file" "$cli" "$@"
 }
-for areas in 1 4; do
-  session="$data_dir/setup_I_${areas}areas.session.json"
-  evaluate "$data_dir/setup_I_${areas}areas.reachable.json" eval reachable --session "$session" --spacing "$spacing"
-  evaluate "$data_dir/setup_I_${areas}areas.scene_model.json" eval scene-model --session "$session" --spacing "$spacing"
+for name in setup_I_1areas setup_I_4areas setup_II_21areas; do
+  session="$data_dir/$name.session.json"
+  evaluate "$data_dir/$name.reachable.json" eval reachable --session "$session" --spacing "$spacing"
+  evaluate "$data_dir/$name.scene_model.json" eval scene-model --session "$session" --spacing "$spacing"
 done
 evaluate "$data_dir/setup_I_4areas.plan.json" plan --session "$data_dir/setup_I_4areas.session.json" --goals "$goals" --seed 1
 evaluate "$data_dir/arm9_8areas.plan.json" plan --session "$data_dir/arm9_8areas.session.json" --goals "$goals" --seed 1
@@ -100,6 +102,16 @@ for areas in 1 4; do
   render --session "$data.session.json" --hide ghosts,itm --point-size 6 --scene-model "$data.scene_model.json" \
     --no-obstacles --view front-right --legend --out "$out/fig4_6_setup_I_${areas}areas.png"
 done
+# Setup II from the front-right as well: the gaps between the boxes and the robot, and the
+# targets beside and behind the right box, stay visible. Wider, so that the legend of 21 areas
+# leaves the scene free.
+data="$data_dir/setup_II_21areas"
+step "fig3_11_setup_II_21areas.png"
+render_sized 1100 700 --session "$data.session.json" --hide ghosts,itm --point-size 5 --reachable "$data.reachable.json" \
+  --view front-right --legend --out "$out/fig3_11_setup_II_21areas.png"
+step "fig4_7_setup_II_21areas.png"
+render_sized 1100 700 --session "$data.session.json" --hide ghosts,itm --point-size 6 --scene-model "$data.scene_model.json" \
+  --no-obstacles --view front-right --legend --out "$out/fig4_7_setup_II_21areas.png"
 step "fig6_5_setup_I_4areas.png"
 render --session "$data_dir/setup_I_4areas.session.json" --hide ghosts,itm --point-size 4 \
   --confidence-heights 0.3,0.6 --confidence-resolution 80 --view front-left --legend \
