@@ -643,6 +643,41 @@ TEST(BuiltinScenes, HoldWhatTheThesisStates) {
   EXPECT_EQ(arm9.training_areas.size(), 8U);  // K = 8 (Sect. 8.3)
 }
 
+// Setup II's listed postures keep to the one redundancy family the thesis' tutor used there
+// (Sect. 4.2.1, Fig. 4.5), so that a learner interpolates between areas instead of averaging IK
+// families: the elbow (q4) and wrist (q6) bent one way everywhere, q1 ~ 0 in front of the boxes
+// (the upper arm between them), q3 of opposite sign to y, and each right area the mirror image of
+// its left twin (q1, q3, q5, q7 negated).
+TEST(BuiltinScenes, SetupIIPosturesKeepToOneRedundancyFamily) {
+  const Scene scene = loadScene("setup_II");
+  int with_posture = 0;
+  for (const auto& area : scene.training_areas) {
+    SCOPED_TRACE(area.name);
+    if (!area.posture) continue;
+    ++with_posture;
+    const Eigen::VectorXd& q = *area.posture;
+    ASSERT_EQ(q.size(), 7);
+    EXPECT_LT(q[3], -0.3);
+    EXPECT_GT(q[5], 0.3);
+    const Eigen::Vector3d& c = area.p_WA;
+    if (c.x() < -0.3) {
+      EXPECT_LT(std::abs(q[0]), 0.1);
+      if (std::abs(c.y()) > 0.05) EXPECT_LT(q[2] * c.y(), 0.0);
+    }
+    if (c.y() < -0.05) {
+      const auto twin = std::find_if(scene.training_areas.begin(), scene.training_areas.end(), [&](const Area& other) {
+        return other.p_WA.isApprox(Eigen::Vector3d(c.x(), -c.y(), c.z()));
+      });
+      ASSERT_NE(twin, scene.training_areas.end());
+      if (!twin->posture) continue;
+      Eigen::VectorXd mirrored = *twin->posture;
+      for (const int j : {0, 2, 4, 6}) mirrored[j] = -mirrored[j];
+      EXPECT_TRUE(q.isApprox(mirrored, 1e-9)) << q.transpose() << " vs the mirrored " << mirrored.transpose();
+    }
+  }
+  EXPECT_GE(with_posture, 19);
+}
+
 // Loads a built-in robot; skips the calling test while its meshes have not been generated.
 std::optional<RobotModel> loadRobotOrNull(const std::string& robot, std::string& why) {
   try {
