@@ -264,9 +264,12 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
     // Postures near a joint limit are penalized (they would warn).
     const double limit_margin = std::min((q - lower).minCoeff(), (upper - q).minCoeff());
     const double score = std::min(clearance, 0.08) / 0.08 - 0.2 * (q - q_reference).norm() - (limit_margin < 0.2 ? 0.5 : 0.0);
-    if (score > best_score) {
+    // A posture with the clearance asked for beats every one without it, however near the
+    // reference that one lies; otherwise the area would be given up with a usable posture found.
+    const bool enough_clearance = clearance >= options_.min_clearance;
+    if (enough_clearance != best.found ? enough_clearance : score > best_score) {
       best_score = score;
-      best.found = clearance >= options_.min_clearance;
+      best.found = enough_clearance;
       best.q = q;
       best.clearance = clearance;
     }

@@ -7,6 +7,8 @@
 #include "app/simulated_tutor.hpp"
 #include "app/workflow.hpp"
 #include "robot/collision.hpp"
+#include "robot/controllers.hpp"
+#include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/scene.hpp"
@@ -216,6 +218,73 @@ TEST(SimulatedTutor, LeadsTheArmAroundTheBoardToAnAreaUnderIt) {
   EXPECT_EQ(report.collisions, 0U);
   ASSERT_EQ(teaching.workflow->areas().size(), 1U);
   EXPECT_LT((teaching.workflow->areas()[0].centre - under_board.p_WA).norm(), 0.05);
+}
+
+// Kinematic IK for the tip position p_W with the hierarchical controller (Eq. 2.11), its
+// null-space target q_null, started at q_null.
+Eigen::VectorXd solveIk(const robot::ParameterSet& parameters, const Eigen::Vector3d& p_W, const Eigen::VectorXd& q_null) {
+  robot::HierarchicalController controller(lwr4(), parameters);
+  Eigen::VectorXd q = q_null;
+  Eigen::VectorXd q_target(q.size());
+  for (int it = 0; it < 400; ++it) {
+    controller.target(q, p_W, q_null, 0.02, q_target);
+    q = q_target.cwiseMax(lwr4().softLowerLimits()).cwiseMin(lwr4().softUpperLimits());
+  }
+  return q;
+}
+
+// A posture with the clearance the tutor asks for wins over one nearer its reference (here the
+// current posture) without it; before, the nearer one won, and the area was given up although
+// a usable posture had been found.
+TEST(SimulatedTutor, PrefersAPostureWithEnoughClearanceOverANearerOneWithout) {
+  robot::Scene scene = robot::loadScene("setup_A");
+  scene.obstacles.clear();
+  scene.training_areas.clear();
+  const Eigen::VectorXd home = *scene.home_posture;
+  robot::Kinematics kinematics(lwr4());
+  kinematics.update(home);
+  const Eigen::Vector3d p_target = kinematics.p_WT();
+  const Eigen::Vector3d elbow = kinematics.X_WB(4).translation();
+  // A block beside the elbow, moved out until the home posture keeps 2.7-3 cm from it.
+  robot::Obstacle block;
+  block.name = "block";
+  block.size = Eigen::Vector3d(0.1, 0.1, 0.1);
+  for (double offset = 0.05; offset < 0.3; offset += 0.002) {
+    block.X_WO = Eigen::Isometry3d(Eigen::Translation3d(elbow + Eigen::Vector3d(0.0, offset, 0.0)));
+    scene.obstacles = {block};
+    robot::CollisionWorld world(lwr4(), scene);
+    world.update(home);
+    if (world.contacts().empty() && world.clearance(0.5).distance > 0.027) break;
+  }
+  ShortTeaching teaching(scene);
+  teaching.sim.reset(home);
+  teaching.tutor_options.posture_candidates = 3;  // the suggestion, the reference, the current posture
+  const double min_clearance = teaching.tutor_options.min_clearance;
+  // The suggestion: the same tip position with the elbow swung away from the block (q3) and the
+  // flange turned (q7, which does not move the tip), far from the home posture in joint space.
+  Eigen::VectorXd swung = home;
+  swung[2] = -2.4;
+  swung[6] = 2.8;
+  const Eigen::VectorXd suggested = solveIk(teaching.parameters, p_target, swung);
+  robot::CollisionWorld world(lwr4(), scene);
+  world.update(home);
+  const double home_clearance = world.clearance(0.5).distance;
+  world.update(suggested);
+  const double suggested_clearance = world.clearance(0.5).distance;
+  kinematics.update(suggested);
+  ASSERT_LT((kinematics.p_WT() - p_target).norm(), 1e-3);
+  ASSERT_GT(home_clearance, 0.0);
+  ASSERT_LT(home_clearance, min_clearance);
+  ASSERT_GE(suggested_clearance, min_clearance + 0.005);
+  // The home posture scores higher by the tutor's rule (clearance up to 8 cm, 0.2 per rad from
+  // the reference), so only the clearance requirement can make the suggestion win.
+  ASSERT_GT(home_clearance / 0.08, std::min(suggested_clearance, 0.08) / 0.08 - 0.2 * (suggested - home).norm());
+
+  SimulatedTutor tutor(teaching.sim, *teaching.workflow, scene, teaching.parameters, teaching.tutor_options);
+  const PostureChoice choice = tutor.choosePosture(p_target, suggested);
+  EXPECT_TRUE(choice.found);
+  EXPECT_GE(choice.clearance, min_clearance);
+  EXPECT_LT((choice.q - suggested).norm(), 0.05);
 }
 
 // Beyond the scene's list the tutor chooses where to teach: where the learned map fails, and an
