@@ -79,6 +79,10 @@ MotionOutcome approachTarget(const robot::RobotModel& model, const robot::Parame
   return executeMotion(model, parameters, map, q_start, [&p_W](double) { return p_W; }, 0.0, 3.0, world);
 }
 
+Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& scene) {
+  return scene.home_posture && scene.home_posture->size() == model.dof() ? *scene.home_posture : model.midPosture();
+}
+
 std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& model) {
   const Eigen::VectorXd q = Eigen::VectorXd::Zero(model.dof())
                                 .cwiseMax(model.softLowerLimits())

@@ -44,6 +44,10 @@ MotionOutcome approachTarget(const robot::RobotModel& model, const robot::Parame
                              const learning::Learner& map, const Eigen::VectorXd& q_start, const Eigen::Vector3d& p_W,
                              robot::CollisionWorld* world);
 
+/// The scene's home posture if it fits the robot, else the middle of the joint limits: where a
+/// taught session and its evaluations start [rad].
+Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& scene);
+
 /// The arm's shoulder (joint 2's axis point in the stretched posture) and its reach from there:
 /// the largest distance of a body origin or the tip from the shoulder [m].
 std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& model);

@@ -19,7 +19,7 @@ TaughtSystem teachInSimulation(const robot::RobotModel& model, const robot::Scen
   const robot::ParameterSet parameters = sceneParameters(scene);
   robot::Simulation sim(model, &scene, parameters);
   TaughtSystem taught;
-  taught.home = scene.home_posture && scene.home_posture->size() == model.dof() ? *scene.home_posture : model.midPosture();
+  taught.home = homePosture(model, scene);
   sim.reset(taught.home);
   WorkflowOptions workflow_options = spec.workflow;
   workflow_options.check_scene = &scene;

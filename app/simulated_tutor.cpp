@@ -478,7 +478,7 @@ void SimulatedTutor::drawCheckPoints() {
   const robot::EvaluationGrid grid = scene_->grid.value_or(robot::EvaluationGrid{});
   const auto [shoulder, reach] = shoulderAndReach(*model_);
   learning::UniformRandom draw(options_.seed + 0x5eed);
-  const Eigen::VectorXd q_start = scene_->home_posture && scene_->home_posture->size() == model_->dof() ? *scene_->home_posture : model_->midPosture();
+  const Eigen::VectorXd q_start = homePosture(*model_, *scene_);
   check_points_.clear();
   for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < 100 * options_.check_points; ++k) {
     Eigen::Vector3d x;
