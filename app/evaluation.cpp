@@ -119,6 +119,8 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
   const int dof = model.dof();
   const Eigen::VectorXd lower = model.softLowerLimits();
   const Eigen::VectorXd upper = model.softUpperLimits();
+  const Eigen::VectorXd sample_lower = model.sampleLowerLimits();
+  const Eigen::VectorXd sample_upper = model.sampleUpperLimits();
   robot::HierarchicalController controller(model, parameters);
   robot::Kinematics kinematics(model);
   Eigen::VectorXd q(dof), q_null(dof), q_target(dof);
@@ -126,7 +128,7 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
     if (seed == 0) {
       q_null = q_start;
     } else {
-      for (int j = 0; j < dof; ++j) q_null[j] = random.uniform(lower[j], upper[j]);
+      for (int j = 0; j < dof; ++j) q_null[j] = random.uniform(sample_lower[j], sample_upper[j]);
     }
     q = q_null.cwiseMax(lower).cwiseMin(upper);
     for (int it = 0; it < 300; ++it) {

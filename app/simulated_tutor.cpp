@@ -166,9 +166,11 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planApproach(const Eigen::VectorXd&
   };
   Tree* a = &start_tree;
   Tree* b = &goal_tree;
+  const Eigen::VectorXd sample_lower = model_->sampleLowerLimits();
+  const Eigen::VectorXd sample_upper = model_->sampleUpperLimits();
   Eigen::VectorXd q_rand(dof);
   for (int it = 0; it < options_.approach_iterations; ++it) {
-    for (int j = 0; j < dof; ++j) q_rand[j] = random_.uniform(lower[j], upper[j]);
+    for (int j = 0; j < dof; ++j) q_rand[j] = random_.uniform(sample_lower[j], sample_upper[j]);
     bool arrived = false;
     const int added = extend(*a, q_rand, arrived);
     if (added >= 0) {
@@ -213,6 +215,8 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
   const int dof = model_->dof();
   const Eigen::VectorXd lower = model_->softLowerLimits();
   const Eigen::VectorXd upper = model_->softUpperLimits();
+  const Eigen::VectorXd sample_lower = model_->sampleLowerLimits();
+  const Eigen::VectorXd sample_upper = model_->sampleUpperLimits();
   robot::HierarchicalController controller(*model_, parameters_);
   PostureChoice best;
   best.clearance = -std::numeric_limits<double>::infinity();
@@ -243,8 +247,8 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
       q_null = state_.q.size() == dof ? state_.q : model_->midPosture();
     } else {
       for (int j = 0; j < dof; ++j) {
-        const double margin = 0.2 * (upper[j] - lower[j]);
-        q_null[j] = random_.uniform(lower[j] + margin, upper[j] - margin);
+        const double margin = 0.2 * (sample_upper[j] - sample_lower[j]);
+        q_null[j] = random_.uniform(sample_lower[j] + margin, sample_upper[j] - margin);
       }
     }
     // Kinematic IK with the hierarchical controller (Eq. 2.11), started at the null target.

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -485,6 +486,13 @@ Eigen::VectorXd RobotModel::upperLimits() const { return collect(joints_, [](con
 Eigen::VectorXd RobotModel::softLowerLimits() const { return collect(joints_, [](const JointLimits& l) { return l.soft_lower; }); }
 Eigen::VectorXd RobotModel::softUpperLimits() const { return collect(joints_, [](const JointLimits& l) { return l.soft_upper; }); }
 Eigen::VectorXd RobotModel::velocityLimits() const { return collect(joints_, [](const JointLimits& l) { return l.velocity; }); }
+
+Eigen::VectorXd RobotModel::sampleLowerLimits() const {
+  return collect(joints_, [](const JointLimits& l) { return std::isfinite(l.soft_lower) ? l.soft_lower : -std::numbers::pi; });
+}
+Eigen::VectorXd RobotModel::sampleUpperLimits() const {
+  return collect(joints_, [](const JointLimits& l) { return std::isfinite(l.soft_upper) ? l.soft_upper : std::numbers::pi; });
+}
 
 Eigen::VectorXd RobotModel::midPosture() const {
   return collect(joints_, [](const JointLimits& l) {

@@ -86,6 +86,10 @@ class RobotModel {
   Eigen::VectorXd velocityLimits() const;
   /// Centre of the software limits (0 for unbounded joints): a safe default posture.
   Eigen::VectorXd midPosture() const;
+  /// The software limits with an unbounded (continuous) joint given one turn, [−π, π]: the
+  /// range to draw random postures from, which ±inf cannot be.
+  Eigen::VectorXd sampleLowerLimits() const;
+  Eigen::VectorXd sampleUpperLimits() const;
 
   /// Throws InputError("expected N joint values, got M") or for NaN/inf entries.
   void checkPosture(const Eigen::VectorXd& q) const;

@@ -1,7 +1,12 @@
 // The simulated tutor teaching the simulated LWR IV in setup A through the workflow.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
+#include <string>
 
 #include "app/evaluation.hpp"
 #include "app/simulated_tutor.hpp"
@@ -218,6 +223,43 @@ TEST(SimulatedTutor, LeadsTheArmAroundTheBoardToAnAreaUnderIt) {
   EXPECT_EQ(report.collisions, 0U);
   ASSERT_EQ(teaching.workflow->areas().size(), 1U);
   EXPECT_LT((teaching.workflow->areas()[0].centre - under_board.p_WA).norm(), 0.05);
+}
+
+// Many arms turn a joint without end (URDF "continuous"): its limits are ±inf, which the
+// tutor's random IK targets and its way around obstacles cannot be drawn from. Before, both
+// came out NaN for such a joint and the teaching never ended.
+TEST(SimulatedTutor, TeachesAnArmWithAnUnboundedJointAroundTheBoard) {
+  const std::filesystem::path urdf_file = resolveRobotPath("lwr4");
+  std::ifstream file(urdf_file);
+  std::string urdf((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  const std::string bounded_a1 = "<joint name=\"A1\" type=\"revolute\">";
+  ASSERT_NE(urdf.find(bounded_a1), std::string::npos);
+  urdf.replace(urdf.find(bounded_a1), bounded_a1.size(), "<joint name=\"A1\" type=\"continuous\">");
+  const robot::RobotModel model = robot::RobotModel::fromUrdfString(urdf, urdf_file.parent_path());
+  ASSERT_TRUE(std::isinf(model.softUpperLimits()[0]));
+
+  robot::Scene scene = robot::loadScene("setup_I");
+  const robot::Area under_board = scene.training_areas.at(2);
+  ASSERT_EQ(under_board.name, "I3");
+  scene.training_areas = {under_board};
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  robot::Simulation sim(model, &scene, parameters);
+  sim.reset(*scene.home_posture);
+  WorkflowOptions options;
+  options.background_learning = false;
+  Workflow workflow(sim, parameters, options);
+  TutorOptions tutor_options;
+  tutor_options.circles = 1;
+  tutor_options.posture_candidates = 8;
+  tutor_options.approach_iterations = 1000;
+  SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
+  const TutorReport report = tutor.configure(1);
+  ASSERT_EQ(report.areas.size(), 1U);
+  EXPECT_TRUE(report.areas[0].taught) << report.areas[0].failure;
+  EXPECT_EQ(report.collisions, 0U);
+  ASSERT_EQ(workflow.areas().size(), 1U);
+  EXPECT_TRUE(workflow.areas()[0].q_fixed.allFinite());
 }
 
 // Kinematic IK for the tip position p_W with the hierarchical controller (Eq. 2.11), its

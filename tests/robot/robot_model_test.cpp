@@ -115,6 +115,18 @@ TEST(RobotModel, CombinesInertiaOfFoldedLinksWithTheParallelAxisTheorem) {
   EXPECT_TRUE(std::isinf(model.joints()[0].limits.upper)) << "continuous joints are unbounded";
 }
 
+TEST(RobotModel, GivesAnUnboundedJointOneTurnToDrawPosturesFrom) {
+  TempDir dir;
+  const auto model = RobotModel::fromUrdfFile(dir.write("c.urdf", twoJointArm("", "continuous")));
+  ASSERT_TRUE(std::isinf(model.softUpperLimits()[1]));
+  const Eigen::VectorXd lower = model.sampleLowerLimits();
+  const Eigen::VectorXd upper = model.sampleUpperLimits();
+  EXPECT_DOUBLE_EQ(lower[0], model.softLowerLimits()[0]) << "a bounded joint keeps its limits";
+  EXPECT_DOUBLE_EQ(upper[0], model.softUpperLimits()[0]);
+  EXPECT_DOUBLE_EQ(lower[1], -std::numbers::pi);
+  EXPECT_DOUBLE_EQ(upper[1], std::numbers::pi);
+}
+
 TEST(RobotModel, AcceptsAnExplicitTipInsideTheChain) {
   TempDir dir;
   const auto model = RobotModel::fromUrdfFile(dir.write("two.urdf", twoJointArm()), "l1");
