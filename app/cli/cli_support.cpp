@@ -60,6 +60,10 @@ int runCli(int argc, const char* const* argv) {
     const Json result = runner.run();
     std::cout << result.dump(2) << std::endl;
     return 0;
+  } catch (const CommandFailed& e) {
+    std::cout << e.result().dump(2) << std::endl;
+    std::cerr << "error: " << e.what() << std::endl;
+    return 1;
   } catch (const CLI::Success& e) {
     // --help and --version: CLI11 prints them itself.
     return app.exit(e);

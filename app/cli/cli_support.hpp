@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 
 #include "app/cli/number_list.hpp"
@@ -12,6 +13,18 @@
 namespace flexirob::cli {
 
 using Json = nlohmann::ordered_json;
+
+/// A command that ran but did not achieve what it is for (e.g. teach taught no area): its JSON
+/// result still goes to stdout (what happened, where the data went), the message to stderr as
+/// one line, and the exit code is 1.
+class CommandFailed : public std::runtime_error {
+ public:
+  CommandFailed(const std::string& message, Json result) : std::runtime_error(message), result_(std::move(result)) {}
+  const Json& result() const { return result_; }
+
+ private:
+  Json result_;
+};
 
 /// What a parsed command will do; it returns the JSON object printed on stdout.
 using Action = std::function<Json()>;
@@ -41,7 +54,7 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner);    // eval reac
 void registerSweepCommand(CLI::App& app, CommandRunner& runner);    // sweep
 
 /// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.
-/// Returns the process exit code (0 success, 2 bad input).
+/// Returns the process exit code (0 success, 1 the command ran but failed, 2 bad input).
 int runCli(int argc, const char* const* argv);
 
 Json toJson(const Eigen::VectorXd& v);

@@ -285,27 +285,35 @@ Json runTeach(const TeachOptions& options) {
             {"commands_applied_by_controller", krc.commands_applied}};
     controller->stop();
   }
-  return {{"areas", workflow.areas().size()},
-          {"backend", options.backend},
-          {"fri_link", link},
-          {"samples", samples},
-          {"collisions", report.collisions},
-          {"colliding_steps", report.colliding_steps},
-          {"collision_events", collision_events},
-          {"session", options.out},
-          {"session_format", json_session ? "json" : "sqlite"},
-          {"states_dropped", states_dropped},
-          {"session_error", session_error},
-          {"session_copy", session_copy},
-          {"learner", options.learner},
-          {"model_learned", workflow.model() != nullptr},
-          {"itm_nodes", itm.nodeCount()},
-          {"itm_edges", itm.edgeCount()},
-          {"transition_checks", checks},
-          {"warnings", warnings},
-          {"tutor", tutor_areas},
-          {"simulated_time_s", report.simulated_time},
-          {"wall_time_s", wall_seconds}};
+  Json result = {{"areas", workflow.areas().size()},
+                 {"backend", options.backend},
+                 {"fri_link", link},
+                 {"samples", samples},
+                 {"collisions", report.collisions},
+                 {"colliding_steps", report.colliding_steps},
+                 {"collision_events", collision_events},
+                 {"session", options.out},
+                 {"session_format", json_session ? "json" : "sqlite"},
+                 {"states_dropped", states_dropped},
+                 {"session_error", session_error},
+                 {"session_copy", session_copy},
+                 {"learner", options.learner},
+                 {"model_learned", workflow.model() != nullptr},
+                 {"itm_nodes", itm.nodeCount()},
+                 {"itm_edges", itm.edgeCount()},
+                 {"transition_checks", checks},
+                 {"warnings", warnings},
+                 {"tutor", tutor_areas},
+                 {"simulated_time_s", report.simulated_time},
+                 {"wall_time_s", wall_seconds}};
+  if (workflow.areas().empty()) {
+    // The session is written all the same (events, the ITM of the attempts): nothing is lost.
+    const std::string reason = report.areas.empty() ? std::string("none was tried") : report.areas.front().failure;
+    throw CommandFailed("teach: no training area could be taught (" + std::to_string(report.areas.size()) +
+                            " tried; the first: " + reason + "); the session was written to " + options.out,
+                        std::move(result));
+  }
+  return result;
 }
 
 }  // namespace

@@ -82,5 +82,33 @@ TEST(TeachCli, RefusesAnUnknownBackendAndFriForTheNineJointArmWithOneLine) {
   }
 }
 
+// A scene where no posture keeps its distance (walls 0.2 m around the robot's axis): teach ends
+// with exit code 1 and one line saying why, and still writes the session and its JSON report,
+// so a script sees the failure and nothing of the attempt is lost.
+TEST(TeachCli, FailsWithOneLineWhenNoAreaCouldBeTaughtAndStillWritesTheSession) {
+  const fs::path scene = scratch("cage.yaml");
+  const fs::path out = scratch("cage.json");
+  std::ofstream(scene) << "name: cage\nobstacles:\n"
+                          "  - {name: front, shape: box, size: [0.05, 1.0, 1.5], position: [-0.25, 0, 0.75]}\n"
+                          "  - {name: back, shape: box, size: [0.05, 1.0, 1.5], position: [0.25, 0, 0.75]}\n"
+                          "  - {name: left, shape: box, size: [0.5, 0.05, 1.5], position: [0, 0.25, 0.75]}\n"
+                          "  - {name: right, shape: box, size: [0.5, 0.05, 1.5], position: [0, -0.25, 0.75]}\n"
+                          "training_areas:\n  - {name: far, centre: [-0.7, 0, 0.3], radius: 0.08}\n";
+  const auto result = runCliBinary("teach --scene " + scene.string() + " --areas 1 --seed 1 --candidates 2 --check-points 0 --out " +
+                                   out.string());
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  EXPECT_EQ(result.err.rfind("error: teach: no training area could be taught", 0), 0U) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  const auto json = result.json();
+  EXPECT_EQ(json.at("areas").get<int>(), 0);
+  EXPECT_FALSE(json.at("model_learned").get<bool>());
+  ASSERT_FALSE(json.at("tutor").empty());
+  EXPECT_EQ(json.at("tutor").at(0).at("name"), "far");
+  EXPECT_FALSE(json.at("tutor").at(0).at("taught").get<bool>());
+  EXPECT_TRUE(fs::exists(out));
+  fs::remove(out);
+  fs::remove(scene);
+}
+
 }  // namespace
 }  // namespace flexirob
