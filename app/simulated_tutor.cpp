@@ -125,8 +125,9 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planApproach(const Eigen::VectorXd&
   // The start may itself lie closer to an obstacle than the margin (the arm rests where the
   // last recording ended): edges leaving it need only be contact-free, their ends keep the margin.
   const int dof = model_->dof();
-  const Eigen::VectorXd lower = model_->softLowerLimits();
-  const Eigen::VectorXd upper = model_->softUpperLimits();
+  // Random samples; one turn for an unbounded joint.
+  const Eigen::VectorXd sample_lower = model_->sampleLowerLimits();
+  const Eigen::VectorXd sample_upper = model_->sampleUpperLimits();
   constexpr double kStep = 0.25;  // [rad] largest joint change per tree edge
   struct Tree {
     std::vector<Eigen::VectorXd> nodes;
@@ -166,8 +167,6 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planApproach(const Eigen::VectorXd&
   };
   Tree* a = &start_tree;
   Tree* b = &goal_tree;
-  const Eigen::VectorXd sample_lower = model_->sampleLowerLimits();
-  const Eigen::VectorXd sample_upper = model_->sampleUpperLimits();
   Eigen::VectorXd q_rand(dof);
   for (int it = 0; it < options_.approach_iterations; ++it) {
     for (int j = 0; j < dof; ++j) q_rand[j] = random_.uniform(sample_lower[j], sample_upper[j]);
