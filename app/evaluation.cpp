@@ -31,9 +31,12 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
   double error_sum = 0.0;
   int error_samples = 0;
   for (int k = 1; k <= steps; ++k) {
+    const Eigen::Vector3d previous_target = target;
     target = p_des(std::min(duration, k * kDt));
+    // The path's velocity over this cycle, fed forward (zero once the path has ended).
+    const Eigen::Vector3d target_velocity = (target - previous_target) / kDt;
     map.predict(target, q_c);
-    controller.velocity(limiter.command(), target, q_c, qd, &limiter);
+    controller.velocity(limiter.command(), target, target_velocity, q_c, qd, &limiter);
     limiter.updateVelocity(qd);
     if (k % 10 == 0) {
       if (k * kDt <= duration) {

@@ -687,11 +687,13 @@ TransitionCheck checkTransition(const robot::RobotModel& model, const robot::Par
   double error_sum = 0.0;
   int error_count = 0;
   check.colliding_samples = world != nullptr ? 0 : -1;
+  const Eigen::Vector3d path_velocity = duration > 0.0 ? Eigen::Vector3d((goal - start) / duration) : Eigen::Vector3d::Zero();
   for (int k = 1; k <= steps; ++k) {
     const double s = duration > 0.0 ? std::min(1.0, k * kDt / duration) : 1.0;
     const Eigen::Vector3d p_des = start + s * (goal - start);
     map.predict(p_des, q_c);
-    controller.velocity(limiter.command(), p_des, q_c, qd, &limiter);
+    const Eigen::Vector3d pd_des = k * kDt <= duration ? path_velocity : Eigen::Vector3d::Zero();
+    controller.velocity(limiter.command(), p_des, pd_des, q_c, qd, &limiter);
     const Eigen::VectorXd& q = limiter.updateVelocity(qd);
     if (k % 10 == 0) {
       kinematics.update(q);
@@ -749,13 +751,14 @@ void Workflow::command() {
     // Eq. 2.11 with the learned q_c, the target moving along the waypoints at execution_speed.
     const Eigen::Vector3d to = execution_waypoints_.back() - execution_target_;
     const double step = options_.execution_speed * backend_->cycleTime();
+    const Eigen::Vector3d previous_target = execution_target_;
     if (to.norm() <= step) {
       execution_target_ = execution_waypoints_.back();
       execution_waypoints_.pop_back();
     } else {
       execution_target_ += to.normalized() * step;
     }
-    interaction_.setTaskTarget(execution_target_);
+    interaction_.setTaskTarget(execution_target_, (execution_target_ - previous_target) / backend_->cycleTime());
   }
   interaction_.update(state_, command_);
   backend_->writeCommand(command_);

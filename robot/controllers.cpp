@@ -196,9 +196,17 @@ HierarchicalController::HierarchicalController(const RobotModel& model, const Pa
 HierarchicalController::Status HierarchicalController::velocity(const Eigen::VectorXd& q, const Eigen::Vector3d& p_des,
                                                                 const Eigen::VectorXd& q_c, Eigen::VectorXd& qd,
                                                                 const CommandLimiter* limiter) {
+  return velocity(q, p_des, Eigen::Vector3d::Zero(), q_c, qd, limiter);
+}
+
+HierarchicalController::Status HierarchicalController::velocity(const Eigen::VectorXd& q, const Eigen::Vector3d& p_des,
+                                                                const Eigen::Vector3d& pd_des,
+                                                                const Eigen::VectorXd& q_c, Eigen::VectorXd& qd,
+                                                                const CommandLimiter* limiter) {
   const int n = model_->dof();
   if (qd.size() != n) qd.setZero(n);  // allocates only on a caller's first, unsized call
-  if (q.size() != n || q_c.size() != n || !q.allFinite() || !q_c.allFinite() || !p_des.allFinite()) {
+  if (q.size() != n || q_c.size() != n || !q.allFinite() || !q_c.allFinite() || !p_des.allFinite() ||
+      !pd_des.allFinite()) {
     qd.setZero();
     ++counters_.rejected;
     return Status::kRejectedTarget;
@@ -232,8 +240,8 @@ HierarchicalController::Status HierarchicalController::velocity(const Eigen::Vec
     N_.noalias() = -J_pinv_ * J_;
     N_.diagonal().array() += 1.0;
     N_ = free_.asDiagonal() * N_ * free_.asDiagonal();
-    // Eq. 2.11
-    qd_task_.noalias() = kappa_x_ * J_pinv_ * error;
+    // Eq. 2.11, with the target's own velocity fed forward as in Eq. 2.6.
+    qd_task_.noalias() = J_pinv_ * (pd_des + kappa_x_ * error);
     qd_null_.noalias() = kappa_q_ * N_ * dq_null_;
     qd = qd_task_ + qd_null_;
     // Joints on a soft limit that would be pushed out leave the task for this cycle.

@@ -124,6 +124,11 @@ class HierarchicalController {
   /// clipping joints one by one, would turn q̇ out of the null space and move the tip).
   Status velocity(const Eigen::VectorXd& q, const Eigen::Vector3d& p_des, const Eigen::VectorXd& q_c,
                   Eigen::VectorXd& qd, const CommandLimiter* limiter = nullptr);
+  /// The same for a target moving at pd_des [m/s]: its velocity enters the task term as the
+  /// feed-forward ẋ of Eq. 2.6, J⁺(ẋ_des + κ_x (x_des − x)), so that the tip follows a moving
+  /// target without the steady lag |ẋ_des|/κ_x that Eq. 2.11's feedback alone leaves.
+  Status velocity(const Eigen::VectorXd& q, const Eigen::Vector3d& p_des, const Eigen::Vector3d& pd_des,
+                  const Eigen::VectorXd& q_c, Eigen::VectorXd& qd, const CommandLimiter* limiter = nullptr);
   /// q_target = q + q̇·dt (Fig. 2.6), for a CommandLimiter to smooth and clamp.
   Status target(const Eigen::VectorXd& q, const Eigen::Vector3d& p_des, const Eigen::VectorXd& q_c, double dt,
                 Eigen::VectorXd& q_target);

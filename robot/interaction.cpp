@@ -79,6 +79,7 @@ void InteractionController::start(InteractionMode mode, const RobotState& state)
   kinematics_.update(limiter_.command());
   p_des_ = kinematics_.p_WT();
   pd_des_.setZero();
+  pd_target_.setZero();
   alpha_ = 0.0;
 }
 
@@ -134,8 +135,9 @@ void InteractionController::update(const RobotState& state, JointImpedanceComman
       } else {
         q_map_ = q_fixed_;
       }
-      controller_.velocity(limiter_.command(), p_des_, q_map_, qd_, &limiter_);
+      controller_.velocity(limiter_.command(), p_des_, pd_target_, q_map_, qd_, &limiter_);
       limiter_.updateVelocity(qd_);
+      pd_target_.setZero();
       break;
     case InteractionMode::kAssistedGravityCompensation: {
       if (!keyboard_ && state.X_WT.matrix().allFinite()) {

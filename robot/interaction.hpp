@@ -85,8 +85,13 @@ class InteractionController {
   void setConfidence(const ConfidenceMap* confidence) { confidence_ = confidence; }
   /// π_rec's posture (and the null-space target of hierarchical control without a map).
   void setFixedPosture(const Eigen::VectorXd& q_fixed);
-  /// Target of hierarchical control [m, W].
-  void setTaskTarget(const Eigen::Vector3d& p_des) { p_des_ = p_des; }
+  /// Target of hierarchical control [m, W], and the velocity it moves at [m/s] in the next
+  /// cycle (fed forward; it holds for that cycle only, so a caller that stops moving the target
+  /// leaves no drift behind). A non-finite velocity counts as zero.
+  void setTaskTarget(const Eigen::Vector3d& p_des, const Eigen::Vector3d& pd_des = Eigen::Vector3d::Zero()) {
+    p_des_ = p_des;
+    pd_target_ = pd_des.allFinite() ? pd_des : Eigen::Vector3d::Zero();
+  }
 
   /// Keyboard tele-operation (Sect. 8.1): moves the task target by Δx [m] and, in
   /// gravity compensation, the null-space target by Δq [rad]. Non-finite steps are ignored.
@@ -121,7 +126,8 @@ class InteractionController {
   bool keyboard_ = false;
   Eigen::VectorXd q_fixed_, q_c_, q_des_, qd_des_, qd_, q_map_;
   Eigen::Vector3d p_des_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d pd_des_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d pd_des_ = Eigen::Vector3d::Zero();     // the task-space admittance's velocity
+  Eigen::Vector3d pd_target_ = Eigen::Vector3d::Zero();  // fed forward in hierarchical control
   double alpha_ = 0.0;
 };
 

@@ -115,7 +115,7 @@ TEST(Experiments, TrajectoriesBetweenTwoAreasAreAccurateAndCountedPerRegion) {
                                              0.05 * (((l >> 2) & 1) - 0.5));
     }
   }
-  constexpr double kSpeed = 0.02;  // [m/s]
+  constexpr double kSpeed = 0.1;  // [m/s], as in Tab. 3.2
   const TrajectoryResult result = evaluateTrajectories(lwr4(), empty, parameters, *map, areas, 2, kSpeed, 1);
   ASSERT_EQ(result.regions.size(), 3u);
   EXPECT_FALSE(result.from_scene);
@@ -124,12 +124,14 @@ TEST(Experiments, TrajectoriesBetweenTwoAreasAreAccurateAndCountedPerRegion) {
   EXPECT_EQ(result.regions[2].trajectories, 4);
   for (const auto& region : result.regions) {
     EXPECT_EQ(region.collisions, 0);
-    // Eq. 2.11 follows a target moving at v with the first-order lag v/κ_x at most (and
-    // approaches it from below): 0.02 m/s / 10 s⁻¹ = 2 mm.
+    // Eq. 2.11's feedback alone would trail the target by v/κ_x = 0.1 m/s / 10 s⁻¹ = 10 mm;
+    // with the path's velocity fed forward only the start from rest (the limiter's
+    // acceleration limit) leaves an error.
     const double lag_mm = 1e3 * kSpeed / parameters.get("hierarchical.kappa_x");
-    EXPECT_LT(region.e_task_mean_mm, lag_mm) << region.name;
-    EXPECT_LT(region.e_task_max_mm, 1.05 * lag_mm) << region.name;
-    EXPECT_GT(region.e_task_max_mm, 0.5 * lag_mm) << region.name;
+    EXPECT_GT(region.e_task_max_mm, 0.0) << region.name;
+    EXPECT_LE(region.e_task_mean_mm, region.e_task_max_mm) << region.name;
+    EXPECT_LT(region.e_task_mean_mm, 0.2 * lag_mm) << region.name;
+    EXPECT_LT(region.e_task_max_mm, 0.5 * lag_mm) << region.name;
   }
 }
 
