@@ -494,11 +494,7 @@ Eigen::VectorXd RobotModel::sampleUpperLimits() const {
   return collect(joints_, [](const JointLimits& l) { return std::isfinite(l.soft_upper) ? l.soft_upper : std::numbers::pi; });
 }
 
-Eigen::VectorXd RobotModel::midPosture() const {
-  return collect(joints_, [](const JointLimits& l) {
-    return std::isfinite(l.soft_lower) && std::isfinite(l.soft_upper) ? 0.5 * (l.soft_lower + l.soft_upper) : 0.0;
-  });
-}
+Eigen::VectorXd RobotModel::midPosture() const { return 0.5 * (sampleLowerLimits() + sampleUpperLimits()); }
 
 void RobotModel::checkPosture(const Eigen::VectorXd& q) const {
   if (q.size() != dof()) {

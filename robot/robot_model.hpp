@@ -84,7 +84,7 @@ class RobotModel {
   Eigen::VectorXd softLowerLimits() const;  ///< what the controllers keep to
   Eigen::VectorXd softUpperLimits() const;
   Eigen::VectorXd velocityLimits() const;
-  /// Centre of the software limits (0 for unbounded joints): a safe default posture.
+  /// Centre of the sample limits below (0 for an unbounded joint): a safe default posture.
   Eigen::VectorXd midPosture() const;
   /// The software limits with an unbounded (continuous) joint given one turn, [−π, π]: the
   /// range to draw random postures from, which ±inf cannot be.

@@ -183,14 +183,11 @@ TEST(SimulatedTutor, IsDeterministicForAFixedSeed) {
 namespace flexirob::app {
 namespace {
 
-// Setup I's area I3 lies under the board, on the far side of it from the home posture: the
-// straight joint-space way there runs into the board, so the tutor has to lead the arm around
-// it (the approach planner) and does so without a contact.
-// A short teaching run on `scene`: learning in the caller's thread, one helix turn per area,
-// eight posture candidates.
+// A short teaching run of `model` (which must outlive it) on `scene`: learning in the caller's
+// thread, one helix turn per area, eight posture candidates.
 struct ShortTeaching {
-  explicit ShortTeaching(robot::Scene scene_in)
-      : scene(std::move(scene_in)), declarations(robot::reachParameters()), parameters(declarations), sim(lwr4(), &scene, parameters) {
+  explicit ShortTeaching(robot::Scene scene_in, const robot::RobotModel& model = lwr4())
+      : scene(std::move(scene_in)), declarations(robot::reachParameters()), parameters(declarations), sim(model, &scene, parameters) {
     sim.reset(*scene.home_posture);
     WorkflowOptions options;
     options.background_learning = false;
@@ -211,6 +208,9 @@ struct ShortTeaching {
   TutorOptions tutor_options;
 };
 
+// Setup I's area I3 lies under the board, on the far side of it from the home posture: the
+// straight joint-space way there runs into the board, so the tutor has to lead the arm around
+// it (the approach planner) and does so without a contact.
 TEST(SimulatedTutor, LeadsTheArmAroundTheBoardToAnAreaUnderIt) {
   robot::Scene scene = robot::loadScene("setup_I");
   const robot::Area under_board = scene.training_areas.at(2);
@@ -242,24 +242,14 @@ TEST(SimulatedTutor, TeachesAnArmWithAnUnboundedJointAroundTheBoard) {
   const robot::Area under_board = scene.training_areas.at(2);
   ASSERT_EQ(under_board.name, "I3");
   scene.training_areas = {under_board};
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-  robot::ParameterSet parameters(declarations);
-  robot::Simulation sim(model, &scene, parameters);
-  sim.reset(*scene.home_posture);
-  WorkflowOptions options;
-  options.background_learning = false;
-  Workflow workflow(sim, parameters, options);
-  TutorOptions tutor_options;
-  tutor_options.circles = 1;
-  tutor_options.posture_candidates = 8;
-  tutor_options.approach_iterations = 1000;
-  SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
-  const TutorReport report = tutor.configure(1);
+  ShortTeaching teaching(scene, model);
+  teaching.tutor_options.approach_iterations = 1000;
+  const TutorReport report = teaching.configure(1);
   ASSERT_EQ(report.areas.size(), 1U);
   EXPECT_TRUE(report.areas[0].taught) << report.areas[0].failure;
   EXPECT_EQ(report.collisions, 0U);
-  ASSERT_EQ(workflow.areas().size(), 1U);
-  EXPECT_TRUE(workflow.areas()[0].q_fixed.allFinite());
+  ASSERT_EQ(teaching.workflow->areas().size(), 1U);
+  EXPECT_TRUE(teaching.workflow->areas()[0].q_fixed.allFinite());
 }
 
 // Kinematic IK for the tip position p_W with the hierarchical controller (Eq. 2.11), its

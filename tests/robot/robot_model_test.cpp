@@ -125,6 +125,7 @@ TEST(RobotModel, GivesAnUnboundedJointOneTurnToDrawPosturesFrom) {
   EXPECT_DOUBLE_EQ(upper[0], model.softUpperLimits()[0]);
   EXPECT_DOUBLE_EQ(lower[1], -std::numbers::pi);
   EXPECT_DOUBLE_EQ(upper[1], std::numbers::pi);
+  EXPECT_DOUBLE_EQ(model.midPosture()[1], 0.0) << "the default posture of an unbounded joint";
 }
 
 TEST(RobotModel, AcceptsAnExplicitTipInsideTheChain) {
