@@ -43,7 +43,9 @@ SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const
   if (!(options_.circle_diameter > 0.0) || options_.circle_diameter > 0.5) {
     throw InputError("tutor: circle diameter must be in (0, 0.5] m");
   }
-  if (options_.circles < 1 || options_.posture_candidates < 1) throw InputError("tutor: circles and candidates must be >= 1");
+  if (options_.circles < 1 || options_.posture_candidates < 1 || options_.posture_attempts < 1) {
+    throw InputError("tutor: circles, candidates and posture attempts must be >= 1");
+  }
   if (options_.check_points < 0) throw InputError("tutor: check points must be >= 0");
   state_.resize(model_->dof());
 }
@@ -217,9 +219,11 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
   const Eigen::VectorXd sample_lower = model_->sampleLowerLimits();
   const Eigen::VectorXd sample_upper = model_->sampleUpperLimits();
   robot::HierarchicalController controller(*model_, parameters_);
-  PostureChoice best;
-  best.clearance = -std::numeric_limits<double>::infinity();
-  double best_score = -std::numeric_limits<double>::infinity();
+  struct Candidate {
+    PostureChoice choice;
+    double score;
+  };
+  std::vector<Candidate> candidates;
   Eigen::VectorXd q(dof), q_target(dof);
   // A person leads the arm on from the posture of the nearest area already taught and changes
   // the arm's configuration only where the obstacles ask for it (Sect. 4.2.1: the tutor's
@@ -267,15 +271,26 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
     // Postures near a joint limit are penalized (they would warn).
     const double limit_margin = std::min((q - lower).minCoeff(), (upper - q).minCoeff());
     const double score = std::min(clearance, 0.08) / 0.08 - 0.2 * (q - q_reference).norm() - (limit_margin < 0.2 ? 0.5 : 0.0);
-    // A posture with the clearance asked for beats every one without it, however near the
-    // reference that one lies; otherwise the area would be given up with a usable posture found.
-    const bool enough_clearance = clearance >= options_.min_clearance;
-    if (enough_clearance != best.found ? enough_clearance : score > best_score) {
-      best_score = score;
-      best.found = enough_clearance;
-      best.q = q;
-      best.clearance = clearance;
-    }
+    candidates.push_back({PostureChoice{clearance >= options_.min_clearance, q, clearance, {}}, score});
+  }
+  // A posture with the clearance asked for beats every one without it, however near the
+  // reference that one lies; otherwise the area would be given up with a usable posture found.
+  // Among equals the higher score wins, and the earlier candidate on a tie.
+  std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return a.choice.found != b.choice.found ? a.choice.found : a.score > b.score;
+  });
+  PostureChoice best;
+  best.clearance = -std::numeric_limits<double>::infinity();
+  if (candidates.empty()) return best;
+  best = candidates.front().choice;
+  for (std::size_t i = 1; i < candidates.size(); ++i) {
+    if (static_cast<int>(best.alternatives.size()) + 1 >= options_.posture_attempts) break;
+    const PostureChoice& next = candidates[i].choice;
+    if (!next.found) break;
+    // IK from different null-space targets often lands on the same posture.
+    bool distinct = (next.q - best.q).norm() > 0.05;
+    for (const PostureChoice& taken : best.alternatives) distinct = distinct && (next.q - taken.q).norm() > 0.05;
+    if (distinct) best.alternatives.push_back(next);
   }
   return best;
 }
@@ -400,7 +415,7 @@ void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref
 }
 
 bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested) {
-  const PostureChoice choice = choosePosture(area.target, suggested);
+  PostureChoice choice = choosePosture(area.target, suggested);
   area.q_chosen = choice.q;
   area.clearance = choice.clearance;
   if (!choice.found) {
@@ -408,13 +423,25 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     return false;
   }
   // The way there: straight in joint space where that keeps the clearance, otherwise around
-  // the obstacles (RRT-Connect in the collision world), keeping the full margin if possible.
-  std::vector<Eigen::VectorXd> path = planApproach(state_.q, choice.q, options_.min_clearance);
-  if (path.empty()) path = planApproach(state_.q, choice.q, 0.5 * options_.min_clearance);
+  // the obstacles (RRT-Connect in the collision world), keeping the full margin if possible;
+  // the next posture where no way to this one is found.
+  std::vector<PostureChoice> postures{choice};
+  postures.insert(postures.end(), choice.alternatives.begin(), choice.alternatives.end());
+  std::vector<Eigen::VectorXd> path;
+  for (const PostureChoice& posture : postures) {
+    path = planApproach(state_.q, posture.q, options_.min_clearance);
+    if (path.empty()) path = planApproach(state_.q, posture.q, 0.5 * options_.min_clearance);
+    if (!path.empty()) {
+      choice = posture;
+      break;
+    }
+  }
   if (path.empty()) {
-    area.failure = "no collision-free way to the posture";
+    area.failure = "no collision-free way to the posture (" + std::to_string(postures.size()) + " tried)";
     return false;
   }
+  area.q_chosen = choice.q;
+  area.clearance = choice.clearance;
   // A person moves slowly where the arm passes close to an obstacle.
   const double path_clearance = std::max(0.0, pathClearance(path));
   const double speed = options_.approach_speed * std::clamp(path_clearance / 0.15, 0.1, 1.0);

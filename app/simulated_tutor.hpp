@@ -40,6 +40,7 @@ struct TutorOptions {
   double approach_speed = 0.4;     ///< [rad/s] of the tutor's joint-space reference
   double max_phase_time = 30.0;    ///< [s] a phase may take beyond its planned duration before the tutor gives up
   int approach_iterations = 4000;  ///< RRT-Connect iterations for a way around obstacles
+  int posture_attempts = 3;        ///< postures with enough clearance tried, best first, until a way to one is found
   bool realtime = false;           ///< pace at wall-clock speed
   /// Areas chosen automatically (beyond the scene's list) are checked on this many points drawn
   /// over the scene's workspace: the tutor teaches where the learned map fails and takes an area
@@ -83,6 +84,10 @@ struct PostureChoice {
   bool found = false;
   Eigen::VectorXd q;
   double clearance = 0.0;  ///< [m]
+  /// The next best distinct candidates with the clearance asked for, best first (at most
+  /// TutorOptions::posture_attempts − 1): where the way to q cannot be found, a person tries
+  /// another posture before giving the area up.
+  std::vector<PostureChoice> alternatives;
 };
 
 class SimulatedTutor {

@@ -225,6 +225,53 @@ TEST(SimulatedTutor, LeadsTheArmAroundTheBoardToAnAreaUnderIt) {
   EXPECT_LT((teaching.workflow->areas()[0].centre - under_board.p_WA).norm(), 0.05);
 }
 
+// Where no way to the best posture is found, a person tries another one. The alternatives the
+// choice offers reach the target, keep the clearance asked for and differ from each other.
+TEST(SimulatedTutor, OffersDistinctAlternativePosturesWithEnoughClearance) {
+  robot::Scene scene = robot::loadScene("setup_I");
+  const robot::Area under_board = scene.training_areas.at(2);
+  ShortTeaching teaching(scene);
+  teaching.tutor_options.posture_candidates = 24;
+  teaching.tutor_options.posture_attempts = 4;
+  SimulatedTutor tutor(teaching.sim, *teaching.workflow, scene, teaching.parameters, teaching.tutor_options);
+  const PostureChoice choice = tutor.choosePosture(under_board.p_WA, std::nullopt);
+  ASSERT_TRUE(choice.found);
+  ASSERT_GE(choice.alternatives.size(), 1U);
+  EXPECT_LE(choice.alternatives.size(), 3U);
+  robot::CollisionWorld world(lwr4(), scene);
+  std::vector<Eigen::VectorXd> postures{choice.q};
+  for (const PostureChoice& alternative : choice.alternatives) {
+    EXPECT_TRUE(alternative.found);
+    EXPECT_GE(alternative.clearance, teaching.tutor_options.min_clearance);
+    EXPECT_LT((robot::tipPose(lwr4(), alternative.q).translation() - under_board.p_WA).norm(), 1e-3);
+    world.update(alternative.q);
+    EXPECT_TRUE(world.contacts().empty());
+    for (const Eigen::VectorXd& taken : postures) EXPECT_GT((alternative.q - taken).norm(), 0.05);
+    postures.push_back(alternative.q);
+  }
+}
+
+// With no way around obstacles searched (0 RRT iterations) only a straight joint-space way
+// counts: one posture tried is given up where several tried find one reachable.
+TEST(SimulatedTutor, TriesTheNextPostureWhenNoWayToTheBestOneIsFound) {
+  robot::Scene scene = robot::loadScene("setup_I");
+  const robot::Area under_board = scene.training_areas.at(2);
+  scene.training_areas = {under_board};
+  int taught_with[2] = {0, 0};
+  for (const int attempts : {1, 24}) {
+    ShortTeaching teaching(scene);
+    teaching.tutor_options.posture_candidates = 24;
+    teaching.tutor_options.approach_iterations = 0;
+    teaching.tutor_options.posture_attempts = attempts;
+    const TutorReport report = teaching.configure(1);
+    ASSERT_GE(report.areas.size(), 1U);  // an automatic area follows one given up
+    ASSERT_EQ(report.areas[0].name, "I3");
+    taught_with[attempts == 1 ? 0 : 1] = report.areas[0].taught ? 1 : 0;
+  }
+  EXPECT_EQ(taught_with[0], 0);
+  EXPECT_EQ(taught_with[1], 1);
+}
+
 // Many arms turn a joint without end (URDF "continuous"): its limits are ±inf, which the
 // tutor's random IK targets and its way around obstacles cannot be drawn from. Before, both
 // came out NaN for such a joint and the teaching never ended.
