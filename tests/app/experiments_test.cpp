@@ -125,8 +125,8 @@ TEST(Experiments, TrajectoriesBetweenTwoAreasAreAccurateAndCountedPerRegion) {
   for (const auto& region : result.regions) {
     EXPECT_EQ(region.collisions, 0);
     // Eq. 2.11's feedback alone would trail the target by v/κ_x = 0.1 m/s / 10 s⁻¹ = 10 mm;
-    // with the path's velocity fed forward only the start from rest (the limiter's
-    // acceleration limit) leaves an error.
+    // with the path's velocity fed forward the error is mostly the start from rest, where the
+    // limiter's acceleration limit holds the arm back.
     const double lag_mm = 1e3 * kSpeed / parameters.get("hierarchical.kappa_x");
     EXPECT_GT(region.e_task_max_mm, 0.0) << region.name;
     EXPECT_LE(region.e_task_mean_mm, region.e_task_max_mm) << region.name;

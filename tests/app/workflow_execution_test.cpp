@@ -154,11 +154,17 @@ void configureAndProgram(Workflow& workflow, KinematicBackend& backend) {
   ASSERT_EQ(workflow.stage(), Stage::kExecution);
 }
 
-// Runs EXECUTION (the arm following its commands) until the motion is done and settled.
-void execute(Workflow& workflow, KinematicBackend& backend, double max_seconds) {
+// Runs EXECUTION (the arm following its commands) until the motion is done and settled;
+// returns the largest distance of the tip from the moving target after the first 0.3 s.
+double execute(Workflow& workflow, KinematicBackend& backend, double max_seconds) {
   backend.following = true;
-  for (int i = 0; i < static_cast<int>(max_seconds / 1e-3) && !workflow.executionDone(); ++i) workflow.step();
+  double max_lag = 0.0;
+  for (int i = 0; i < static_cast<int>(max_seconds / 1e-3) && !workflow.executionDone(); ++i) {
+    workflow.step();
+    if (i >= 300) max_lag = std::max(max_lag, (backend.tip() - workflow.taskTarget()).norm());
+  }
   run(workflow, 0.5);
+  return max_lag;
 }
 
 TEST(WorkflowExecution, ReplaysATeachInToItsEnd) {
@@ -169,7 +175,10 @@ TEST(WorkflowExecution, ReplaysATeachInToItsEnd) {
   EXPECT_FALSE(workflow.replayTeachIn(1));  // only one teach-in
   ASSERT_TRUE(workflow.replayTeachIn(0));
   EXPECT_FALSE(workflow.executionDone());
-  execute(workflow, rig.backend, 20.0);
+  // The target moves at 0.1 m/s; its velocity is fed forward, so the tip stays well inside
+  // the lag v/κ_x = 10 mm that Eq. 2.11's feedback alone leaves (measured: 9.9 mm without).
+  const double max_lag = execute(workflow, rig.backend, 20.0);
+  EXPECT_LT(max_lag, 0.005);
   EXPECT_TRUE(workflow.executionDone());
   const Eigen::Vector3d end = trajectory.col(trajectory.cols() - 1);
   EXPECT_LT((rig.backend.tip() - end).norm(), 0.005) << "tip " << rig.backend.tip().transpose();
