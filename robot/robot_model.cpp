@@ -444,6 +444,10 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
       const double soft_upper = joint.safety->soft_upper_limit;
       // urdfdom defaults both to 0 when absent; only a proper interval narrows the limits.
       if (std::isfinite(soft_lower) && std::isfinite(soft_upper) && soft_lower < soft_upper) {
+        // A software range that misses the hardware range leaves no posture the joint may take.
+        if (soft_lower > limits.upper || soft_upper < limits.lower) {
+          throw InputError("joint '" + joint.name + "': <safety_controller> soft limits lie outside its <limit>");
+        }
         limits.soft_lower = std::max(limits.lower, soft_lower);
         limits.soft_upper = std::min(limits.upper, soft_upper);
       }
