@@ -18,7 +18,7 @@ namespace flexirob::app {
 MotionOutcome executeMotion(const robot::RobotModel& model, const robot::ParameterSet& parameters,
                             const learning::Learner& map, const Eigen::VectorXd& q_start,
                             const std::function<Eigen::Vector3d(double)>& p_des, double duration, double settle,
-                            robot::CollisionWorld* world) {
+                            robot::CollisionWorld* world, AtContact at_contact) {
   constexpr double kDt = 1e-3;
   robot::HierarchicalController controller(model, parameters);
   robot::CommandLimiter limiter(model, parameters, kDt);
@@ -49,13 +49,16 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
       if (world != nullptr) {
         world->update(limiter.command());
         if (!world->contacts().empty()) {
-          outcome.collided = true;
-          const robot::Contact& contact = world->contacts().front();
-          outcome.contact = world->bodyName(contact.body) + "/" + world->otherName(contact);
-          outcome.contact_time = k * kDt;
-          kinematics.update(limiter.command());
-          outcome.contact_task_error = (kinematics.p_WT() - target).norm();
-          break;  // a collision ends the motion as on the real robot
+          ++outcome.colliding_checks;
+          if (!outcome.collided) {
+            outcome.collided = true;
+            const robot::Contact& contact = world->contacts().front();
+            outcome.contact = world->bodyName(contact.body) + "/" + world->otherName(contact);
+            outcome.contact_time = k * kDt;
+            kinematics.update(limiter.command());
+            outcome.contact_task_error = (kinematics.p_WT() - target).norm();
+          }
+          if (at_contact == AtContact::kStop) break;  // a collision ends the motion as on the real robot
         }
       }
       // Settled: at the end of the path, at rest and on target.

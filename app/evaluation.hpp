@@ -31,8 +31,13 @@ struct MotionOutcome {
   std::string contact;    ///< the first contact, "body/other" (empty without one)
   double contact_time = 0.0;        ///< [s] when it happened
   double contact_task_error = 0.0;  ///< [m] |x_des − x| at the contact
+  int colliding_checks = 0;  ///< 10 ms checks in contact (at most 1 unless the motion went on through contacts)
   Eigen::VectorXd q;      ///< final posture
 };
+
+/// What executeMotion does at a contact: stop there as the real robot would (evaluations), or go
+/// on and count the checks in contact (the tutor's feedback on a transition between areas).
+enum class AtContact { kStop, kContinue };
 
 /// The learned posture q_c(p_W), clamped to the soft limits: where the reachability evaluation
 /// starts the arm for a target (ApproachFrom::kLearnedPosture).
@@ -52,12 +57,13 @@ Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& 
 /// the largest distance of a body origin or the tip from the shoulder [m].
 std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& model);
 
-/// Drives the command from q_start towards p_des(t) (t in [0, duration], held after) for
-/// duration + settle seconds at 1 kHz; checks contacts every 10 ms. `world` may be null.
+/// Drives the command from q_start towards p_des(t) (t in [0, duration], held after) for up to
+/// duration + settle seconds at 1 kHz, feeding the path's velocity forward (Eq. 2.6); ends early
+/// once settled on target. Checks contacts every 10 ms; `world` may be null.
 MotionOutcome executeMotion(const robot::RobotModel& model, const robot::ParameterSet& parameters,
                             const learning::Learner& map, const Eigen::VectorXd& q_start,
                             const std::function<Eigen::Vector3d(double)>& p_des, double duration, double settle,
-                            robot::CollisionWorld* world);
+                            robot::CollisionWorld* world, AtContact at_contact = AtContact::kStop);
 
 struct ReachableResult {
   int grid_points = 0;   ///< points of G

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "app/evaluation.hpp"
 #include "app/realtime.hpp"
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
@@ -669,48 +670,23 @@ TransitionCheck checkTransition(const robot::RobotModel& model, const robot::Par
                                 const learning::Learner& map, const TrainingArea& from, const TrainingArea& to,
                                 int from_index, int to_index, robot::CollisionWorld* world, double speed,
                                 double tolerance) {
-  constexpr double kDt = 1e-3;
   TransitionCheck check;
   check.from = from_index;
   check.to = to_index;
-  robot::HierarchicalController controller(model, parameters);
-  robot::CommandLimiter limiter(model, parameters, kDt);
-  limiter.reset(from.q_fixed);
-  robot::Kinematics kinematics(model);
-  Eigen::VectorXd qd(model.dof()), q_c(model.dof());
   const Eigen::Vector3d start = tipPose(model, from.q_fixed).translation();
   const Eigen::Vector3d goal = to.centre;
-  const double length = (goal - start).norm();
-  const double duration = length / speed;
-  const double settle = 2.0;
-  const auto steps = static_cast<int>(std::ceil((duration + settle) / kDt));
-  double error_sum = 0.0;
-  int error_count = 0;
-  check.colliding_samples = world != nullptr ? 0 : -1;
-  const Eigen::Vector3d path_velocity = duration > 0.0 ? Eigen::Vector3d((goal - start) / duration) : Eigen::Vector3d::Zero();
-  for (int k = 1; k <= steps; ++k) {
-    const double s = duration > 0.0 ? std::min(1.0, k * kDt / duration) : 1.0;
-    const Eigen::Vector3d p_des = start + s * (goal - start);
-    map.predict(p_des, q_c);
-    const Eigen::Vector3d pd_des = k * kDt <= duration ? path_velocity : Eigen::Vector3d::Zero();
-    controller.velocity(limiter.command(), p_des, pd_des, q_c, qd, &limiter);
-    const Eigen::VectorXd& q = limiter.updateVelocity(qd);
-    if (k % 10 == 0) {
-      kinematics.update(q);
-      const double error = (kinematics.p_WT() - p_des).norm();
-      error_sum += error;
-      ++error_count;
-      check.max_error_m = std::max(check.max_error_m, error);
-      if (world != nullptr) {
-        world->update(q);
-        if (!world->contacts().empty()) ++check.colliding_samples;
-      }
-    }
-  }
-  kinematics.update(limiter.command());
-  check.final_error_m = (kinematics.p_WT() - goal).norm();
-  check.mean_error_m = error_count > 0 ? error_sum / error_count : 0.0;
-  check.posture_error_rad = (limiter.command() - to.q_fixed).norm();
+  const double duration = (goal - start).norm() / speed;
+  const auto line = [&](double t) -> Eigen::Vector3d {
+    return duration > 0.0 ? Eigen::Vector3d(start + (t / duration) * (goal - start)) : goal;
+  };
+  // The whole line is run through contacts: the tutor hears how much of it collides.
+  const MotionOutcome motion =
+      executeMotion(model, parameters, map, from.q_fixed, line, duration, 2.0, world, AtContact::kContinue);
+  check.mean_error_m = motion.mean_error_m;
+  check.max_error_m = motion.max_error_m;
+  check.final_error_m = motion.final_error_m;
+  check.posture_error_rad = (motion.q - to.q_fixed).norm();
+  check.colliding_samples = world != nullptr ? motion.colliding_checks : -1;
   check.ok = check.colliding_samples <= 0 && check.final_error_m <= tolerance && check.max_error_m <= 5.0 * tolerance;
   return check;
 }
