@@ -212,7 +212,7 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planApproach(const Eigen::VectorXd&
   return {};
 }
 
-PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested) {
+std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested) {
   const int dof = model_->dof();
   const Eigen::VectorXd lower = model_->softLowerLimits();
   const Eigen::VectorXd upper = model_->softUpperLimits();
@@ -271,7 +271,7 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
     // Postures near a joint limit are penalized (they would warn).
     const double limit_margin = std::min((q - lower).minCoeff(), (upper - q).minCoeff());
     const double score = std::min(clearance, 0.08) / 0.08 - 0.2 * (q - q_reference).norm() - (limit_margin < 0.2 ? 0.5 : 0.0);
-    candidates.push_back({PostureChoice{clearance >= options_.min_clearance, q, clearance, {}}, score});
+    candidates.push_back({PostureChoice{clearance >= options_.min_clearance, q, clearance}, score});
   }
   // A posture with the clearance asked for beats every one without it, however near the
   // reference that one lies; otherwise the area would be given up with a usable posture found.
@@ -279,20 +279,17 @@ PostureChoice SimulatedTutor::choosePosture(const Eigen::Vector3d& p_W, const st
   std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
     return a.choice.found != b.choice.found ? a.choice.found : a.score > b.score;
   });
-  PostureChoice best;
-  best.clearance = -std::numeric_limits<double>::infinity();
-  if (candidates.empty()) return best;
-  best = candidates.front().choice;
-  for (std::size_t i = 1; i < candidates.size(); ++i) {
-    if (static_cast<int>(best.alternatives.size()) + 1 >= options_.posture_attempts) break;
-    const PostureChoice& next = candidates[i].choice;
-    if (!next.found) break;
+  std::vector<PostureChoice> ranked;
+  for (const Candidate& candidate : candidates) {
+    if (static_cast<int>(ranked.size()) >= std::max(1, options_.posture_attempts)) break;
+    if (!ranked.empty() && !candidate.choice.found) break;
     // IK from different null-space targets often lands on the same posture.
-    bool distinct = (next.q - best.q).norm() > 0.05;
-    for (const PostureChoice& taken : best.alternatives) distinct = distinct && (next.q - taken.q).norm() > 0.05;
-    if (distinct) best.alternatives.push_back(next);
+    const bool distinct = std::all_of(ranked.begin(), ranked.end(), [&](const PostureChoice& taken) {
+      return (candidate.choice.q - taken.q).norm() > 0.05;
+    });
+    if (distinct) ranked.push_back(candidate.choice);
   }
-  return best;
+  return ranked;
 }
 
 bool SimulatedTutor::waitFor(SubStage sub_stage, double max_time) {
@@ -415,18 +412,19 @@ void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref
 }
 
 bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested) {
-  PostureChoice choice = choosePosture(area.target, suggested);
-  area.q_chosen = choice.q;
-  area.clearance = choice.clearance;
-  if (!choice.found) {
+  const std::vector<PostureChoice> postures = choosePostures(area.target, suggested);
+  if (postures.empty() || !postures.front().found) {
+    if (!postures.empty()) {
+      area.q_chosen = postures.front().q;
+      area.clearance = postures.front().clearance;
+    }
     area.failure = "no collision-free posture with enough clearance";
     return false;
   }
+  PostureChoice choice = postures.front();
   // The way there: straight in joint space where that keeps the clearance, otherwise around
   // the obstacles (RRT-Connect in the collision world), keeping the full margin if possible;
   // the next posture where no way to this one is found.
-  std::vector<PostureChoice> postures{choice};
-  postures.insert(postures.end(), choice.alternatives.begin(), choice.alternatives.end());
   std::vector<Eigen::VectorXd> path;
   for (const PostureChoice& posture : postures) {
     path = planApproach(state_.q, posture.q, options_.min_clearance);

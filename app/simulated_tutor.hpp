@@ -84,10 +84,6 @@ struct PostureChoice {
   bool found = false;
   Eigen::VectorXd q;
   double clearance = 0.0;  ///< [m]
-  /// The next best distinct candidates with the clearance asked for, best first (at most
-  /// TutorOptions::posture_attempts − 1): where the way to q cannot be found, a person tries
-  /// another posture before giving the area up.
-  std::vector<PostureChoice> alternatives;
 };
 
 class SimulatedTutor {
@@ -106,8 +102,12 @@ class SimulatedTutor {
   /// did not complete.
   bool program(const std::vector<Eigen::Vector3d>& waypoints);
 
-  /// Best collision-free IK posture for p_W (suggested posture tried first).
-  PostureChoice choosePosture(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested);
+  /// Collision-free IK postures for p_W (the suggested posture tried first), best first: the best
+  /// candidate (found only if it has the clearance asked for), then the next distinct ones with
+  /// that clearance, TutorOptions::posture_attempts in all at most. Where the way to the first
+  /// cannot be found, a person tries the next before giving the area up. Empty when no
+  /// candidate reached p_W collision-free.
+  std::vector<PostureChoice> choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested);
 
   const TutorReport& report() const { return report_; }
 

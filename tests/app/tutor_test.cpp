@@ -225,7 +225,7 @@ TEST(SimulatedTutor, LeadsTheArmAroundTheBoardToAnAreaUnderIt) {
   EXPECT_LT((teaching.workflow->areas()[0].centre - under_board.p_WA).norm(), 0.05);
 }
 
-// Where no way to the best posture is found, a person tries another one. The alternatives the
+// Where no way to the best posture is found, a person tries another one. The postures the
 // choice offers reach the target, keep the clearance asked for and differ from each other.
 TEST(SimulatedTutor, OffersDistinctAlternativePosturesWithEnoughClearance) {
   robot::Scene scene = robot::loadScene("setup_I");
@@ -234,13 +234,14 @@ TEST(SimulatedTutor, OffersDistinctAlternativePosturesWithEnoughClearance) {
   teaching.tutor_options.posture_candidates = 24;
   teaching.tutor_options.posture_attempts = 4;
   SimulatedTutor tutor(teaching.sim, *teaching.workflow, scene, teaching.parameters, teaching.tutor_options);
-  const PostureChoice choice = tutor.choosePosture(under_board.p_WA, std::nullopt);
-  ASSERT_TRUE(choice.found);
-  ASSERT_GE(choice.alternatives.size(), 1U);
-  EXPECT_LE(choice.alternatives.size(), 3U);
+  const std::vector<PostureChoice> choices = tutor.choosePostures(under_board.p_WA, std::nullopt);
+  ASSERT_GE(choices.size(), 2U);
+  EXPECT_LE(choices.size(), 4U);
+  ASSERT_TRUE(choices.front().found);
   robot::CollisionWorld world(lwr4(), scene);
-  std::vector<Eigen::VectorXd> postures{choice.q};
-  for (const PostureChoice& alternative : choice.alternatives) {
+  std::vector<Eigen::VectorXd> postures{choices.front().q};
+  for (std::size_t i = 1; i < choices.size(); ++i) {
+    const PostureChoice& alternative = choices[i];
     EXPECT_TRUE(alternative.found);
     EXPECT_GE(alternative.clearance, teaching.tutor_options.min_clearance);
     EXPECT_LT((robot::tipPose(lwr4(), alternative.q).translation() - under_board.p_WA).norm(), 1e-3);
@@ -360,7 +361,9 @@ TEST(SimulatedTutor, PrefersAPostureWithEnoughClearanceOverANearerOneWithout) {
   ASSERT_GT(home_clearance / 0.08, std::min(suggested_clearance, 0.08) / 0.08 - 0.2 * (suggested - home).norm());
 
   SimulatedTutor tutor(teaching.sim, *teaching.workflow, scene, teaching.parameters, teaching.tutor_options);
-  const PostureChoice choice = tutor.choosePosture(p_target, suggested);
+  const std::vector<PostureChoice> choices = tutor.choosePostures(p_target, suggested);
+  ASSERT_FALSE(choices.empty());
+  const PostureChoice& choice = choices.front();
   EXPECT_TRUE(choice.found);
   EXPECT_GE(choice.clearance, min_clearance);
   EXPECT_LT((choice.q - suggested).norm(), 0.05);
