@@ -13,6 +13,7 @@
 #include "app/workflow.hpp"
 #include "robot/collision.hpp"
 #include "robot/controllers.hpp"
+#include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
@@ -207,6 +208,27 @@ struct ShortTeaching {
   std::unique_ptr<Workflow> workflow;
   TutorOptions tutor_options;
 };
+
+// A start posture inside an obstacle leaves no way to any area: the tutor says so before it
+// starts, naming the obstacle, instead of failing area after area.
+TEST(SimulatedTutor, RefusesToStartFromAPostureInsideAnObstacle) {
+  robot::Scene scene = robot::loadScene("setup_A");
+  robot::Obstacle block;
+  block.name = "block_at_the_wrist";
+  block.shape = robot::Obstacle::Shape::kSphere;
+  block.size = Eigen::Vector3d(0.1, 0.0, 0.0);
+  block.X_WO.translation() = robot::tipPose(lwr4(), *scene.home_posture).translation();
+  scene.obstacles.push_back(block);
+  ShortTeaching teaching(scene);
+  try {
+    teaching.configure(2);
+    FAIL() << "configured from inside an obstacle";
+  } catch (const flexirob::InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("block_at_the_wrist"), std::string::npos) << error.what();
+  }
+  EXPECT_TRUE(teaching.workflow->areas().empty());
+  EXPECT_EQ(teaching.workflow->stage(), Stage::kIdle) << "nothing was started";
+}
 
 // Setup I's area I3 lies under the board, on the far side of it from the home posture: the
 // straight joint-space way there runs into the board, so the tutor has to lead the arm around
