@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <numbers>
 #include <sstream>
@@ -412,13 +413,33 @@ void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref
 }
 
 bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested) {
-  const std::vector<PostureChoice> postures = choosePostures(area.target, suggested);
-  if (postures.empty() || !postures.front().found) {
-    if (!postures.empty()) {
-      area.q_chosen = postures.front().q;
-      area.clearance = postures.front().clearance;
+  // What a person sees at once, said as such instead of as a failed posture search.
+  for (const robot::Obstacle& obstacle : scene_->obstacles) {
+    if (robot::obstacleContains(obstacle, area.target)) {
+      area.failure = "the area's centre lies inside " + obstacle.name;
+      return false;
     }
-    area.failure = "no collision-free posture with enough clearance";
+  }
+  const auto [shoulder, reach] = shoulderAndReach(*model_);
+  if ((area.target - shoulder).norm() > reach) {
+    std::ostringstream failure;
+    failure << std::fixed << std::setprecision(2) << "out of the arm's reach (" << (area.target - shoulder).norm()
+            << " m from the shoulder, reach " << reach << " m)";
+    area.failure = failure.str();
+    return false;
+  }
+  const std::vector<PostureChoice> postures = choosePostures(area.target, suggested);
+  if (postures.empty()) {
+    area.failure = "no posture found that reaches it without a contact";
+    return false;
+  }
+  if (!postures.front().found) {
+    area.q_chosen = postures.front().q;
+    area.clearance = postures.front().clearance;
+    std::ostringstream failure;
+    failure << std::fixed << std::setprecision(1) << "no posture with " << 100.0 * options_.min_clearance
+            << " cm clearance (the best found keeps " << 100.0 * postures.front().clearance << " cm)";
+    area.failure = failure.str();
     return false;
   }
   PostureChoice choice = postures.front();

@@ -230,6 +230,29 @@ TEST(SimulatedTutor, RefusesToStartFromAPostureInsideAnObstacle) {
   EXPECT_EQ(teaching.workflow->stage(), Stage::kIdle) << "nothing was started";
 }
 
+// Areas a person would see at once cannot be taught are reported as such, and the next one is
+// taught as usual.
+TEST(SimulatedTutor, SaysWhyAnAreaInsideAnObstacleOrOutOfReachIsNotTaught) {
+  robot::Scene scene = robot::loadScene("setup_A");
+  robot::Obstacle block;
+  block.name = "crate";
+  block.size = Eigen::Vector3d(0.2, 0.2, 0.2);
+  block.X_WO.translation() = Eigen::Vector3d(-0.5, 0.5, 0.1);
+  scene.obstacles.push_back(block);
+  robot::Area inside{"in_the_crate", block.X_WO.translation(), 0.05, std::nullopt, std::nullopt};
+  robot::Area far{"far_away", Eigen::Vector3d(-2.0, 0.0, 0.4), 0.05, std::nullopt, std::nullopt};
+  scene.training_areas.insert(scene.training_areas.begin(), {inside, far});
+  ShortTeaching teaching(scene);
+  const TutorReport report = teaching.configure(1);
+  ASSERT_EQ(report.areas.size(), 3U);
+  EXPECT_FALSE(report.areas[0].taught);
+  EXPECT_EQ(report.areas[0].failure, "the area's centre lies inside crate");
+  EXPECT_FALSE(report.areas[1].taught);
+  EXPECT_NE(report.areas[1].failure.find("out of the arm's reach"), std::string::npos) << report.areas[1].failure;
+  EXPECT_TRUE(report.areas[2].taught) << report.areas[2].failure;
+  EXPECT_EQ(teaching.workflow->areas().size(), 1U);
+}
+
 // Setup I's area I3 lies under the board, on the far side of it from the home posture: the
 // straight joint-space way there runs into the board, so the tutor has to lead the arm around
 // it (the approach planner) and does so without a contact.
