@@ -101,9 +101,12 @@ void TimePlot::autoscale() {
   }
   if (!(upper >= lower)) return;
   const double margin = std::max(0.05 * (upper - lower), 1e-9 + 1e-3 * std::abs(upper));
-  value_axis_->setRange(lower - margin, upper + margin);
+  // A quantity that cannot be negative (an error norm, a compute time) gets no negative axis.
+  value_axis_->setRange(lower >= 0.0 ? std::max(0.0, lower - margin) : lower - margin, upper + margin);
   updateCursorLine();
 }
+
+std::pair<double, double> TimePlot::valueRange() const { return {value_axis_->min(), value_axis_->max()}; }
 
 void TimePlot::setCursorTime(double time) {
   cursor_time_ = time;

@@ -16,6 +16,7 @@
 #include <deque>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 class QChart;
@@ -49,8 +50,11 @@ class TimePlot : public QChartView {
   int seriesCount() const { return static_cast<int>(series_.size()); }
   const QLineSeries* series(int index) const { return series_.at(static_cast<std::size_t>(index)); }
   void setTimeRange(double t0, double t1);
-  /// Fixed value range; without it, the range follows the data (with 5 % margins).
+  /// Fixed value range; without it, the range follows the data (with 5 % margins; data that
+  /// are all non-negative, such as errors and times, keep the axis at zero and above).
   void setValueRange(double lower, double upper);
+  /// The value axis' current range (lower, upper).
+  std::pair<double, double> valueRange() const;
   void setCursorTime(double time);
   double cursorTime() const { return cursor_time_; }
   /// The time under a widget x coordinate.

@@ -167,6 +167,9 @@ class FeaturesTest : public QObject {
     // The control cycle's compute time is plotted (positive, in microseconds).
     QVERIFY(plots->cyclePlot()->series(0)->count() >= 5);
     QVERIFY(plots->cyclePlot()->series(0)->points().back().y() > 0.0);
+    // Times and error norms are never negative, nor are their axes.
+    QCOMPARE(plots->cyclePlot()->valueRange().first, 0.0);
+    QCOMPARE(plots->taskErrorPlot()->valueRange().first, 0.0);
   }
 
   void aTaughtAreaShowsAsSlicesAndAGoalIsPlannedAndReviewed() {
