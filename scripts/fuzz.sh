@@ -4,6 +4,10 @@
 #
 # Usage: scripts/fuzz.sh [seconds per target, default 25] [target ...]
 # Targets: urdf mesh scene fri model_file itm_file session number_list (default: all).
+# FLEXIROB_FUZZ_SEED=N fixes libFuzzer's random seed: every run with the same seed mutates the
+# same inputs in the same order, so a gate (CI) checks a reproducible prefix of one sequence,
+# which a longer local run with that seed has already covered. Unset: a new seed per run, for
+# exploration.
 # A crash stops with a non-zero status; its input is copied to fuzz/regressions/<target>/ so
 # that, once fixed, CTest replays it in every build (fuzz_regression_<target>). New inputs the
 # run finds go to the build directory, not into the committed corpus (merge them by hand with
@@ -13,6 +17,8 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 dir="${FLEXIROB_FUZZ_BUILD_DIR:-$root/build-fuzz}"
 jobs="${FLEXIROB_JOBS:-$(nproc)}"
 seconds="${1:-25}"
+seed_option=()
+[ -n "${FLEXIROB_FUZZ_SEED:-}" ] && seed_option=("-seed=$FLEXIROB_FUZZ_SEED")
 shift || true
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
@@ -47,7 +53,11 @@ for target in "${targets[@]}"; do
   # under ASan and UBSan, and mutated further.
   corpora=("$root/fuzz/corpus/$target")
   [ -d "$root/fuzz/regressions/$target" ] && corpora+=("$root/fuzz/regressions/$target")
-  if ! "$dir/fuzz/fuzz_$target" "$work" "${corpora[@]}" -max_total_time="$seconds" \
+  # Each run starts from the committed corpora alone, so that a seeded run is the same
+  # everywhere (inputs found by earlier runs on this machine would change the sequence).
+  rm -rf "$work"
+  mkdir -p "$work"
+  if ! "$dir/fuzz/fuzz_$target" "$work" "${corpora[@]}" -max_total_time="$seconds" "${seed_option[@]}" \
       -rss_limit_mb=2560 -malloc_limit_mb=2048 -timeout=10 -max_len=131072 -print_final_stats=1 \
       -artifact_prefix="$artifacts" 2>"$dir/fuzz-$target.log"; then
     status=1
