@@ -454,9 +454,11 @@ PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Sce
     motion.found = true;
     for (double t = 0.0; t < spline.duration(); t += 0.05) motion.planned_W.emplace_back(spline.position(t).head<3>());
     motion.planned_W.emplace_back(spline.position(spline.duration()).head<3>());
+    // The collision world only counts contacts (Sect. A.4): a motion runs to its end through a
+    // contact, so that each path is judged on its own and the next starts at this one's goal.
     const MotionOutcome outcome = executeMotion(
         model, parameters, map, q, [&](double t) { return Eigen::Vector3d(spline.position(t).head<3>()); },
-        spline.duration(), 2.0, &world);
+        spline.duration(), 2.0, &world, AtContact::kContinue);
     if (!outcome.collided) ++result.collision_free;
     if (!outcome.collided && (robot::tipPose(model, outcome.q).translation() - p_goal).norm() <= 0.01) ++result.reached_1cm;
     motion.final_W = robot::tipPose(model, outcome.q).translation();
@@ -467,10 +469,10 @@ PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Sce
     if (outcome.collided) ++result.contacts[outcome.contact];
     motion.reached_1cm = !outcome.collided && (motion.final_W - p_goal).norm() <= 0.01;
     result.motions.push_back(std::move(motion));
-    // A contact stops the arm in contact; the next goal starts where the last motion without one
-    // ended (the operator frees the arm), not inside the obstacle, which would count every later
-    // motion as collided as well.
-    if (!outcome.collided) q = outcome.q;
+    // Where the motion ended in contact, the next starts where the last one ended free (the
+    // operator frees the arm): starting inside the obstacle would count it as collided as well.
+    world.update(outcome.q);
+    if (world.contacts().empty()) q = outcome.q;
     if (progress) progress(static_cast<double>(g + 1) / goals);
   }
   result.mean_plan_ms = plan_ms / goals;

@@ -140,8 +140,6 @@ struct PlanningResult {
   std::vector<PlannedMotion> motions;  ///< per goal, in the order visited
 };
 
-/// Sect. 8.3: `goals` random graph nodes (seeded) visited one after another from q_start; each
-/// planned with A* + spline and executed with the hierarchical controller.
 /// Eq. 4.1: the implicit scene model S = {x ∈ T : d(x, M) > 0.1 m}, with T the grid points
 /// within reach (obstacles not removed) and M the points of the arm (joint origins and the
 /// links between them, every 2 cm) in the postures the reachability evaluation ended in.
@@ -185,6 +183,10 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
                                       const std::vector<EvaluatedArea>& areas, int per_area, double speed,
                                       std::uint64_t seed, const ProgressCallback& progress = {});
 
+/// Sect. 8.3: `goals` random graph nodes (seeded) visited one after another from q_start; each
+/// planned with A* + spline and executed with the hierarchical controller, through contacts
+/// (counted, the motion goes on to its goal). The next motion starts where this one ended, or
+/// where the last one ended free of contact if this one ended in contact.
 PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Scene& scene,
                                 const robot::ParameterSet& parameters, const learning::Learner& map,
                                 const planning::Itm& graph, const Eigen::VectorXd& q_start, int goals,

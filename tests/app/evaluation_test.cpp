@@ -4,6 +4,7 @@
 
 #include "app/evaluation.hpp"
 #include "learning/elm.hpp"
+#include "planning/itm.hpp"
 #include "robot/collision.hpp"
 #include "robot/controllers.hpp"
 #include "robot/errors.hpp"
@@ -74,6 +75,51 @@ TEST(Evaluation, MotionThroughAnObstacleCountsAsCollision) {
   robot::CollisionWorld world(lwr4(), scene);
   const MotionOutcome outcome = executeMotion(lwr4(), s.parameters, *map, ready(), [&](double) { return target; }, 0.0, 3.0, &world);
   EXPECT_TRUE(outcome.collided);
+}
+
+// Sect. 8.3 in a corridor of ITM nodes that a thin wall crosses: a motion through the wall is
+// counted as collided and goes on to its goal (the collision world only counts contacts), and
+// the next motion starts there. Only the motions that cross the wall collide, whatever came
+// before them; stopping at the first contact would leave the arm on the near side and count
+// every later goal beyond the wall as well.
+TEST(Evaluation, PlannedMotionsThroughAContactGoOnToTheirGoalAndTheNextStartsThere) {
+  Parameters s;
+  const auto map = constantMap();
+  const Eigen::Vector3d start = robot::tipPose(lwr4(), ready()).translation();
+  const Eigen::Vector3d step(0.0, 0.3, 0.0);
+  robot::Scene scene;
+  robot::Obstacle wall;
+  wall.name = "wall";
+  wall.size = Eigen::Vector3d(0.3, 0.02, 0.2);  // low: only the hand passes it, never the elbow
+  wall.X_WO.translation() = start + 0.5 * step;  // midway between the first two nodes
+  scene.obstacles.push_back(wall);
+  // Three nodes 0.3 m apart in a row, joined by edges: visited 0, 1, 2, 1, 0.
+  planning::Itm graph(planning::ItmParameters{}, 7);
+  for (const int k : {0, 1, 2, 1, 0}) graph.insert(start + k * step, ready());
+  ASSERT_EQ(graph.nodeCount(), 3);
+  ASSERT_GE(graph.edgeCount(), 2);
+  const PlanningResult result = evaluatePlanning(lwr4(), scene, s.parameters, *map, graph, ready(), 12, 3);
+  ASSERT_EQ(result.motions.size(), 12U);
+  const double wall_y = wall.X_WO.translation().y();
+  int crossings = 0, collided = 0;
+  for (std::size_t i = 0; i < result.motions.size(); ++i) {
+    const PlannedMotion& motion = result.motions[i];
+    ASSERT_TRUE(motion.found) << "goal " << i;
+    EXPECT_LT((motion.final_W - motion.goal_W).norm(), 0.01) << "goal " << i << " ended short of its goal";
+    if (i > 0) EXPECT_LT((motion.start_W - result.motions[i - 1].final_W).norm(), 1e-6) << "goal " << i;
+    const bool crosses = (motion.start_W.y() - wall_y) * (motion.goal_W.y() - wall_y) < 0.0;
+    crossings += crosses ? 1 : 0;
+    collided += motion.collided ? 1 : 0;
+    EXPECT_EQ(motion.collided, crosses) << "goal " << i;
+  }
+  EXPECT_GE(crossings, 2) << "the seed should cross the wall more than once";
+  EXPECT_EQ(result.collision_free, 12 - collided);
+  int counted = 0;
+  for (const auto& [contact, motions] : result.contacts) {
+    EXPECT_NE(contact.find("/wall"), std::string::npos) << contact;
+    counted += motions;
+  }
+  EXPECT_EQ(counted, collided);
 }
 
 TEST(Evaluation, ExploredFractionCountsCellsHoldingSamples) {
