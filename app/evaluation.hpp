@@ -35,8 +35,9 @@ struct MotionOutcome {
   Eigen::VectorXd q;      ///< final posture
 };
 
-/// What executeMotion does at a contact: stop there as the real robot would (evaluations), or go
-/// on and count the checks in contact (the tutor's feedback on a transition between areas).
+/// What executeMotion does at a contact: stop there as the real robot would (the reachability
+/// and trajectory evaluations), or go on and count the checks in contact (the check of a
+/// transition between areas, Sect. 8.3's planned motions).
 enum class AtContact { kStop, kContinue };
 
 /// The learned posture q_c(p_W), clamped to the soft limits: where the reachability evaluation
