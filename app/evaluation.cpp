@@ -187,9 +187,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   learning::UniformRandom random(7);  // the IK seeds of the accessibility test: fixed, T must not vary
   for (const auto& p : points) {
     if ((p - shoulder).norm() > reach - grid.tolerance) continue;
-    bool inside = false;
-    for (const auto& obstacle : scene.obstacles) inside = inside || robot::obstacleContains(obstacle, p);
-    if (inside) continue;
+    if (robot::obstacleAt(scene, p) != nullptr) continue;
     if (!scene.obstacles.empty() && !accessibleWithoutCollision(model, parameters, world, p, q_start, 24, random)) {
       ++result.inaccessible;
       continue;
@@ -278,8 +276,7 @@ SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot:
         }
       }
     }
-    bool inside = false;
-    for (const auto& obstacle : scene.obstacles) inside = inside || robot::obstacleContains(obstacle, x);
+    const bool inside = robot::obstacleAt(scene, x) != nullptr;
     if (inside) ++result.obstacle_points;
     if (near) continue;
     result.model.push_back(x);

@@ -419,11 +419,9 @@ void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref
 
 bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested) {
   // What a person sees at once, said as such instead of as a failed posture search.
-  for (const robot::Obstacle& obstacle : scene_->obstacles) {
-    if (robot::obstacleContains(obstacle, area.target)) {
-      area.failure = "the area's centre lies inside " + obstacle.name;
-      return false;
-    }
+  if (const robot::Obstacle* obstacle = robot::obstacleAt(*scene_, area.target)) {
+    area.failure = "the area's centre lies inside " + obstacle->name;
+    return false;
   }
   const auto [shoulder, reach] = shoulderAndReach(*model_);
   if ((area.target - shoulder).norm() > reach) {
@@ -538,10 +536,8 @@ void SimulatedTutor::drawCheckPoints() {
     Eigen::Vector3d x;
     for (int a = 0; a < 3; ++a) x[a] = draw.uniform(grid.lower[a], grid.upper[a]);
     if ((x - shoulder).norm() > reach) continue;
-    bool inside = false;
-    for (const auto& obstacle : scene_->obstacles) inside = inside || robot::obstacleContains(obstacle, x, 0.05);
     // Only where some posture reaches without a contact (a person sees the arm cannot get there).
-    if (!inside && (scene_->obstacles.empty() || accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw))) {
+    if (robot::obstacleAt(*scene_, x, 0.05) == nullptr && (scene_->obstacles.empty() || accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw))) {
       check_points_.push_back(x);
     }
   }
@@ -602,9 +598,7 @@ Eigen::Vector3d SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid&
 bool SimulatedTutor::roomyForAnArea(const Eigen::Vector3d& p_W) const {
   // Room for the arm around the tip: 0.1 m from every obstacle, and off the robot's own base
   // and the table it stands on, where the hands cannot lead the arm through a helix.
-  for (const auto& obstacle : scene_->obstacles) {
-    if (robot::obstacleContains(obstacle, p_W, 0.1)) return false;
-  }
+  if (robot::obstacleAt(*scene_, p_W, 0.1) != nullptr) return false;
   return p_W.z() >= 0.08 && p_W.head<2>().norm() >= 0.2;
 }
 

@@ -686,6 +686,13 @@ bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, doub
   return false;
 }
 
+const Obstacle* obstacleAt(const Scene& scene, const Eigen::Vector3d& p_W, double margin) {
+  for (const Obstacle& obstacle : scene.obstacles) {
+    if (obstacleContains(obstacle, p_W, margin)) return &obstacle;
+  }
+  return nullptr;
+}
+
 const std::vector<std::string>& builtinSceneNames() {
   static const std::vector<std::string> names{"empty",   "setup_A",  "setup_B", "setup_C",   "setup_D",
                                               "setup_I", "setup_II", "harting", "arm9_areas"};

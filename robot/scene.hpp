@@ -81,6 +81,10 @@ struct Scene {
 /// meshes with its own collision engine).
 bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, double margin = 0.0);
 
+/// The first of the scene's obstacles that contains p_W within `margin` [m] (as obstacleContains),
+/// or nullptr when p_W lies in free space.
+const Obstacle* obstacleAt(const Scene& scene, const Eigen::Vector3d& p_W, double margin = 0.0);
+
 /// Built-in scene names: empty, setup_A .. setup_D, setup_I, setup_II, harting, arm9_areas.
 const std::vector<std::string>& builtinSceneNames();
 

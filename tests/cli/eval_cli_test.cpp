@@ -70,13 +70,6 @@ std::filesystem::path tinySession(const std::string& scene_name, const std::stri
   return file;
 }
 
-bool insideSomeObstacle(const robot::Scene& scene, const Eigen::Vector3d& p) {
-  for (const auto& obstacle : scene.obstacles) {
-    if (robot::obstacleContains(obstacle, p)) return true;
-  }
-  return false;
-}
-
 TEST(EvalSceneModelCli, ModelPointsLieOnTheGridAndTheEnclosedObstaclePointsInsideTheScenesBoxes) {
   const auto session = tinySession("setup_I", "scene-model.json");
   const auto result = runCliBinary("eval scene-model --session " + session.string() + " --spacing 0.2");
@@ -102,7 +95,7 @@ TEST(EvalSceneModelCli, ModelPointsLieOnTheGridAndTheEnclosedObstaclePointsInsid
     EXPECT_NEAR((steps - steps.array().round().matrix()).norm(), 0.0, 1e-6) << p.transpose();
     EXPECT_TRUE((p.array() >= scene.grid->lower.array() - 1e-9).all() && (p.array() <= scene.grid->upper.array() + 1e-9).all())
         << p.transpose();
-    inside += insideSomeObstacle(scene, p) ? 1 : 0;
+    inside += robot::obstacleAt(scene, p) != nullptr ? 1 : 0;
   }
   EXPECT_EQ(inside, json.at("obstacle_points_enclosed").get<int>());
   EXPECT_EQ(json.at("free_points_in_model").get<int>(), json.at("model_points").get<int>() - inside);

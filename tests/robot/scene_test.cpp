@@ -334,6 +334,24 @@ TEST(EvaluationGrid, SpansTheThesisGridWithItsUpperBoundsIncluded) {
   EXPECT_EQ(grid.counts(), Eigen::Vector3i(91, 111, 76));
 }
 
+TEST(ObstacleGeometry, NamesTheFirstObstacleHoldingAPointAndNoneInFreeSpace) {
+  Scene scene;
+  Obstacle low;
+  low.name = "low";
+  low.size = Eigen::Vector3d(0.2, 0.2, 0.2);
+  low.X_WO.translation() = Eigen::Vector3d(0.5, 0, 0.1);
+  Obstacle high = low;
+  high.name = "high";
+  high.X_WO.translation() = Eigen::Vector3d(0.5, 0, 0.3);
+  scene.obstacles = {low, high};
+  EXPECT_EQ(obstacleAt(scene, Eigen::Vector3d(0.5, 0, 0.35)), &scene.obstacles[1]);
+  // On the shared face both contain the point; the scene's order decides.
+  EXPECT_EQ(obstacleAt(scene, Eigen::Vector3d(0.5, 0, 0.2)), &scene.obstacles[0]);
+  EXPECT_EQ(obstacleAt(scene, Eigen::Vector3d(0.5, 0, 0.45)), nullptr);
+  EXPECT_EQ(obstacleAt(scene, Eigen::Vector3d(0.5, 0, 0.45), 0.06), &scene.obstacles[1]);
+  EXPECT_EQ(obstacleAt(Scene{}, Eigen::Vector3d::Zero()), nullptr);
+}
+
 TEST(ObstacleGeometry, ContainsPointsInsideAndWithinTheMarginOnly) {
   Obstacle box;
   box.size = Eigen::Vector3d(0.2, 0.4, 0.8);
