@@ -24,6 +24,11 @@ constexpr double kJointStiffness = 36.0;  // [1/s²] times the joint inertia: ab
 constexpr double kJointDamping = 12.0;    // [1/s] times the joint inertia: critically damped
 constexpr double kJointIntegral = 60.0;   // [1/s³] times the joint inertia
 constexpr double kMaxPointForce = 150.0;  // [N]
+// [rad] how far the tutor's reference may run ahead of the arm (largest joint): a person leads the
+// arm along the way and waits where it lags, rather than pulling it across the corners.
+// Unbounded, its lead reached 0.5 rad on the 9-DoF arm and the links cut across the planned way
+// into the bridge and into the arm's own base.
+constexpr double kMaxLead = 0.05;
 constexpr double kTipStiffness = 1500.0;  // [N/m] of the hand drawing circles
 constexpr double kTipDamping = 60.0;      // [Ns/m]
 constexpr double kMaxTipForce = 60.0;     // [N]
@@ -91,7 +96,10 @@ double SimulatedTutor::pathClearance(const std::vector<Eigen::VectorXd>& path) {
 bool SimulatedTutor::postureFree(const Eigen::VectorXd& q, double margin) {
   world_->update(q);
   if (!world_->contacts().empty()) return false;
-  return world_->clearance(std::max(0.05, 2.0 * margin)).distance >= margin;
+  // A person leading the arm keeps its links apart as well as off the obstacles: the hands
+  // lag behind the joint-space path, and a fold planned with zero margin ends in a contact.
+  return world_->clearance(std::max(0.05, 2.0 * margin)).distance >= margin &&
+         world_->selfClearance(3, 2.0 * margin) >= margin;
 }
 
 bool SimulatedTutor::helixFree(const Eigen::VectorXd& q_fixed, const std::vector<Eigen::Vector3d>& helix, double margin) {
@@ -353,8 +361,10 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
       last_failure_detail_ = detail.str();
       return false;
     }
-    // Move the reference along the path at the tutor's pace.
-    if (next < path.size()) {
+    // Move the reference along the path at the tutor's pace, waiting where the arm lags.
+    const double lead = (state_.q - q_ref).cwiseAbs().maxCoeff();
+    if (next < path.size()) report_.max_approach_lead = std::max(report_.max_approach_lead, lead);
+    if (next < path.size() && lead <= kMaxLead) {
       const Eigen::VectorXd to = path[next] - q_ref;
       const double step = speed * dt;
       if (to.cwiseAbs().maxCoeff() <= step) {

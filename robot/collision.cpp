@@ -372,6 +372,22 @@ double CollisionWorld::distance(int body, int obstacle, double max_distance) {
   return collector.distance;
 }
 
+double CollisionWorld::selfClearance(int min_separation, double max_distance) {
+  double closest = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < impl_->bodies; ++a) {
+    for (int b = a + std::max(2, min_separation); b < impl_->bodies; ++b) {
+      if (!selfPairChecked(a, b)) continue;
+      ClosestCollector collector;
+      collector.m_closestDistanceThreshold = btScalar(max_distance);
+      collector.first = impl_->body_objects[static_cast<std::size_t>(a)].get();
+      impl_->world.contactPairTest(impl_->body_objects[static_cast<std::size_t>(a)].get(),
+                                   impl_->body_objects[static_cast<std::size_t>(b)].get(), collector);
+      closest = std::min(closest, collector.distance);
+    }
+  }
+  return closest;
+}
+
 Clearance CollisionWorld::clearance(double max_distance) {
   Clearance best;
   best.distance = std::numeric_limits<double>::infinity();

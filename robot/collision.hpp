@@ -61,6 +61,10 @@ class CollisionWorld {
   const std::vector<Contact>& contacts();
   /// Closest robot–obstacle distance, searched up to max_distance [m].
   Clearance clearance(double max_distance = 1.0);
+  /// Closest distance between two links of the arm at least `min_separation` bodies apart along
+  /// the chain among the self-collision pairs checked [m]; negative: penetration depth; +inf
+  /// beyond max_distance. Links next to each other along the chain are close by construction.
+  double selfClearance(int min_separation = 3, double max_distance = 1.0);
   /// Distance between one body and one obstacle (+inf beyond max_distance).
   double distance(int body, int obstacle, double max_distance = 1.0);
 

@@ -292,6 +292,7 @@ Json runTeach(const TeachOptions& options) {
                  {"collisions", report.collisions},
                  {"colliding_steps", report.colliding_steps},
                  {"collision_events", collision_events},
+                 {"approach_max_lead_rad", report.max_approach_lead},
                  {"session", options.out},
                  {"session_format", json_session ? "json" : "sqlite"},
                  {"states_dropped", states_dropped},

@@ -130,6 +130,27 @@ TEST(CollisionWorld, ReportsSelfCollisionButNeverAdjacentLinks) {
   EXPECT_EQ(world.otherName(contacts[0]), "link3");
 }
 
+TEST(CollisionWorld, SelfClearanceIsTheGapBetweenLinksApartAlongTheChain) {
+  CollisionWorld world(threeLinkArm(), Scene{});
+  // link2 along +x at z = 0.4 m, link3 straight down from its end: link1 (the z axis) and link3
+  // are parallel cylinders 0.4 m apart, radius 0.05 m each.
+  world.update(Eigen::Vector3d(0.0, std::numbers::pi / 2, std::numbers::pi / 2));
+  EXPECT_NEAR(world.selfClearance(2), 0.3, 1e-3);
+  // Beyond the search distance there is nothing to report.
+  EXPECT_TRUE(std::isinf(world.selfClearance(2, 0.2)));
+  // No two of the four bodies (base and three links) are four apart along the chain.
+  EXPECT_TRUE(std::isinf(world.selfClearance(4)));
+  // Folded onto link1, the pair penetrates (as contacts() reports); three apart, only the base
+  // (a small sphere at the origin) and link3 count, and they stay clear.
+  world.update(Eigen::Vector3d(0.0, std::numbers::pi / 2, 2.7));
+  EXPECT_LT(world.selfClearance(2), 0.0);
+  EXPECT_GT(world.selfClearance(3), 0.0);
+  // At 90° + 30°, link3 leans back towards link1: its lower end (0.4 − 0.45 sin 30°) m
+  // from the z axis, 0.4 − 0.45 cos 30° m high, is the closest point, minus both radii.
+  world.update(Eigen::Vector3d(0.0, std::numbers::pi / 2, std::numbers::pi / 2 + std::numbers::pi / 6));
+  EXPECT_NEAR(world.selfClearance(2), 0.4 - 0.45 * 0.5 - 0.05 - 0.05 * std::cos(std::numbers::pi / 6), 3e-3);
+}
+
 TEST(CollisionWorld, LinksWithoutCollisionGeometryGetCapsules) {
   std::string bare = kPlanarArm;
   for (std::size_t start; (start = bare.find("<collision>")) != std::string::npos;) {
