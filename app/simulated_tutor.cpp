@@ -606,10 +606,13 @@ Eigen::Vector3d SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid&
 }
 
 bool SimulatedTutor::roomyForAnArea(const Eigen::Vector3d& p_W) const {
-  // Room for the arm around the tip: 0.1 m from every obstacle, and off the robot's own base
-  // and the table it stands on, where the hands cannot lead the arm through a helix.
+  // Room for the arm around the tip: 0.1 m from every obstacle, off the robot's own base and
+  // the table it stands on, where the hands cannot lead the arm through a helix, and 5 cm inside
+  // the arm's reach (the workspace box reaches beyond it, and a person does not pick a place the
+  // arm cannot get to).
   if (robot::obstacleAt(*scene_, p_W, 0.1) != nullptr) return false;
-  return p_W.z() >= 0.08 && p_W.head<2>().norm() >= 0.2;
+  const auto [shoulder, reach] = shoulderAndReach(*model_);
+  return p_W.z() >= 0.08 && p_W.head<2>().norm() >= 0.2 && (p_W - shoulder).norm() <= reach - 0.05;
 }
 
 TutorReport SimulatedTutor::configure(int area_count) {

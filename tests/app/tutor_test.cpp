@@ -209,6 +209,29 @@ struct ShortTeaching {
   TutorOptions tutor_options;
 };
 
+// The scene's workspace box may reach beyond the arm: places the tutor picks itself lie within
+// reach (a person does not ask the arm for a place it cannot get to).
+TEST(SimulatedTutor, PicksItsOwnAreasWithinTheArmsReach) {
+  robot::Scene scene = robot::loadScene("setup_A");  // its home posture, without its pillar and areas
+  scene.obstacles.clear();
+  scene.training_areas.clear();
+  robot::EvaluationGrid box;
+  box.lower = Eigen::Vector3d(-2.0, -2.0, 0.0);
+  box.upper = Eigen::Vector3d(2.0, 2.0, 2.0);
+  scene.grid = box;
+  ShortTeaching teaching(scene);
+  teaching.tutor_options.check_points = 0;  // random places, all kept
+  const TutorReport report = teaching.configure(2);
+  const auto [shoulder, reach] = shoulderAndReach(lwr4());
+  ASSERT_GE(report.areas.size(), 2U);
+  for (const TutorAreaReport& area : report.areas) {
+    EXPECT_TRUE(area.automatic);
+    EXPECT_LE((area.target - shoulder).norm(), reach - 0.05) << area.name;
+    EXPECT_EQ(area.failure.find("out of the arm's reach"), std::string::npos) << area.name << ": " << area.failure;
+  }
+  EXPECT_EQ(teaching.workflow->areas().size(), 2U);
+}
+
 // A start posture inside an obstacle leaves no way to any area: the tutor says so before it
 // starts, naming the obstacle, instead of failing area after area.
 TEST(SimulatedTutor, RefusesToStartFromAPostureInsideAnObstacle) {
