@@ -76,8 +76,9 @@ struct TutorReport {
   std::vector<TutorAreaReport> areas;
   std::uint64_t collisions = 0;       ///< contact events in the simulation (E_coll)
   std::uint64_t colliding_steps = 0;
-  /// [rad] largest lead of the tutor's reference over the arm (largest joint) while moving it
-  /// along an approach path: the reference waits where the arm lags by more than 0.05 rad.
+  /// [rad] largest lead of the tutor's reference over the arm (largest joint) along an approach
+  /// path. The reference stops while the arm lags by more than 0.05 rad; a light arm pushed one
+  /// link at a time can still fall further behind while it waits.
   double max_approach_lead = 0.0;
   double simulated_time = 0.0;        ///< [s]
 };
