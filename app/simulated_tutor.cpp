@@ -45,6 +45,7 @@ SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const
       options_(std::move(options)),
       world_(std::make_unique<robot::CollisionWorld>(sim.model(), scene)),
       kinematics_(sim.model()),
+      shoulder_and_reach_(shoulderAndReach(sim.model())),
       random_(options_.seed) {
   if (!(options_.circle_diameter > 0.0) || options_.circle_diameter > 0.5) {
     throw InputError("tutor: circle diameter must be in (0, 0.5] m");
@@ -433,7 +434,7 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     area.failure = "the area's centre lies inside " + obstacle->name;
     return false;
   }
-  const auto [shoulder, reach] = shoulderAndReach(*model_);
+  const auto& [shoulder, reach] = shoulder_and_reach_;
   if ((area.target - shoulder).norm() > reach) {
     std::ostringstream failure;
     failure << std::fixed << std::setprecision(2) << "out of the arm's reach (" << (area.target - shoulder).norm()
@@ -538,7 +539,7 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
 
 void SimulatedTutor::drawCheckPoints() {
   const robot::EvaluationGrid grid = scene_->grid.value_or(robot::EvaluationGrid{});
-  const auto [shoulder, reach] = shoulderAndReach(*model_);
+  const auto& [shoulder, reach] = shoulder_and_reach_;
   learning::UniformRandom draw(options_.seed + 0x5eed);
   const Eigen::VectorXd q_start = homePosture(*model_, *scene_);
   check_points_.clear();
@@ -611,7 +612,7 @@ bool SimulatedTutor::roomyForAnArea(const Eigen::Vector3d& p_W) const {
   // the arm's reach (the workspace box reaches beyond it, and a person does not pick a place the
   // arm cannot get to).
   if (robot::obstacleAt(*scene_, p_W, 0.1) != nullptr) return false;
-  const auto [shoulder, reach] = shoulderAndReach(*model_);
+  const auto& [shoulder, reach] = shoulder_and_reach_;
   return p_W.z() >= 0.08 && p_W.head<2>().norm() >= 0.2 && (p_W - shoulder).norm() <= reach - 0.05;
 }
 

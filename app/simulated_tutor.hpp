@@ -15,6 +15,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "app/workflow.hpp"
@@ -175,6 +176,8 @@ class SimulatedTutor {
   TutorOptions options_;
   std::unique_ptr<robot::CollisionWorld> world_;
   robot::Kinematics kinematics_;
+  /// The arm's shoulder [m, W] and reach [m] (shoulderAndReach), for where areas can lie.
+  std::pair<Eigen::Vector3d, double> shoulder_and_reach_;
   learning::UniformRandom random_;
   robot::RobotState state_;
   TutorReport report_;
