@@ -188,6 +188,10 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   for (const auto& p : points) {
     if ((p - shoulder).norm() > reach - grid.tolerance) continue;
     if (robot::obstacleAt(scene, p) != nullptr) continue;
+    if (grid.excludes(p)) {
+      ++result.excluded;
+      continue;
+    }
     if (!scene.obstacles.empty() && !accessibleWithoutCollision(model, parameters, world, p, q_start, 24, random)) {
       ++result.inaccessible;
       continue;

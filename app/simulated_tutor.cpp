@@ -546,7 +546,7 @@ void SimulatedTutor::drawCheckPoints() {
   for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < 100 * options_.check_points; ++k) {
     Eigen::Vector3d x;
     for (int a = 0; a < 3; ++a) x[a] = draw.uniform(grid.lower[a], grid.upper[a]);
-    if ((x - shoulder).norm() > reach) continue;
+    if ((x - shoulder).norm() > reach || grid.excludes(x)) continue;
     // Only where some posture reaches without a contact (a person sees the arm cannot get there).
     if (robot::obstacleAt(*scene_, x, 0.05) == nullptr && (scene_->obstacles.empty() || accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw))) {
       check_points_.push_back(x);
@@ -612,6 +612,7 @@ bool SimulatedTutor::roomyForAnArea(const Eigen::Vector3d& p_W) const {
   // the arm's reach (the workspace box reaches beyond it, and a person does not pick a place the
   // arm cannot get to).
   if (robot::obstacleAt(*scene_, p_W, 0.1) != nullptr) return false;
+  if (scene_->grid && scene_->grid->excludes(p_W)) return false;
   const auto& [shoulder, reach] = shoulder_and_reach_;
   return p_W.z() >= 0.08 && p_W.head<2>().norm() >= 0.2 && (p_W - shoulder).norm() <= reach - 0.05;
 }

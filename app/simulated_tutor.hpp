@@ -139,14 +139,15 @@ class SimulatedTutor {
   /// keep `margin` [m] from the obstacles: a person sees how far the arm can be deflected.
   bool helixFree(const Eigen::VectorXd& q_fixed, const std::vector<Eigen::Vector3d>& helix, double margin);
   void updateReport();
-  /// The check points of automatic areas: drawn over the scene's workspace box, within reach
-  /// and 5 cm outside the obstacles (seeded; the same for the whole configuration).
+  /// The check points of automatic areas: drawn over the scene's workspace box, within reach,
+  /// outside the grid's excluded boxes and 5 cm outside the obstacles (seeded; the same for the
+  /// whole configuration).
   void drawCheckPoints();
   /// Fits the workflow's learner to what was taught and marks the check points the arm does not
   /// reach from the learned posture (as `eval reachable` does); returns how many.
   int mapFailures();
   /// Whether an area centred at p_W leaves the arm room: 0.1 m to the obstacles, off the base
-  /// and the table.
+  /// and the table, outside the grid's excluded boxes.
   bool roomyForAnArea(const Eigen::Vector3d& p_W) const;
   /// Where to teach next automatically: with `where_it_fails`, the failing check point with the
   /// most failing neighbours within 0.2 m that is roomy and 0.1 m from earlier attempts;

@@ -35,6 +35,7 @@ constexpr std::size_t kMaxJoints = 64;
 constexpr std::size_t kMaxNameLength = 200;
 constexpr std::size_t kMaxTextLength = 20000;
 constexpr double kMaxGridPoints = 5.0e6;
+constexpr std::size_t kMaxExcludedBoxes = 1000;
 constexpr double kMaxLength = 1000.0;  // [m]: any coordinate or size beyond this is a mistake
 // Every scalar the reader visits costs one unit; YAML aliases can make a small file name the
 // same large list many times, and this budget bounds the work regardless.
@@ -565,7 +566,7 @@ class SceneReader {
   }
 
   EvaluationGrid grid(const Node& node, const std::string& path) {
-    checkKeys(node, path, {"lower", "upper", "spacing", "tolerance"});
+    checkKeys(node, path, {"lower", "upper", "spacing", "tolerance", "exclude"});
     EvaluationGrid grid;
     if (const auto n = node["lower"]) grid.lower = position(n, join(path, "lower"));
     if (const auto n = node["upper"]) grid.upper = position(n, join(path, "upper"));
@@ -576,6 +577,21 @@ class SceneReader {
     if (counts.prod() > kMaxGridPoints) {
       fail(node, path, "the grid would have " + std::to_string(static_cast<long long>(counts.prod())) +
                            " points (at most 5000000); increase 'spacing'");
+    }
+    if (const auto n = node["exclude"]) {
+      const std::string exclude_path = join(path, "exclude");
+      const auto& items = sequence(n, exclude_path, kMaxExcludedBoxes);
+      for (std::size_t i = 0; i < items.size(); ++i) {
+        const std::string item_path = exclude_path + "[" + std::to_string(i) + "]";
+        const Node& item = items[i];
+        checkKeys(item, item_path, {"lower", "upper"});
+        if (!item["lower"]) fail(item, item_path, "missing key 'lower'");
+        if (!item["upper"]) fail(item, item_path, "missing key 'upper'");
+        const Eigen::Vector3d lower = position(item["lower"], join(item_path, "lower"));
+        const Eigen::Vector3d upper = position(item["upper"], join(item_path, "upper"));
+        if ((upper.array() < lower.array()).any()) fail(item, item_path, "'upper' must not lie below 'lower' on any axis");
+        grid.excluded.emplace_back(lower, upper);
+      }
     }
     return grid;
   }
@@ -663,6 +679,10 @@ std::vector<Eigen::Vector3d> EvaluationGrid::points() const {
     }
   }
   return result;
+}
+
+bool EvaluationGrid::excludes(const Eigen::Vector3d& p_W) const {
+  return std::any_of(excluded.begin(), excluded.end(), [&p_W](const Eigen::AlignedBox3d& box) { return box.contains(p_W); });
 }
 
 bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, double margin) {
@@ -819,6 +839,17 @@ std::string sceneToYaml(const Scene& scene) {
     emitNumbers(out, scene.grid->upper);
     out << YAML::Key << "spacing" << YAML::Value << scene.grid->spacing;
     out << YAML::Key << "tolerance" << YAML::Value << scene.grid->tolerance;
+    if (!scene.grid->excluded.empty()) {
+      out << YAML::Key << "exclude" << YAML::Value << YAML::BeginSeq;
+      for (const Eigen::AlignedBox3d& box : scene.grid->excluded) {
+        out << YAML::Flow << YAML::BeginMap << YAML::Key << "lower" << YAML::Value;
+        emitNumbers(out, box.min());
+        out << YAML::Key << "upper" << YAML::Value;
+        emitNumbers(out, box.max());
+        out << YAML::EndMap;
+      }
+      out << YAML::EndSeq;
+    }
     out << YAML::EndMap;
   }
   if (!scene.targets.empty()) {

@@ -47,6 +47,12 @@ struct EvaluationGrid {
   Eigen::Vector3d upper = Eigen::Vector3d(0.0, 0.55, 0.8);
   double spacing = 0.05;  ///< [m]
   double tolerance = 0.01;  ///< a target counts as reached within this distance [m] (Sect. 3.3.2)
+  /// Boxes whose points are not targets although the arm could get there: parts of the
+  /// workspace a scene's author rules out, as Sect. 3.3.2 drops the points above setup I's board
+  /// from T_I. Boundaries count as inside.
+  std::vector<Eigen::AlignedBox3d> excluded;
+  /// Whether p_W lies in one of the excluded boxes.
+  bool excludes(const Eigen::Vector3d& p_W) const;
   /// Points lower + spacing * (i, j, k) inside [lower, upper] (upper inclusive up to 1e-9 m),
   /// x fastest.
   std::vector<Eigen::Vector3d> points() const;

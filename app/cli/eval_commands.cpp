@@ -202,6 +202,7 @@ Json runReachable(const EvalOptions& options) {
           {"areas", session.q_fixed.size()},
           {"samples", session.data.size()},
           {"inaccessible", result.inaccessible},
+          {"excluded", result.excluded},
           {"contacts", result.contacts},
           {"approach", options.approach},
           {"target_points", pointsJson(result.target_points)},

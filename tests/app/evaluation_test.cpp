@@ -143,6 +143,25 @@ TEST(Evaluation, ExploredFractionCountsCellsHoldingSamples) {
   EXPECT_EQ(result.reached, 6);  // free space in front of the robot
 }
 
+TEST(Evaluation, ExcludedBoxesOfTheGridHoldNoTargets) {
+  Parameters s;
+  const auto map = constantMap();
+  robot::Scene empty;
+  robot::EvaluationGrid grid;
+  grid.lower = Eigen::Vector3d(-0.6, -0.2, 0.3);
+  grid.upper = Eigen::Vector3d(-0.4, 0.2, 0.3);
+  grid.spacing = 0.2;
+  // Holds the two points with y = 0.2 (on its boundary) and none other.
+  grid.excluded.emplace_back(Eigen::Vector3d(-0.7, 0.2, 0.2), Eigen::Vector3d(-0.3, 0.5, 0.4));
+  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
+  EXPECT_EQ(result.grid_points, 6);
+  EXPECT_EQ(result.excluded, 2);
+  EXPECT_EQ(result.targets, 4);
+  ASSERT_EQ(result.target_points.size(), 4U);
+  for (const Eigen::Vector3d& p : result.target_points) EXPECT_LT(p.y(), 0.1) << p.transpose();
+  EXPECT_EQ(result.reached, 4);
+}
+
 // IK with the hierarchical controller (Eq. 2.11) from q0 with q0 as null-space target: an
 // independent posture for a tip position, not the map's.
 Eigen::VectorXd solveIk(const Eigen::VectorXd& q0, const Eigen::Vector3d& p_W) {

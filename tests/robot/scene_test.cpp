@@ -123,6 +123,10 @@ grid:
   upper: [0, 0.55, 0.8]
   spacing: 0.05
   tolerance: 0.01
+  exclude:
+    - {lower: [-0.8, 0.08, 0.56], upper: [-0.25, 0.55, 0.8]}
+    - lower: [-0.1, -0.1, 0]
+      upper: [0, 0.1, 0.8]
 targets:
   - [-0.5, 0, 0.4]
   - [-0.4, 0.1, +0.2]
@@ -195,6 +199,13 @@ TEST_F(SceneFileTest, ReadsEveryElementWithUnitsAndDefaults) {
 
   ASSERT_TRUE(scene.grid.has_value());
   EXPECT_DOUBLE_EQ(scene.grid->tolerance, 0.01);
+  ASSERT_EQ(scene.grid->excluded.size(), 2U);
+  EXPECT_TRUE(scene.grid->excluded[0].min().isApprox(Eigen::Vector3d(-0.8, 0.08, 0.56)));
+  EXPECT_TRUE(scene.grid->excluded[0].max().isApprox(Eigen::Vector3d(-0.25, 0.55, 0.8)));
+  EXPECT_TRUE(scene.grid->excludes(Eigen::Vector3d(-0.5, 0.3, 0.7)));
+  EXPECT_TRUE(scene.grid->excludes(Eigen::Vector3d(-0.5, 0.3, 0.56)));  // on the boundary
+  EXPECT_FALSE(scene.grid->excludes(Eigen::Vector3d(-0.5, 0.3, 0.5)));   // under the first box
+  EXPECT_TRUE(scene.grid->excludes(Eigen::Vector3d(-0.05, 0.0, 0.4)));  // in the second
   ASSERT_EQ(scene.targets.size(), 2U);
   EXPECT_DOUBLE_EQ(scene.targets[1].z(), 0.2);
   ASSERT_EQ(scene.trajectories.size(), 2U);
@@ -246,6 +257,11 @@ void expectScenesEqual(const Scene& a, const Scene& b) {
     EXPECT_EQ(a.grid->upper, b.grid->upper);
     EXPECT_EQ(a.grid->spacing, b.grid->spacing);
     EXPECT_EQ(a.grid->tolerance, b.grid->tolerance);
+    ASSERT_EQ(a.grid->excluded.size(), b.grid->excluded.size());
+    for (std::size_t i = 0; i < a.grid->excluded.size(); ++i) {
+      EXPECT_EQ(a.grid->excluded[i].min(), b.grid->excluded[i].min());
+      EXPECT_EQ(a.grid->excluded[i].max(), b.grid->excluded[i].max());
+    }
   }
   EXPECT_EQ(a.targets, b.targets);
   ASSERT_EQ(a.trajectories.size(), b.trajectories.size());
@@ -432,6 +448,14 @@ TEST_F(SceneFileTest, RefusesValuesOfTheWrongType) {
            "version: 2\n",
            "robot: no_such_robot\n",
            "grid: {lower: [0, 0, 1], upper: [1, 1, 0]}\n",
+           "grid: {exclude: [{lower: [0, 0, 1], upper: [1, 1, 0]}]}\n",
+           "grid: {exclude: [{lower: [0, 0, 0]}]}\n",
+           "grid: {exclude: [{upper: [1, 1, 1]}]}\n",
+           "grid: {exclude: {lower: [0, 0, 0], upper: [1, 1, 1]}}\n",
+           "grid: {exclude: [[0, 0, 0]]}\n",
+           "grid: {exclude: [{lower: [0, 0, 0], upper: [1, 1, 1], margin: 0.1}]}\n",
+           "grid: {exclude: [{lower: [0, 0], upper: [1, 1, 1]}]}\n",
+           "grid: {exclude: [{lower: [0, 0, .nan], upper: [1, 1, 1]}]}\n",
        }) {
     SCOPED_TRACE(text);
     expectOneLineNamingFile(refusal(text), "broken.yaml");
@@ -502,6 +526,12 @@ TEST_F(SceneFileTest, RefusesHugeCountsAndAliasBombsBeforeExpandingThem) {
   many = "obstacles:\n";
   for (int i = 0; i < 100000; ++i) many += "- {shape: sphere, radius: 1}\n";
   EXPECT_EQ(loadSceneFile(write("many.yaml", many)).obstacles.size(), 100000U);
+
+  std::string boxes = "grid:\n  exclude:\n";
+  for (int i = 0; i < 1001; ++i) boxes += "  - {lower: [0, 0, 0], upper: [1, 1, 1]}\n";
+  const std::string boxes_message = refusal(boxes);
+  expectOneLineNamingFile(boxes_message, "broken.yaml");
+  EXPECT_NE(boxes_message.find("too many"), std::string::npos) << boxes_message;
 
   // Aliases repeat one list of 10 001 waypoints in 10 000 trajectories: 400 kB of text that
   // would expand to 10^8 waypoints.
