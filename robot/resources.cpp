@@ -1,5 +1,6 @@
 #include "robot/resources.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <system_error>
 
@@ -54,6 +55,15 @@ fs::path resolveRobotPath(const std::string& robot_argument) {
                      ") nor a readable URDF file");
   }
   return path;
+}
+
+std::string portableReference(const std::string& argument, const std::vector<std::string>& builtin_names) {
+  if (argument.empty() || std::find(builtin_names.begin(), builtin_names.end(), argument) != builtin_names.end()) {
+    return argument;
+  }
+  std::error_code error;
+  const fs::path absolute = fs::absolute(argument, error);
+  return error ? argument : absolute.lexically_normal().string();
 }
 
 }  // namespace flexirob

@@ -18,4 +18,8 @@ const std::vector<std::string>& builtinRobotNames();
 /// else is taken as a path to a URDF file. Throws InputError if the file does not exist.
 std::filesystem::path resolveRobotPath(const std::string& robot_argument);
 
+/// How a session refers to a robot or scene argument so that it still resolves from another
+/// working directory: a built-in name as it is, a file as its absolute path. Empty stays empty.
+std::string portableReference(const std::string& argument, const std::vector<std::string>& builtin_names);
+
 }  // namespace flexirob

@@ -681,6 +681,24 @@ std::vector<Eigen::Vector3d> EvaluationGrid::points() const {
   return result;
 }
 
+std::string robotFor(const std::string& robot_option, const Scene& scene) {
+  if (!robot_option.empty()) return robot_option;
+  return scene.robot.empty() ? std::string("lwr4") : scene.robot;
+}
+
+void checkPosturesFit(const Scene& scene, int dof, const std::string& robot_name) {
+  const auto check = [&](const std::optional<Eigen::VectorXd>& posture, const std::string& what) {
+    if (posture && posture->size() != dof) {
+      throw InputError("scene '" + printable(scene.name, 200) + "': " + what + " has " + std::to_string(posture->size()) +
+                       " joint values, the robot '" + printable(robot_name, 200) + "' has " + std::to_string(dof) +
+                       " joints (the scene was made for '" + printable(scene.robot, 200) + "')");
+    }
+  };
+  check(scene.home_posture, "home_posture");
+  for (const Area& area : scene.training_areas) check(area.posture, "training area '" + area.name + "' posture");
+  for (const Area& area : scene.working_areas) check(area.posture, "working area '" + area.name + "' posture");
+}
+
 bool EvaluationGrid::excludes(const Eigen::Vector3d& p_W) const {
   return std::any_of(excluded.begin(), excluded.end(), [&p_W](const Eigen::AlignedBox3d& box) { return box.contains(p_W); });
 }

@@ -91,6 +91,15 @@ bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, doub
 /// or nullptr when p_W lies in free space.
 const Obstacle* obstacleAt(const Scene& scene, const Eigen::Vector3d& p_W, double margin = 0.0);
 
+/// The robot to use with `scene`: `robot_option` when the user gave one (non-empty), else the
+/// robot the scene was made for.
+std::string robotFor(const std::string& robot_option, const Scene& scene);
+
+/// Throws InputError (one line, naming the scene and the posture) when a posture of the scene
+/// (home, training or working area) does not have `dof` values: postures are joint vectors of
+/// the robot the scene was made for, and one of another robot is a mistake, not a suggestion.
+void checkPosturesFit(const Scene& scene, int dof, const std::string& robot_name);
+
 /// Built-in scene names: empty, setup_A .. setup_D, setup_I, setup_II, harting, arm9_areas.
 const std::vector<std::string>& builtinSceneNames();
 

@@ -57,6 +57,7 @@ Session loadRecordedSession(const std::string& file) {
   session.model = std::make_unique<robot::RobotModel>(
       robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
   session.scene_data = robot::loadScene(session.scene);
+  robot::checkPosturesFit(session.scene_data, session.model->dof(), session.robot);
   const int n = session.model->dof();
   // The complete areas with samples, labelled by their position here: q_fixed[k] is area k's.
   std::vector<const app::RecordedArea*> taught;
@@ -107,6 +108,7 @@ Session loadSession(const std::string& file) {
     session.model = std::make_unique<robot::RobotModel>(
         robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
     session.scene_data = robot::loadScene(session.scene);
+    robot::checkPosturesFit(session.scene_data, session.model->dof(), session.robot);
     const int n = session.model->dof();
     std::vector<Eigen::VectorXd> xs, qs;
     int k = 0;

@@ -16,7 +16,7 @@ namespace flexirob::cli {
 namespace {
 
 struct ReachOptions {
-  std::string robot = "lwr4";
+  std::string robot;  ///< empty: the scene's robot, else lwr4
   std::string tip;
   std::string scene;
   std::string target;
@@ -27,10 +27,12 @@ struct ReachOptions {
 };
 
 Json runReach(const ReachOptions& options) {
-  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(options.robot), options.tip);
-  const Eigen::Vector3d target = parseNumberList(options.target, "--target", 3);
   std::optional<robot::Scene> scene;
   if (!options.scene.empty()) scene = robot::loadScene(options.scene);
+  const std::string robot_name = robot::robotFor(options.robot, scene ? *scene : robot::Scene{});
+  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
+  if (scene) robot::checkPosturesFit(*scene, model.dof(), robot_name);
+  const Eigen::Vector3d target = parseNumberList(options.target, "--target", 3);
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);
   if (scene) parameters.applyOverrides(scene->parameters);
@@ -39,7 +41,7 @@ Json runReach(const ReachOptions& options) {
   request.target = target;
   if (!options.from.empty()) {
     request.start = parseNumberList(options.from, "--from", model.dof());
-  } else if (scene && scene->home_posture && scene->home_posture->size() == model.dof()) {
+  } else if (scene && scene->home_posture) {
     request.start = *scene->home_posture;
   }
   if (!options.posture.empty()) request.posture = parseNumberList(options.posture, "--posture", model.dof());
@@ -84,7 +86,7 @@ Json runReach(const ReachOptions& options) {
 void registerReachCommand(CLI::App& app, CommandRunner& runner) {
   auto* command = app.add_subcommand("reach", "drive the simulated tip to a target with the hierarchical controller");
   auto options = std::make_shared<ReachOptions>();
-  command->add_option("--robot", options->robot, "built-in robot (lwr4, arm9) or a URDF file")->capture_default_str();
+  command->add_option("--robot", options->robot, "built-in robot (lwr4, arm9) or a URDF file (default: the scene's, else lwr4)");
   command->add_option("--tip", options->tip, "tip link (default: the last link of the longest serial chain)");
   command->add_option("--scene", options->scene, "built-in scene name or a scene file (default: empty)");
   command->add_option("--target", options->target, "tip target x,y,z [m] in the base frame")->required();

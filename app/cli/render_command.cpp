@@ -197,19 +197,19 @@ Json renderPicture(const RenderOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   std::optional<SessionOverlay> session;
   if (!options.session.empty()) session = loadSessionOverlay(options.session);
-  // Robot and scene: the options', else the session's, else the LWR IV in an empty scene.
-  const std::string robot_name = !options.robot.empty() ? options.robot : session ? session->robot : "lwr4";
-  const std::string tip = !options.tip.empty() ? options.tip : session && options.robot.empty() ? session->tip : "";
+  // Scene and robot: the options', else the session's, else an empty scene and the scene's robot.
   const std::string scene_name = !options.scene.empty() ? options.scene : session ? session->scene : "";
-  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), tip);
   robot::Scene scene = robot::loadScene(scene_name);
+  const std::string robot_name = !options.robot.empty() ? options.robot : session ? session->robot : robot::robotFor("", scene);
+  const std::string tip = !options.tip.empty() ? options.tip : session && options.robot.empty() ? session->tip : "";
+  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), tip);
+  robot::checkPosturesFit(scene, model.dof(), robot_name);
 
-  // Posture: --q, else the scene's home posture if it fits this robot, else the middle of the
-  // software limits.
+  // Posture: --q, else the scene's home posture, else the middle of the software limits.
   Eigen::VectorXd q = model.midPosture();
   if (!options.q.empty()) {
     q = parseNumberList(options.q, "--q", model.dof());
-  } else if (scene.home_posture && scene.home_posture->size() == model.dof()) {
+  } else if (scene.home_posture) {
     q = *scene.home_posture;
   }
   model.checkPosture(q);
@@ -431,7 +431,7 @@ Json renderPicture(const RenderOptions& options) {
 void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
   auto options = std::make_shared<RenderOptions>();
   auto* command = app.add_subcommand("render", "render a robot posture in a scene to a PNG file, offscreen");
-  command->add_option("--robot", options->robot, "built-in robot (lwr4, arm9) or a URDF file (default: the session's, else lwr4)");
+  command->add_option("--robot", options->robot, "built-in robot (lwr4, arm9) or a URDF file (default: the session's, else the scene's)");
   command->add_option("--tip", options->tip, "tip link (default: the last link of the longest serial chain)");
   command->add_option("--scene", options->scene, "built-in scene name or a scene file (default: the session's, else empty)");
   command->add_option("--out", options->out, "PNG file to write")->required();

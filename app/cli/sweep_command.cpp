@@ -53,7 +53,9 @@ struct Loaded {
 
 Loaded load(const std::string& scene_name) {
   robot::Scene scene = robot::loadScene(scene_name);
-  robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(scene.robot.empty() ? "lwr4" : scene.robot), "");
+  const std::string robot_name = robot::robotFor("", scene);
+  robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), "");
+  robot::checkPosturesFit(scene, model.dof(), robot_name);
   return {std::move(model), std::move(scene)};
 }
 

@@ -29,7 +29,7 @@ namespace flexirob::cli {
 namespace {
 
 struct TeachOptions {
-  std::string robot = "lwr4";
+  std::string robot;  ///< empty: the scene's robot
   std::string tip;
   std::string scene = "empty";
   int areas = 2;
@@ -59,8 +59,13 @@ bool endsWith(const std::string& text, const std::string& suffix) {
 Json runTeach(const TeachOptions& options) {
   if (options.out.empty()) throw InputError("--out: expected a session file path");
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);
-  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(options.robot), options.tip);
   const robot::Scene scene = robot::loadScene(options.scene);
+  const std::string robot_name = robot::robotFor(options.robot, scene);
+  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
+  robot::checkPosturesFit(scene, model.dof(), robot_name);
+  // The session names robot and scene so that they resolve from any working directory.
+  const std::string robot_reference = portableReference(robot_name, builtinRobotNames());
+  const std::string scene_reference = portableReference(options.scene, robot::builtinSceneNames());
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);
   parameters.applyOverrides(scene.parameters);
@@ -122,10 +127,10 @@ Json runTeach(const TeachOptions& options) {
   std::unique_ptr<app::WorkflowSessionWriter> writer;
   if (!json_session) {
     app::SessionMetadata metadata;
-    metadata.robot_name = options.robot;
+    metadata.robot_name = robot_reference;
     metadata.robot_urdf = readText(model.urdfPath());
     metadata.tip_link = model.tipLink();
-    metadata.scene_name = options.scene;
+    metadata.scene_name = scene_reference;
     metadata.software_version = FLEXIROB_VERSION_STRING;
     metadata.scene_text = robot::sceneToYaml(scene);
     metadata.parameters = Json{{"seed", options.seed}, {"learner", options.learner}, {"areas", options.areas},
@@ -214,9 +219,9 @@ Json runTeach(const TeachOptions& options) {
   }
   const Json session = {{"format", "flexirob-session-json"},
                         {"version", 1},
-                        {"robot", options.robot},
+                        {"robot", robot_reference},
                         {"tip", options.tip},
-                        {"scene", options.scene},
+                        {"scene", scene_reference},
                         {"seed", options.seed},
                         {"learner", options.learner},
                         {"dof", model.dof()},
@@ -322,7 +327,7 @@ Json runTeach(const TeachOptions& options) {
 void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   auto options = std::make_shared<TeachOptions>();
   CLI::App* teach = app.add_subcommand("teach", "simulated tutor teaches the robot in a scene; writes a session");
-  teach->add_option("--robot", options->robot, "lwr4, arm9 or a URDF path");
+  teach->add_option("--robot", options->robot, "lwr4, arm9 or a URDF path (default: the scene's robot)");
   teach->add_option("--tip", options->tip, "tip link");
   teach->add_option("--scene", options->scene, "built-in scene name or scene file");
   teach->add_option("--areas", options->areas, "number of training areas")->check(CLI::Range(1, 200));

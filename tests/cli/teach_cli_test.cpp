@@ -110,5 +110,37 @@ TEST(TeachCli, FailsWithOneLineWhenNoAreaCouldBeTaughtAndStillWritesTheSession) 
   fs::remove(scene);
 }
 
+// A scene names the robot it was made for: without --robot, teach uses it; the session names
+// the scene file by its absolute path, so eval finds it from another working directory.
+TEST(TeachCli, TeachesTheScenesRobotAndTheSessionResolvesFromAnyFolder) {
+  const fs::path scene = scratch("nine.yaml");
+  const fs::path out = scratch("nine.json");
+  std::ofstream(scene) << "name: nine\nrobot: arm9\n"
+                          "home_posture: [0, 0.0705, 0, -1.2312, 0, -1.3737, 0, 0.9916, 0]\n"
+                          "training_areas:\n  - {name: front, centre: [0.45, 0.0, 0.75], radius: 0.08}\n";
+  const fs::path relative_scene = fs::relative(scene, fs::current_path());
+  ASSERT_TRUE(relative_scene.is_relative());
+  const auto result = runCliBinary("teach --scene " + relative_scene.string() + " --areas 1 --seed 1 --out " + out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  std::ifstream in(out);
+  const auto session = nlohmann::json::parse(in);
+  EXPECT_EQ(session.at("robot"), "arm9");
+  EXPECT_EQ(session.at("dof").get<int>(), 9);
+  EXPECT_EQ(fs::path(session.at("scene").get<std::string>()), fs::absolute(scene).lexically_normal());
+  const auto reachable = runCliBinary("eval reachable --spacing 0.3 --session " + out.string());
+  EXPECT_EQ(reachable.exit_code, 0) << reachable.err;
+  fs::remove(out);
+  fs::remove(scene);
+}
+
+TEST(TeachCli, RefusesASceneWhosePosturesBelongToAnotherRobotWithOneLine) {
+  const auto result = runCliBinary("teach --robot lwr4 --scene arm9_areas --areas 1 --out " + scratch("mismatch.json").string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_EQ(result.err.rfind("error: ", 0), 0U) << result.err;
+  EXPECT_NE(result.err.find("home_posture has 9 joint values, the robot 'lwr4' has 7 joints"), std::string::npos) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_FALSE(fs::exists(scratch("mismatch.json")));
+}
+
 }  // namespace
 }  // namespace flexirob

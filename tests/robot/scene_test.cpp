@@ -10,10 +10,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <numbers>
 #include <random>
 #include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
@@ -819,6 +822,55 @@ TEST(BuiltinScenes, AreGeometricallySensibleForTheirRobot) {
       }
     }
   }
+}
+
+TEST(ScenePostures, ARobotOptionWinsOverTheScenesRobotAndPosturesMustHaveItsJointCount) {
+  Scene scene;
+  scene.name = "cell";
+  scene.robot = "arm9";
+  EXPECT_EQ(robotFor("", scene), "arm9");
+  EXPECT_EQ(robotFor("lwr4", scene), "lwr4");
+  scene.robot.clear();
+  EXPECT_EQ(robotFor("", scene), "lwr4");
+
+  scene.robot = "arm9";
+  scene.home_posture = Eigen::VectorXd::Zero(9);
+  Area area;
+  area.name = "left";
+  area.posture = Eigen::VectorXd::Zero(9);
+  scene.training_areas.push_back(area);
+  EXPECT_NO_THROW(checkPosturesFit(scene, 9, "arm9"));
+  struct Mismatch {
+    std::string what;
+    int dof;
+    std::function<void(Scene&)> change;
+  };
+  for (const Mismatch& mismatch : std::vector<Mismatch>{
+           {"home_posture has 9 joint values, the robot 'r' has 7 joints", 7, [](Scene&) {}},
+           {"training area 'left' posture has 7 joint values", 9,
+            [](Scene& s) { s.training_areas[0].posture = Eigen::VectorXd::Zero(7); }},
+           {"working area 'far' posture has 8 joint values", 9,
+            [](Scene& s) {
+              Area far;
+              far.name = "far";
+              far.posture = Eigen::VectorXd::Zero(8);
+              s.working_areas.push_back(far);
+            }},
+       }) {
+    Scene changed = scene;
+    mismatch.change(changed);
+    try {
+      checkPosturesFit(changed, mismatch.dof, "r");
+      ADD_FAILURE() << "accepted: " << mismatch.what;
+    } catch (const InputError& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(mismatch.what), std::string::npos) << message;
+      EXPECT_NE(message.find("scene 'cell'"), std::string::npos) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+  }
+  // A scene without postures fits any robot.
+  EXPECT_NO_THROW(checkPosturesFit(Scene{}, 7, "lwr4"));
 }
 
 }  // namespace
