@@ -69,7 +69,7 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
 struct ReachableResult {
   int grid_points = 0;   ///< points of G
   int targets = 0;       ///< |T|: grid points within reach, outside the obstacles and excluded boxes, and accessible
-  int inaccessible = 0;  ///< within reach and outside the obstacles, but no collision-free posture reaches them
+  int inaccessible = 0;  ///< within reach and outside the obstacles, but neither the IK search nor the learned map found a collision-free posture there
   int excluded = 0;      ///< within reach and outside the obstacles, but in a box the grid excludes
   int reached = 0;       ///< reached within the tolerance without collision
   int collided = 0;

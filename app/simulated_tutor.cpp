@@ -222,7 +222,9 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planApproach(const Eigen::VectorXd&
   return {};
 }
 
-std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested) {
+std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested,
+                                                          int* reaching) {
+  if (reaching != nullptr) *reaching = 0;
   const int dof = model_->dof();
   const Eigen::VectorXd lower = model_->softLowerLimits();
   const Eigen::VectorXd upper = model_->softUpperLimits();
@@ -273,6 +275,7 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
     }
     kinematics_.update(q);
     if ((kinematics_.p_WT() - p_W).norm() > 1e-3) continue;
+    if (reaching != nullptr) ++*reaching;
     world_->update(q);
     if (!world_->contacts().empty()) continue;
     const double clearance = world_->clearance(0.5).distance;
@@ -442,9 +445,12 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     area.failure = failure.str();
     return false;
   }
-  const std::vector<PostureChoice> postures = choosePostures(area.target, suggested);
+  int reaching = 0;
+  const std::vector<PostureChoice> postures = choosePostures(area.target, suggested, &reaching);
   if (postures.empty()) {
-    area.failure = "no posture found that reaches it without a contact";
+    area.failure = reaching == 0 ? "no posture within the joint limits puts the tip there (" + std::to_string(options_.posture_candidates) +
+                                       " IK searches)"
+                                 : "every posture found that reaches it makes a contact";
     return false;
   }
   if (!postures.front().found) {
@@ -548,7 +554,7 @@ void SimulatedTutor::drawCheckPoints() {
     for (int a = 0; a < 3; ++a) x[a] = draw.uniform(grid.lower[a], grid.upper[a]);
     if ((x - shoulder).norm() > reach || grid.excludes(x)) continue;
     // Only where some posture reaches without a contact (a person sees the arm cannot get there).
-    if (robot::obstacleAt(*scene_, x, 0.05) == nullptr && (scene_->obstacles.empty() || accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw))) {
+    if (robot::obstacleAt(*scene_, x, 0.05) == nullptr && accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw)) {
       check_points_.push_back(x);
     }
   }
@@ -597,11 +603,17 @@ Eigen::Vector3d SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid&
     }
   }
   if (best >= 0) return check_points_[static_cast<std::size_t>(best)];
-  // A point of the workspace box away from the obstacles.
+  // A point of the workspace box away from the obstacles that some collision-free posture
+  // reaches (near the base the joint limits leave holes a person would not ask the arm into).
   Eigen::Vector3d target = Eigen::Vector3d::Zero();
+  learning::UniformRandom ik_seeds(options_.seed + 0xacce55);
+  const Eigen::VectorXd q_home = homePosture(*model_, *scene_);
   for (int tries = 0; tries < 100; ++tries) {
     for (int a = 0; a < 3; ++a) target[a] = random_.uniform(grid.lower[a], grid.upper[a]);
-    if (roomyForAnArea(target) && !near_tried(target)) break;
+    if (roomyForAnArea(target) && !near_tried(target) &&
+        accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds)) {
+      break;
+    }
   }
   return target;
 }

@@ -111,8 +111,10 @@ class SimulatedTutor {
   /// candidate (found only if it has the clearance asked for), then the next distinct ones with
   /// that clearance, TutorOptions::posture_attempts in all at most. Where the way to the first
   /// cannot be found, a person tries the next before giving the area up. Empty when no
-  /// candidate reached p_W collision-free.
-  std::vector<PostureChoice> choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested);
+  /// candidate reached p_W collision-free; `reaching` (if given) counts the candidates that put
+  /// the tip on p_W at all, with or without a contact.
+  std::vector<PostureChoice> choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested,
+                                            int* reaching = nullptr);
 
   const TutorReport& report() const { return report_; }
 
@@ -151,7 +153,8 @@ class SimulatedTutor {
   bool roomyForAnArea(const Eigen::Vector3d& p_W) const;
   /// Where to teach next automatically: with `where_it_fails`, the failing check point with the
   /// most failing neighbours within 0.2 m that is roomy and 0.1 m from earlier attempts;
-  /// otherwise, or before any map, or when none is left, a random roomy point of the workspace box.
+  /// otherwise, or before any map, or when none is left, a random roomy point of the workspace box
+  /// that some collision-free IK posture reaches.
   Eigen::Vector3d nextAutomaticTarget(const robot::EvaluationGrid& grid, const std::vector<Eigen::Vector3d>& tried,
                                       bool where_it_fails);
 

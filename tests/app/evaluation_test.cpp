@@ -162,6 +162,23 @@ TEST(Evaluation, ExcludedBoxesOfTheGridHoldNoTargets) {
   EXPECT_EQ(result.reached, 4);
 }
 
+// Joint limits and the arm's own links bound the workspace without any obstacle: a point beside
+// the base within the reach sphere is no target in the empty scene either.
+TEST(Evaluation, PointsNoPostureReachesAreNoTargetsInAnEmptySceneEither) {
+  Parameters s;
+  const auto map = constantMap();
+  robot::Scene empty;
+  robot::EvaluationGrid grid;
+  grid.lower = Eigen::Vector3d(-0.5, 0.0, 0.1);
+  grid.upper = Eigen::Vector3d(-0.1, 0.0, 0.1);
+  grid.spacing = 0.4;
+  ASSERT_EQ(grid.points().size(), 2U);
+  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
+  EXPECT_EQ(result.inaccessible, 1);  // (-0.1, 0, 0.1): the base's own housing
+  ASSERT_EQ(result.target_points.size(), 1U);
+  EXPECT_TRUE(result.target_points[0].isApprox(Eigen::Vector3d(-0.5, 0.0, 0.1)));
+}
+
 // IK with the hierarchical controller (Eq. 2.11) from q0 with q0 as null-space target: an
 // independent posture for a tip position, not the map's.
 Eigen::VectorXd solveIk(const Eigen::VectorXd& q0, const Eigen::Vector3d& p_W) {

@@ -133,6 +133,35 @@ TEST(TeachCli, TeachesTheScenesRobotAndTheSessionResolvesFromAnyFolder) {
   fs::remove(scene);
 }
 
+// An area the tip cannot get to at all (beside the base, inside the joint limits' hole) and one
+// it reaches only touching something (between two slabs 2 cm apart) are given up with
+// different reasons: the tutor tells the person which it is.
+TEST(TeachCli, SaysWhetherAnAreaIsBeyondTheJointsOrOnlyReachedWithAContact) {
+  const fs::path scene = scratch("reasons.yaml");
+  const fs::path out = scratch("reasons.json");
+  std::ofstream(scene) << "name: reasons\n"
+                          "training_areas:\n"
+                          "  - {name: hole, centre: [-0.12, 0, 0.12], radius: 0.05}\n"
+                          "  - {name: pressed, centre: [-0.5, 0, 0.215], radius: 0.05}\n"
+                          "obstacles:\n"
+                          "  - {name: slab, shape: box, size: [0.3, 0.3, 0.02], position: [-0.5, 0, 0.2]}\n"
+                          "  - {name: lid, shape: box, size: [0.3, 0.3, 0.02], position: [-0.5, 0, 0.24]}\n";
+  const auto result = runCliBinary("teach --scene " + scene.string() + " --areas 2 --seed 1 --candidates 4 --check-points 0 --out " +
+                                   out.string());
+  ASSERT_FALSE(result.out.empty()) << result.err;
+  const auto tutor = result.json().at("tutor");
+  ASSERT_GE(tutor.size(), 2U);
+  EXPECT_EQ(tutor.at(0).at("name"), "hole");
+  EXPECT_FALSE(tutor.at(0).at("taught").get<bool>());
+  EXPECT_EQ(tutor.at(0).at("failure").get<std::string>().rfind("no posture within the joint limits puts the tip there", 0), 0U)
+      << tutor.at(0).at("failure");
+  EXPECT_EQ(tutor.at(1).at("name"), "pressed");
+  EXPECT_FALSE(tutor.at(1).at("taught").get<bool>());
+  EXPECT_EQ(tutor.at(1).at("failure").get<std::string>(), "every posture found that reaches it makes a contact");
+  fs::remove(out);
+  fs::remove(scene);
+}
+
 TEST(TeachCli, RefusesASceneWhosePosturesBelongToAnotherRobotWithOneLine) {
   const auto result = runCliBinary("teach --robot lwr4 --scene arm9_areas --areas 1 --out " + scratch("mismatch.json").string());
   EXPECT_EQ(result.exit_code, 2) << result.err;
