@@ -487,7 +487,8 @@ void Workflow::checkJointLimits(const Eigen::VectorXd& q_fixed, int area) {
     if (margin < options_.limit_warning_margin) {
       std::ostringstream detail;
       detail << "posture near the joint limit: joint " << (j + 1) << " (" << model_robot_->joints()[static_cast<std::size_t>(j)].name
-             << ") is " << margin * 180.0 / std::numbers::pi << " deg from its limit";
+             << ") is " << std::abs(margin) * 180.0 / std::numbers::pi
+             << (margin < 0.0 ? " deg beyond its software limit" : " deg from its limit");
       emit(WorkflowEvent::Kind::kWarning, "joint_limit", detail.str(), area);
     }
   }
