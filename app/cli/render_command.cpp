@@ -383,13 +383,13 @@ Json renderPicture(const RenderOptions& options) {
   render::CameraPose camera;
   if (!options.camera.empty()) {
     camera = render::parseCamera(options.camera);
-  } else if (!options.view.empty()) {
+  } else {
+    // Without a view the picture is taken from the front-left, as the GUI's home view; it frames
+    // the overlays too, since a picture that crops the targets it was asked to show is wrong.
     Eigen::Vector3d direction, up;
-    render::namedView(options.view, direction, up);
+    render::namedView(options.view.empty() ? "front-left" : options.view, direction, up);
     if (!(box.first.array() <= box.second.array()).all()) box = {Eigen::Vector3d(-1.0, -1.0, 0.0), Eigen::Vector3d(1.0, 1.0, 1.0)};
     camera = render::frameBoxFrom(box.first, box.second, aspect, direction, up, 0.04);
-  } else {
-    camera = world.defaultCamera(aspect);
   }
   if (options.legend && !legend.empty() && shown(render::OverlayLayer::kLegend)) {
     overlays.setContent(render::OverlayLayer::kLegend, render::makeLegend(legend, options.width, options.height));
@@ -440,9 +440,9 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
   command->add_option("--height", options->height, "image height [px]")->capture_default_str()->check(CLI::Range(1, 8192));
   command->add_option("--camera", options->camera,
                       "eye and look-at point in the world frame [m], optionally the vertical field of view "
-                      "[deg]: ex,ey,ez,cx,cy,cz[,fovy] (default: front-left, framing robot and scene)");
+                      "[deg]: ex,ey,ez,cx,cy,cz[,fovy] (default: --view front-left)");
   command->add_option("--view", options->view,
-                      "front-left, front-right, front, back, left, right or top: frames robot, scene and overlays from that side");
+                      "front-left (the default), front-right, front, back, left, right or top: frames robot, scene and overlays from that side");
   command->add_option("--supersample", options->supersampling, "anti-aliasing: render at this multiple and average")
       ->capture_default_str()
       ->check(CLI::Range(1, 4));

@@ -341,13 +341,16 @@ TEST(RenderCommandOverlays, RejectsHostileOverlayFilesWithAOneLineErrorAndExitCo
   std::filesystem::remove(input);
 }
 
-TEST(RenderCommandOverlays, NamedViewsFrameTheOverlays) {
+TEST(RenderCommandOverlays, DefaultAndNamedViewsFrameTheOverlays) {
   const auto reachable = tempPng("view.json");
   const auto file = tempPng("view.png");
   writeText(reachable, R"({"target_points": [[-1.5, 0.0, 0.3], [0.0, 1.5, 0.3]], "target_reached": [true, true]})");
-  for (const std::string view : {"front-left", "front-right", "front", "back", "left", "right", "top"}) {
-    const Result result = run({"render", "--reachable", reachable.string(), "--out", file.string(), "--width", "200",
-                               "--height", "150", "--supersample", "1", "--view", view});
+  // "" is the default camera, which frames them as well.
+  for (const std::string view : {"", "front-left", "front-right", "front", "back", "left", "right", "top"}) {
+    std::vector<std::string> arguments = {"render", "--reachable", reachable.string(), "--out", file.string(),
+                                          "--width", "200", "--height", "150", "--supersample", "1"};
+    if (!view.empty()) arguments.insert(arguments.end(), {"--view", view});
+    const Result result = run(arguments);
     ASSERT_EQ(result.exit_code, 0) << result.err;
     const render::CameraPose camera = cameraOf(nlohmann::json::parse(result.out));
     // Both targets lie far outside the robot's bounds, and still inside the picture.
