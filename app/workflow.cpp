@@ -483,12 +483,17 @@ void Workflow::checkJointLimits(const Eigen::VectorXd& q_fixed, int area) {
   const Eigen::VectorXd lower = model_robot_->softLowerLimits();
   const Eigen::VectorXd upper = model_robot_->softUpperLimits();
   for (Eigen::Index j = 0; j < q_fixed.size(); ++j) {
+    const robot::Joint& joint = model_robot_->joints()[static_cast<std::size_t>(j)];
+    const bool sliding = joint.type == robot::JointType::kPrismatic;
     const double margin = std::min(q_fixed[j] - lower[j], upper[j] - q_fixed[j]);
-    if (margin < options_.limit_warning_margin) {
+    // A slide's travel may be a few centimetres: near means within a tenth of it.
+    const double near = sliding ? std::min(options_.limit_warning_margin_m, 0.1 * (upper[j] - lower[j]))
+                                : options_.limit_warning_margin;
+    if (margin < near) {
       std::ostringstream detail;
-      detail << "posture near the joint limit: joint " << (j + 1) << " (" << model_robot_->joints()[static_cast<std::size_t>(j)].name
-             << ") is " << std::abs(margin) * 180.0 / std::numbers::pi
-             << (margin < 0.0 ? " deg beyond its software limit" : " deg from its limit");
+      detail << "posture near the joint limit: joint " << (j + 1) << " (" << joint.name << ") is "
+             << (sliding ? std::abs(margin) * 1000.0 : std::abs(margin) * 180.0 / std::numbers::pi)
+             << (sliding ? " mm" : " deg") << (margin < 0.0 ? " beyond its software limit" : " from its limit");
       emit(WorkflowEvent::Kind::kWarning, "joint_limit", detail.str(), area);
     }
   }

@@ -124,6 +124,7 @@ struct WorkflowOptions {
   /// allocates in the control cycle; longer recordings keep their first samples and warn.
   double max_recording_time = 600.0;
   double limit_warning_margin = 0.17;  ///< [rad] q_fixed closer than this to a soft limit warns
+  double limit_warning_margin_m = 0.02;  ///< [m] the same for a prismatic joint (at most 1/10 of its travel)
   bool background_learning = true;     ///< false: fit synchronously in finished_configuration (tests)
   /// Box for the OS-ELM's fixed input normalization [m, W] (its workspace).
   Eigen::Vector3d workspace_lower = Eigen::Vector3d(-1.0, -1.0, -0.2);

@@ -219,9 +219,11 @@ void foldLinkInto(Body& body, const urdf::Link& link, const Eigen::Isometry3d& X
     geometry.X_BG = X_BL * geometry.X_BG;
     body.collisions.push_back(std::move(geometry));
   }
+  if (link.inertial && !(link.inertial->mass >= 0.0 && std::isfinite(link.inertial->mass))) {
+    throw InputError("link '" + link.name + "': mass must be a finite, non-negative number of kg");
+  }
   if (link.inertial && link.inertial->mass > 0.0) {
     const auto& inertial = *link.inertial;
-    if (!std::isfinite(inertial.mass)) throw InputError("link '" + link.name + "': non-finite mass");
     const Eigen::Isometry3d X_BC = X_BL * toIsometry(inertial.origin);
     Eigen::Matrix3d I_C;
     I_C << inertial.ixx, inertial.ixy, inertial.ixz, inertial.ixy, inertial.iyy, inertial.iyz,
@@ -238,6 +240,25 @@ void foldLinkInto(Body& body, const urdf::Link& link, const Eigen::Isometry3d& X
     body.I_BCom = shifted(body.I_BCom, body.mass, body.p_BCom - com) + shifted(I_new_B, inertial.mass, p_new - com);
     body.p_BCom = com;
     body.mass = total_mass;
+  }
+}
+
+// Kinematics-only URDFs leave out <inertial>. A moving body without mass would make the
+// simulated joints (stiffness and damping tuned for the LWR IV's kilograms) numerically stiff
+// beyond any time step, and the gravity model would see nothing to hold. Such a body is given
+// kAssumedMass at the middle of its link (from its joint to the next joint, or to the tip),
+// with the inertia of a solid sphere spanning that link.
+void assumeInertiaOfMasslessBodies(std::vector<Body>& bodies, const std::vector<Joint>& joints,
+                                   const Eigen::Isometry3d& X_last_body_tip) {
+  for (std::size_t b = 1; b < bodies.size(); ++b) {
+    Body& body = bodies[b];
+    if (body.mass > 0.0) continue;
+    const Eigen::Vector3d link_end = b < joints.size() ? joints[b].X_PJ.translation() : X_last_body_tip.translation();
+    const double radius = std::max(kAssumedMinRadius, 0.5 * link_end.norm());
+    body.mass = kAssumedMass;
+    body.p_BCom = 0.5 * link_end;
+    body.I_BCom = 0.4 * kAssumedMass * radius * radius * Eigen::Matrix3d::Identity();
+    body.inertia_assumed = true;
   }
 }
 
@@ -473,6 +494,7 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
   foldFixedSubtree(model.bodies_.back(), *path.back(), X_BL, nullptr, base_dir);
   model.X_last_body_tip_ = X_BL;
   if (model.joints_.empty()) throw InputError("no movable joint between root '" + root->name + "' and tip '" + tip + "'");
+  assumeInertiaOfMasslessBodies(model.bodies_, model.joints_, model.X_last_body_tip_);
   return model;
 }
 

@@ -45,7 +45,14 @@ struct Body {
   double mass = 0.0;                             ///< [kg], folded links included
   Eigen::Vector3d p_BCom = Eigen::Vector3d::Zero();  ///< centre of mass in the body frame
   Eigen::Matrix3d I_BCom = Eigen::Matrix3d::Zero();  ///< inertia about the COM, body axes
+  /// The URDF gives this moving body no mass: it carries kAssumedMass instead.
+  bool inertia_assumed = false;
 };
+
+/// What a moving body without <inertial> in its URDF weighs in the simulation [kg], centred on
+/// its link, with the inertia of a solid sphere of at least kAssumedMinRadius [m].
+inline constexpr double kAssumedMass = 1.0;
+inline constexpr double kAssumedMinRadius = 0.05;
 
 struct Joint {
   std::string name;
@@ -62,7 +69,8 @@ class RobotModel {
  public:
   /// Reads a URDF file. tip_link empty: the last link of the longest serial chain. Throws
   /// InputError with a one-line reason for malformed files, missing links or meshes,
-  /// ambiguous (non-serial) chains and unsupported joint types on the chain.
+  /// ambiguous (non-serial) chains and unsupported joint types on the chain. A moving body
+  /// whose links give no mass gets kAssumedMass (Body::inertia_assumed).
   static RobotModel fromUrdfFile(const std::filesystem::path& urdf_file,
                                  const std::string& tip_link = "");
   /// As fromUrdfFile; relative mesh URIs are resolved against base_dir.

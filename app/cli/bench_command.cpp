@@ -187,14 +187,14 @@ void registerBenchCommand(CLI::App& app, CommandRunner& runner) {
   auto repetitions = std::make_shared<int>(5);
   auto min_time = std::make_shared<double>(0.1);
   bench->add_option("--filter", *filter, "regular expression over benchmark names")->capture_default_str();
-  bench->add_option("--repetitions", *repetitions, "repetitions per case")->check(CLI::Range(1, 1000))->capture_default_str();
-  bench->add_option("--min-time", *min_time, "minimum seconds per repetition")->check(CLI::Range(0.001, 60.0))->capture_default_str();
+  bench->add_option("--repetitions", *repetitions, "repetitions per case")->check(finiteRange(1, 1000))->capture_default_str();
+  bench->add_option("--min-time", *min_time, "minimum seconds per repetition")->check(finiteRange(0.001, 60.0))->capture_default_str();
   auto peers = std::make_shared<PeerOptions>();
   bench->add_flag("--peers", peers->enabled,
                   "instead of the suite: reaching against orocos-kdl and planning against OMPL, as ratios");
-  bench->add_option("--peer-targets", peers->targets, "reaching targets per robot (--peers)")->check(CLI::Range(1, 100000))->capture_default_str();
-  bench->add_option("--peer-goals", peers->goals, "planning queries on arm9_areas (--peers)")->check(CLI::Range(1, 10000))->capture_default_str();
-  bench->add_option("--peer-areas", peers->areas, "areas the tutor teaches for planning (--peers)")->check(CLI::Range(1, 50))->capture_default_str();
+  bench->add_option("--peer-targets", peers->targets, "reaching targets per robot (--peers)")->check(finiteRange(1, 100000))->capture_default_str();
+  bench->add_option("--peer-goals", peers->goals, "planning queries on arm9_areas (--peers)")->check(finiteRange(1, 10000))->capture_default_str();
+  bench->add_option("--peer-areas", peers->areas, "areas the tutor teaches for planning (--peers)")->check(finiteRange(1, 50))->capture_default_str();
   bench->add_option("--peer-seed", peers->seed, "seed of targets, queries and teaching (--peers)")->capture_default_str();
   bench->callback([&runner, filter, repetitions, min_time, peers] {
     if (peers->enabled) {

@@ -1,5 +1,7 @@
 #include "app/cli/cli_support.hpp"
 
+#include <algorithm>
+
 #include <unistd.h>
 
 #include <cerrno>
@@ -11,6 +13,18 @@
 #include "robot/errors.hpp"
 
 namespace flexirob::cli {
+
+CLI::Validator seedValidator() {
+  return CLI::Validator(
+      [](std::string& input) -> std::string {
+        const bool digits = !input.empty() && input.size() <= 20 &&
+                            std::all_of(input.begin(), input.end(), [](char c) { return c >= '0' && c <= '9'; });
+        // 20 digits may still exceed 2^64 - 1 = 18446744073709551615.
+        if (digits && (input.size() < 20 || input <= "18446744073709551615")) return {};
+        return "a seed is a whole number from 0 to 18446744073709551615, got " + input.substr(0, 64);
+      },
+      "");
+}
 
 Json toJson(const Eigen::VectorXd& v) {
   Json array = Json::array();

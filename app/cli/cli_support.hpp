@@ -3,6 +3,8 @@
 // strict parsing of the numeric lists users type on the command line.
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
+#include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -52,6 +54,26 @@ void registerReviewCommands(CLI::App& app, CommandRunner& runner);  // review
 void registerTeachCommands(CLI::App& app, CommandRunner& runner);   // teach
 void registerEvalCommands(CLI::App& app, CommandRunner& runner);    // eval reachable, plan
 void registerSweepCommand(CLI::App& app, CommandRunner& runner);    // sweep
+
+/// CLI::Range lets "nan" through (every comparison with NaN is false), and an option left at
+/// its default then meant "the scene's value": the range of every numeric option also refuses
+/// numbers that are not finite.
+template <typename T>
+CLI::Validator finiteRange(T min, T max) {
+  const CLI::Validator finite(
+      [](std::string& input) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(input.c_str(), &end);
+        if (end != input.c_str() && !std::isfinite(value)) return "expected a finite number, got " + input.substr(0, 64);
+        return {};
+      },
+      "");
+  return CLI::Range(min, max) & finite;
+}
+
+/// Seeds are unsigned 64-bit integers written in decimal; "-1" or a number beyond 2^64 - 1 is
+/// refused (the C library would wrap or saturate it to a seed the user never gave).
+CLI::Validator seedValidator();
 
 /// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.
 /// Returns the process exit code (0 success, 1 the command ran but failed, 2 bad input).

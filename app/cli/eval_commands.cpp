@@ -4,6 +4,8 @@
 // recorder) or the JSON files `teach --out F.json` writes.
 #include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <iomanip>
 #include <map>
 #include <unistd.h>
 
@@ -47,6 +49,31 @@ struct Session {
   std::unique_ptr<planning::Itm> itm;
 };
 
+// A posture the robot cannot take would be learned and planned with as if it could (a hand-edited
+// or damaged file): every recorded posture must lie within the hardware limits, up to what the
+// simulated limit stops let a joint overshoot.
+void checkPosturesWithinLimits(const Session& session) {
+  constexpr double kOvershoot = 0.05;  // [rad] or [m]
+  const robot::RobotModel& model = *session.model;
+  const Eigen::VectorXd lower = model.lowerLimits();
+  const Eigen::VectorXd upper = model.upperLimits();
+  const auto check = [&](const Eigen::VectorXd& q, const std::string& what) {
+    for (Eigen::Index j = 0; j < q.size(); ++j) {
+      if (q[j] >= lower[j] - kOvershoot && q[j] <= upper[j] + kOvershoot) continue;
+      std::ostringstream message;
+      message << std::setprecision(4) << "session: " << what << ": joint " << j + 1 << " ("
+              << model.joints()[static_cast<std::size_t>(j)].name << ") at " << q[j] << " lies outside its limits ["
+              << lower[j] << ", " << upper[j] << "]";
+      throw InputError(message.str());
+    }
+  };
+  for (std::size_t k = 0; k < session.q_fixed.size(); ++k) check(session.q_fixed[k], "q_fixed of area " + std::to_string(k + 1));
+  for (Eigen::Index l = 0; l < session.data.Y.cols(); ++l) check(session.data.Y.col(l), "training sample " + std::to_string(l + 1));
+  if (session.itm) {
+    for (const int id : session.itm->nodeIds()) check(session.itm->joints(id), "ITM node " + std::to_string(id));
+  }
+}
+
 // A session recorded in SQLite by the session recorder: the complete areas' latest takes.
 Session loadRecordedSession(const std::string& file) {
   app::RecordedTeaching teaching = app::readRecordedTeaching(app::SessionReader(file));
@@ -84,6 +111,7 @@ Session loadRecordedSession(const std::string& file) {
   }
   if (!teaching.itm) throw InputError("session: no ITM graph recorded");
   session.itm = std::make_unique<planning::Itm>(std::move(*teaching.itm));
+  checkPosturesWithinLimits(session);
   return session;
 }
 
@@ -145,6 +173,7 @@ Session loadSession(const std::string& file) {
   } catch (const Json::exception& e) {
     throw InputError("--session: malformed session (" + std::string(e.what()) + ")");
   }
+  checkPosturesWithinLimits(session);
   return session;
 }
 
@@ -324,7 +353,7 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   CLI::App* reachable = eval->add_subcommand("reachable", "reachable workspace on the evaluation grid (Sect. 3.3.2)");
   reachable->add_option("--session", options->session, "session file written by teach")->required();
   reachable->add_option("--learner", options->learner, "elm, oselm or llm");
-  reachable->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(CLI::Range(0.01, 1.0));
+  reachable->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
   reachable->add_option("--approach", options->approach,
                   "targets approached from the learned posture at the target (learned), the start posture (start) or the previous target (previous)")
       ->check(CLI::IsMember({"learned", "start", "previous"}));
@@ -332,7 +361,7 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   CLI::App* scene_model = eval->add_subcommand("scene-model", "implicit scene model S of Eq. 4.1 and how much of the obstacles it encloses");
   scene_model->add_option("--session", options->session, "session file written by teach")->required();
   scene_model->add_option("--learner", options->learner, "elm, oselm or llm");
-  scene_model->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(CLI::Range(0.01, 1.0));
+  scene_model->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
   scene_model->add_option("--approach", options->approach,
                   "targets approached from the learned posture at the target (learned), the start posture (start) or the previous target (previous)")
       ->check(CLI::IsMember({"learned", "start", "previous"}));
@@ -340,15 +369,15 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
   trajectories->add_option("--session", options->session, "session file written by teach")->required();
   trajectories->add_option("--learner", options->learner, "elm, oselm or llm");
-  trajectories->add_option("--per-area", options->per_area, "trajectories per training area without scene trajectories (interpolation: twice)")->check(CLI::Range(1, 10000));
-  trajectories->add_option("--speed", options->speed, "tip speed [m/s]")->check(CLI::Range(0.01, 1.0));
-  trajectories->add_option("--seed", options->seed, "random seed for drawn trajectories");
+  trajectories->add_option("--per-area", options->per_area, "trajectories per training area without scene trajectories (interpolation: twice)")->check(finiteRange(1, 10000));
+  trajectories->add_option("--speed", options->speed, "tip speed [m/s]")->check(finiteRange(0.01, 1.0));
+  trajectories->add_option("--seed", options->seed, "random seed for drawn trajectories")->check(seedValidator());
   trajectories->callback([&runner, options] { runner.select([options] { return runTrajectories(*options); }); });
 
   CLI::App* plan = app.add_subcommand("plan", "plan to random ITM nodes and execute (Sect. 8.3)");
   plan->add_option("--session", options->session, "session file written by teach")->required();
-  plan->add_option("--goals", options->goals, "number of goals")->check(CLI::Range(1, 10000));
-  plan->add_option("--seed", options->seed, "random seed");
+  plan->add_option("--goals", options->goals, "number of goals")->check(finiteRange(1, 10000));
+  plan->add_option("--seed", options->seed, "random seed")->check(seedValidator());
   plan->add_option("--learner", options->learner, "elm, oselm or llm");
   plan->callback([&runner, options] { runner.select([options] { return runPlan(*options); }); });
 }

@@ -202,19 +202,19 @@ void registerFriCommands(CLI::App& app, CommandRunner& runner) {
     auto* command = fri->add_subcommand("probe", "listen to the robot controller, mirror the arm, hold its posture");
     auto options = std::make_shared<ProbeOptions>();
     command->add_option("--port", options->port, "local UDP port the robot controller sends to")
-        ->check(CLI::Range(1, 65535))
+        ->check(finiteRange(1, 65535))
         ->capture_default_str();
     command->add_option("--robot", options->robot, "the robot controller's address host[:port]")->required();
     command->add_option("--seconds", options->seconds, "how long to listen [s]")->capture_default_str();
     command->add_option("--bind", options->bind, "local address to listen on")->capture_default_str();
     command->add_option("--watchdog-cycles", options->watchdog_cycles, "missed measurements before holding")
-        ->check(CLI::Range(1, 1000))
+        ->check(finiteRange(1, 1000))
         ->capture_default_str();
     command->add_option("--stiffness", options->stiffness, "joint stiffness of the hold [Nm/rad]")
-        ->check(CLI::Range(0.0, 5000.0))
+        ->check(finiteRange(0.0, 5000.0))
         ->capture_default_str();
     command->add_option("--damping", options->damping, "normalized joint damping of the hold")
-        ->check(CLI::Range(0.0, 1.0))
+        ->check(finiteRange(0.0, 1.0))
         ->capture_default_str();
     command->callback([&runner, options] { runner.select([options] { return probe(*options); }); });
   }
@@ -222,23 +222,23 @@ void registerFriCommands(CLI::App& app, CommandRunner& runner) {
     auto* command = fri->add_subcommand("simulate", "act as the robot controller over loopback");
     auto options = std::make_shared<SimulateOptions>();
     command->add_option("--port", options->port, "local UDP port of the simulated controller (0: any)")
-        ->check(CLI::Range(0, 65535))
+        ->check(finiteRange(0, 65535))
         ->capture_default_str();
     command->add_option("--peer", options->peer, "the PC's address ADDRESS:PORT (loopback)")->required();
     command->add_option("--seconds", options->seconds, "how long to run [s]")->capture_default_str();
     command->add_option("--cycle-ms", options->cycle_ms, "measurement period [ms]")
-        ->check(CLI::Range(0.5, 100.0))
+        ->check(finiteRange(0.5, 100.0))
         ->capture_default_str();
     command->add_option("--loss", options->loss, "probability that a datagram is lost")
-        ->check(CLI::Range(0.0, 1.0))
+        ->check(finiteRange(0.0, 1.0))
         ->capture_default_str();
     command->add_option("--delay-ms", options->delay_ms, "extra latency of measurements [ms]")
-        ->check(CLI::Range(0.0, 1000.0))
+        ->check(finiteRange(0.0, 1000.0))
         ->capture_default_str();
     command->add_option("--reorder", options->reorder, "probability that a measurement is overtaken")
-        ->check(CLI::Range(0.0, 1.0))
+        ->check(finiteRange(0.0, 1.0))
         ->capture_default_str();
-    command->add_option("--seed", options->seed, "random seed of the fault injection")->capture_default_str();
+    command->add_option("--seed", options->seed, "random seed of the fault injection")->check(seedValidator())->capture_default_str();
     command->add_option("--q", options->q, "initial joint posture q1,...,q7 [rad]");
     command->add_option("--arm", options->arm, "arm model: bullet (robot/sim) or impedance (built-in)")
         ->capture_default_str();

@@ -272,24 +272,24 @@ void registerLearnCommands(CLI::App& app, CommandRunner& runner) {
         ->capture_default_str();
     fit_command->add_option("--data", options->data, "training data CSV with header area,x,y,z[,rx,ry,rz],q1,...,qN")->required();
     fit_command->add_option("--out", options->out, "model file to write")->required();
-    fit_command->add_option("--hidden", options->hidden, "ELM/OS-ELM hidden neurons R")->check(CLI::Range(1, 5000))->capture_default_str();
+    fit_command->add_option("--hidden", options->hidden, "ELM/OS-ELM hidden neurons R")->check(finiteRange(1, 5000))->capture_default_str();
     fit_command->add_option("--epsilon", options->epsilon, "ELM/OS-ELM ridge regularization (Eq. 3.13)")
-        ->check(CLI::Range(1e-12, 1e12))
+        ->check(finiteRange(1e-12, 1e12))
         ->capture_default_str();
     fit_command->add_option("--seed", options->seed, "random seed (ELM features, LLM sample order, BPDC weights)")
-        ->check(CLI::Range(std::int64_t{0}, std::numeric_limits<std::int64_t>::max()))
+        ->check(finiteRange(std::int64_t{0}, std::numeric_limits<std::int64_t>::max()))
         ->capture_default_str();
-    fit_command->add_option("--eta", options->eta, "LLM learning rate (Eq. 3.19)")->check(CLI::Range(1e-9, 10.0))->capture_default_str();
-    fit_command->add_option("--max-epochs", options->max_epochs, "LLM/BPDC epoch limit")->check(CLI::Range(1, 1000000))->capture_default_str();
+    fit_command->add_option("--eta", options->eta, "LLM learning rate (Eq. 3.19)")->check(finiteRange(1e-9, 10.0))->capture_default_str();
+    fit_command->add_option("--max-epochs", options->max_epochs, "LLM/BPDC epoch limit")->check(finiteRange(1, 1000000))->capture_default_str();
     fit_command->add_option("--tolerance", options->tolerance, "LLM stopping rule: relative MSE improvement that counts as progress")
-        ->check(CLI::Range(0.0, 1.0))
+        ->check(finiteRange(0.0, 1.0))
         ->capture_default_str();
     fit_command->add_option("--patience", options->patience, "LLM stopping rule: epochs without progress before stopping")
-        ->check(CLI::Range(1, 1000000))
+        ->check(finiteRange(1, 1000000))
         ->capture_default_str();
     fit_command->add_option("--area-radius", options->area_radius,
                             "without an area column: samples within this distance [m] of an area's first sample join it")
-        ->check(CLI::Range(1e-6, 100.0))
+        ->check(finiteRange(1e-6, 100.0))
         ->capture_default_str();
     fit_command->callback([&runner, options] { runner.select([options] { return fit(*options); }); });
   }

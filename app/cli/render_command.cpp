@@ -436,8 +436,8 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
   command->add_option("--scene", options->scene, "built-in scene name or a scene file (default: the session's, else empty)");
   command->add_option("--out", options->out, "PNG file to write")->required();
   command->add_option("--q", options->q, "joint values q1,...,qN [rad] (default: the scene's home posture, else mid-range)");
-  command->add_option("--width", options->width, "image width [px]")->capture_default_str()->check(CLI::Range(1, 8192));
-  command->add_option("--height", options->height, "image height [px]")->capture_default_str()->check(CLI::Range(1, 8192));
+  command->add_option("--width", options->width, "image width [px]")->capture_default_str()->check(finiteRange(1, 8192));
+  command->add_option("--height", options->height, "image height [px]")->capture_default_str()->check(finiteRange(1, 8192));
   command->add_option("--camera", options->camera,
                       "eye and look-at point in the world frame [m], optionally the vertical field of view "
                       "[deg]: ex,ey,ez,cx,cy,cz[,fovy] (default: --view front-left)");
@@ -445,7 +445,7 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
                       "front-left (the default), front-right, front, back, left, right or top: frames robot, scene and overlays from that side");
   command->add_option("--supersample", options->supersampling, "anti-aliasing: render at this multiple and average")
       ->capture_default_str()
-      ->check(CLI::Range(1, 4));
+      ->check(finiteRange(1, 4));
   command->add_flag("--no-grid", options->no_grid, "hide the ground grid and the world axes");
   command->add_flag("--no-scene-areas", options->no_scene_areas, "hide the scene file's suggested training areas");
   command->add_flag("--no-robot", options->no_robot, "leave the robot out (e.g. to look down onto a confidence slice)");
@@ -456,15 +456,15 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
                       "heights z1,z2,... [m] of confidence slices (Fig. 6.5) from the session's areas");
   command->add_option("--confidence-resolution", options->confidence_resolution, "grid points per side of a slice")
       ->capture_default_str()
-      ->check(CLI::Range(2, 400));
+      ->check(finiteRange(2, 400));
   command->add_option("--reachable", options->reachable, "JSON of eval reachable: reached targets green, others red (Fig. 3.10)");
   command->add_option("--scene-model", options->scene_model, "JSON of eval scene-model: the points of S (Eq. 4.1, Fig. 4.6)");
   command->add_option("--plan", options->plan, "JSON of plan: goals and planned paths (Fig. 7.7, 8.4)");
-  command->add_option("--plan-paths", options->plan_paths, "draw only the first N planned paths")->check(CLI::Range(0, 100000));
+  command->add_option("--plan-paths", options->plan_paths, "draw only the first N planned paths")->check(finiteRange(0, 100000));
   command->add_option("--hide", options->hide, "overlay layers not to draw: samples,ghosts,confidence,itm,path,reachability,legend");
   command->add_option("--point-size", options->point_size, "size of points [px]")
       ->capture_default_str()
-      ->check(CLI::Range(1.0, 64.0));
+      ->check(finiteRange(1.0, 64.0));
   command->add_flag("--legend", options->legend, "draw a legend of the overlays in the top-left corner");
   command->callback([options, &runner] { runner.select([options] { return renderPicture(*options); }); });
 }

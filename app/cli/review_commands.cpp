@@ -287,9 +287,9 @@ void registerReviewCommands(CLI::App& app, CommandRunner& runner) {
   command->add_option("--centres", study->centres,
                       "with --study: initial k-means centres, CSV lines area,name,q1,...,q6 (default: thesis Tab. B.1)");
   command->add_option("--success-e-task", study->success_e_task, "with --study: E_task [m] a successful teaching stays within")
-      ->check(CLI::Range(0.0, 10.0));
+      ->check(finiteRange(0.0, 10.0));
   command->add_option("--replay-interval", study->replay_interval, "with --study: seconds between replayed states for E_coll")
-      ->check(CLI::Range(0.0, 10.0));
+      ->check(finiteRange(0.0, 10.0));
   command->callback([&runner, session, study, session_option, study_option] {
     if (session_option->count() == 0 && study_option->count() == 0) {
       throw InputError("review: expected --session FILE or --study DIR");

@@ -42,7 +42,11 @@ Json robotInfo(const robot::RobotModel& model) {
   Json links = Json::array();
   for (const auto& body : model.bodies()) links.push_back(body.name);
   double total_mass = 0.0;
-  for (const auto& body : model.bodies()) total_mass += body.mass;
+  Json assumed = Json::array();
+  for (const auto& body : model.bodies()) {
+    total_mass += body.mass;
+    if (body.inertia_assumed) assumed.push_back(body.name);
+  }
   return {{"name", model.name()},
           {"dof", model.dof()},
           {"urdf", model.urdfPath().string()},
@@ -50,7 +54,8 @@ Json robotInfo(const robot::RobotModel& model) {
           {"tip_link", model.tipLink()},
           {"joints", joints},
           {"bodies", links},
-          {"mass_kg", total_mass}};
+          {"mass_kg", total_mass},
+          {"bodies_with_assumed_mass", assumed}};
 }
 
 Json forwardKinematics(const robot::RobotModel& model, const Eigen::VectorXd& q) {

@@ -292,11 +292,11 @@ void registerSweepCommand(CLI::App& app, CommandRunner& runner) {
   auto options = std::make_shared<SweepOptions>();
   CLI::App* sweep = app.add_subcommand("sweep", "reproduce the thesis' tables with the simulated tutor (Tab. 3.2, 3.3, 3.4, 7.1, Sect. 8.3)");
   sweep->add_option("--tables", options->tables, "subset of 3.2 3.3 3.4 7.1 8.3")->delimiter(',');
-  sweep->add_option("--spacing", options->spacing, "Tab. 3.3 grid spacing [m] (default: the scene's)")->check(CLI::Range(0.01, 1.0));
-  sweep->add_option("--spacing-34", options->spacing_34, "Tab. 3.4 grid spacing [m]")->check(CLI::Range(0.01, 1.0));
-  sweep->add_option("--seeds", options->seeds, "Tab. 3.4 network initializations")->check(CLI::Range(1, 100));
-  sweep->add_option("--goals", options->goals, "Sect. 8.3 goals")->check(CLI::Range(1, 10000));
-  sweep->add_option("--max-areas", options->max_areas, "skip Tab. 3.3 rows with more areas")->check(CLI::Range(1, 1000));
+  sweep->add_option("--spacing", options->spacing, "Tab. 3.3 grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
+  sweep->add_option("--spacing-34", options->spacing_34, "Tab. 3.4 grid spacing [m]")->check(finiteRange(0.01, 1.0));
+  sweep->add_option("--seeds", options->seeds, "Tab. 3.4 network initializations")->check(finiteRange(1, 100));
+  sweep->add_option("--goals", options->goals, "Sect. 8.3 goals")->check(finiteRange(1, 10000));
+  sweep->add_option("--max-areas", options->max_areas, "skip Tab. 3.3 rows with more areas")->check(finiteRange(1, 1000));
   sweep->add_option("--approach", options->approach, "Tab. 3.3/3.4: targets approached from the learned posture at the target (learned), the home posture (start) or the previous target (previous)")
       ->check(CLI::IsMember({"learned", "start", "previous"}));
   sweep->add_option("--only", options->only, "Tab. 3.3 rows to run, e.g. setup_I:4,setup_II:1")->delimiter(',');

@@ -330,16 +330,16 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   teach->add_option("--robot", options->robot, "lwr4, arm9 or a URDF path (default: the scene's robot)");
   teach->add_option("--tip", options->tip, "tip link");
   teach->add_option("--scene", options->scene, "built-in scene name or scene file");
-  teach->add_option("--areas", options->areas, "number of training areas")->check(CLI::Range(1, 200));
-  teach->add_option("--seed", options->seed, "random seed");
+  teach->add_option("--areas", options->areas, "number of training areas")->check(finiteRange(1, 200));
+  teach->add_option("--seed", options->seed, "random seed")->check(seedValidator());
   teach->add_option("--out", options->out, "session file (SQLite; JSON if it ends in .json)")->required();
   teach->add_flag("--realtime", options->realtime, "pace the simulation at wall-clock speed");
   teach->add_option("--learner", options->learner, "elm, oselm or llm");
-  teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m]")->check(CLI::Range(0.005, 0.5));
-  teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(CLI::Range(1, 1000));
+  teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m]")->check(finiteRange(0.005, 0.5));
+  teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(finiteRange(1, 1000));
   teach->add_option("--check-points", options->check_points,
                     "points on which areas beyond the scene's list are checked and taken back if the map got worse (0: random places, kept)")
-      ->check(CLI::Range(0, 10000))
+      ->check(finiteRange(0, 10000))
       ->capture_default_str();
   teach->add_option("--backend", options->backend,
                     "sim (the Bullet simulation) or fri-sim (the same arm behind the FRI controller stand-in, "

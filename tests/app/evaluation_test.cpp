@@ -106,7 +106,9 @@ TEST(Evaluation, PlannedMotionsThroughAContactGoOnToTheirGoalAndTheNextStartsThe
     const PlannedMotion& motion = result.motions[i];
     ASSERT_TRUE(motion.found) << "goal " << i;
     EXPECT_LT((motion.final_W - motion.goal_W).norm(), 0.01) << "goal " << i << " ended short of its goal";
-    if (i > 0) EXPECT_LT((motion.start_W - result.motions[i - 1].final_W).norm(), 1e-6) << "goal " << i;
+    if (i > 0) {
+      EXPECT_LT((motion.start_W - result.motions[i - 1].final_W).norm(), 1e-6) << "goal " << i;
+    }
     const bool crosses = (motion.start_W.y() - wall_y) * (motion.goal_W.y() - wall_y) < 0.0;
     crossings += crosses ? 1 : 0;
     collided += motion.collided ? 1 : 0;

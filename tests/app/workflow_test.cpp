@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "app/workflow.hpp"
 #include "robot/resources.hpp"
@@ -277,6 +278,49 @@ TEST(Workflow, WarnsWhenThePostureIsNearAJointLimit) {
     }
   }
   EXPECT_EQ(warnings, 1);
+}
+
+TEST(Workflow, APrismaticJointIsNearItsLimitInMillimetresOfItsOwnTravel) {
+  // Joint 3 slides 0.2 m: the radian margin of the rotary joints would call every position of
+  // it near a limit, and in degrees.
+  const robot::RobotModel slider = robot::RobotModel::fromUrdfString(R"(<robot name="slider">
+    <link name="base"/>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.3"/>
+      <axis xyz="0 0 1"/><limit lower="-2.9" upper="2.9" velocity="2" effort="100"/></joint>
+    <link name="l1"/>
+    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.1"/>
+      <axis xyz="0 1 0"/><limit lower="-2.9" upper="2.9" velocity="2" effort="100"/></joint>
+    <link name="l2"/>
+    <joint name="slide" type="prismatic"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.3"/>
+      <axis xyz="0 0 1"/><limit lower="0" upper="0.2" velocity="0.5" effort="100"/></joint>
+    <link name="l3"/>
+    <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/><origin xyz="0 0 0.1"/>
+      <axis xyz="0 1 0"/><limit lower="-2.9" upper="2.9" velocity="2" effort="100"/></joint>
+    <link name="l4"/>
+    <joint name="tool" type="fixed"><parent link="l4"/><child link="tip"/><origin xyz="0 0 0.2"/></joint>
+    <link name="tip"/>
+  </robot>)",
+                                                                    std::filesystem::temp_directory_path());
+  const auto warningsFor = [&](double slide) {
+    ScriptedBackend backend(slider);
+    const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+    robot::ParameterSet parameters(declarations);
+    Workflow workflow(backend, parameters, syncOptions());
+    EXPECT_TRUE(workflow.press(Button::kStartConfiguration));
+    Eigen::VectorXd q(4);
+    q << 0.3, 0.5, slide, -1.0;
+    teachArea(workflow, backend, q);
+    std::vector<std::string> details;
+    for (const auto& event : workflow.events()) {
+      if (event.kind == WorkflowEvent::Kind::kWarning && event.name == "joint_limit") details.push_back(event.detail);
+    }
+    return details;
+  };
+  EXPECT_TRUE(warningsFor(0.1).empty()) << "mid-travel, 0.1 m from either end";
+  const std::vector<std::string> near_end = warningsFor(0.19);
+  ASSERT_EQ(near_end.size(), 1U);
+  EXPECT_NE(near_end[0].find("joint 3 (slide)"), std::string::npos) << near_end[0];
+  EXPECT_NE(near_end[0].find(" mm from its limit"), std::string::npos) << near_end[0];
 }
 
 TEST(Workflow, OnlineOsElmLearnsDuringRecording) {

@@ -181,6 +181,11 @@ TEST(EvalCli, BadArgumentsGiveExitCodeTwoAndOneLine) {
       "eval trajectories --session " + session.string() + " --speed -1",
       "eval trajectories --session " + session.string() + " --learner nonsense",
       "eval nonsense",
+      "eval reachable --session " + session.string() + " --spacing nan",
+      "eval scene-model --session " + session.string() + " --spacing -nan",
+      "plan --session " + session.string() + " --seed -1",
+      "plan --session " + session.string() + " --seed 18446744073709551616",
+      "eval trajectories --session " + session.string() + " --seed 1.5",
       "sweep --tables 9.9",
       "sweep --spacing 0",
       "sweep --seeds 0"};
@@ -191,6 +196,38 @@ TEST(EvalCli, BadArgumentsGiveExitCodeTwoAndOneLine) {
     EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << arguments << ": " << result.err;
     EXPECT_TRUE(result.out.empty()) << arguments;
   }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(EvalCli, RefusesASessionWhosePosturesLieOutsideTheJointLimits) {
+  const auto dir = scratchDir();
+  const auto good = tinySession("empty", "limits-good.json");
+  std::ifstream in(good);
+  const nlohmann::json session = nlohmann::json::parse(in);
+  // A hand-edited q_fixed, a damaged training sample, an ITM node posture out of range.
+  nlohmann::json q_fixed = session;
+  q_fixed["areas"][1]["q_fixed"][0] = 10.0;
+  nlohmann::json sample = session;
+  sample["areas"][0]["q"][5][3] = 1e308;
+  nlohmann::json node = session;
+  node["itm"]["nodes"][2]["q"][6] = -3.5;
+  const std::vector<std::pair<nlohmann::json, std::string>> broken = {
+      {q_fixed, "q_fixed of area 2: joint 1 (A1) at 10 lies outside its limits"},
+      {sample, "training sample 6: joint 4"},
+      {node, "ITM node 2: joint 7"}};
+  for (const auto& [json, expected] : broken) {
+    const auto file = dir / "limits-broken.json";
+    writeText(file, json.dump());
+    for (const std::string command : {"eval reachable --spacing 0.3", "plan --goals 2"}) {
+      const auto result = runCliBinary(command + " --session " + file.string());
+      EXPECT_EQ(result.exit_code, 2) << command << ": " << result.err;
+      EXPECT_NE(result.err.find(expected), std::string::npos) << result.err;
+      EXPECT_NE(result.err.find("outside its limits"), std::string::npos) << result.err;
+      EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    }
+  }
+  // The untouched session is accepted.
+  EXPECT_EQ(runCliBinary("plan --goals 2 --session " + good.string()).exit_code, 0);
   std::filesystem::remove_all(dir);
 }
 

@@ -115,6 +115,48 @@ TEST(RobotModel, CombinesInertiaOfFoldedLinksWithTheParallelAxisTheorem) {
   EXPECT_TRUE(std::isinf(model.joints()[0].limits.upper)) << "continuous joints are unbounded";
 }
 
+// A kinematics-only arm: no link says what it weighs.
+std::string masslessArm() {
+  return R"(<robot name="bare">
+    <link name="base"/>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/>
+      <axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l1"/>
+    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/>
+      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l2"/>
+    <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.04"/>
+      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l3"/>
+    <joint name="tip" type="fixed"><parent link="l3"/><child link="tool"/><origin xyz="0.3 0 0"/></joint>
+    <link name="tool"/>
+  </robot>)";
+}
+
+TEST(RobotModel, AMovingLinkWithoutMassWeighsTheAssumedMassAtTheMiddleOfItsLink) {
+  TempDir dir;
+  const auto model = RobotModel::fromUrdfString(masslessArm(), dir.path());
+  ASSERT_EQ(model.bodies().size(), 4U);
+  EXPECT_FALSE(model.bodies()[0].inertia_assumed) << "the base does not move";
+  for (std::size_t b = 1; b < 4; ++b) {
+    EXPECT_TRUE(model.bodies()[b].inertia_assumed) << b;
+    EXPECT_DOUBLE_EQ(model.bodies()[b].mass, kAssumedMass) << b;
+  }
+  // l1 spans 0.4 m to the next joint: centre at 0.2 m, a sphere of radius 0.2 m.
+  EXPECT_TRUE(model.bodies()[1].p_BCom.isApprox(Eigen::Vector3d(0.0, 0.0, 0.2)));
+  EXPECT_TRUE(model.bodies()[1].I_BCom.isApprox(0.4 * kAssumedMass * 0.04 * Eigen::Matrix3d::Identity()));
+  // l2 is 4 cm short: the sphere keeps its least radius.
+  EXPECT_TRUE(model.bodies()[2].p_BCom.isApprox(Eigen::Vector3d(0.0, 0.0, 0.02)));
+  EXPECT_TRUE(model.bodies()[2].I_BCom.isApprox(
+      0.4 * kAssumedMass * kAssumedMinRadius * kAssumedMinRadius * Eigen::Matrix3d::Identity()));
+  // The last link ends at the tip.
+  EXPECT_TRUE(model.bodies()[3].p_BCom.isApprox(Eigen::Vector3d(0.15, 0.0, 0.0)));
+  // A body that weighs something keeps its own inertia.
+  const auto two = RobotModel::fromUrdfFile(dir.write("two.urdf", twoJointArm()));
+  EXPECT_FALSE(two.bodies()[1].inertia_assumed);
+  EXPECT_DOUBLE_EQ(two.bodies()[1].mass, 2.0);
+}
+
 TEST(RobotModel, GivesAnUnboundedJointOneTurnToDrawPosturesFrom) {
   TempDir dir;
   const auto model = RobotModel::fromUrdfFile(dir.write("c.urdf", twoJointArm("", "continuous")));
@@ -237,6 +279,11 @@ INSTANTIATE_TEST_SUITE_P(
                    "<robot name='x'><link name='a'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/>"
                    "<origin xyz='nan 0 0'/><axis xyz='0 0 1'/></joint><link name='b'/></robot>",
                    "", "invalid URDF"},
+        BrokenUrdf{"negative mass",
+                   "<robot name='x'><link name='a'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/>"
+                   "<axis xyz='0 0 1'/></joint><link name='b'><inertial><mass value='-2'/>"
+                   "<inertia ixx='1' ixy='0' ixz='0' iyy='1' iyz='0' izz='1'/></inertial></link></robot>",
+                   "", "mass must be"},
         BrokenUrdf{"zero axis",
                    "<robot name='x'><link name='a'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/>"
                    "<axis xyz='0 0 0'/></joint><link name='b'/></robot>",

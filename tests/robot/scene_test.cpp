@@ -713,7 +713,9 @@ TEST(BuiltinScenes, SetupIIPosturesKeepToOneRedundancyFamily) {
     const Eigen::Vector3d& c = area.p_WA;
     if (c.x() < -0.3) {
       EXPECT_LT(std::abs(q[0]), 0.1);
-      if (std::abs(c.y()) > 0.05) EXPECT_LT(q[2] * c.y(), 0.0);
+      if (std::abs(c.y()) > 0.05) {
+        EXPECT_LT(q[2] * c.y(), 0.0);
+      }
     }
     if (c.y() < -0.05) {
       const auto twin = std::find_if(scene.training_areas.begin(), scene.training_areas.end(), [&](const Area& other) {

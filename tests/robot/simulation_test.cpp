@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "robot/controllers.hpp"
 #include "robot/errors.hpp"
@@ -89,6 +90,39 @@ TEST(Simulation, TracksACommandedPostureAndMatchesTheKinematics) {
   sim.readState(state);
   EXPECT_LT((state.q - target).cwiseAbs().maxCoeff(), 1e-4);
   EXPECT_LT((state.p_WT() - tipPose(lwr4(), state.q).translation()).norm(), 1e-12);
+}
+
+TEST(Simulation, AKinematicsOnlyArmHoldsItsPostureWithinItsLimits) {
+  // No link of this arm has <inertial>: with a token gram per link the joint impedance made the
+  // integration blow up and a joint ran to hundreds of radians.
+  const RobotModel bare = RobotModel::fromUrdfString(R"(<robot name="bare">
+    <link name="base"/>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/>
+      <axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l1"/>
+    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/>
+      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l2"/>
+    <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.4"/>
+      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l3"/>
+  </robot>)",
+                                                     std::filesystem::temp_directory_path());
+  Simulation sim(bare, nullptr, simParameters());
+  Eigen::VectorXd start(3);
+  start << 0.0, 0.3, 0.5;
+  Eigen::VectorXd target(3);
+  target << 0.5, 0.8, -0.4;
+  sim.reset(start);
+  ASSERT_EQ(sim.writeCommand(holdCommand(target, 300.0, 0.95)), CommandStatus::kAccepted);
+  RobotState state;
+  for (int k = 0; k < 3000; ++k) {
+    sim.step();
+    sim.readState(state);
+    ASSERT_TRUE(state.q.allFinite()) << k;
+    ASSERT_LT(state.q.cwiseAbs().maxCoeff(), 2.0 + 1e-2) << "step " << k;
+  }
+  EXPECT_LT((state.q - target).cwiseAbs().maxCoeff(), 1e-3);
 }
 
 TEST(Simulation, RejectsCommandsItCannotExecute) {
