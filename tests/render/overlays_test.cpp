@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <utility>
+#include <vector>
 
 #include "render/camera.hpp"
 #include "render/offscreen.hpp"
@@ -67,10 +69,21 @@ const CameraPose& testCamera() {
   return camera;
 }
 
-TEST(OverlayPalette, AreaColoursDifferAndRepeatAfterEight) {
+TEST(OverlayPalette, AreaColoursDifferFromEachOtherAndFromTheOtherOverlaysAndRepeatAfterEight) {
   for (int a = 0; a < 8; ++a) {
     for (int b = a + 1; b < 8; ++b) {
       EXPECT_GT((OverlayPalette::area(a) - OverlayPalette::area(b)).head<3>().norm(), 0.2) << a << " vs " << b;
+    }
+  }
+  // Samples are drawn together with targets, the ITM graph, paths and the scene model: no area
+  // may look like one of them.
+  const std::vector<std::pair<const char*, Eigen::Vector4f>> others = {
+      {"reachable", OverlayPalette::reachable()}, {"unreachable", OverlayPalette::unreachable()},
+      {"ITM node", OverlayPalette::itmNode()},     {"ITM edge", OverlayPalette::itmEdge()},
+      {"planned path", OverlayPalette::plannedPath()}, {"scene model", OverlayPalette::sceneModel()}};
+  for (int a = 0; a < 8; ++a) {
+    for (const auto& [name, colour] : others) {
+      EXPECT_GT((OverlayPalette::area(a) - colour).head<3>().norm(), 0.25) << "area " << a << " vs " << name;
     }
   }
   EXPECT_EQ(OverlayPalette::area(9), OverlayPalette::area(1));
