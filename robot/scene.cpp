@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <iomanip>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -16,6 +17,7 @@
 
 #include "robot/errors.hpp"
 #include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
 
 namespace flexirob::robot {
 namespace fs = std::filesystem;
@@ -575,8 +577,9 @@ class SceneReader {
     if ((grid.upper.array() < grid.lower.array()).any()) fail(node, path, "'upper' must not lie below 'lower' on any axis");
     const Eigen::Array3d counts = ((grid.upper - grid.lower) / grid.spacing).array().floor() + 1.0;
     if (counts.prod() > kMaxGridPoints) {
-      fail(node, path, "the grid would have " + std::to_string(static_cast<long long>(counts.prod())) +
-                           " points (at most 5000000); increase 'spacing'");
+      std::ostringstream count;  // may exceed every integer type
+      count << std::setprecision(3) << counts.prod();
+      fail(node, path, "the grid would have " + count.str() + " points (at most 5000000); increase 'spacing'");
     }
     if (const auto n = node["exclude"]) {
       const std::string exclude_path = join(path, "exclude");
@@ -692,6 +695,28 @@ void checkPosturesFit(const Scene& scene, int dof, const std::string& robot_name
       throw InputError("scene '" + printable(scene.name, 200) + "': " + what + " has " + std::to_string(posture->size()) +
                        " joint values, the robot '" + printable(robot_name, 200) + "' has " + std::to_string(dof) +
                        " joints (the scene was made for '" + printable(scene.robot, 200) + "')");
+    }
+  };
+  check(scene.home_posture, "home_posture");
+  for (const Area& area : scene.training_areas) check(area.posture, "training area '" + area.name + "' posture");
+  for (const Area& area : scene.working_areas) check(area.posture, "working area '" + area.name + "' posture");
+}
+
+void checkPosturesFit(const Scene& scene, const RobotModel& model, const std::string& robot_name) {
+  checkPosturesFit(scene, model.dof(), robot_name);
+  const Eigen::VectorXd lower = model.lowerLimits();
+  const Eigen::VectorXd upper = model.upperLimits();
+  const auto check = [&](const std::optional<Eigen::VectorXd>& posture, const std::string& what) {
+    if (!posture) return;
+    for (Eigen::Index j = 0; j < posture->size(); ++j) {
+      const double value = (*posture)[j];
+      if (value >= lower[j] && value <= upper[j]) continue;
+      std::ostringstream message;
+      message << std::setprecision(4) << "scene '" << printable(scene.name, 200) << "': " << what << ": joint " << j + 1
+              << " (" << model.joints()[static_cast<std::size_t>(j)].name << ") at " << value
+              << " lies outside its limits [" << lower[j] << ", " << upper[j] << "] of the robot '"
+              << printable(robot_name, 200) << "'";
+      throw InputError(message.str());
     }
   };
   check(scene.home_posture, "home_posture");

@@ -15,6 +15,8 @@
 
 namespace flexirob::robot {
 
+class RobotModel;
+
 struct Obstacle {
   enum class Shape { kBox, kCylinder, kSphere, kMesh };
   std::string name;
@@ -99,6 +101,9 @@ std::string robotFor(const std::string& robot_option, const Scene& scene);
 /// (home, training or working area) does not have `dof` values: postures are joint vectors of
 /// the robot the scene was made for, and one of another robot is a mistake, not a suggestion.
 void checkPosturesFit(const Scene& scene, int dof, const std::string& robot_name);
+/// As above, and every such posture must lie within the robot's hardware joint limits (the
+/// simulation cannot start from one outside them, and the tutor would teach it as given).
+void checkPosturesFit(const Scene& scene, const RobotModel& model, const std::string& robot_name);
 
 /// Built-in scene names: empty, setup_A .. setup_D, setup_I, setup_II, harting, arm9_areas.
 const std::vector<std::string>& builtinSceneNames();

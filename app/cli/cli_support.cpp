@@ -1,6 +1,9 @@
 #include "app/cli/cli_support.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <limits>
 
 #include <unistd.h>
 
@@ -24,6 +27,28 @@ CLI::Validator seedValidator() {
         return "a seed is a whole number from 0 to 18446744073709551615, got " + input.substr(0, 64);
       },
       "");
+}
+
+int jsonInteger(const Json& value, const std::string& what) {
+  if (value.is_number_unsigned() && value.get<std::uint64_t>() <= static_cast<std::uint64_t>(std::numeric_limits<int>::max())) {
+    return value.get<int>();
+  }
+  if (value.is_number_integer() && !value.is_number_unsigned()) {
+    const auto number = value.get<std::int64_t>();
+    if (number >= std::numeric_limits<int>::min() && number <= std::numeric_limits<int>::max()) return static_cast<int>(number);
+  }
+  throw InputError(what + ": expected a whole number, got " + value.dump().substr(0, 64));
+}
+
+bool startsAsJson(std::istream& in) {
+  const std::streampos start = in.tellg();
+  char c = 0;
+  while (in.get(c) && std::isspace(static_cast<unsigned char>(c))) {
+  }
+  const bool json = in && (c == '{' || c == '[');
+  in.clear();
+  in.seekg(start);
+  return json;
 }
 
 Json toJson(const Eigen::VectorXd& v) {

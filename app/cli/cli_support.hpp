@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <functional>
+#include <istream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -74,6 +75,13 @@ CLI::Validator finiteRange(T min, T max) {
 /// Seeds are unsigned 64-bit integers written in decimal; "-1" or a number beyond 2^64 - 1 is
 /// refused (the C library would wrap or saturate it to a seed the user never gave).
 CLI::Validator seedValidator();
+
+/// A whole number from JSON, e.g. a node index: 0.7 or "1" is an error, not 0 or 1.
+int jsonInteger(const Json& value, const std::string& what);
+
+/// Whether a file is JSON text (its first non-blank character opens an object or an array),
+/// as opposed to a recording in SQLite; leaves the stream where it was.
+bool startsAsJson(std::istream& in);
 
 /// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.
 /// Returns the process exit code (0 success, 1 the command ran but failed, 2 bad input).

@@ -84,7 +84,7 @@ Session loadRecordedSession(const std::string& file) {
   session.model = std::make_unique<robot::RobotModel>(
       robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
   session.scene_data = robot::loadScene(session.scene);
-  robot::checkPosturesFit(session.scene_data, session.model->dof(), session.robot);
+  robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
   const int n = session.model->dof();
   // The complete areas with samples, labelled by their position here: q_fixed[k] is area k's.
   std::vector<const app::RecordedArea*> taught;
@@ -118,7 +118,7 @@ Session loadRecordedSession(const std::string& file) {
 Session loadSession(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError("--session: cannot read '" + file + "'");
-  if (in.peek() != '{') return loadRecordedSession(file);
+  if (!startsAsJson(in)) return loadRecordedSession(file);
   Json json;
   try {
     json = Json::parse(in);
@@ -136,7 +136,7 @@ Session loadSession(const std::string& file) {
     session.model = std::make_unique<robot::RobotModel>(
         robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
     session.scene_data = robot::loadScene(session.scene);
-    robot::checkPosturesFit(session.scene_data, session.model->dof(), session.robot);
+    robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
     const int n = session.model->dof();
     std::vector<Eigen::VectorXd> xs, qs;
     int k = 0;
@@ -163,8 +163,8 @@ Session loadSession(const std::string& file) {
     const Json& nodes = json.at("itm").at("nodes");
     for (const Json& node : nodes) session.itm->addNode(vectorOf(node.at("x"), 3, "itm x"), vectorOf(node.at("q"), n, "itm q"));
     for (const Json& edge : json.at("itm").at("edges")) {
-      const int a = edge.at(0).get<int>();
-      const int b = edge.at(1).get<int>();
+      const int a = jsonInteger(edge.at(0), "session: ITM edge");
+      const int b = jsonInteger(edge.at(1), "session: ITM edge");
       if (a < 0 || b < 0 || a >= static_cast<int>(nodes.size()) || b >= static_cast<int>(nodes.size()) || a == b) {
         throw InputError("session: ITM edge with a bad node index");
       }

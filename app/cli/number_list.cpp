@@ -49,7 +49,9 @@ Eigen::VectorXd parseNumberList(const std::string& text, const std::string& what
 }
 
 Eigen::VectorXd parseNumberList(const std::string& text, const std::string& what, int count) {
-  Eigen::VectorXd values = parseNumberList(text, what, static_cast<std::size_t>(count) + 1);
+  // Every entry is read, so that the error says how many were given, also when too many were.
+  const auto given = static_cast<std::size_t>(std::count(text.begin(), text.end(), ',')) + 1;
+  Eigen::VectorXd values = parseNumberList(text, what, given);
   if (values.size() != count) {
     throw InputError(what + ": expected " + std::to_string(count) + " values, got " + std::to_string(values.size()));
   }

@@ -31,7 +31,7 @@ Json runReach(const ReachOptions& options) {
   if (!options.scene.empty()) scene = robot::loadScene(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene ? *scene : robot::Scene{});
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
-  if (scene) robot::checkPosturesFit(*scene, model.dof(), robot_name);
+  if (scene) robot::checkPosturesFit(*scene, model, robot_name);
   const Eigen::Vector3d target = parseNumberList(options.target, "--target", 3);
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);

@@ -136,8 +136,8 @@ SessionOverlay sessionFromJson(const Json& json, const std::string& file) {
     int id = 0;
     for (const Json& node : nodes) session.nodes.emplace_back(id++, point3(node.at("x"), "--session: itm x"));
     for (const Json& edge : json.at("itm").at("edges")) {
-      const int a = edge.at(0).get<int>();
-      const int b = edge.at(1).get<int>();
+      const int a = jsonInteger(edge.at(0), "--session: ITM edge");
+      const int b = jsonInteger(edge.at(1), "--session: ITM edge");
       if (a < 0 || b < 0 || a >= id || b >= id || a == b) throw InputError("--session: ITM edge with a bad node index");
       session.edges.emplace_back(a, b);
     }
@@ -178,7 +178,7 @@ SessionOverlay sessionFromRecording(const std::string& file) {
 SessionOverlay loadSessionOverlay(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError("--session: cannot read '" + file + "'");
-  if (in.peek() != '{') return sessionFromRecording(file);
+  if (!startsAsJson(in)) return sessionFromRecording(file);
   in.close();
   return sessionFromJson(readJsonFile(file, "--session"), file);
 }
@@ -203,7 +203,7 @@ Json renderPicture(const RenderOptions& options) {
   const std::string robot_name = !options.robot.empty() ? options.robot : session ? session->robot : robot::robotFor("", scene);
   const std::string tip = !options.tip.empty() ? options.tip : session && options.robot.empty() ? session->tip : "";
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), tip);
-  robot::checkPosturesFit(scene, model.dof(), robot_name);
+  robot::checkPosturesFit(scene, model, robot_name);
 
   // Posture: --q, else the scene's home posture, else the middle of the software limits.
   Eigen::VectorXd q = model.midPosture();

@@ -55,7 +55,7 @@ Loaded load(const std::string& scene_name) {
   robot::Scene scene = robot::loadScene(scene_name);
   const std::string robot_name = robot::robotFor("", scene);
   robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), "");
-  robot::checkPosturesFit(scene, model.dof(), robot_name);
+  robot::checkPosturesFit(scene, model, robot_name);
   return {std::move(model), std::move(scene)};
 }
 

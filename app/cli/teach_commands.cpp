@@ -62,7 +62,7 @@ Json runTeach(const TeachOptions& options) {
   const robot::Scene scene = robot::loadScene(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene);
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
-  robot::checkPosturesFit(scene, model.dof(), robot_name);
+  robot::checkPosturesFit(scene, model, robot_name);
   // The session names robot and scene so that they resolve from any working directory.
   const std::string robot_reference = portableReference(robot_name, builtinRobotNames());
   const std::string scene_reference = portableReference(options.scene, robot::builtinSceneNames());

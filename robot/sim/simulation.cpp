@@ -9,6 +9,8 @@
 #include <Eigen/Eigenvalues>
 #include <array>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 #include "robot/errors.hpp"
 
@@ -150,9 +152,10 @@ void Simulation::reset(const Eigen::VectorXd& q) {
   const Eigen::VectorXd upper = model_->upperLimits();
   for (int j = 0; j < model_->dof(); ++j) {
     if (q[j] < lower[j] - 1e-9 || q[j] > upper[j] + 1e-9) {
-      throw InputError("joint '" + model_->joints()[static_cast<std::size_t>(j)].name + "': start value " +
-                       std::to_string(q[j]) + " is outside the limits [" + std::to_string(lower[j]) + ", " +
-                       std::to_string(upper[j]) + "]");
+      std::ostringstream message;
+      message << std::setprecision(4) << "joint '" << model_->joints()[static_cast<std::size_t>(j)].name
+              << "': start value " << q[j] << " is outside the limits [" << lower[j] << ", " << upper[j] << "]";
+      throw InputError(message.str());
     }
     impl_->body->setJointPos(j, btScalar(q[j]));
     impl_->body->setJointVel(j, 0);

@@ -81,7 +81,7 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(BadInvocation{"fk --robot lwr4 --q 1,2,3", "expected 7 values, got 3"},
                       BadInvocation{"fk --robot lwr4 --q 1,2,3,4,5,6,nan", "not a finite number"},
                       BadInvocation{"fk --robot lwr4 --q 1,,3,4,5,6,7", "empty entry"},
-                      BadInvocation{"fk --robot lwr4 --q 1,2,3,4,5,6,7,8", "expected 7 values"},
+                      BadInvocation{"fk --robot lwr4 --q 1,2,3,4,5,6,7,8", "expected 7 values, got 8"},
                       BadInvocation{"fk --robot lwr4 --q 1e999,0,0,0,0,0,0", "not a finite number"},
                       BadInvocation{"fk --robot lwr4 --q abc", "not a finite number"},
                       BadInvocation{"fk --robot /nonexistent.urdf --q 0", "neither a built-in robot"},

@@ -492,6 +492,9 @@ TEST_F(SceneFileTest, RefusesNegativeZeroAndAbsurdSizes) {
     SCOPED_TRACE(text);
     expectOneLineNamingFile(refusal(text), "broken.yaml");
   }
+  // A grid too large for any integer says how large it is, not an overflowed count.
+  const std::string huge = refusal("grid: {lower: [-1000, -1000, -1000], upper: [1000, 1000, 1000], spacing: 0.0001}\n");
+  EXPECT_NE(huge.find("would have 8e+21 points"), std::string::npos) << huge;
 }
 
 TEST_F(SceneFileTest, RefusesMissingMeshFiles) {
@@ -873,6 +876,38 @@ TEST(ScenePostures, ARobotOptionWinsOverTheScenesRobotAndPosturesMustHaveItsJoin
   }
   // A scene without postures fits any robot.
   EXPECT_NO_THROW(checkPosturesFit(Scene{}, 7, "lwr4"));
+}
+
+TEST(ScenePostures, MustLieWithinTheRobotsJointLimits) {
+  const RobotModel lwr4 = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  for (const std::string& name : builtinSceneNames()) {
+    const Scene scene = loadScene(name);
+    if (robotFor("", scene) == "lwr4") {
+      EXPECT_NO_THROW(checkPosturesFit(scene, lwr4, "lwr4")) << name;
+    }
+  }
+  Scene scene;
+  scene.name = "cell";
+  scene.home_posture = lwr4.midPosture();
+  (*scene.home_posture)[6] = 1e300;
+  try {
+    checkPosturesFit(scene, lwr4, "lwr4");
+    ADD_FAILURE() << "accepted a home posture of 1e300 rad";
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("scene 'cell': home_posture: joint 7 (A7) at 1e+300 lies outside its limits [-2.967, 2.967]"),
+              std::string::npos)
+        << message;
+  }
+  scene.home_posture = lwr4.midPosture();
+  Area area;
+  area.name = "shelf";
+  area.posture = lwr4.midPosture();
+  (*area.posture)[1] = -2.2;  // A2 ends at 2.094 rad
+  scene.training_areas.push_back(area);
+  EXPECT_THROW(checkPosturesFit(scene, lwr4, "lwr4"), InputError);
+  scene.training_areas[0].posture = lwr4.midPosture();
+  EXPECT_NO_THROW(checkPosturesFit(scene, lwr4, "lwr4"));
 }
 
 }  // namespace
