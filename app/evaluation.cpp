@@ -325,7 +325,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
   TrajectoryResult result;
   if (!scene.trajectories.empty()) {
     result.from_scene = true;
-    for (const auto& trajectory : scene.trajectories) region(trajectory.group.empty() ? "all" : trajectory.group).push_back(trajectory.waypoints);
+    for (const auto& trajectory : scene.trajectories) region(trajectory.group.empty() ? "ungrouped" : trajectory.group).push_back(trajectory.waypoints);
   } else {
     if (areas.size() < 2) throw InputError("trajectories: the scene lists none and fewer than two areas were taught");
     if (per_area < 1) throw InputError("trajectories: expected at least one trajectory per area");

@@ -675,6 +675,7 @@ TutorReport SimulatedTutor::configure(int area_count) {
       tried.push_back(area.target);
     }
     const std::size_t areas_before = workflow_->areas().size();
+    workflow_->nameNextArea(area.name);
     teachArea(area, suggested);
     // A recording that has not come to rest holds the arm under π_rec, against which the next
     // approach cannot lead it: hands off until it ends.

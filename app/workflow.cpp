@@ -533,9 +533,10 @@ void Workflow::finishArea() {
     checks_.clear();
     if (options_.learner == LearnerKind::kOsElm) startLearning();  // refit what the online learner cannot forget
   } else {
-    area.name = "area_" + std::to_string(index + 1);
+    area.name = next_area_name_.empty() ? "area_" + std::to_string(index + 1) : next_area_name_;
     areas_.push_back(std::move(area));
   }
+  next_area_name_.clear();
   recording_samples_ = 0;
   rebuildConfidence();
   ++areas_version_;

@@ -163,6 +163,10 @@ class Workflow {
   RequestResult removeArea(int k);
   /// The next RECORDING replaces area k instead of adding one (CONFIGURATION, not recording).
   RequestResult reteachArea(int k);
+  /// The name the area of the next RECORDING gets (e.g. the scene's name of the place taught),
+  /// in its events, the transition checks and the session; without one it is area_<k>. A
+  /// re-taught area keeps its name.
+  void nameNextArea(std::string name) { next_area_name_ = std::move(name); }
   /// EXECUTION: follow these waypoints [m, W] with the hierarchical controller and q_c.
   RequestResult execute(const std::vector<Eigen::Vector3d>& waypoints);
   /// EXECUTION: replay teach-in k (straight to its first point, then along it).
@@ -302,6 +306,7 @@ class Workflow {
   std::uint64_t recording_serial_ = 0;
   bool recording_full_ = false;
   int reteach_index_ = -1;
+  std::string next_area_name_;
   std::vector<Eigen::MatrixXd> teach_ins_;
 
   std::shared_ptr<learning::Learner> model_;  // used by the control side only

@@ -250,6 +250,32 @@ TEST(Workflow, RemovingAnAreaRelearnsFromTheRest) {
   EXPECT_TRUE(workflow.transitionChecks().empty());  // one area: nothing to check
 }
 
+TEST(Workflow, AnAreaTakesTheNameGivenBeforeItsRecordingAndKeepsItWhenRetaught) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  workflow.nameNextArea("under_the_board");
+  teachArea(workflow, f.backend, posture(-0.5));
+  teachArea(workflow, f.backend, posture(0.5));
+  ASSERT_EQ(workflow.areas().size(), 2U);
+  EXPECT_EQ(workflow.areas()[0].name, "under_the_board");
+  EXPECT_EQ(workflow.areas()[1].name, "area_2") << "a name is for one area only";
+  ASSERT_TRUE(workflow.reteachArea(0));
+  workflow.nameNextArea("ignored");
+  teachArea(workflow, f.backend, posture(-0.8));
+  EXPECT_EQ(workflow.areas()[0].name, "under_the_board");
+  // The transition checks after learning speak of the areas by name.
+  ASSERT_TRUE(workflow.press(Button::kFinishedConfiguration));
+  int checks = 0;
+  for (const auto& event : workflow.events()) {
+    if (event.name.rfind("transition", 0) == 0) {
+      ++checks;
+      EXPECT_NE(event.detail.find("under_the_board -> area_2"), std::string::npos) << event.detail;
+    }
+  }
+  EXPECT_EQ(checks, 1);
+}
+
 TEST(Workflow, ReteachingReplacesTheArea) {
   Fixture f;
   Workflow workflow(f.backend, f.parameters, syncOptions());

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cli_test_support.hpp"
+#include "robot/scene.hpp"
 
 namespace flexirob {
 namespace {
@@ -62,6 +63,9 @@ TEST(TeachCli, TheSameSeedTeachesTheSameAreaOnBothBackends) {
   const auto fri_session = read(fri_out);
   ASSERT_EQ(sim_session.at("areas").size(), 1U);
   ASSERT_EQ(fri_session.at("areas").size(), 1U);
+  // The session names the area as the scene and the tutor's report do.
+  EXPECT_EQ(sim_session.at("areas")[0].at("name"), sim.json().at("tutor").at(0).at("name"));
+  EXPECT_EQ(sim_session.at("areas")[0].at("name"), robot::loadScene("setup_A").training_areas.at(0).name);
   const auto q_sim = sim_session.at("areas")[0].at("q_fixed").get<std::vector<double>>();
   const auto q_fri = fri_session.at("areas")[0].at("q_fixed").get<std::vector<double>>();
   ASSERT_EQ(q_sim.size(), 7U);
