@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "planning/path_planner.hpp"
+#include "planning/path_postures.hpp"
 #include "robot/controllers.hpp"
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
@@ -17,6 +18,15 @@ namespace flexirob::app {
 
 MotionOutcome executeMotion(const robot::RobotModel& model, const robot::ParameterSet& parameters,
                             const learning::Learner& map, const Eigen::VectorXd& q_start,
+                            const std::function<Eigen::Vector3d(double)>& p_des, double duration, double settle,
+                            robot::CollisionWorld* world, AtContact at_contact) {
+  return executeMotion(
+      model, parameters, [&map](const Eigen::Vector3d& p_W, Eigen::VectorXd& q) { map.predict(p_W, q); }, q_start,
+      p_des, duration, settle, world, at_contact);
+}
+
+MotionOutcome executeMotion(const robot::RobotModel& model, const robot::ParameterSet& parameters,
+                            const PostureAt& posture_at, const Eigen::VectorXd& q_start,
                             const std::function<Eigen::Vector3d(double)>& p_des, double duration, double settle,
                             robot::CollisionWorld* world, AtContact at_contact) {
   constexpr double kDt = 1e-3;
@@ -35,7 +45,7 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
     target = p_des(std::min(duration, k * kDt));
     // The path's velocity over this cycle, fed forward (zero once the path has ended).
     const Eigen::Vector3d target_velocity = (target - previous_target) / kDt;
-    map.predict(target, q_c);
+    posture_at(target, q_c);
     controller.velocity(limiter.command(), target, target_velocity, q_c, qd, &limiter);
     limiter.updateVelocity(qd);
     if (k % 10 == 0) {
@@ -430,7 +440,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
 PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Scene& scene,
                                 const robot::ParameterSet& parameters, const learning::Learner& map,
                                 const planning::Itm& graph, const Eigen::VectorXd& q_start, int goals,
-                                std::uint64_t seed, const ProgressCallback& progress) {
+                                std::uint64_t seed, const ProgressCallback& progress, planning::PlanPostures postures) {
   if (goals < 1) throw InputError("goals: expected at least 1");
   const std::vector<int> nodes = graph.nodeIds();
   if (nodes.size() < 2) throw InputError("plan: the session's ITM has fewer than two nodes");
@@ -463,9 +473,16 @@ PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Sce
     motion.planned_W.emplace_back(spline.position(spline.duration()).head<3>());
     // The collision world only counts contacts (Sect. A.4): a motion runs to its end through a
     // contact, so that each path is judged on its own and the next starts at this one's goal.
-    const MotionOutcome outcome = executeMotion(
-        model, parameters, map, q, [&](double t) { return Eigen::Vector3d(spline.position(t).head<3>()); },
-        spline.duration(), 2.0, &world, AtContact::kContinue);
+    const auto along = [&](double t) { return Eigen::Vector3d(spline.position(t).head<3>()); };
+    const MotionOutcome outcome = [&] {
+      if (postures == planning::PlanPostures::kLearned) {
+        return executeMotion(model, parameters, map, q, along, spline.duration(), 2.0, &world, AtContact::kContinue);
+      }
+      const planning::PathPostures shown(graph, path, p_start, q);
+      return executeMotion(
+          model, parameters, [&shown](const Eigen::Vector3d& p_W, Eigen::VectorXd& q_c) { shown.at(p_W, q_c); }, q, along,
+          spline.duration(), 2.0, &world, AtContact::kContinue);
+    }();
     if (!outcome.collided) ++result.collision_free;
     if (!outcome.collided && (robot::tipPose(model, outcome.q).translation() - p_goal).norm() <= 0.01) ++result.reached_1cm;
     motion.final_W = robot::tipPose(model, outcome.q).translation();

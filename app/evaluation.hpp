@@ -13,6 +13,7 @@
 
 #include "learning/learner.hpp"
 #include "planning/itm.hpp"
+#include "planning/path_postures.hpp"
 #include "robot/collision.hpp"
 #include "robot/parameters.hpp"
 #include "robot/robot_model.hpp"
@@ -63,6 +64,13 @@ std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& mod
 /// once settled on target. Checks contacts every 10 ms; `world` may be null.
 MotionOutcome executeMotion(const robot::RobotModel& model, const robot::ParameterSet& parameters,
                             const learning::Learner& map, const Eigen::VectorXd& q_start,
+                            const std::function<Eigen::Vector3d(double)>& p_des, double duration, double settle,
+                            robot::CollisionWorld* world, AtContact at_contact = AtContact::kStop);
+/// The null-space posture for a desired tip position [m, W] -> q [rad].
+using PostureAt = std::function<void(const Eigen::Vector3d& p_W, Eigen::VectorXd& q)>;
+/// As above, with the null-space posture from `posture_at` instead of the learned map.
+MotionOutcome executeMotion(const robot::RobotModel& model, const robot::ParameterSet& parameters,
+                            const PostureAt& posture_at, const Eigen::VectorXd& q_start,
                             const std::function<Eigen::Vector3d(double)>& p_des, double duration, double settle,
                             robot::CollisionWorld* world, AtContact at_contact = AtContact::kStop);
 
@@ -188,10 +196,13 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
 /// Sect. 8.3: `goals` random graph nodes (seeded) visited one after another from q_start; each
 /// planned with A* + spline and executed with the hierarchical controller, through contacts
 /// (counted, the motion goes on to its goal). The next motion starts where this one ended, or
-/// where the last one ended free of contact if this one ended in contact.
+/// where the last one ended free of contact if this one ended in contact. The null-space
+/// posture along each path: the postures shown along it (planning::PathPostures), or with
+/// kLearned the learned map as in the thesis.
 PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Scene& scene,
                                 const robot::ParameterSet& parameters, const learning::Learner& map,
                                 const planning::Itm& graph, const Eigen::VectorXd& q_start, int goals,
-                                std::uint64_t seed, const ProgressCallback& progress = {});
+                                std::uint64_t seed, const ProgressCallback& progress = {},
+                                planning::PlanPostures postures = planning::PlanPostures::kDemonstrated);
 
 }  // namespace flexirob::app

@@ -132,6 +132,10 @@ robot::ParameterSet workflowParameters(const robot::ParameterSet& given, const W
 int Workflow::PostureMap::dof() const { return workflow_->model_robot_->dof(); }
 
 void Workflow::PostureMap::predict(const Eigen::Vector3d& p_W, Eigen::VectorXd& q_c) const {
+  if (workflow_->stage_ == Stage::kExecution && workflow_->path_postures_) {
+    workflow_->path_postures_->at(p_W, q_c);
+    return;
+  }
   const learning::Learner* learner = workflow_->online_ ? workflow_->online_.get() : workflow_->model_.get();
   if (learner != nullptr && learner->trained()) {
     learner->predict(p_W, q_c);
@@ -284,6 +288,7 @@ RequestResult Workflow::press(Button button) {
       emit(WorkflowEvent::Kind::kButton, name, "");
       setState(Stage::kExecution, SubStage::kNone);
       execution_target_ = interaction_.taskTarget();
+      path_postures_.reset();
       return {true, ""};
   }
   return refuse(name, "unknown button");
@@ -354,6 +359,7 @@ RequestResult Workflow::execute(const std::vector<Eigen::Vector3d>& waypoints) {
   execution_waypoints_ = waypoints;
   std::reverse(execution_waypoints_.begin(), execution_waypoints_.end());  // back() = next
   execution_target_ = interaction_.taskTarget();
+  path_postures_.reset();  // a motion that is not a planned path follows q_c
   return {true, ""};
 }
 
@@ -391,6 +397,9 @@ RequestResult Workflow::planTo(const Eigen::Vector3d& goal) {
   if (waypoints.empty()) waypoints.push_back(goal);
   const RequestResult result = execute(waypoints);
   if (!result) return result;
+  if (options_.plan_postures == planning::PlanPostures::kDemonstrated) {
+    path_postures_ = std::make_unique<const planning::PathPostures>(itm_, *path, start, state_.q);
+  }
   std::ostringstream detail;
   detail << "to (" << goal.transpose() << ") m through " << path->nodes.size() << " nodes, " << path->length << " m";
   planned_path_ = std::move(path);

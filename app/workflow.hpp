@@ -38,6 +38,7 @@
 #include "learning/llm.hpp"
 #include "planning/itm.hpp"
 #include "planning/path_planner.hpp"
+#include "planning/path_postures.hpp"
 #include "robot/backend.hpp"
 #include "robot/collision.hpp"
 #include "robot/controllers.hpp"
@@ -135,6 +136,9 @@ struct WorkflowOptions {
   double check_speed = 0.1;        ///< [m/s] along the straight transition
   double check_tolerance = 0.01;   ///< [m] error that still counts as accurate
   double execution_speed = 0.1;    ///< [m/s] in EXECUTION
+  /// Null-space posture along a planned path: the postures the configuration stage showed along
+  /// it (planning::PathPostures), or the learned map alone as in the thesis.
+  planning::PlanPostures plan_postures = planning::PlanPostures::kDemonstrated;
   /// [m] planTo() refuses goals farther than this from every ITM node: unexplored space. The
   /// ITM's quantization error e_max (0.1 m) is the distance within which a node stands for
   /// the explored positions around it.
@@ -205,6 +209,9 @@ class Workflow {
   std::shared_ptr<const planning::PlannedPath> plannedPath() const { return planned_path_; }
   /// The interaction controller's task target x_des [m, W] and α of assistance blending.
   const Eigen::Vector3d& taskTarget() const { return interaction_.taskTarget(); }
+  /// The null-space posture the map gave in the last cycle of hierarchical control: q_c(x_des),
+  /// or along a planned path the postures shown along it [rad].
+  const Eigen::VectorXd& mapPosture() const { return interaction_.mapPosture(); }
   double alpha() const { return interaction_.alpha(); }
   /// The command written in the last cycle.
   const robot::JointImpedanceCommand& lastCommand() const { return command_; }
@@ -327,6 +334,9 @@ class Workflow {
   std::vector<Eigen::Vector3d> execution_waypoints_;
   Eigen::Vector3d execution_target_ = Eigen::Vector3d::Zero();
   std::shared_ptr<const planning::PlannedPath> planned_path_;
+  /// The postures along the path being executed (plan_postures kDemonstrated); held at its goal
+  /// until the next motion.
+  std::unique_ptr<const planning::PathPostures> path_postures_;
   bool keyboard_ = false;
   std::uint64_t areas_version_ = 0, teach_ins_version_ = 0, model_version_ = 0, itm_version_ = 0, path_version_ = 0;
 

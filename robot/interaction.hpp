@@ -106,6 +106,9 @@ class InteractionController {
 
   const Eigen::Vector3d& taskTarget() const { return p_des_; }
   const Eigen::VectorXd& nullSpaceTarget() const { return q_c_; }
+  /// The redundancy map's posture at x_des in the last cycle that asked it (hierarchical
+  /// control and the assisted modes) [rad].
+  const Eigen::VectorXd& mapPosture() const { return q_map_; }
   /// α of the last assistance-blending cycle.
   double alpha() const { return alpha_; }
   const CommandLimiter& limiter() const { return limiter_; }

@@ -184,6 +184,17 @@ TEST(WorkflowExecution, ReplaysATeachInToItsEnd) {
   EXPECT_LT((rig.backend.tip() - end).norm(), 0.005) << "tip " << rig.backend.tip().transpose();
 }
 
+// Runs EXECUTION as execute() does, calling `check` after every cycle of the motion.
+template <typename Check>
+void backendFollowsEveryCycle(Workflow& workflow, KinematicBackend& backend, Check check) {
+  backend.following = true;
+  for (int i = 0; i < 30000 && !workflow.executionDone(); ++i) {
+    workflow.step();
+    check();
+  }
+  run(workflow, 0.5);
+}
+
 TEST(WorkflowExecution, PlansThroughTheItmAndExecutesThePath) {
   Rig rig;
   Workflow workflow(rig.backend, rig.parameters, syncOptions());
@@ -198,6 +209,44 @@ TEST(WorkflowExecution, PlansThroughTheItmAndExecutesThePath) {
   EXPECT_EQ(workflow.pathVersion(), 1U);
   execute(workflow, rig.backend, 30.0);
   EXPECT_LT((rig.backend.tip() - goal).norm(), 0.005) << "tip " << rig.backend.tip().transpose();
+}
+
+TEST(WorkflowExecution, APlannedMotionFollowsThePosturesShownAlongItsPathUnlessToldToFollowTheMap) {
+  for (const planning::PlanPostures postures : {planning::PlanPostures::kDemonstrated, planning::PlanPostures::kLearned}) {
+    SCOPED_TRACE(planning::toString(postures));
+    Rig rig;
+    WorkflowOptions options = syncOptions();
+    options.plan_postures = postures;
+    Workflow workflow(rig.backend, rig.parameters, options);
+    configureAndProgram(workflow, rig.backend);
+    const Eigen::Vector3d goal = workflow.areas()[1].centre;
+    ASSERT_TRUE(workflow.planTo(goal));
+    const planning::PlannedPath& path = *workflow.plannedPath();
+    // What the arm showed along the path: the start posture and the nodes' q_i.
+    robot::RobotState state;
+    rig.backend.readState(state);
+    Eigen::VectorXd lowest = state.q.cwiseMin(path.node_joints.rowwise().minCoeff());
+    Eigen::VectorXd highest = state.q.cwiseMax(path.node_joints.rowwise().maxCoeff());
+    double largest_departure = 0.0;  // of the null-space posture from the map's [rad]
+    int cycle = 0;
+    backendFollowsEveryCycle(workflow, rig.backend, [&] {
+      const Eigen::VectorXd learned = workflow.model()->predict(workflow.taskTarget());
+      const Eigen::VectorXd& target = workflow.mapPosture();
+      if (++cycle > 2) largest_departure = std::max(largest_departure, (target - learned).norm());
+      if (postures == planning::PlanPostures::kDemonstrated) {
+        EXPECT_TRUE((target.array() >= lowest.array() - 1e-9).all() && (target.array() <= highest.array() + 1e-9).all())
+            << target.transpose();
+      }
+    });
+    EXPECT_LT((rig.backend.tip() - goal).norm(), 0.005);
+    // The shown postures differ from the map's by up to 0.08 rad in A1 here (the ELM averages
+    // the two areas' postures).
+    if (postures == planning::PlanPostures::kLearned) {
+      EXPECT_LT(largest_departure, 1e-9);
+    } else {
+      EXPECT_GT(largest_departure, 0.03);
+    }
+  }
 }
 
 TEST(WorkflowExecution, RefusesAGoalOutsideTheExploredSpaceWithoutMoving) {

@@ -230,8 +230,15 @@ TEST(EvalCli, RefusesAHandEditedSessionWhosePosturesLieOutsideTheJointLimitsOrWh
       EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
     }
   }
-  // The untouched session is accepted.
+  // The untouched session is accepted, and so is a sample 0.1 rad past a limit: the simulated
+  // arm overshoots its limit stops that far where the tutor's hands push it against them.
   EXPECT_EQ(runCliBinary("plan --goals 2 --session " + good.string()).exit_code, 0);
+  nlohmann::json overshoot = session;
+  overshoot["areas"][0]["q"][3][1] = 2.094395 + 0.1;  // A2's hardware limit is 120 deg
+  const auto overshoot_file = dir / "limits-overshoot.json";
+  writeText(overshoot_file, overshoot.dump());
+  const auto accepted = runCliBinary("plan --goals 2 --session " + overshoot_file.string());
+  EXPECT_EQ(accepted.exit_code, 0) << accepted.err;
   std::filesystem::remove_all(dir);
 }
 
