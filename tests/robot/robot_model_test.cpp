@@ -115,27 +115,9 @@ TEST(RobotModel, CombinesInertiaOfFoldedLinksWithTheParallelAxisTheorem) {
   EXPECT_TRUE(std::isinf(model.joints()[0].limits.upper)) << "continuous joints are unbounded";
 }
 
-// A kinematics-only arm: no link says what it weighs.
-std::string masslessArm() {
-  return R"(<robot name="bare">
-    <link name="base"/>
-    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/>
-      <axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
-    <link name="l1"/>
-    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/>
-      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
-    <link name="l2"/>
-    <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.04"/>
-      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
-    <link name="l3"/>
-    <joint name="tip" type="fixed"><parent link="l3"/><child link="tool"/><origin xyz="0.3 0 0"/></joint>
-    <link name="tool"/>
-  </robot>)";
-}
-
 TEST(RobotModel, AMovingLinkWithoutMassWeighsTheAssumedMassAtTheMiddleOfItsLink) {
   TempDir dir;
-  const auto model = RobotModel::fromUrdfString(masslessArm(), dir.path());
+  const auto model = RobotModel::fromUrdfString(flexirob::testing::masslessArm(), dir.path());
   ASSERT_EQ(model.bodies().size(), 4U);
   EXPECT_FALSE(model.bodies()[0].inertia_assumed) << "the base does not move";
   for (std::size_t b = 1; b < 4; ++b) {

@@ -9,6 +9,7 @@
 #include "robot/errors.hpp"
 #include "robot/resources.hpp"
 #include "robot/sim/simulation.hpp"
+#include "test_urdf.hpp"
 
 namespace flexirob::robot {
 namespace {
@@ -95,19 +96,7 @@ TEST(Simulation, TracksACommandedPostureAndMatchesTheKinematics) {
 TEST(Simulation, AKinematicsOnlyArmHoldsItsPostureWithinItsLimits) {
   // No link of this arm has <inertial>: with a token gram per link the joint impedance made the
   // integration blow up and a joint ran to hundreds of radians.
-  const RobotModel bare = RobotModel::fromUrdfString(R"(<robot name="bare">
-    <link name="base"/>
-    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/>
-      <axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
-    <link name="l1"/>
-    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/>
-      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
-    <link name="l2"/>
-    <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.4"/>
-      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
-    <link name="l3"/>
-  </robot>)",
-                                                     std::filesystem::temp_directory_path());
+  const RobotModel bare = RobotModel::fromUrdfString(flexirob::testing::masslessArm(), std::filesystem::temp_directory_path());
   Simulation sim(bare, nullptr, simParameters());
   Eigen::VectorXd start(3);
   start << 0.0, 0.3, 0.5;

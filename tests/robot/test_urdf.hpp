@@ -35,6 +35,25 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+/// A kinematics-only 3-joint arm: no link says what it weighs. Link l1 spans 0.4 m, l2 only
+/// 4 cm, l3 0.3 m to the tool; every joint turns within +-2 rad.
+inline std::string masslessArm() {
+  return R"(<robot name="bare">
+    <link name="base"/>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/>
+      <axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l1"/>
+    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/>
+      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l2"/>
+    <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.04"/>
+      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l3"/>
+    <joint name="tip" type="fixed"><parent link="l3"/><child link="tool"/><origin xyz="0.3 0 0"/></joint>
+    <link name="tool"/>
+  </robot>)";
+}
+
 inline std::string resourcePath(const std::string& relative) {
   return std::string(FLEXIROB_TEST_RESOURCE_DIR) + "/" + relative;
 }
