@@ -251,6 +251,7 @@ RequestResult Workflow::press(Button button) {
       if (learning()) return refuse(name, "start_configuration: learning is still running");
       emit(WorkflowEvent::Kind::kButton, name, "");
       execution_waypoints_.clear();
+      next_area_name_.clear();  // a name given for a place never recorded is not the next area's
       triggers_.reset();
       setState(Stage::kConfiguration, SubStage::kWaiting);
       return {true, ""};
@@ -413,6 +414,7 @@ RequestResult Workflow::nudgeTask(const Eigen::Vector3d& dx) {
   if (!execution_waypoints_.empty()) return refuse("nudge_task", "nudge_task: a motion is being executed");
   interaction_.nudgeTask(dx);
   execution_target_ = interaction_.taskTarget();
+  path_postures_.reset();  // off the path: q_c again
   return {true, ""};
 }
 

@@ -22,14 +22,24 @@ PathPostures::PathPostures(const Itm& graph, const PlannedPath& path, const Eige
   if (q_start.size() != graph.jointCount() || path.node_joints.cols() != static_cast<Eigen::Index>(path.nodes.size())) {
     throw std::invalid_argument("PathPostures: joint counts of the start posture, the graph and the path differ");
   }
-  const auto count = static_cast<Eigen::Index>(path.nodes.size()) + 1;
+  // Leading nodes the start lies beyond: its projection on the segment to the next node falls
+  // inside that segment.
+  std::size_t first = 0;
+  while (first + 1 < path.nodes.size()) {
+    const Eigen::Vector3d a = graph.prototype(path.nodes[first]).head<3>();
+    const Eigen::Vector3d b = graph.prototype(path.nodes[first + 1]).head<3>();
+    if ((p_start - a).dot(b - a) <= 0.0) break;
+    ++first;
+  }
+  const auto count = static_cast<Eigen::Index>(path.nodes.size() - first) + 1;
   points_.resize(3, count);
   postures_.resize(q_start.size(), count);
   points_.col(0) = p_start;
   postures_.col(0) = q_start;
   for (Eigen::Index k = 1; k < count; ++k) {
-    points_.col(k) = graph.prototype(path.nodes[static_cast<std::size_t>(k - 1)]).head<3>();
-    postures_.col(k) = path.node_joints.col(k - 1);
+    const std::size_t node = first + static_cast<std::size_t>(k - 1);
+    points_.col(k) = graph.prototype(path.nodes[node]).head<3>();
+    postures_.col(k) = path.node_joints.col(static_cast<Eigen::Index>(node));
   }
 }
 
@@ -39,9 +49,10 @@ void PathPostures::at(const Eigen::Vector3d& p_W, Eigen::Ref<Eigen::VectorXd> q)
     return;
   }
   double nearest = std::numeric_limits<double>::infinity();
-  Eigen::Index segment_index = 0;
+  Eigen::Index segment_index = segment_;
   double along = 0.0;
-  for (Eigen::Index k = 0; k + 1 < points_.cols(); ++k) {
+  const Eigen::Index last = std::min(points_.cols() - 2, segment_ + kLookAhead);
+  for (Eigen::Index k = segment_; k <= last; ++k) {
     const Eigen::Vector3d a = points_.col(k);
     const Eigen::Vector3d segment = points_.col(k + 1) - a;
     const double length2 = segment.squaredNorm();
@@ -53,6 +64,7 @@ void PathPostures::at(const Eigen::Vector3d& p_W, Eigen::Ref<Eigen::VectorXd> q)
       along = s;
     }
   }
+  segment_ = segment_index;
   q = (1.0 - along) * postures_.col(segment_index) + along * postures_.col(segment_index + 1);
 }
 

@@ -24,19 +24,27 @@ PlanPostures planPosturesFromString(const std::string& name);
 class PathPostures {
  public:
   /// The polyline start -> prototypes of path.nodes carrying q_start, then each node's q_i
-  /// (path.node_joints). Throws std::invalid_argument if the path was not found or q_start
+  /// (path.node_joints). The start node is the node nearest to the start, so the start may lie
+  /// beyond it, on the way to the next: such leading nodes are left out, or the polyline would
+  /// double back over them. Throws std::invalid_argument if the path was not found or q_start
   /// does not have the graph's joint count.
   PathPostures(const Itm& graph, const PlannedPath& path, const Eigen::Vector3d& p_start, const Eigen::VectorXd& q_start);
 
   /// The posture at the point of the polyline nearest to p_W: the joint values of the two
-  /// ends of that segment, linearly interpolated. No allocation (q must have the joint count).
+  /// ends of that segment, linearly interpolated. Calls follow one motion along the path: the
+  /// search starts at the segment the last call found and looks kLookAhead segments ahead,
+  /// never back, so that a path passing near one of its own earlier legs keeps to its order.
+  /// No allocation (q must have the joint count).
   void at(const Eigen::Vector3d& p_W, Eigen::Ref<Eigen::VectorXd> q) const;
 
   Eigen::Index points() const { return points_.cols(); }
 
+  static constexpr Eigen::Index kLookAhead = 3;
+
  private:
   Eigen::Matrix3Xd points_;   ///< 3 x K positions [m, W]
   Eigen::MatrixXd postures_;  ///< N x K joint values [rad or m]
+  mutable Eigen::Index segment_ = 0;  ///< where the last call was
 };
 
 }  // namespace flexirob::planning

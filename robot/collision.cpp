@@ -33,11 +33,12 @@ Eigen::Isometry3d segmentPose(const Eigen::Vector3d& a, const Eigen::Vector3d& b
   return X;
 }
 
-constexpr double kDefaultRadius = 0.05;  // [m] for links without mass
+constexpr double kDefaultRadius = 0.05;  // [m] for links without a mass of their own
 
-// Radius of a solid cylinder with the body's mass and smallest principal inertia.
+// Radius of a solid cylinder with the body's mass and smallest principal inertia. A mass the
+// model assumed (no <inertial>) says nothing of the link's girth.
 double capsuleRadius(const Body& body) {
-  if (!(body.mass > 1e-6)) return kDefaultRadius;
+  if (!(body.mass > 1e-6) || body.inertia_assumed) return kDefaultRadius;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(body.I_BCom, Eigen::EigenvaluesOnly);
   const double i_min = eigen.eigenvalues()[0];
   if (!(i_min > 0.0)) return kDefaultRadius;

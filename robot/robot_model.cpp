@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -521,6 +522,20 @@ Eigen::VectorXd RobotModel::sampleUpperLimits() const {
 }
 
 Eigen::VectorXd RobotModel::midPosture() const { return 0.5 * (sampleLowerLimits() + sampleUpperLimits()); }
+
+void RobotModel::checkWithinLimits(const Eigen::VectorXd& q, const std::string& what, double overshoot_rad,
+                                   double overshoot_m) const {
+  for (std::size_t j = 0; j < joints_.size(); ++j) {
+    const JointLimits& limits = joints_[j].limits;
+    const double overshoot = joints_[j].type == JointType::kPrismatic ? overshoot_m : overshoot_rad;
+    const double value = q[static_cast<Eigen::Index>(j)];
+    if (value >= limits.lower - overshoot && value <= limits.upper + overshoot) continue;
+    std::ostringstream message;
+    message << std::setprecision(4) << what << ": joint " << j + 1 << " (" << joints_[j].name << ") at " << value
+            << " lies outside its limits [" << limits.lower << ", " << limits.upper << "]";
+    throw InputError(message.str());
+  }
+}
 
 void RobotModel::checkPosture(const Eigen::VectorXd& q) const {
   if (q.size() != dof()) {

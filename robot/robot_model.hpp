@@ -101,6 +101,11 @@ class RobotModel {
 
   /// Throws InputError("expected N joint values, got M") or for NaN/inf entries.
   void checkPosture(const Eigen::VectorXd& q) const;
+  /// Throws InputError("<what>: joint j (name) at v lies outside its limits [lower, upper]") for
+  /// the first joint beyond its hardware limits by more than `overshoot_rad` (revolute) or
+  /// `overshoot_m` (prismatic); q must have dof() entries.
+  void checkWithinLimits(const Eigen::VectorXd& q, const std::string& what, double overshoot_rad = 0.0,
+                         double overshoot_m = 0.0) const;
 
  private:
   std::string name_;

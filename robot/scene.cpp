@@ -704,20 +704,9 @@ void checkPosturesFit(const Scene& scene, int dof, const std::string& robot_name
 
 void checkPosturesFit(const Scene& scene, const RobotModel& model, const std::string& robot_name) {
   checkPosturesFit(scene, model.dof(), robot_name);
-  const Eigen::VectorXd lower = model.lowerLimits();
-  const Eigen::VectorXd upper = model.upperLimits();
+  const std::string prefix = "scene '" + printable(scene.name, 200) + "': ";
   const auto check = [&](const std::optional<Eigen::VectorXd>& posture, const std::string& what) {
-    if (!posture) return;
-    for (Eigen::Index j = 0; j < posture->size(); ++j) {
-      const double value = (*posture)[j];
-      if (value >= lower[j] && value <= upper[j]) continue;
-      std::ostringstream message;
-      message << std::setprecision(4) << "scene '" << printable(scene.name, 200) << "': " << what << ": joint " << j + 1
-              << " (" << model.joints()[static_cast<std::size_t>(j)].name << ") at " << value
-              << " lies outside its limits [" << lower[j] << ", " << upper[j] << "] of the robot '"
-              << printable(robot_name, 200) << "'";
-      throw InputError(message.str());
-    }
+    if (posture) model.checkWithinLimits(*posture, prefix + what);
   };
   check(scene.home_posture, "home_posture");
   for (const Area& area : scene.training_areas) check(area.posture, "training area '" + area.name + "' posture");

@@ -195,7 +195,9 @@ void registerBenchCommand(CLI::App& app, CommandRunner& runner) {
   bench->add_option("--peer-targets", peers->targets, "reaching targets per robot (--peers)")->check(finiteRange(1, 100000))->capture_default_str();
   bench->add_option("--peer-goals", peers->goals, "planning queries on arm9_areas (--peers)")->check(finiteRange(1, 10000))->capture_default_str();
   bench->add_option("--peer-areas", peers->areas, "areas the tutor teaches for planning (--peers)")->check(finiteRange(1, 50))->capture_default_str();
-  bench->add_option("--peer-seed", peers->seed, "seed of targets, queries and teaching (--peers)")->capture_default_str();
+  bench->add_option("--peer-seed", peers->seed, "seed of targets, queries and teaching (--peers)")
+      ->check(seedValidator())
+      ->capture_default_str();
   bench->callback([&runner, filter, repetitions, min_time, peers] {
     if (peers->enabled) {
       runner.select([peers] { return runPeers(*peers); });

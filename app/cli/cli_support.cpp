@@ -22,9 +22,11 @@ CLI::Validator seedValidator() {
       [](std::string& input) -> std::string {
         const bool digits = !input.empty() && input.size() <= 20 &&
                             std::all_of(input.begin(), input.end(), [](char c) { return c >= '0' && c <= '9'; });
-        // 20 digits may still exceed 2^64 - 1 = 18446744073709551615.
-        if (digits && (input.size() < 20 || input <= "18446744073709551615")) return {};
-        return "a seed is a whole number from 0 to 18446744073709551615, got " + input.substr(0, 64);
+        // 20 digits may still exceed 2^64 - 1 = 18446744073709551615; a leading zero would make
+        // the number octal to CLI11 (010 is seed 8).
+        const bool plain = digits && (input[0] != '0' || input.size() == 1);
+        if (plain && (input.size() < 20 || input <= "18446744073709551615")) return {};
+        return "a seed is a whole number from 0 to 18446744073709551615 without leading zeros, got " + input.substr(0, 64);
       },
       "");
 }
@@ -41,14 +43,9 @@ int jsonInteger(const Json& value, const std::string& what) {
 }
 
 bool startsAsJson(std::istream& in) {
-  const std::streampos start = in.tellg();
-  char c = 0;
-  while (in.get(c) && std::isspace(static_cast<unsigned char>(c))) {
-  }
-  const bool json = in && (c == '{' || c == '[');
-  in.clear();
-  in.seekg(start);
-  return json;
+  // Skipping the blanks needs no seek, so a pipe works too; JSON does not mind them gone.
+  const auto next = (in >> std::ws).peek();
+  return next == '{' || next == '[';
 }
 
 Json toJson(const Eigen::VectorXd& v) {

@@ -80,7 +80,7 @@ CLI::Validator seedValidator();
 int jsonInteger(const Json& value, const std::string& what);
 
 /// Whether a file is JSON text (its first non-blank character opens an object or an array),
-/// as opposed to a recording in SQLite; leaves the stream where it was.
+/// as opposed to a recording in SQLite; leaves the stream at that character.
 bool startsAsJson(std::istream& in);
 
 /// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.

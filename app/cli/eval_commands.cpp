@@ -47,6 +47,7 @@ struct Session {
   robot::Scene scene_data;
   learning::TrainingSet data;
   std::vector<Eigen::VectorXd> q_fixed;
+  std::vector<std::string> area_names;  ///< how messages name area k: as the file counts it
   std::unique_ptr<planning::Itm> itm;
 };
 
@@ -58,21 +59,10 @@ void checkPosturesWithinLimits(const Session& session) {
   constexpr double kOvershootRad = 0.25;
   constexpr double kOvershootM = 0.05;
   const robot::RobotModel& model = *session.model;
-  const Eigen::VectorXd lower = model.lowerLimits();
-  const Eigen::VectorXd upper = model.upperLimits();
   const auto check = [&](const Eigen::VectorXd& q, const std::string& what) {
-    for (Eigen::Index j = 0; j < q.size(); ++j) {
-      const bool sliding = model.joints()[static_cast<std::size_t>(j)].type == robot::JointType::kPrismatic;
-      const double overshoot = sliding ? kOvershootM : kOvershootRad;
-      if (q[j] >= lower[j] - overshoot && q[j] <= upper[j] + overshoot) continue;
-      std::ostringstream message;
-      message << std::setprecision(4) << "session: " << what << ": joint " << j + 1 << " ("
-              << model.joints()[static_cast<std::size_t>(j)].name << ") at " << q[j] << " lies outside its limits ["
-              << lower[j] << ", " << upper[j] << "]";
-      throw InputError(message.str());
-    }
+    model.checkWithinLimits(q, "session: " + what, kOvershootRad, kOvershootM);
   };
-  for (std::size_t k = 0; k < session.q_fixed.size(); ++k) check(session.q_fixed[k], "q_fixed of area " + std::to_string(k + 1));
+  for (std::size_t k = 0; k < session.q_fixed.size(); ++k) check(session.q_fixed[k], "q_fixed of area " + session.area_names[k]);
   for (Eigen::Index l = 0; l < session.data.Y.cols(); ++l) check(session.data.Y.col(l), "training sample " + std::to_string(l + 1));
   if (session.itm) {
     for (const int id : session.itm->nodeIds()) check(session.itm->joints(id), "ITM node " + std::to_string(id));
@@ -101,6 +91,7 @@ Session loadRecordedSession(const std::string& file) {
     }
     taught.push_back(&area);
     session.q_fixed.push_back(area.q_fixed);
+    session.area_names.push_back(std::to_string(area.index));
     count += area.X.cols();
   }
   if (count == 0) throw InputError("session: no training samples");
@@ -147,6 +138,7 @@ Session loadSession(const std::string& file) {
     int k = 0;
     for (const Json& area : json.at("areas")) {
       session.q_fixed.push_back(vectorOf(area.at("q_fixed"), n, "q_fixed"));
+      session.area_names.push_back(std::to_string(k + 1));
       const Json& x = area.at("x");
       const Json& q = area.at("q");
       if (x.size() != q.size()) throw InputError("session: area samples x and q differ in count");

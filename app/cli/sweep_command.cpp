@@ -247,7 +247,7 @@ Json section83(const SweepOptions& options, std::ostream& md) {
   md << "\n## Sect. 8.3 — 9-DoF arm (arm9_areas), 8 areas, " << options.goals << " goals\n\n"
      << "| null-space posture along the path | areas (taught / given up) | ITM nodes | paths found | collision-free | within 1 cm | mean plan ms | thesis |\n|---|---|---|---|---|---|---|---|\n";
   Json rows = Json::array();
-  // Both executions of the same paths: the postures shown along them, and the thesis' q_c alone.
+  // Both executions to the same goals: the postures shown along the paths, and the thesis' q_c alone.
   for (const planning::PlanPostures postures : {planning::PlanPostures::kDemonstrated, planning::PlanPostures::kLearned}) {
     const std::string name = planning::toString(postures);
     const app::PlanningResult result = app::evaluatePlanning(

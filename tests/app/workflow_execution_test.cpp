@@ -246,6 +246,10 @@ TEST(WorkflowExecution, APlannedMotionFollowsThePosturesShownAlongItsPathUnlessT
     } else {
       EXPECT_GT(largest_departure, 0.03);
     }
+    // A keyboard nudge leaves the path: q_c again.
+    ASSERT_TRUE(workflow.nudgeTask(Eigen::Vector3d(0.0, 0.0, 0.01)));
+    run(workflow, 0.01);
+    EXPECT_LT((workflow.mapPosture() - workflow.model()->predict(workflow.taskTarget())).norm(), 1e-9);
   }
 }
 

@@ -185,7 +185,7 @@ TEST(EvalCli, BadArgumentsGiveExitCodeTwoAndOneLine) {
       "eval scene-model --session " + session.string() + " --spacing -nan",
       "plan --session " + session.string() + " --seed -1",
       "plan --session " + session.string() + " --seed 18446744073709551616",
-      "eval trajectories --session " + session.string() + " --seed 1.5",
+      "eval trajectories --session " + session.string() + " --seed 010",
       "sweep --tables 9.9",
       "sweep --spacing 0",
       "sweep --seeds 0"};

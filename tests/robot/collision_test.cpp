@@ -8,6 +8,7 @@
 #include "robot/controllers.hpp"
 #include "robot/resources.hpp"
 #include "robot/sim/simulation.hpp"
+#include "test_urdf.hpp"
 
 namespace flexirob::robot {
 namespace {
@@ -174,6 +175,26 @@ TEST(CollisionWorld, LinksWithoutCollisionGeometryGetCapsules) {
   world.update(Eigen::Vector3d(0.0, 0.05, 0.0));  // lean link2 towards the ball
   ASSERT_FALSE(world.contacts().empty());
   EXPECT_EQ(world.bodyName(world.contacts()[0].body), "link2");
+}
+
+TEST(CollisionWorld, ALinkWhoseMassWasAssumedGetsTheDefaultCapsule) {
+  // The 1 kg the model assumes for a link without <inertial> says nothing of its girth: l1
+  // (0.4 m along z from 0.1 m) keeps the 5 cm default radius, not the 0.18 m the assumed
+  // sphere inertia would give.
+  const RobotModel model = RobotModel::fromUrdfString(flexirob::testing::masslessArm(), ".");
+  ASSERT_TRUE(model.bodies()[1].inertia_assumed);
+  Scene scene;
+  Obstacle ball;
+  ball.name = "ball";
+  ball.shape = Obstacle::Shape::kSphere;
+  ball.size = Eigen::Vector3d(0.02, 0, 0);
+  ball.X_WO.translation() = Eigen::Vector3d(0.1, 0.0, 0.3);
+  scene.obstacles.push_back(ball);
+  CollisionWorld world(model, scene);
+  EXPECT_EQ(world.bodyShapeSource(1), "capsule");
+  world.update(Eigen::Vector3d::Zero());
+  EXPECT_NEAR(world.distance(1, 0), 0.1 - 0.02 - 0.05, 1e-3);
+  EXPECT_TRUE(world.contacts().empty());
 }
 
 TEST(CollisionWorld, UsesTheLwr4CollisionMeshes) {
