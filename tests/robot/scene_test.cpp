@@ -745,6 +745,39 @@ std::optional<RobotModel> loadRobotOrNull(const std::string& robot, std::string&
   }
 }
 
+// Setup I's listed postures keep to one redundancy family as the thesis' tutor did there
+// (Sect. 4.2.1, Fig. 4.4: q2 near pi/2): the upper arm about level, so the elbow stays under the
+// board, with q3, q4 < 0 and q6 > 0 everywhere. Only the area beside the box's back face is out
+// of the level arm's way and reached leaning back (q2 < 0) with the same signs.
+TEST(BuiltinScenes, SetupIPosturesKeepToOneRedundancyFamily) {
+  const Scene scene = loadScene("setup_I");
+  std::string why;
+  const auto model = loadRobotOrNull(scene.robot, why);
+  if (!model) GTEST_SKIP() << "robot meshes not generated yet: " << why;
+  Kinematics kinematics(*model);
+  const auto board = std::find_if(scene.obstacles.begin(), scene.obstacles.end(), [](const Obstacle& o) { return o.name == "board"; });
+  ASSERT_NE(board, scene.obstacles.end());
+  const double board_underside = board->X_WO.translation().z() - 0.01;
+  int level = 0;
+  for (const auto& area : scene.training_areas) {
+    SCOPED_TRACE(area.name);
+    ASSERT_TRUE(area.posture.has_value());
+    const Eigen::VectorXd& q = *area.posture;
+    ASSERT_EQ(q.size(), 7);
+    EXPECT_LT(q[2], 0.0);
+    EXPECT_LT(q[3], -0.3);
+    EXPECT_GT(q[5], 0.3);
+    if (q[1] < 0.0) continue;  // leaning back around the box
+    ++level;
+    EXPECT_GE(q[1], 1.0);
+    EXPECT_LE(q[1], 1.7);
+    kinematics.update(q);
+    // Body 4 is the forearm; its origin is the elbow.
+    EXPECT_LT(kinematics.X_WB(4).translation().z(), board_underside - 0.04);
+  }
+  EXPECT_GE(level, 11);
+}
+
 // Points along the kinematic skeleton (joint origins joined by straight lines, up to the tip)
 // at most 1 cm apart. The links' surfaces lie at least 4.5 cm (the hand's radius) around it.
 std::vector<Eigen::Vector3d> skeleton(const Kinematics& kinematics, int first_body) {
