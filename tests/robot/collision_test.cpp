@@ -54,6 +54,15 @@ Obstacle box(const std::string& name, const Eigen::Vector3d& centre, const Eigen
   return obstacle;
 }
 
+Obstacle sphere(const std::string& name, const Eigen::Vector3d& centre, double radius) {
+  Obstacle obstacle;
+  obstacle.name = name;
+  obstacle.shape = Obstacle::Shape::kSphere;
+  obstacle.X_WO.translation() = centre;
+  obstacle.size = Eigen::Vector3d(radius, 0, 0);
+  return obstacle;
+}
+
 TEST(CollisionWorld, ReportsABoxAcrossTheArmsPathWithTheLinkThatHitsIt) {
   Scene scene;
   // A bar across the path of link2 when j2 swings it down towards +x.
@@ -101,12 +110,7 @@ TEST(CollisionWorld, ReportsABoxAcrossTheArmsPathWithTheLinkThatHitsIt) {
 
 TEST(CollisionWorld, DistanceToASphereMatchesTheGeometry) {
   Scene scene;
-  Obstacle ball;
-  ball.name = "ball";
-  ball.shape = Obstacle::Shape::kSphere;
-  ball.size = Eigen::Vector3d(0.1, 0, 0);
-  ball.X_WO.translation() = Eigen::Vector3d(0.4, 0.0, 0.2);
-  scene.obstacles.push_back(ball);
+  scene.obstacles.push_back(sphere("ball", Eigen::Vector3d(0.4, 0.0, 0.2), 0.1));
   CollisionWorld world(threeLinkArm(), scene);
   world.update(Eigen::Vector3d::Zero());
   // link1's axis is the z axis: distance = 0.4 − 0.1 (ball) − 0.05 (cylinder).
@@ -161,12 +165,7 @@ TEST(CollisionWorld, LinksWithoutCollisionGeometryGetCapsules) {
   Scene scene;
   // 1 cm beside link2's capsule surface when the arm is straight up: the capsule radius comes
   // from the link's inertia, r = sqrt(2·0.0025/2) = 0.05 m.
-  Obstacle ball;
-  ball.name = "ball";
-  ball.shape = Obstacle::Shape::kSphere;
-  ball.size = Eigen::Vector3d(0.05, 0, 0);
-  ball.X_WO.translation() = Eigen::Vector3d(0.11, 0.0, 0.6);
-  scene.obstacles.push_back(ball);
+  scene.obstacles.push_back(sphere("ball", Eigen::Vector3d(0.11, 0.0, 0.6), 0.05));
   CollisionWorld world(model, scene);
   EXPECT_EQ(world.bodyShapeSource(2), "capsule");
   world.update(Eigen::Vector3d::Zero());
@@ -184,12 +183,7 @@ TEST(CollisionWorld, ALinkWhoseMassWasAssumedGetsTheDefaultCapsule) {
   const RobotModel model = RobotModel::fromUrdfString(flexirob::testing::masslessArm(), ".");
   ASSERT_TRUE(model.bodies()[1].inertia_assumed);
   Scene scene;
-  Obstacle ball;
-  ball.name = "ball";
-  ball.shape = Obstacle::Shape::kSphere;
-  ball.size = Eigen::Vector3d(0.02, 0, 0);
-  ball.X_WO.translation() = Eigen::Vector3d(0.1, 0.0, 0.3);
-  scene.obstacles.push_back(ball);
+  scene.obstacles.push_back(sphere("ball", Eigen::Vector3d(0.1, 0.0, 0.3), 0.02));
   CollisionWorld world(model, scene);
   EXPECT_EQ(world.bodyShapeSource(1), "capsule");
   world.update(Eigen::Vector3d::Zero());
