@@ -1,6 +1,8 @@
 #include "app/experiments.hpp"
 
 #include <chrono>
+#include <sstream>
+#include <string>
 
 #include "robot/errors.hpp"
 #include "robot/sim/reach.hpp"
@@ -88,6 +90,11 @@ std::unique_ptr<learning::Learner> fitMap(const learning::TrainingSet& data, int
 robot::EvaluationGrid sceneGrid(const robot::Scene& scene, double spacing) {
   robot::EvaluationGrid grid = scene.grid.value_or(robot::EvaluationGrid{});
   if (spacing > 0.0) grid.spacing = spacing;
+  if (const std::string problem = grid.sizeProblem(); !problem.empty()) {
+    std::ostringstream spacing_text;
+    spacing_text << grid.spacing;
+    throw InputError("evaluation grid at a spacing of " + spacing_text.str() + " m: " + problem + "; increase the spacing");
+  }
   return grid;
 }
 

@@ -54,6 +54,7 @@ std::unique_ptr<learning::Learner> fitMap(const learning::TrainingSet& data, int
                                           const learning::ElmParams& elm, const learning::LlmParams& llm);
 
 /// The evaluation grid of a scene (its own, else G of Sect. 3.3.2), spacing overridden if > 0.
+/// Throws InputError when the grid has more than robot::kMaxGridPoints points at that spacing.
 robot::EvaluationGrid sceneGrid(const robot::Scene& scene, double spacing);
 
 /// The taught areas as the trajectory evaluation needs them.

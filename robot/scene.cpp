@@ -36,7 +36,6 @@ constexpr std::size_t kMaxParameters = 10000;
 constexpr std::size_t kMaxJoints = 64;
 constexpr std::size_t kMaxNameLength = 200;
 constexpr std::size_t kMaxTextLength = 20000;
-constexpr double kMaxGridPoints = 5.0e6;
 constexpr std::size_t kMaxExcludedBoxes = 1000;
 constexpr double kMaxLength = 1000.0;  // [m]: any coordinate or size beyond this is a mistake
 // Every scalar the reader visits costs one unit; YAML aliases can make a small file name the
@@ -575,12 +574,7 @@ class SceneReader {
     if (const auto n = node["spacing"]) grid.spacing = length(n, join(path, "spacing"), false);
     if (const auto n = node["tolerance"]) grid.tolerance = length(n, join(path, "tolerance"), false);
     if ((grid.upper.array() < grid.lower.array()).any()) fail(node, path, "'upper' must not lie below 'lower' on any axis");
-    const Eigen::Array3d counts = ((grid.upper - grid.lower) / grid.spacing).array().floor() + 1.0;
-    if (counts.prod() > kMaxGridPoints) {
-      std::ostringstream count;  // may exceed every integer type
-      count << std::setprecision(3) << counts.prod();
-      fail(node, path, "the grid would have " + count.str() + " points (at most 5000000); increase 'spacing'");
-    }
+    if (const std::string problem = grid.sizeProblem(); !problem.empty()) fail(node, path, problem + "; increase 'spacing'");
     if (const auto n = node["exclude"]) {
       const std::string exclude_path = join(path, "exclude");
       const auto& items = sequence(n, exclude_path, kMaxExcludedBoxes);
@@ -672,6 +666,19 @@ Eigen::Vector3i EvaluationGrid::counts() const {
   return n.cast<int>().matrix();
 }
 
+double EvaluationGrid::pointCount() const {
+  if (!(spacing > 0.0) || (upper.array() < lower.array()).any()) return 0.0;
+  return (((upper - lower).array() / spacing + 1e-9).floor() + 1.0).prod();
+}
+
+std::string EvaluationGrid::sizeProblem() const {
+  const double count = pointCount();
+  if (count <= kMaxGridPoints) return "";
+  std::ostringstream out;
+  out << "the grid would have " << std::setprecision(3) << count << " points (at most " << std::setprecision(10) << kMaxGridPoints << ")";
+  return out.str();
+}
+
 std::vector<Eigen::Vector3d> EvaluationGrid::points() const {
   const Eigen::Vector3i n = counts();
   std::vector<Eigen::Vector3d> result;
@@ -714,7 +721,10 @@ void checkPosturesFit(const Scene& scene, const RobotModel& model, const std::st
 }
 
 bool EvaluationGrid::excludes(const Eigen::Vector3d& p_W) const {
-  return std::any_of(excluded.begin(), excluded.end(), [&p_W](const Eigen::AlignedBox3d& box) { return box.contains(p_W); });
+  static constexpr double kSlack = 1e-9;  // [m], as counts() keeps an upper bound
+  return std::any_of(excluded.begin(), excluded.end(), [&p_W](const Eigen::AlignedBox3d& box) {
+    return (p_W.array() >= box.min().array() - kSlack).all() && (p_W.array() <= box.max().array() + kSlack).all();
+  });
 }
 
 bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, double margin) {

@@ -51,7 +51,8 @@ struct EvaluationGrid {
   double tolerance = 0.01;  ///< a target counts as reached within this distance [m] (Sect. 3.3.2)
   /// Boxes whose points are not targets although the arm could get there: parts of the
   /// workspace a scene's author rules out, as Sect. 3.3.2 drops the points above setup I's board
-  /// from T_I. Boundaries count as inside.
+  /// from T_I. Boundaries count as inside (within 1e-9 m: points() puts a point meant to lie on
+  /// a boundary there only up to rounding).
   std::vector<Eigen::AlignedBox3d> excluded;
   /// Whether p_W lies in one of the excluded boxes.
   bool excludes(const Eigen::Vector3d& p_W) const;
@@ -60,7 +61,16 @@ struct EvaluationGrid {
   std::vector<Eigen::Vector3d> points() const;
   /// Number of points() per axis.
   Eigen::Vector3i counts() const;
+  /// Number of points(), as a real number: a grid a user asks for may exceed every integer type.
+  double pointCount() const;
+  /// Why the grid is too large to evaluate (more than kMaxGridPoints points), for a one-line
+  /// error, or empty if it is not.
+  std::string sizeProblem() const;
 };
+
+/// Largest evaluation grid a scene or an evaluation may ask for: 5e6 points hold 120 MB of
+/// positions and take hours to evaluate.
+inline constexpr double kMaxGridPoints = 5.0e6;
 
 /// A target trajectory in task space: waypoints joined by straight segments.
 struct Trajectory {

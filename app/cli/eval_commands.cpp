@@ -209,12 +209,9 @@ struct EvalOptions {
 
 Json runReachable(const EvalOptions& options) {
   const Session session = loadSession(options.session);
+  const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
   const auto learner = learnMap(session, options.learner);
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-  robot::ParameterSet parameters(declarations);
-  parameters.applyOverrides(session.scene_data.parameters);
-  robot::EvaluationGrid grid = session.scene_data.grid.value_or(robot::EvaluationGrid{});
-  if (options.spacing > 0.0) grid.spacing = options.spacing;
+  const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
   const app::ReachableResult result =
       app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
                              session.data.X, [](double f) { reportProgress("eval reachable", f); },
@@ -258,9 +255,9 @@ std::vector<app::EvaluatedArea> sessionAreas(const Session& session) {
 
 Json runSceneModel(const EvalOptions& options) {
   const Session session = loadSession(options.session);
+  const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
   const auto learner = learnMap(session, options.learner);
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
-  const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
   // Eq. 4.1 uses the postures the reachability evaluation ends in (Sect. 4.2.2).
   const app::ReachableResult reachable =
       app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
@@ -311,9 +308,7 @@ Json runTrajectories(const EvalOptions& options) {
 Json runPlan(const EvalOptions& options) {
   const Session session = loadSession(options.session);
   const auto learner = learnMap(session, options.learner);
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-  robot::ParameterSet parameters(declarations);
-  parameters.applyOverrides(session.scene_data.parameters);
+  const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
   const Eigen::VectorXd start = session.q_fixed.empty() ? startPosture(session) : session.q_fixed.front();
   const app::PlanningResult result =
       app::evaluatePlanning(*session.model, session.scene_data, parameters, *learner, *session.itm, start, options.goals,

@@ -57,6 +57,23 @@ TEST(Experiments, SubsamplingKeepsEverySthSampleOfEachAreaStartingWithItsFirst) 
   EXPECT_THROW(subsample(data, 0), InputError);
 }
 
+TEST(Experiments, ASpacingThatMakesTheScenesGridTooLargeIsRefusedBeforeAnyWork) {
+  robot::Scene scene;
+  scene.grid = robot::EvaluationGrid{};
+  scene.grid->lower = Eigen::Vector3d(-2, -2, 0);
+  scene.grid->upper = Eigen::Vector3d(2, 2, 2);
+  scene.grid->spacing = 0.1;
+  EXPECT_DOUBLE_EQ(sceneGrid(scene, 0.0).spacing, 0.1);
+  EXPECT_DOUBLE_EQ(sceneGrid(scene, 0.05).spacing, 0.05);
+  try {
+    sceneGrid(scene, 0.01);
+    FAIL() << "a grid of 3.2e7 points was accepted";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("spacing of 0.01 m: the grid would have 3.23e+07 points"), std::string::npos)
+        << error.what();
+  }
+}
+
 TEST(Experiments, TargetsAboveTheBoardOfSetupIAreNotAccessibleButTargetsInFrontAre) {
   const robot::Scene scene = robot::loadScene("setup_I");
   const robot::ParameterSet parameters = sceneParameters(scene);

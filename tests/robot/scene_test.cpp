@@ -697,6 +697,36 @@ TEST(BuiltinScenes, HoldWhatTheThesisStates) {
   EXPECT_EQ(arm9.training_areas.size(), 8U);  // K = 8 (Sect. 8.3)
 }
 
+// A grid point meant to lie on an excluded box's face is computed as lower + spacing * i and
+// lands there only up to rounding (x = -0.6 + 6 * 0.1 = 1.1e-16, not 0): it is still excluded.
+TEST(EvaluationGrid, ExcludedBoxesHoldTheGridPointsOnTheirFacesDespiteRounding) {
+  EvaluationGrid grid;
+  grid.lower = Eigen::Vector3d(-0.6, -0.6, 0.05);
+  grid.upper = Eigen::Vector3d(0.6, 0.6, 1.0);
+  grid.spacing = 0.1;
+  grid.excluded.emplace_back(Eigen::Vector3d(-0.6, -0.6, 0.05), Eigen::Vector3d(0.0, 0.0, 1.0));
+  int excluded = 0;
+  for (const Eigen::Vector3d& p : grid.points()) {
+    const bool inside = p.x() < 0.05 && p.y() < 0.05;  // half a spacing past the faces
+    EXPECT_EQ(grid.excludes(p), inside) << p.transpose();
+    excluded += inside ? 1 : 0;
+  }
+  EXPECT_EQ(excluded, 7 * 7 * 10);
+  EXPECT_FALSE(grid.excludes(Eigen::Vector3d(1e-6, -0.3, 0.5)));  // a micrometre outside is outside
+}
+
+TEST(EvaluationGrid, SaysHowLargeAGridTooLargeToEvaluateWouldBe) {
+  EvaluationGrid grid;
+  grid.lower = Eigen::Vector3d(-2, -2, 0);
+  grid.upper = Eigen::Vector3d(2, 2, 2);
+  grid.spacing = 0.1;
+  EXPECT_DOUBLE_EQ(grid.pointCount(), 41.0 * 41.0 * 21.0);
+  EXPECT_EQ(grid.sizeProblem(), "");
+  grid.spacing = 0.01;
+  EXPECT_DOUBLE_EQ(grid.pointCount(), 401.0 * 401.0 * 201.0);
+  EXPECT_EQ(grid.sizeProblem(), "the grid would have 3.23e+07 points (at most 5000000)");
+}
+
 // Setup II's listed postures keep to the one redundancy family the thesis' tutor used there
 // (Sect. 4.2.1, Fig. 4.5), so that a learner interpolates between areas instead of averaging IK
 // families: the elbow (q4) and wrist (q6) bent one way everywhere, q1 ~ 0 in front of the boxes
