@@ -334,11 +334,22 @@ bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) 
 bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double speed) {
   const int dof = model_->dof();
   // Points the hands push: every body but the first, 6 cm off the body's origin (alternately
-  // along its x and y axes, so that rotations about any link axis can be pushed).
+  // along its x and y axes, so that rotations about any link axis can be pushed), never along
+  // the body's own joint axis: a push at a point on that axis cannot turn the joint (a 3-DoF
+  // arm with two parallel y axes stalled 0.05 rad short of every posture).
   std::vector<int> bodies;
-  for (int b = 2; b <= dof; ++b) bodies.push_back(b);
+  std::vector<Eigen::Vector3d> offsets;
+  for (int b = 2; b <= dof; ++b) {
+    const bool even = bodies.size() % 2 == 0;
+    Eigen::Vector3d along = even ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    if (std::abs(along.dot(model_->joints()[static_cast<std::size_t>(b - 1)].axis_J)) > 0.9) {
+      along = even ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitX();
+    }
+    bodies.push_back(b);
+    offsets.push_back(0.06 * along);
+  }
   const auto m = static_cast<int>(bodies.size());
-  const auto offset = [](int i) { return i % 2 == 0 ? Eigen::Vector3d(0.06, 0.0, 0.0) : Eigen::Vector3d(0.0, 0.06, 0.0); };
+  const auto offset = [&offsets](int i) { return offsets[static_cast<std::size_t>(i)]; };
   std::vector<Eigen::Vector3d> forces(static_cast<std::size_t>(m));
   std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m));
   robot::Matrix3Xd Jp(3, dof);
@@ -443,6 +454,11 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     failure << std::fixed << std::setprecision(2) << "out of the arm's reach (" << (area.target - shoulder).norm()
             << " m from the shoulder, reach " << reach << " m)";
     area.failure = failure.str();
+    return false;
+  }
+  if (workflow_->subStage() == SubStage::kPosed || workflow_->subStage() == SubStage::kRecording) {
+    // A touch now would not start an approach but a recording where the arm happens to be.
+    area.failure = std::string("the workflow is in ") + workflow_->stateName() + ", not ready for an approach";
     return false;
   }
   int reaching = 0;
@@ -686,6 +702,7 @@ TutorReport SimulatedTutor::configure(int area_count) {
       area.taught = true;
       area.failure.clear();
     }
+    if (!area.taught) discardPose();
     if (automatic) last_automatic_taught = area.taught;
     if (automatic && area.taught && options_.check_points > 0) {
       const std::vector<bool> failed_without = check_failed_;
@@ -709,6 +726,15 @@ TutorReport SimulatedTutor::configure(int area_count) {
   tick();
   updateReport();
   return report_;
+}
+
+void SimulatedTutor::discardPose() {
+  if (workflow_->subStage() != SubStage::kPosed) return;
+  const std::size_t areas_before = workflow_->areas().size();
+  arm()->readState(state_);
+  if (!grab(SubStage::kPosed, Eigen::Vector3d::UnitZ())) return;
+  waitFor(SubStage::kWaiting, 10.0);
+  if (workflow_->areas().size() > areas_before) workflow_->removeArea(static_cast<int>(workflow_->areas().size()) - 1);
 }
 
 bool SimulatedTutor::program(const std::vector<Eigen::Vector3d>& waypoints) {

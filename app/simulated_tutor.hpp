@@ -130,6 +130,11 @@ class SimulatedTutor {
   /// Steps with a constant tip force until the workflow leaves `sub_stage`.
   bool grab(SubStage sub_stage, const Eigen::Vector3d& direction);
   void tick();
+  /// An approach that ended short can leave the arm posed (POSED, held under π_rec) where the
+  /// tutor did not mean to record, and the workflow's only way on from POSED is a recording
+  /// (Fig. 2.5): the tutor does what a person would, touches the arm, lets go and removes the
+  /// area that made, so that the next area starts from WAITING instead of recording there.
+  void discardPose();
   double pathClearance(const std::vector<Eigen::VectorXd>& path);
   /// A joint-space path from `from` to `to` keeping `margin` [m] from the obstacles at every
   /// sample (RRT-Connect, then shortcuts), as a person leads the arm around an obstacle rather

@@ -389,6 +389,49 @@ TEST(SimulatedTutor, TeachesAnArmWithAnUnboundedJointAroundTheBoard) {
   EXPECT_TRUE(teaching.workflow->areas()[0].q_fixed.allFinite());
 }
 
+// A 3-DoF arm whose second and third joints turn about parallel y axes: the hands must push
+// each link off its own joint axis (a push on body 3's y axis cannot turn joint 3, and the
+// approach stalled 0.05 rad short of every posture).
+constexpr const char* kParallelAxesArm = R"(<robot name="parallel_axes">
+  <link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 0 1"/><limit lower="-2.9" upper="2.9" velocity="2" effort="100"/></joint>
+  <link name="l1"><inertial><origin xyz="0 0 0.15"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.002"/></inertial></link>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0 0 0.3"/><axis xyz="0 1 0"/><limit lower="-2.9" upper="2.9" velocity="2" effort="100"/></joint>
+  <link name="l2"><inertial><origin xyz="0 0 0.2"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.002"/></inertial></link>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0 0 0.4"/><axis xyz="0 1 0"/><limit lower="-2.9" upper="2.9" velocity="2" effort="100"/></joint>
+  <link name="l3"><inertial><origin xyz="0 0 0.2"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.002"/></inertial></link>
+  <joint name="tip_joint" type="fixed"><parent link="l3"/><child link="tip"/><origin xyz="0 0 0.4"/></joint>
+  <link name="tip"><inertial><mass value="0.1"/><inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial></link>
+</robot>)";
+
+robot::Scene parallelAxesScene() {
+  robot::Scene scene;
+  scene.name = "parallel_axes";
+  scene.home_posture = Eigen::Vector3d(0.3, 0.6, 0.8);
+  robot::Area area;
+  area.name = "front";
+  area.p_WA = Eigen::Vector3d(0.3, 0.1, 0.6);
+  area.radius = 0.05;
+  scene.training_areas = {area};
+  return scene;
+}
+
+TEST(SimulatedTutor, PushesEveryJointOfAnArmWithParallelJointAxes) {
+  const robot::RobotModel model = robot::RobotModel::fromUrdfString(kParallelAxesArm, ".");
+  ShortTeaching teaching(parallelAxesScene(), model);
+  teaching.tutor_options.check_points = 0;
+  const TutorReport report = teaching.configure(1);
+  ASSERT_FALSE(report.areas.empty());
+  EXPECT_TRUE(report.areas[0].taught) << report.areas[0].failure;
+  ASSERT_EQ(teaching.workflow->areas().size(), 1U);
+  robot::Kinematics kinematics(model);
+  kinematics.update(teaching.workflow->areas()[0].q_fixed);
+  EXPECT_LT((kinematics.p_WT() - teaching.scene.training_areas[0].p_WA).norm(), 0.02);
+}
+
 // Kinematic IK for the tip position p_W with the hierarchical controller (Eq. 2.11), its
 // null-space target q_null, started at q_null.
 Eigen::VectorXd solveIk(const robot::ParameterSet& parameters, const Eigen::Vector3d& p_W, const Eigen::VectorXd& q_null) {
