@@ -37,6 +37,13 @@ void checkHeader(const std::filesystem::path& file) {
   const auto got = static_cast<std::size_t>(in.gcount());
   static const char kMagic[] = "SQLite format 3";  // 16 bytes with its terminating zero
   if (got < 16 || std::memcmp(header.data(), kMagic, 16) != 0) {
+    const auto first = std::find_if(header.begin(), header.begin() + static_cast<std::ptrdiff_t>(got),
+                                    [](unsigned char c) { return std::isspace(c) == 0; });
+    if (first != header.begin() + static_cast<std::ptrdiff_t>(got) && *first == '{') {
+      throw InputError("session file " + name +
+                       " is a JSON session (teach --out *.json): it keeps the areas and the map, not the recorded "
+                       "stream read here; record to a database instead (teach --out " + file.stem().string() + ".flexirob)");
+    }
     throw InputError("session file " + name + " is not a FlexIRob session (not an SQLite database)");
   }
   if (got < header.size()) {

@@ -320,6 +320,11 @@ TEST_F(SessionTest, RefusesMissingEmptyAndNonSqliteFiles) {
   EXPECT_NE(refusal(path("empty.flexirob")).find("is empty"), std::string::npos);
   std::ofstream(path("text.flexirob")) << "time,q1,q2\n0,1,2\n";
   EXPECT_NE(refusal(path("text.flexirob")).find("not an SQLite database"), std::string::npos);
+  // teach's JSON sessions hold areas and the map, not the stream: said as such.
+  std::ofstream(path("taught.json")) << "\n  {\"format\": \"flexirob-session\", \"areas\": []}";
+  const std::string json_refusal = refusal(path("taught.json"));
+  EXPECT_NE(json_refusal.find("is a JSON session"), std::string::npos) << json_refusal;
+  EXPECT_NE(json_refusal.find("teach --out taught.flexirob"), std::string::npos) << json_refusal;
 }
 
 TEST_F(SessionTest, RefusesForeignSqliteDatabase) {
