@@ -273,7 +273,7 @@ class SceneReader {
     if (const auto node = root["targets"]) {
       const auto& items = sequence(node, "targets", kMaxTargets);
       for (std::size_t i = 0; i < items.size(); ++i) {
-        scene.targets.push_back(position(items[i], "targets[" + std::to_string(i) + "]"));
+        scene.targets.push_back(placeAboveTable(items[i], "targets[" + std::to_string(i) + "]"));
       }
     }
     if (const auto node = root["trajectories"]) scene.trajectories = trajectories(node, "trajectories");
@@ -395,6 +395,18 @@ class SceneReader {
       fail(node, path, "coordinates beyond " + std::to_string(static_cast<int>(kMaxLength)) + " m");
     }
     return v;
+  }
+
+  // Places the arm is asked to reach: the robot stands on the table top z = 0, which is no
+  // obstacle in the collision model, so a place below it would count as free.
+  Eigen::Vector3d placeAboveTable(const Node& node, const std::string& path) {
+    const Eigen::Vector3d p = position(node, path);
+    if (p.z() < 0.0) {
+      std::ostringstream z;
+      z << p.z();
+      fail(node, path, "lies below the table top (z = " + z.str() + " m); the robot stands on z = 0");
+    }
+    return p;
   }
 
   Eigen::Vector3d positiveSize(const Node& node, const std::string& path) {
@@ -556,7 +568,7 @@ class SceneReader {
       if (item["centre"] && item["center"]) fail(item, item_path, "give either 'centre' or 'center', not both");
       const Node centre = item["centre"] ? item["centre"] : item["center"];
       if (!centre) fail(item, item_path, "missing key 'centre'");
-      area.p_WA = position(centre, join(item_path, "centre"));
+      area.p_WA = placeAboveTable(centre, join(item_path, "centre"));
       if (const auto r = item["radius"]) area.radius = length(r, join(item_path, "radius"), false);
       if (const auto b = item["box"]) area.box = positiveSize(b, join(item_path, "box"));
       if (const auto q = item["posture"]) area.posture = posture(q, join(item_path, "posture"));
@@ -569,7 +581,7 @@ class SceneReader {
   EvaluationGrid grid(const Node& node, const std::string& path) {
     checkKeys(node, path, {"lower", "upper", "spacing", "tolerance", "exclude"});
     EvaluationGrid grid;
-    if (const auto n = node["lower"]) grid.lower = position(n, join(path, "lower"));
+    if (const auto n = node["lower"]) grid.lower = placeAboveTable(n, join(path, "lower"));
     if (const auto n = node["upper"]) grid.upper = position(n, join(path, "upper"));
     if (const auto n = node["spacing"]) grid.spacing = length(n, join(path, "spacing"), false);
     if (const auto n = node["tolerance"]) grid.tolerance = length(n, join(path, "tolerance"), false);
@@ -612,7 +624,7 @@ class SceneReader {
         fail(item["waypoints"], join(item_path, "waypoints"), "more than " + std::to_string(kMaxWaypoints) + " waypoints in all trajectories");
       }
       for (std::size_t k = 0; k < points.size(); ++k) {
-        trajectory.waypoints.push_back(position(points[k], join(item_path, "waypoints") + "[" + std::to_string(k) + "]"));
+        trajectory.waypoints.push_back(placeAboveTable(points[k], join(item_path, "waypoints") + "[" + std::to_string(k) + "]"));
       }
       if (!names.insert(trajectory.name).second) fail(item, item_path, "duplicate trajectory name '" + printable(trajectory.name) + "'");
       result.push_back(std::move(trajectory));

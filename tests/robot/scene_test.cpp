@@ -289,6 +289,7 @@ TEST_F(SceneFileTest, RandomScenesSurviveAWriteReadCycleExactly) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
   std::uniform_real_distribution<double> size(0.001, 2.0);
+  std::uniform_real_distribution<double> height(0.0, 1.0);  // places lie on or above the table top
   for (int trial = 0; trial < 20; ++trial) {
     Scene scene;
     scene.name = "random_" + std::to_string(trial);
@@ -309,11 +310,11 @@ TEST_F(SceneFileTest, RandomScenesSurviveAWriteReadCycleExactly) {
     }
     Area area;
     area.name = "a";
-    area.p_WA = Eigen::Vector3d(coordinate(rng), coordinate(rng), coordinate(rng));
+    area.p_WA = Eigen::Vector3d(coordinate(rng), coordinate(rng), height(rng));
     area.radius = size(rng);
     area.posture = Eigen::VectorXd::NullaryExpr(9, [&] { return coordinate(rng); });
     scene.training_areas.push_back(area);
-    scene.targets.emplace_back(coordinate(rng), coordinate(rng), coordinate(rng));
+    scene.targets.emplace_back(coordinate(rng), coordinate(rng), height(rng));
     scene.trajectories.push_back({"t", "g", {scene.targets.front(), area.p_WA}});
     scene.parameters["sim.gravity"] = coordinate(rng);
     const Scene again = parseScene(sceneToYaml(scene), dir_, "generated");
@@ -493,8 +494,28 @@ TEST_F(SceneFileTest, RefusesNegativeZeroAndAbsurdSizes) {
     expectOneLineNamingFile(refusal(text), "broken.yaml");
   }
   // A grid too large for any integer says how large it is, not an overflowed count.
-  const std::string huge = refusal("grid: {lower: [-1000, -1000, -1000], upper: [1000, 1000, 1000], spacing: 0.0001}\n");
-  EXPECT_NE(huge.find("would have 8e+21 points"), std::string::npos) << huge;
+  const std::string huge = refusal("grid: {lower: [-1000, -1000, 0], upper: [1000, 1000, 1000], spacing: 0.0001}\n");
+  EXPECT_NE(huge.find("would have 4e+21 points"), std::string::npos) << huge;
+}
+
+// The table top z = 0 the robot stands on is no obstacle of the collision model: an area,
+// target, waypoint or grid below it would be taught or reached through it.
+TEST_F(SceneFileTest, RefusesPlacesBelowTheTableTop) {
+  for (const std::string text : {
+           "training_areas:\n  - {centre: [0.5, 0.3, -0.2]}\n",
+           "working_areas:\n  - {centre: [0.5, 0.3, -0.01]}\n",
+           "targets: [[0.5, 0, 0.3], [0.5, 0, -0.1]]\n",
+           "trajectories:\n  - {waypoints: [[0.5, 0, 0.3], [0.5, 0, -0.1]]}\n",
+           "grid: {lower: [-0.5, -0.5, -0.3], upper: [0.5, 0.5, 0.5], spacing: 0.1}\n",
+       }) {
+    SCOPED_TRACE(text);
+    const std::string message = refusal(text);
+    expectOneLineNamingFile(message, "broken.yaml");
+    EXPECT_NE(message.find("below the table top"), std::string::npos) << message;
+  }
+  // On the table top is allowed.
+  const Scene scene = loadSceneFile(write("on_table.yaml", "training_areas:\n  - {centre: [0.5, 0.3, 0]}\n"));
+  EXPECT_DOUBLE_EQ(scene.training_areas.at(0).p_WA.z(), 0.0);
 }
 
 TEST_F(SceneFileTest, RefusesMissingMeshFiles) {
