@@ -16,6 +16,7 @@
 #include <system_error>
 
 #include "robot/errors.hpp"
+#include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 
@@ -728,8 +729,24 @@ void checkPosturesFit(const Scene& scene, const RobotModel& model, const std::st
     if (posture) model.checkWithinLimits(*posture, prefix + what);
   };
   check(scene.home_posture, "home_posture");
-  for (const Area& area : scene.training_areas) check(area.posture, "training area '" + area.name + "' posture");
-  for (const Area& area : scene.working_areas) check(area.posture, "working area '" + area.name + "' posture");
+  // An area's posture is a suggestion for holding the tip there: one that puts the tip
+  // elsewhere is a slip of the scene's author, which the tutor would silently pass over.
+  Kinematics kinematics(model);
+  const auto checkArea = [&](const Area& area, const std::string& what) {
+    check(area.posture, what);
+    if (!area.posture) return;
+    kinematics.update(*area.posture);
+    const double off = (kinematics.p_WT() - area.p_WA).norm();
+    const double extent = area.box ? 0.5 * area.box->norm() : area.radius;
+    if (off > extent + 0.01) {
+      std::ostringstream message;
+      message << std::fixed << std::setprecision(3) << prefix << what << " puts the tip " << off
+              << " m from the area's centre (the area extends " << extent << " m)";
+      throw InputError(message.str());
+    }
+  };
+  for (const Area& area : scene.training_areas) checkArea(area, "training area '" + area.name + "' posture");
+  for (const Area& area : scene.working_areas) checkArea(area, "working area '" + area.name + "' posture");
 }
 
 bool EvaluationGrid::excludes(const Eigen::Vector3d& p_W) const {

@@ -112,7 +112,8 @@ std::string robotFor(const std::string& robot_option, const Scene& scene);
 /// the robot the scene was made for, and one of another robot is a mistake, not a suggestion.
 void checkPosturesFit(const Scene& scene, int dof, const std::string& robot_name);
 /// As above, and every such posture must lie within the robot's hardware joint limits (the
-/// simulation cannot start from one outside them, and the tutor would teach it as given).
+/// simulation cannot start from one outside them, and the tutor would teach it as given), and an
+/// area's posture must put the tip (the model's) within the area, 1 cm of slack beyond it.
 void checkPosturesFit(const Scene& scene, const RobotModel& model, const std::string& robot_name);
 
 /// Built-in scene names: empty, setup_A .. setup_D, setup_I, setup_II, harting, arm9_areas.

@@ -991,7 +991,21 @@ TEST(ScenePostures, MustLieWithinTheRobotsJointLimits) {
   scene.training_areas.push_back(area);
   EXPECT_THROW(checkPosturesFit(scene, lwr4, "lwr4"), InputError);
   scene.training_areas[0].posture = lwr4.midPosture();
+  Kinematics kinematics(lwr4);
+  kinematics.update(lwr4.midPosture());
+  scene.training_areas[0].p_WA = kinematics.p_WT() + Eigen::Vector3d(0.0, 0.0, 0.05);
+  scene.training_areas[0].radius = 0.08;
   EXPECT_NO_THROW(checkPosturesFit(scene, lwr4, "lwr4"));
+  // A posture that holds the tip 0.3 m from its area is a slip of the scene's author.
+  scene.training_areas[0].p_WA = kinematics.p_WT() + Eigen::Vector3d(0.3, 0.0, 0.0);
+  try {
+    checkPosturesFit(scene, lwr4, "lwr4");
+    ADD_FAILURE() << "accepted a posture 0.3 m off its area";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("training area 'shelf' posture puts the tip 0.300 m from the area's centre"),
+              std::string::npos)
+        << error.what();
+  }
 }
 
 }  // namespace
