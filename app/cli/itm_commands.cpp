@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -209,6 +210,7 @@ struct PathCommandOptions {
   std::string to;
   planning::PathOptions path;
   double sample_period = 0.0;
+  double max_gap = -1.0;  ///< [m]; negative: the graph's e_max
 };
 
 Json planOnMap(const PathCommandOptions& options) {
@@ -232,10 +234,32 @@ Json planOnMap(const PathCommandOptions& options) {
   }
 
   const auto started = Clock::now();
-  const planning::PlannedPath path = planning::planPath(itm, from, to, options.path);
+  planning::PlannedPath path = planning::planPath(itm, from, to, options.path);
   const double plan_ms = 1e3 * std::chrono::duration<double>(Clock::now() - started).count();
 
+  // A node stands for the explored positions within e_max of it (the ITM's insertion threshold,
+  // Sect. 7.3.1); a start or goal farther from every node lies in space the tutor never showed,
+  // and the straight leg to it would cross unexplored space: no path, as the workflow's planner
+  // refuses such a goal.
+  const double max_gap = options.max_gap >= 0.0 ? options.max_gap : itm.parameters().e_max;
+  std::string reason;
+  if (itm.nodeCount() == 0) {
+    reason = "the graph has no nodes";
+  } else if (path.start_gap > max_gap || path.goal_gap > max_gap) {
+    const bool start = path.start_gap > max_gap;
+    std::ostringstream text;
+    text << (start ? "the start is " : "the goal is ") << (start ? path.start_gap : path.goal_gap)
+         << " m from the nearest explored position (at most " << max_gap << " m, --max-gap)";
+    reason = text.str();
+    path.found = false;
+    path.nodes.clear();
+    path.trajectory.reset();
+  } else if (!path.found) {
+    reason = "start and goal lie in different components of the graph";
+  }
+
   Json result{{"found", path.found}};
+  if (!reason.empty()) result["reason"] = reason;
   result["waypoints"] = path.found ? toJsonRows(path.waypoints.transpose()) : Json::array();
   result["length_m"] = path.found ? Json(path.length) : Json(nullptr);
   result["graph_nodes"] = itm.nodeCount();
@@ -296,6 +320,9 @@ void registerItmCommands(CLI::App& app, CommandRunner& runner) {
     path->add_option("--vmax", options->path.limits.max_speed, "speed limit of the spline [m/s]")->capture_default_str();
     path->add_option("--amax", options->path.limits.max_acceleration, "acceleration limit of the spline [m/s^2]")->capture_default_str();
     path->add_option("--dt", options->sample_period, "also print the trajectory sampled every dt seconds")->check(CLI::PositiveNumber);
+    path->add_option("--max-gap", options->max_gap,
+                     "no path when start or goal lies farther than this from every node [m] (default: the graph's e_max)")
+        ->check(finiteRange(0.0, 1e3));
     path->callback([&runner, options] { runner.select([options] { return planOnMap(*options); }); });
   }
 }

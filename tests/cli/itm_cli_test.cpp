@@ -99,6 +99,28 @@ TEST(ItmCli, PathGoesAroundTheUFromStartToGoal) {
   EXPECT_NEAR(json["trajectory"]["positions"].back()[0].get<double>(), 0.3, 1e-12);
 }
 
+TEST(ItmCli, AGoalFarFromEveryExploredPositionHasNoPath) {
+  const auto data = writeUStream();
+  const auto graph = scratchDir() / "u_far.itm";
+  ASSERT_EQ(runCliBinary("itm build --data " + data.string() + " --out " + graph.string() + " --dcmax 0").exit_code, 0);
+  const std::string far = " --from -0.3,0.78,0.5 --to 8,0.78,0.5";
+  const auto refused = runCliBinary("itm path --graph " + graph.string() + far);
+  ASSERT_EQ(refused.exit_code, 0) << refused.err;
+  const auto json = refused.json();
+  EXPECT_FALSE(json["found"].get<bool>());
+  EXPECT_NE(json["reason"].get<std::string>().find("goal"), std::string::npos) << json["reason"];
+  EXPECT_GT(json["goal_gap_m"].get<double>(), 7.0);
+  EXPECT_TRUE(json["waypoints"].empty());
+  EXPECT_FALSE(json.contains("duration_s"));
+  // The start is held to the same bound; a wider bound lets the far goal through.
+  const auto far_start = runCliBinary("itm path --graph " + graph.string() + " --from 8,0.78,0.5 --to 0.3,0.78,0.5");
+  EXPECT_NE(far_start.json()["reason"].get<std::string>().find("start"), std::string::npos) << far_start.out;
+  const auto allowed = runCliBinary("itm path --graph " + graph.string() + far + " --max-gap 10");
+  ASSERT_EQ(allowed.exit_code, 0) << allowed.err;
+  EXPECT_TRUE(allowed.json()["found"].get<bool>());
+  EXPECT_FALSE(allowed.json().contains("reason"));
+}
+
 TEST(ItmCli, RefusesBrokenGraphFiles) {
   const auto dir = scratchDir();
   writeText(dir / "garbage.itm", "this is not a graph\n");
