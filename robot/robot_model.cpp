@@ -333,16 +333,42 @@ std::string defaultTip(const urdf::ModelInterface& model) {
   return best->name;
 }
 
-// Links hanging off `link` through fixed joints only, except `skip` (the next chain link).
-void foldFixedSubtree(Body& body, const urdf::Link& link, const Eigen::Isometry3d& X_BL,
-                      const urdf::Link* skip, const fs::path& base_dir) {
+// The motion of an off-chain joint held still: at 0, or at the limit nearest to 0 when 0 lies
+// outside its range. Floating and planar joints are held at their origin.
+Eigen::Isometry3d heldJointMotion(const urdf::Joint& joint) {
+  const bool revolute = joint.type == urdf::Joint::REVOLUTE || joint.type == urdf::Joint::CONTINUOUS;
+  if (!revolute && joint.type != urdf::Joint::PRISMATIC) return Eigen::Isometry3d::Identity();
+  double value = 0.0;
+  if (joint.type != urdf::Joint::CONTINUOUS && joint.limits && std::isfinite(joint.limits->lower) &&
+      std::isfinite(joint.limits->upper) && joint.limits->lower <= joint.limits->upper) {
+    value = std::clamp(0.0, joint.limits->lower, joint.limits->upper);
+  }
+  const Eigen::Vector3d axis(joint.axis.x, joint.axis.y, joint.axis.z);
+  if (value == 0.0 || !axis.allFinite() || axis.norm() < 1e-9) return Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  if (revolute) {
+    motion.linear() = Eigen::AngleAxisd(value, axis.normalized()).toRotationMatrix();
+  } else {
+    motion.translation() = value * axis.normalized();
+  }
+  return motion;
+}
+
+// Links hanging off `link`, except `skip` (the next chain link), join the body: through fixed
+// joints as the URDF means them, through movable joints off the chain (a gripper's fingers, the
+// links past a --tip inside the chain) held still, so that they are still drawn, weighed and
+// collided with instead of vanishing from the model.
+void foldSubtree(Body& body, const urdf::Link& link, const Eigen::Isometry3d& X_BL, const urdf::Link* skip,
+                 const fs::path& base_dir) {
   for (const auto& child : link.child_links) {
     if (child.get() == skip || !child->parent_joint) continue;
-    if (child->parent_joint->type != urdf::Joint::FIXED) continue;  // off-chain movable branches are not ours
-    const Eigen::Isometry3d X_BC = X_BL * toIsometry(child->parent_joint->parent_to_joint_origin_transform);
+    const urdf::Joint& joint = *child->parent_joint;
+    const Eigen::Isometry3d X_BC = X_BL * toIsometry(joint.parent_to_joint_origin_transform) * heldJointMotion(joint);
+    if (!isFinite(X_BC)) throw InputError("joint '" + joint.name + "': non-finite origin");
     foldLinkInto(body, *child, X_BC, base_dir);
     body.folded_links.push_back(child->name);
-    foldFixedSubtree(body, *child, X_BC, nullptr, base_dir);
+    if (joint.type != urdf::Joint::FIXED) body.held_links.push_back(child->name);
+    foldSubtree(body, *child, X_BC, nullptr, base_dir);
   }
 }
 
@@ -422,8 +448,8 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
     const urdf::Joint& joint = *link.parent_joint;
     const Eigen::Isometry3d X_PJ = X_BL * toIsometry(joint.parent_to_joint_origin_transform);
     if (!isFinite(X_PJ)) throw InputError("joint '" + joint.name + "': non-finite origin");
-    // Fixed side-branches of the previous chain link belong to the current body.
-    foldFixedSubtree(model.bodies_.back(), *path[i - 1], X_BL, &link, base_dir);
+    // Side-branches of the previous chain link belong to the current body.
+    foldSubtree(model.bodies_.back(), *path[i - 1], X_BL, &link, base_dir);
     if (joint.type == urdf::Joint::FIXED) {
       X_BL = X_PJ;
       foldLinkInto(model.bodies_.back(), link, X_BL, base_dir);
@@ -491,8 +517,8 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
     X_BL = Eigen::Isometry3d::Identity();
     foldLinkInto(model.bodies_.back(), link, X_BL, base_dir);
   }
-  // What hangs off the tip (tools, sensors) through fixed joints moves with the last body.
-  foldFixedSubtree(model.bodies_.back(), *path.back(), X_BL, nullptr, base_dir);
+  // What hangs off the tip (tools, sensors, links past a tip inside the chain) moves with the last body.
+  foldSubtree(model.bodies_.back(), *path.back(), X_BL, nullptr, base_dir);
   model.X_last_body_tip_ = X_BL;
   if (model.joints_.empty()) throw InputError("no movable joint between root '" + root->name + "' and tip '" + tip + "'");
   assumeInertiaOfMasslessBodies(model.bodies_, model.joints_, model.X_last_body_tip_);

@@ -39,7 +39,10 @@ struct Geometry {
 
 struct Body {
   std::string name;                    ///< the URDF link on the chain
-  std::vector<std::string> folded_links;  ///< links merged into this body through fixed joints
+  std::vector<std::string> folded_links;  ///< links merged into this body (fixed joints, held joints)
+  /// Of folded_links, those joined through a movable joint off the chain, held at 0 (or the
+  /// limit nearest 0): not controlled, but drawn, weighed and collided with.
+  std::vector<std::string> held_links;
   std::vector<Geometry> visuals;
   std::vector<Geometry> collisions;
   double mass = 0.0;                             ///< [kg], folded links included

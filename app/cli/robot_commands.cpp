@@ -43,9 +43,11 @@ Json robotInfo(const robot::RobotModel& model) {
   for (const auto& body : model.bodies()) links.push_back(body.name);
   double total_mass = 0.0;
   Json assumed = Json::array();
+  Json held = Json::array();
   for (const auto& body : model.bodies()) {
     total_mass += body.mass;
     if (body.inertia_assumed) assumed.push_back(body.name);
+    for (const auto& link : body.held_links) held.push_back({{"link", link}, {"moves_with", body.name}});
   }
   return {{"name", model.name()},
           {"dof", model.dof()},
@@ -55,7 +57,8 @@ Json robotInfo(const robot::RobotModel& model) {
           {"joints", joints},
           {"bodies", links},
           {"mass_kg", total_mass},
-          {"bodies_with_assumed_mass", assumed}};
+          {"bodies_with_assumed_mass", assumed},
+          {"links_held_still", held}};
 }
 
 Json forwardKinematics(const robot::RobotModel& model, const Eigen::VectorXd& q) {

@@ -159,6 +159,37 @@ TEST(RobotModel, AcceptsAnExplicitTipInsideTheChain) {
   EXPECT_EQ(model.tipLink(), "l1");
 }
 
+TEST(RobotModel, LinksOffTheChainMoveWithTheLinkTheyHangFromTheirJointHeldStill) {
+  TempDir dir;
+  // A finger on a prismatic joint whose range [0.02, 0.04] m excludes 0: held at 0.02.
+  const std::string finger = R"(
+  <joint name="finger_joint" type="prismatic"><parent link="l2"/><child link="finger"/>
+    <origin xyz="0.1 0 0"/><axis xyz="0 0 2"/><limit lower="0.02" upper="0.04" velocity="1" effort="1"/></joint>
+  <link name="finger">
+    <inertial><origin xyz="0 0 0"/><mass value="0.5"/><inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial>
+    <collision><geometry><box size="0.01 0.02 0.03"/></geometry></collision>
+  </link>
+)";
+  const auto model = RobotModel::fromUrdfFile(dir.write("finger.urdf", twoJointArm(finger)), "tool");
+  ASSERT_EQ(model.dof(), 2);
+  const Body& hand = model.bodies()[2];
+  EXPECT_EQ(hand.held_links, std::vector<std::string>{"finger"});
+  EXPECT_DOUBLE_EQ(hand.mass, 1.5);
+  // Tool (1 kg at x = 0.3) and finger (0.5 kg at (0.1, 0, 0.02)).
+  EXPECT_TRUE(hand.p_BCom.isApprox(Eigen::Vector3d(0.35 / 1.5, 0.0, 0.01 / 1.5))) << hand.p_BCom.transpose();
+  ASSERT_EQ(hand.collisions.size(), 1U);
+  EXPECT_TRUE(hand.collisions[0].X_BG.translation().isApprox(Eigen::Vector3d(0.1, 0.0, 0.02)));
+
+  // A tip inside the chain: the links past it ride on its body, the joint between held at 0.
+  const auto short_arm = RobotModel::fromUrdfFile(dir.write("finger.urdf", twoJointArm(finger)), "l1");
+  ASSERT_EQ(short_arm.dof(), 1);
+  const Body& last = short_arm.bodies()[1];
+  EXPECT_EQ(last.held_links, (std::vector<std::string>{"l2", "finger"}));
+  EXPECT_DOUBLE_EQ(last.mass, 3.5);
+  ASSERT_EQ(last.collisions.size(), 1U);
+  EXPECT_TRUE(last.collisions[0].X_BG.translation().isApprox(Eigen::Vector3d(0.1, 0.0, 0.52)));
+}
+
 TEST(RobotModel, SupportsPrismaticJoints) {
   TempDir dir;
   const auto model = RobotModel::fromUrdfFile(dir.write("p.urdf", twoJointArm("", "prismatic")));
