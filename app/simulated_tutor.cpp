@@ -29,6 +29,9 @@ constexpr double kMaxPointForce = 150.0;  // [N]
 // Unbounded, its lead reached 0.5 rad on the 9-DoF arm and the links cut across the planned way
 // into the bridge and into the arm's own base.
 constexpr double kMaxLead = 0.05;
+// [rad] (largest joint) an arm that on_converged poses at the end of the way may stand off the
+// chosen posture and still be taken as there, as a person sees it.
+constexpr double kPosedTolerance = 0.02;
 constexpr double kTipStiffness = 1500.0;  // [N/m] of the hand drawing circles
 constexpr double kTipDamping = 60.0;      // [Ns/m]
 constexpr double kMaxTipForce = 60.0;     // [N]
@@ -373,6 +376,20 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
       detail << "in " << workflow_->stateName() << ", at path point " << next << "/" << path.size() << ", posture error "
              << std::setprecision(3) << (state_.q - q_ref).cwiseAbs().maxCoeff() << " rad, joint speed "
              << state_.qd.cwiseAbs().maxCoeff() << " rad/s (" << qd_mean.cwiseAbs().maxCoeff() << " over 0.1 s)";
+      last_failure_detail_ = detail.str();
+      return false;
+    }
+    if (workflow_->subStage() == SubStage::kPosed) {
+      // on_converged fired under the hands: the arm crept so slowly (below the triggers' still
+      // speed for converged_time) that it counts as posed. A person who sees that lets go at
+      // once, since any further push would start a recording here. At the end of the way,
+      // close to the posture, that is the posture; short of it, the approach failed.
+      arm()->clearHandForce();
+      const double error = (state_.q - path.back()).cwiseAbs().maxCoeff();
+      if (next >= path.size() && error < kPosedTolerance) return true;
+      std::ostringstream detail;
+      detail << "on_converged fired " << std::setprecision(3) << error << " rad short of the posture, at path point " << next << "/"
+             << path.size();
       last_failure_detail_ = detail.str();
       return false;
     }

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <numbers>
+#include <sstream>
 #include <string>
 
 #include "app/evaluation.hpp"
@@ -430,6 +432,77 @@ TEST(SimulatedTutor, PushesEveryJointOfAnArmWithParallelJointAxes) {
   robot::Kinematics kinematics(model);
   kinematics.update(teaching.workflow->areas()[0].q_fixed);
   EXPECT_LT((kinematics.p_WT() - teaching.scene.training_areas[0].p_WA).norm(), 0.02);
+}
+
+// A 6-DoF arm of cylinders whose tool and cable hang off the last link through fixed joints.
+// In front of a wall its approach ends creeping: within 0.01 rad of the posture, slower than
+// the triggers' still speed for 2 s, so on_converged posed the arm under the hands, their next
+// push started a recording there, and the one area was taught as two (100 samples and the
+// helix's 943).
+constexpr double kDegree = std::numbers::pi / 180.0;
+
+std::string creepingArm() {
+  struct Segment {
+    const char* axis;
+    double length;
+  };
+  const Segment segments[] = {{"0 0 1", 0.3}, {"0 1 0", 0.4}, {"0 1 0", 0.35}, {"0 0 1", 0.1}, {"0 1 0", 0.1}, {"0 0 1", 0.08}};
+  const auto link = [](const std::string& name, double length, double radius) {
+    std::ostringstream text;
+    text << "<link name=\"" << name << "\"><inertial><origin xyz=\"0 0 " << length / 2 << "\"/><mass value=\"1\"/>"
+         << "<inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.002\"/></inertial>"
+         << "<collision><origin xyz=\"0 0 " << length / 2 << "\"/><geometry><cylinder radius=\"" << radius << "\" length=\"" << length
+         << "\"/></geometry></collision></link>\n";
+    return text.str();
+  };
+  const auto joint = [](const std::string& name, const std::string& type, const std::string& parent, const std::string& child,
+                        double z, const char* axis) {
+    std::ostringstream text;
+    text << "<joint name=\"" << name << "\" type=\"" << type << "\"><parent link=\"" << parent << "\"/><child link=\"" << child
+         << "\"/><origin xyz=\"0 0 " << z << "\"/><axis xyz=\"" << axis << "\"/>"
+         << (type == "fixed" ? "" : "<limit lower=\"-2.9\" upper=\"2.9\" velocity=\"2\" effort=\"100\"/>") << "</joint>\n";
+    return text.str();
+  };
+  std::string urdf = "<robot name=\"creeping\">\n" + link("l0", 0.1, 0.08);
+  double previous_length = 0.1;
+  for (int i = 0; i < 6; ++i) {
+    const std::string parent = "l" + std::to_string(i);
+    const std::string child = "l" + std::to_string(i + 1);
+    urdf += joint("j" + std::to_string(i + 1), "revolute", parent, child, previous_length, segments[i].axis) + link(child, segments[i].length, 0.04);
+    previous_length = segments[i].length;
+  }
+  urdf += joint("tool_joint", "fixed", "l6", "tool", 0.08, "0 0 1") + link("tool", 0.1, 0.02);
+  urdf += joint("cable_joint", "fixed", "tool", "cable", 0.1, "0 0 1") + link("cable", 0.05, 0.01);
+  return urdf + "</robot>\n";
+}
+
+TEST(SimulatedTutor, AnArmPosedUnderTheHandsAtTheEndOfItsWayIsTaughtOneArea) {
+  const robot::RobotModel model = robot::RobotModel::fromUrdfString(creepingArm(), ".");
+  ASSERT_EQ(model.tipLink(), "cable");
+  robot::Scene scene;
+  scene.name = "wall";
+  scene.home_posture = Eigen::VectorXd(6);
+  *scene.home_posture << 0.0, 30 * kDegree, 60 * kDegree, 0.0, 60 * kDegree, 0.0;
+  robot::Obstacle wall;
+  wall.name = "wall";
+  wall.size = Eigen::Vector3d(0.05, 0.8, 0.3);
+  wall.X_WO = Eigen::Translation3d(0.45, 0.0, 0.15) * Eigen::AngleAxisd(30 * kDegree, Eigen::Vector3d::UnitZ());
+  scene.obstacles = {wall};
+  robot::Area area;
+  area.name = "front";
+  area.p_WA = Eigen::Vector3d(0.5, 0.0, 0.5);
+  area.radius = 0.08;
+  scene.training_areas = {area};
+  ShortTeaching teaching(scene, model);
+  teaching.tutor_options.check_points = 0;
+  teaching.tutor_options.circles = 4;
+  teaching.tutor_options.posture_candidates = 24;
+  const TutorReport report = teaching.configure(1);
+  ASSERT_EQ(report.areas.size(), 1U);
+  EXPECT_TRUE(report.areas[0].taught) << report.areas[0].failure;
+  ASSERT_EQ(teaching.workflow->areas().size(), 1U);
+  // The whole helix (4 turns of 4 s) went into the one area.
+  EXPECT_GT(teaching.workflow->areas()[0].X.cols(), 600);
 }
 
 // Kinematic IK for the tip position p_W with the hierarchical controller (Eq. 2.11), its
