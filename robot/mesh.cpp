@@ -52,8 +52,18 @@ void precheckStl(const fs::path& file, std::uintmax_t file_bytes, const MeshLimi
   in.read(head.data(), head.size());
   const auto got = static_cast<std::size_t>(in.gcount());
   const bool starts_solid = got >= 5 && std::memcmp(head.data(), "solid", 5) == 0;
+  const bool printable = got > 0 && std::all_of(head.begin(), head.begin() + static_cast<std::ptrdiff_t>(got), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return std::isprint(u) != 0 || std::isspace(u) != 0;
+  });
+  // Text that is not an ASCII STL (a README or an OBJ saved as .stl) would otherwise be read as
+  // a binary header declaring a count made of letters, and called truncated.
+  const auto notAnStl = [&file] {
+    return InputError("mesh '" + file.string() + "' is text but not an ASCII STL (which begins with \"solid\")");
+  };
   if (got < 84) {
     if (starts_solid) return;  // a tiny ASCII STL
+    if (printable) throw notAnStl();
     throw InputError("mesh '" + file.string() + "' is truncated (shorter than a binary STL header)");
   }
   std::uint32_t count = 0;
@@ -67,11 +77,8 @@ void precheckStl(const fs::path& file, std::uintmax_t file_bytes, const MeshLimi
     return;
   }
   // Not a consistent binary STL: accept it only as text.
-  const bool printable = std::all_of(head.begin(), head.end(), [](char c) {
-    const auto u = static_cast<unsigned char>(c);
-    return std::isprint(u) != 0 || std::isspace(u) != 0;
-  });
   if (starts_solid && printable) return;
+  if (printable) throw notAnStl();
   throw InputError("mesh '" + file.string() + "' is truncated or corrupt: the binary STL header declares " +
                    std::to_string(count) + " triangles (" + std::to_string(expected) + " bytes), the file has " +
                    std::to_string(file_bytes) + " bytes");

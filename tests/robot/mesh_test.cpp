@@ -283,6 +283,12 @@ TEST(MeshLoader, RefusesMissingEmptyAndGarbageFiles) {
   expectOneLineInputError([&] { loadMesh(dir / "garbage.dae"); }, "garbage.dae");
   std::ofstream(dir / "noise.stl", std::ios::binary) << std::string(300, '\x7f');
   expectOneLineInputError([&] { loadMesh(dir / "noise.stl"); }, "truncated or corrupt");
+  // Text that is no ASCII STL, long and short, is called what it is, not a truncated binary.
+  std::ofstream(dir / "readme.stl") << "This folder holds the gripper meshes; export them as binary STL in metres.\n"
+                                    << std::string(100, '-') << "\n";
+  expectOneLineInputError([&] { loadMesh(dir / "readme.stl"); }, "text but not an ASCII STL");
+  std::ofstream(dir / "short.stl") << "v 0 0 0\n";
+  expectOneLineInputError([&] { loadMesh(dir / "short.stl"); }, "text but not an ASCII STL");
   fs::remove_all(dir);
 }
 
