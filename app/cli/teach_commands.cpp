@@ -58,6 +58,12 @@ bool endsWith(const std::string& text, const std::string& suffix) {
 
 Json runTeach(const TeachOptions& options) {
   if (options.out.empty()) throw InputError("--out: expected a session file path");
+  {
+    std::error_code error;
+    if (std::filesystem::is_directory(options.out, error)) {
+      throw InputError("--out: '" + options.out + "' is a directory; expected a session file path");
+    }
+  }
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);
   const robot::Scene scene = robot::loadScene(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene);
@@ -269,8 +275,6 @@ Json runTeach(const TeachOptions& options) {
       } catch (const InputError& e) {
         session_error += std::string("; no copy either: ") + e.what();
       }
-      std::cerr << "error: --out: " << session_error
-                << (session_copy.empty() ? std::string() : "; the session was saved to " + session_copy) << "\n";
     }
   }
   int warnings = 0;
@@ -312,6 +316,11 @@ Json runTeach(const TeachOptions& options) {
                  {"tutor", tutor_areas},
                  {"simulated_time_s", report.simulated_time},
                  {"wall_time_s", wall_seconds}};
+  if (!session_error.empty()) {
+    throw CommandFailed("teach: the session file failed: " + session_error +
+                            (session_copy.empty() ? std::string() : "; the whole session was saved to " + session_copy),
+                        std::move(result));
+  }
   if (workflow.areas().empty()) {
     // The session is written all the same (events, the ITM of the attempts): nothing is lost.
     const std::string reason = report.areas.empty() ? std::string("none was tried") : report.areas.front().failure;

@@ -175,5 +175,18 @@ TEST(TeachCli, RefusesASceneWhosePosturesBelongToAnotherRobotWithOneLine) {
   EXPECT_FALSE(fs::exists(scratch("mismatch.json")));
 }
 
+TEST(TeachCli, RefusesADirectoryAsTheSessionFileBeforeTeaching) {
+  const fs::path folder = scratch("sessions_folder");
+  fs::create_directories(folder);
+  for (const fs::path& out : {folder, folder / "."}) {
+    const auto result = runCliBinary("teach --scene setup_A --areas 1 --out " + out.string());
+    EXPECT_EQ(result.exit_code, 2) << result.err;
+    EXPECT_NE(result.err.find("is a directory"), std::string::npos) << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_TRUE(result.out.empty()) << "refused before any teaching: " << result.out;
+  }
+  fs::remove_all(folder);
+}
+
 }  // namespace
 }  // namespace flexirob
