@@ -4,6 +4,7 @@
 #include <cmath>
 #include <memory>
 #include <optional>
+#include <sstream>
 
 #include "app/cli/cli_support.hpp"
 #include "robot/errors.hpp"
@@ -33,6 +34,13 @@ Json runReach(const ReachOptions& options) {
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
   if (scene) robot::checkPosturesFit(*scene, model, robot_name);
   const Eigen::Vector3d target = parseNumberList(options.target, "--target", 3);
+  // The table the robot stands on is no obstacle of the collision model (as in scene files,
+  // docs/SCENES.md): a target under it would be reached through it, contact-free.
+  if (target.z() < 0.0) {
+    std::ostringstream z;
+    z << target.z();
+    throw InputError("--target: lies below the table top (z = " + z.str() + " m); the robot stands on z = 0");
+  }
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);
   if (scene) parameters.applyOverrides(scene->parameters);
@@ -41,10 +49,14 @@ Json runReach(const ReachOptions& options) {
   request.target = target;
   if (!options.from.empty()) {
     request.start = parseNumberList(options.from, "--from", model.dof());
+    model.checkWithinLimits(request.start, "--from");
   } else if (scene && scene->home_posture) {
     request.start = *scene->home_posture;
   }
-  if (!options.posture.empty()) request.posture = parseNumberList(options.posture, "--posture", model.dof());
+  if (!options.posture.empty()) {
+    request.posture = parseNumberList(options.posture, "--posture", model.dof());
+    model.checkWithinLimits(request.posture, "--posture");
+  }
   if (!(options.tolerance > 0.0) || !std::isfinite(options.tolerance)) throw InputError("--tolerance: expected a positive number");
   if (!(options.max_time > 0.0) || !(options.max_time <= 3600.0)) throw InputError("--max-time: expected a value in (0, 3600] s");
   request.tolerance = options.tolerance;

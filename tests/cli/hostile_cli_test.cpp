@@ -119,6 +119,12 @@ TEST_F(HostileCli, NonFiniteAndOverflowingNumbersAreRefused) {
   expectRefused(runCliBinary("reach --target 0.4,inf,0.5"), "not a finite number");
 }
 
+TEST_F(HostileCli, ReachRefusesTargetsUnderTheTableAndPosturesOutsideTheLimits) {
+  expectRefused(runCliBinary("reach --target -0.5,0.2,-0.4"), "below the table top");
+  expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --posture 0,0,0,0,0,0,10"), "--posture: joint 7");
+  expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --from 0,0,0,0,0,0,10"), "--from: joint 7");
+}
+
 TEST_F(HostileCli, GarbageModelGraphAndSessionFilesAreRefused) {
   const fs::path garbage = write("garbage.bin", std::string("\x00\xff\x13garbage\n", 11));
   const fs::path data = write("data.csv", "x,y,z\n0.4,0,0.5\n");
