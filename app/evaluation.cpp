@@ -196,8 +196,14 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   std::vector<Eigen::Vector3d> targets;
   learning::UniformRandom random(7);  // the IK seeds of the accessibility test: fixed, T must not vary
   for (const auto& p : points) {
-    if ((p - shoulder).norm() > reach - grid.tolerance) continue;
-    if (robot::obstacleAt(scene, p) != nullptr) continue;
+    if ((p - shoulder).norm() > reach - grid.tolerance) {
+      ++result.out_of_reach;
+      continue;
+    }
+    if (robot::obstacleAt(scene, p) != nullptr) {
+      ++result.in_obstacles;
+      continue;
+    }
     if (grid.excludes(p)) {
       ++result.excluded;
       continue;

@@ -76,6 +76,8 @@ MotionOutcome executeMotion(const robot::RobotModel& model, const robot::Paramet
 
 struct ReachableResult {
   int grid_points = 0;   ///< points of G
+  int out_of_reach = 0;  ///< farther from the shoulder than the arm reaches
+  int in_obstacles = 0;  ///< within reach, inside an obstacle
   int targets = 0;       ///< |T|: grid points within reach, outside the obstacles and excluded boxes, and accessible
   int inaccessible = 0;  ///< within reach and outside the obstacles, but neither the IK search nor the learned map found a collision-free posture there
   int excluded = 0;      ///< within reach and outside the obstacles, but in a box the grid excludes

@@ -216,23 +216,35 @@ Json runReachable(const EvalOptions& options) {
       app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
                              session.data.X, [](double f) { reportProgress("eval reachable", f); },
                              app::parseApproach(options.approach));
-  return {{"targets", result.targets},
-          {"reached", result.reached},
-          {"reachable_fraction", result.reachable_fraction},
-          {"explored_fraction", result.explored_fraction},
-          {"collided", result.collided},
-          {"grid_points", result.grid_points},
-          {"spacing_m", grid.spacing},
-          {"tolerance_m", grid.tolerance},
-          {"learner", options.learner},
-          {"areas", session.q_fixed.size()},
-          {"samples", session.data.size()},
-          {"inaccessible", result.inaccessible},
-          {"excluded", result.excluded},
-          {"contacts", result.contacts},
-          {"approach", options.approach},
-          {"target_points", pointsJson(result.target_points)},
-          {"target_reached", result.target_reached}};
+  // Without targets there is no fraction (0 of 0 is not 0 %).
+  const auto fraction = [&result](double value) { return result.targets > 0 ? Json(value) : Json(nullptr); };
+  Json json = {{"targets", result.targets},
+               {"reached", result.reached},
+               {"reachable_fraction", fraction(result.reachable_fraction)},
+               {"explored_fraction", fraction(result.explored_fraction)},
+               {"collided", result.collided},
+               {"grid_points", result.grid_points},
+               {"out_of_reach", result.out_of_reach},
+               {"in_obstacles", result.in_obstacles},
+               {"spacing_m", grid.spacing},
+               {"tolerance_m", grid.tolerance},
+               {"learner", options.learner},
+               {"areas", session.q_fixed.size()},
+               {"samples", session.data.size()},
+               {"inaccessible", result.inaccessible},
+               {"excluded", result.excluded},
+               {"contacts", result.contacts},
+               {"approach", options.approach},
+               {"target_points", pointsJson(result.target_points)},
+               {"target_reached", result.target_reached}};
+  if (result.targets == 0) {
+    throw CommandFailed("eval reachable: none of the grid's " + std::to_string(result.grid_points) + " points is a target (" +
+                            std::to_string(result.out_of_reach) + " out of reach, " + std::to_string(result.in_obstacles) +
+                            " inside obstacles, " + std::to_string(result.excluded) + " excluded, " +
+                            std::to_string(result.inaccessible) + " inaccessible)",
+                        std::move(json));
+  }
+  return json;
 }
 
 // The session's areas with their samples, for the trajectory evaluation.

@@ -107,6 +107,25 @@ TEST(EvalSceneModelCli, ModelPointsLieOnTheGridAndTheEnclosedObstaclePointsInsid
   std::filesystem::remove(session);
 }
 
+// 0 of 0 targets is no fraction: the command fails with one line that says where the grid's
+// points went, and its JSON holds null fractions (it reported reachable_fraction 0).
+TEST(EvalReachableCli, AGridWithNoTargetFailsSayingWhereItsPointsWent) {
+  const auto scene = scratchDir() / "far_grid.yaml";
+  writeText(scene, "name: far_grid\ngrid: {lower: [2.5, 2.5, 0.1], upper: [3.0, 3.0, 0.5], spacing: 0.25}\n");
+  const auto session = tinySession(scene.string(), "far-grid.json");
+  const auto result = runCliBinary("eval reachable --session " + session.string());
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  EXPECT_NE(result.err.find("none of the grid's 18 points is a target (18 out of reach"), std::string::npos) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  const nlohmann::json json = result.json();
+  EXPECT_EQ(json.at("targets"), 0);
+  EXPECT_EQ(json.at("out_of_reach"), 18);  // 3 x 3 x 2 points
+  EXPECT_TRUE(json.at("reachable_fraction").is_null());
+  EXPECT_TRUE(json.at("explored_fraction").is_null());
+  std::filesystem::remove(session);
+  std::filesystem::remove(scene);
+}
+
 TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
   // The empty scene lists no trajectories: per area `per-area` are drawn, twice as many between.
   const auto session = tinySession("empty", "trajectories.json");
