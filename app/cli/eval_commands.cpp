@@ -19,6 +19,7 @@
 #include "planning/itm.hpp"
 #include "planning/path_postures.hpp"
 #include "robot/errors.hpp"
+#include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/scene.hpp"
@@ -66,6 +67,26 @@ void checkPosturesWithinLimits(const Session& session) {
   for (Eigen::Index l = 0; l < session.data.Y.cols(); ++l) check(session.data.Y.col(l), "training sample " + std::to_string(l + 1));
   if (session.itm) {
     for (const int id : session.itm->nodeIds()) check(session.itm->joints(id), "ITM node " + std::to_string(id));
+  }
+}
+
+// teach writes each sample's tip position as the forward kinematics of its posture: a JSON
+// session whose positions disagree was edited or belongs to another robot, and its map would
+// be learned from pairs that never were (positions 5 m away were evaluated without a word).
+// A recorded SQLite session from the real robot keeps the controller's own Cartesian
+// measurement, which a tool frame set on the robot may offset; it is not held to this.
+void checkTipPositionsMatchPostures(const Session& session) {
+  constexpr double kToleranceM = 0.01;
+  robot::Kinematics kinematics(*session.model);
+  for (Eigen::Index l = 0; l < session.data.X.cols(); ++l) {
+    kinematics.update(session.data.Y.col(l));
+    const double gap = (kinematics.p_WT() - session.data.X.col(l)).norm();
+    if (!(gap <= kToleranceM)) {
+      std::ostringstream message;
+      message << std::setprecision(3) << "session: training sample " << l + 1 << ": its tip position lies " << gap
+              << " m from where its joint values put the tip of '" << session.model->name() << "' (at most " << kToleranceM << " m)";
+      throw InputError(message.str());
+    }
   }
 }
 
@@ -124,6 +145,10 @@ Session loadSession(const std::string& file) {
   if (!json.is_object() || json.value("format", "") != "flexirob-session-json") {
     throw InputError("--session: '" + file + "' is not a flexirob session (format flexirob-session-json)");
   }
+  if (!json.contains("version") || json.at("version") != 1) {
+    throw InputError("--session: '" + file + "' has version " + (json.contains("version") ? json.at("version").dump() : "none") +
+                     "; this build reads version 1");
+  }
   Session session;
   try {
     session.robot = json.at("robot").get<std::string>();
@@ -171,6 +196,7 @@ Session loadSession(const std::string& file) {
     throw InputError("--session: malformed session (" + std::string(e.what()) + ")");
   }
   checkPosturesWithinLimits(session);
+  checkTipPositionsMatchPostures(session);
   return session;
 }
 

@@ -233,11 +233,18 @@ TEST(EvalCli, RefusesAHandEditedSessionWhosePosturesLieOutsideTheJointLimitsOrWh
   node["itm"]["nodes"][2]["q"][6] = -3.5;
   nlohmann::json fractional_edge = session;
   fractional_edge["itm"]["edges"][0] = {0.7, 1.9};
+  // A tip position that its joint values do not put the tip at, and a future version.
+  nlohmann::json far_tip = session;
+  far_tip["areas"][1]["x"][7] = {5.0, 5.0, 5.0};
+  nlohmann::json future = session;
+  future["version"] = 99;
   const std::vector<std::pair<nlohmann::json, std::string>> broken = {
       {q_fixed, "q_fixed of area 2: joint 1 (A1) at 10 lies outside its limits"},
       {sample, "training sample 6: joint 4"},
       {node, "ITM node 2: joint 7"},
       {fractional_edge, "ITM edge: expected a whole number, got 0.7"},
+      {far_tip, "training sample 48: its tip position lies"},
+      {future, "has version 99; this build reads version 1"},
       {nlohmann::json::array({1, 2}), "is not a flexirob session"}};
   for (const auto& [json, expected] : broken) {
     const auto file = dir / "limits-broken.json";
@@ -253,7 +260,14 @@ TEST(EvalCli, RefusesAHandEditedSessionWhosePosturesLieOutsideTheJointLimitsOrWh
   // arm overshoots its limit stops that far where the tutor's hands push it against them.
   EXPECT_EQ(runCliBinary("plan --goals 2 --session " + good.string()).exit_code, 0);
   nlohmann::json overshoot = session;
-  overshoot["areas"][0]["q"][3][1] = 2.094395 + 0.1;  // A2's hardware limit is 120 deg
+  Eigen::VectorXd q_over(7);
+  for (int j = 0; j < 7; ++j) q_over[j] = session["areas"][0]["q"][3][j].get<double>();
+  q_over[1] = 2.094395 + 0.1;  // A2's hardware limit is 120 deg
+  const robot::RobotModel lwr4 = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
+  robot::Kinematics kinematics(lwr4);
+  kinematics.update(q_over);
+  overshoot["areas"][0]["q"][3][1] = q_over[1];
+  overshoot["areas"][0]["x"][3] = {kinematics.p_WT().x(), kinematics.p_WT().y(), kinematics.p_WT().z()};
   const auto overshoot_file = dir / "limits-overshoot.json";
   writeText(overshoot_file, overshoot.dump());
   const auto accepted = runCliBinary("plan --goals 2 --session " + overshoot_file.string());
