@@ -201,6 +201,22 @@ Json renderPicture(const RenderOptions& options) {
   const std::string scene_name = !options.scene.empty() ? options.scene : session ? session->scene : "";
   robot::Scene scene = robot::loadScene(scene_name);
   const std::string robot_name = !options.robot.empty() ? options.robot : session ? session->robot : robot::robotFor("", scene);
+  if (session && !options.robot.empty()) {
+    // The session's postures and samples belong to its robot: drawn on another arm of the same
+    // joint count they would show postures that never put that arm's tip into the samples.
+    // A session whose robot file has moved since may be drawn on the robot the user names.
+    std::error_code error;
+    const auto canonical = [&error](const std::string& name) { return std::filesystem::weakly_canonical(resolveRobotPath(name), error); };
+    std::filesystem::path session_robot;
+    try {
+      session_robot = canonical(session->robot);
+    } catch (const InputError&) {
+    }
+    if (!session_robot.empty() && canonical(options.robot) != session_robot) {
+      throw InputError("--robot '" + options.robot + "' is not the session's robot '" + session->robot +
+                       "'; leave --robot out to draw the session on its own robot");
+    }
+  }
   const std::string tip = !options.tip.empty() ? options.tip : session && options.robot.empty() ? session->tip : "";
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), tip);
   robot::checkPosturesFit(scene, model, robot_name);

@@ -18,6 +18,7 @@
 #include "render/camera.hpp"
 #include "render/overlays.hpp"
 #include "render/world.hpp"
+#include "robot/resources.hpp"
 
 namespace flexirob::cli {
 namespace {
@@ -295,6 +296,24 @@ TEST(RenderCommandOverlays, ConfidenceSliceIsBrightAtTheAreaAndDarkFarFromIt) {
   EXPECT_TRUE(near(picture.at(*far), blend(render::confidenceColor(0.0)), 6));
   std::filesystem::remove(session);
   std::filesystem::remove(file);
+}
+
+// A session's postures belong to its robot: another arm with as many joints (here a copy of
+// the LWR IV's description under another name) is refused instead of drawing them on it.
+TEST(RenderCommandOverlays, DrawsASessionOnlyOnItsOwnRobot) {
+  const auto session = tempPng("own_robot.json");
+  const auto file = tempPng("own_robot.png");
+  const auto other = tempPng("other_arm.urdf");
+  writeText(session, tinySession());
+  std::filesystem::copy_file(resolveRobotPath("lwr4"), other, std::filesystem::copy_options::overwrite_existing);
+  const Result refused = run({"render", "--session", session.string(), "--robot", other.string(), "--out", file.string()});
+  EXPECT_EQ(refused.exit_code, 2) << refused.err;
+  EXPECT_NE(refused.err.find("is not the session's robot 'lwr4'"), std::string::npos) << refused.err;
+  EXPECT_EQ(std::count(refused.err.begin(), refused.err.end(), '\n'), 1) << refused.err;
+  const Result same = run({"render", "--session", session.string(), "--robot", "lwr4", "--out", file.string(), "--width", "64",
+                           "--height", "48"});
+  EXPECT_EQ(same.exit_code, 0) << same.err;
+  for (const auto& path : {session, file, other}) std::filesystem::remove(path);
 }
 
 TEST(RenderCommandOverlays, RejectsHostileOverlayFilesWithAOneLineErrorAndExitCodeTwo) {
