@@ -54,11 +54,11 @@ struct Session {
 
 // A posture the robot cannot take would be learned and planned with as if it could (a hand-edited
 // or damaged file): every recorded posture must lie within the hardware limits, up to what a
-// joint overshoots them when the tutor's hands push the simulated arm against its limit stops
-// (up to 0.11 rad measured in the 9-DoF and setup_II sessions).
+// joint overshot them in sessions simulated before the limit stops held (up to 0.11 rad
+// measured in the 9-DoF and setup_II sessions; a prismatic slide 0.09 m), which stay readable.
 void checkPosturesWithinLimits(const Session& session) {
   constexpr double kOvershootRad = 0.25;
-  constexpr double kOvershootM = 0.05;
+  constexpr double kOvershootM = 0.1;
   const robot::RobotModel& model = *session.model;
   const auto check = [&](const Eigen::VectorXd& q, const std::string& what) {
     model.checkWithinLimits(q, "session: " + what, kOvershootRad, kOvershootM);

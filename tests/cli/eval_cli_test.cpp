@@ -256,8 +256,8 @@ TEST(EvalCli, RefusesAHandEditedSessionWhosePosturesLieOutsideTheJointLimitsOrWh
       EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
     }
   }
-  // The untouched session is accepted, and so is a sample 0.1 rad past a limit: the simulated
-  // arm overshoots its limit stops that far where the tutor's hands push it against them.
+  // The untouched session is accepted, and so is a sample 0.1 rad past a limit: sessions
+  // simulated before the limit stops held have such samples and stay readable.
   EXPECT_EQ(runCliBinary("plan --goals 2 --session " + good.string()).exit_code, 0);
   nlohmann::json overshoot = session;
   Eigen::VectorXd q_over(7);

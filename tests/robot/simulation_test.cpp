@@ -164,6 +164,65 @@ TEST(Simulation, HandForceGivesTheExternalTorqueThatJacobianTransposePredicts) {
   EXPECT_GT(state.tau_ext.cwiseAbs().maxCoeff(), 1.5);
 }
 
+// The hardware limits are stops: a hand pushing a joint beyond one holds it there. Before the
+// links had colliders, Bullet never solved their limit constraints (a multibody constraint is
+// solved only within its links' simulation island): 20 N at the LWR IV's tip took A2 0.15 rad
+// through its stop and 150 N 0.8 rad, and a prismatic slide sank 9 cm below its lower limit.
+TEST(Simulation, JointLimitStopsHoldAgainstAHandPushingBeyondThem) {
+  const std::string slide_arm = R"(<robot name="slide">
+  <link name="base"/>
+  <joint name="lift" type="prismatic"><parent link="base"/><child link="carriage"/>
+    <origin xyz="0 0 0.3"/><axis xyz="0 0 1"/><limit lower="0" upper="0.5" velocity="1" effort="200"/></joint>
+  <link name="carriage"><inertial><origin xyz="0 0 0.1"/><mass value="2"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="shoulder" type="revolute"><parent link="carriage"/><child link="arm"/>
+    <origin xyz="0 0 0.2"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+  <link name="arm"><inertial><origin xyz="0 0 0.2"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.002"/></inertial></link>
+</robot>)";
+  testing::TempDir dir;
+  const RobotModel slide = RobotModel::fromUrdfFile(dir.write("slide.urdf", slide_arm));
+  struct Case {
+    const RobotModel* model;
+    Eigen::VectorXd q0;
+    int joint;        // pushed towards its limit
+    bool upper;       // which one
+    int body;         // where the hand pushes
+    Eigen::Vector3d direction;
+  };
+  Eigen::VectorXd lwr_q = bentPosture();
+  lwr_q[1] = lwr4().joints()[1].limits.upper - 0.02;
+  Kinematics lwr_kinematics(lwr4());
+  lwr_kinematics.update(lwr_q);
+  Matrix6Xd J;
+  lwr_kinematics.tipJacobian(J);
+  const std::vector<Case> cases = {
+      // The tip pushed along A2's own tip velocity: A2 turns on towards its upper limit.
+      {&lwr4(), lwr_q, 1, true, 7, J.block<3, 1>(0, 1).normalized()},
+      // The slide's carriage pushed down onto its lower limit, 1 cm above it.
+      {&slide, Eigen::Vector2d(0.01, 0.3), 0, false, 1, -Eigen::Vector3d::UnitZ()},
+  };
+  for (const Case& c : cases) {
+    Simulation sim(*c.model, nullptr, simParameters());
+    sim.reset(c.q0);
+    sim.writeCommand(holdCommand(c.q0, 80.0, 0.7));
+    Kinematics kinematics(*c.model);
+    const JointLimits& limits = c.model->joints()[static_cast<std::size_t>(c.joint)].limits;
+    for (const double force : {20.0, 150.0}) {
+      RobotState state;
+      for (int k = 0; k < 2000; ++k) {
+        sim.readState(state);
+        kinematics.update(state.q);
+        sim.setHandForce(c.body, kinematics.X_WB(c.body).translation(), force * c.direction);
+        sim.step();
+      }
+      sim.readState(state);
+      const double beyond = c.upper ? state.q[c.joint] - limits.upper : limits.lower - state.q[c.joint];
+      EXPECT_LT(beyond, 1e-3) << c.model->name() << " joint " << c.joint + 1 << " under " << force << " N";
+      // It does reach the stop (the push is strong enough to get there at all).
+      EXPECT_GT(beyond, -1e-3) << c.model->name() << " joint " << c.joint + 1 << " under " << force << " N";
+    }
+  }
+}
+
 TEST(Simulation, SteppingIsDeterministic) {
   auto run = [] {
     Simulation sim(lwr4(), nullptr, simParameters());
@@ -244,3 +303,4 @@ TEST(Reach, ReportsATargetOutOfTheWorkspaceWithTheBestError) {
 
 }  // namespace
 }  // namespace flexirob::robot
+
