@@ -44,8 +44,10 @@ int jsonInteger(const Json& value, const std::string& what) {
 
 bool startsAsJson(std::istream& in) {
   // Skipping the blanks needs no seek, so a pipe works too; JSON does not mind them gone.
+  // A JSON value of another kind (null, a number) is still JSON, and told so by the JSON reader,
+  // rather than called "not an SQLite database".
   const auto next = (in >> std::ws).peek();
-  return next == '{' || next == '[';
+  return next == '{' || next == '[' || next == 'n' || next == '"' || next == '-' || (next >= '0' && next <= '9');
 }
 
 Json toJson(const Eigen::VectorXd& v) {

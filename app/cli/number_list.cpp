@@ -37,7 +37,10 @@ Eigen::VectorXd parseNumberList(const std::string& text, const std::string& what
     errno = 0;
     char* parsed_end = nullptr;
     const double value = std::strtod(token.c_str(), &parsed_end);
-    if (parsed_end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value)) {
+    // strtod also reads hexadecimal ("0x1" = 1, "0x1p3" = 8), which the scene reader refuses:
+    // decimal only, as everywhere else.
+    const bool hexadecimal = token.find_first_of("xX") != std::string::npos;
+    if (hexadecimal || parsed_end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value)) {
       throw InputError(what + ": '" + excerpt(token) + "' is not a finite number");
     }
     values.push_back(value);

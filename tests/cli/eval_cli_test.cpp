@@ -245,7 +245,9 @@ TEST(EvalCli, RefusesAHandEditedSessionWhosePosturesLieOutsideTheJointLimitsOrWh
       {fractional_edge, "ITM edge: expected a whole number, got 0.7"},
       {far_tip, "training sample 48: its tip position lies"},
       {future, "has version 99; this build reads version 1"},
-      {nlohmann::json::array({1, 2}), "is not a flexirob session"}};
+      {nlohmann::json::array({1, 2}), "is not a flexirob session"},
+      {nlohmann::json(nullptr), "is not a flexirob session"},
+      {nlohmann::json(42), "is not a flexirob session"}};
   for (const auto& [json, expected] : broken) {
     const auto file = dir / "limits-broken.json";
     writeText(file, json.dump());

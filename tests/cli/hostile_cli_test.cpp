@@ -117,6 +117,9 @@ TEST_F(HostileCli, NonFiniteAndOverflowingNumbersAreRefused) {
   expectRefused(runCliBinary("fk --q 0,0,0,nan,0,0,0"), "not a finite number");
   expectRefused(runCliBinary("fk --q 0,0,0,1e999,0,0,0"), "not a finite number");
   expectRefused(runCliBinary("reach --target 0.4,inf,0.5"), "not a finite number");
+  // Hexadecimal is refused as the scene reader refuses it (strtod reads 0x1 as 1).
+  expectRefused(runCliBinary("fk --q 0x1,0,0,0,0,0,0"), "'0x1' is not a finite number");
+  expectRefused(runCliBinary("reach --target 0x1p-1,0,0.5"), "'0x1p-1' is not a finite number");
 }
 
 TEST_F(HostileCli, ReachRefusesTargetsUnderTheTableAndPosturesOutsideTheLimits) {
