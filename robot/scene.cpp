@@ -17,6 +17,7 @@
 
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
+#include "robot/mesh.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 
@@ -541,6 +542,13 @@ class SceneReader {
           fail(node["file"], join(path, "file"), "mesh file '" + printable(file) + "' not found (relative paths start at the scene file's folder)");
         }
         obstacle.mesh_file = resolved.lexically_normal();
+        // Loaded here (cached for the collision model and the drawing that load it again), so
+        // that a broken mesh is reported at the scene line that names it.
+        try {
+          loadMeshCached(obstacle.mesh_file);
+        } catch (const InputError& e) {
+          fail(node["file"], join(path, "file"), e.what());
+        }
         if (const auto scale = node["scale"]) {
           obstacle.mesh_scale = scale.IsSequence() ? positiveSize(scale, join(path, "scale"))
                                                    : Eigen::Vector3d::Constant(length(scale, join(path, "scale"), false));

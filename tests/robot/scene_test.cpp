@@ -27,6 +27,11 @@
 namespace flexirob::robot {
 namespace {
 
+// A mesh obstacle's file is loaded with the scene: the fixtures' mesh is a real one.
+constexpr const char* kOneTriangleStl =
+    "solid triangle\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 0.1 0 0\n   vertex 0 0.1 0\n"
+    "  endloop\n endfacet\nendsolid triangle\n";
+
 namespace fs = std::filesystem;
 constexpr double kPi = std::numbers::pi;
 
@@ -146,7 +151,7 @@ parameters:
 )";
 
 TEST_F(SceneFileTest, ReadsEveryElementWithUnitsAndDefaults) {
-  write("meshes/fixture.stl", "solid empty\nendsolid empty\n");
+  write("meshes/fixture.stl", kOneTriangleStl);
   const fs::path file = write("cell/../workcell.yaml", kFullScene);
   const Scene scene = loadSceneFile(file);
 
@@ -277,7 +282,7 @@ void expectScenesEqual(const Scene& a, const Scene& b) {
 }
 
 TEST_F(SceneFileTest, WritesEveryElementBackToAnEqualScene) {
-  write("meshes/fixture.stl", "solid empty\nendsolid empty\n");
+  write("meshes/fixture.stl", kOneTriangleStl);
   const Scene original = loadSceneFile(write("workcell.yaml", kFullScene));
   const std::string text = sceneToYaml(original);
   const Scene again = loadSceneFile(write("again/workcell.yaml", text));
@@ -518,12 +523,17 @@ TEST_F(SceneFileTest, RefusesPlacesBelowTheTableTop) {
   EXPECT_DOUBLE_EQ(scene.training_areas.at(0).p_WA.z(), 0.0);
 }
 
-TEST_F(SceneFileTest, RefusesMissingMeshFiles) {
+TEST_F(SceneFileTest, RefusesMissingAndBrokenMeshFilesNamingTheLine) {
   const std::string message = refusal("obstacles:\n  - {shape: mesh, file: meshes/nowhere.stl}\n");
   expectOneLineNamingFile(message, "broken.yaml:2");
   EXPECT_NE(message.find("nowhere.stl"), std::string::npos) << message;
   fs::create_directories(dir_ / "folder.stl");
   expectOneLineNamingFile(refusal("obstacles:\n  - {shape: mesh, file: folder.stl}\n"), "broken.yaml");
+  // A mesh that cannot be read is reported at the scene line that names it, with the mesh's reason.
+  write("meshes/readme.stl", "These meshes are exported from the fixture's CAD model in millimetres.\n");
+  const std::string broken = refusal("name: cell\nobstacles:\n  - {shape: mesh, file: meshes/readme.stl}\n");
+  expectOneLineNamingFile(broken, "broken.yaml:3");
+  EXPECT_NE(broken.find("text but not an ASCII STL"), std::string::npos) << broken;
 }
 
 TEST_F(SceneFileTest, RefusesEmptyAndBinaryFiles) {
