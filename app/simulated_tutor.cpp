@@ -473,8 +473,16 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     area.failure = failure.str();
     return false;
   }
+  // A touch in POSED would not start an approach but a recording where the arm happens to be.
+  // The arm can come to be posed without the tutor's doing (after a let-go the settling arm's
+  // torques may read as a touch, and its coming to rest as on_converged): a person records that
+  // pose away and takes it back, then starts the area, rather than giving the area up.
+  if (workflow_->subStage() == SubStage::kRecording) waitFor(SubStage::kWaiting, 10.0);
+  if (workflow_->subStage() == SubStage::kPosed) {
+    discardPose();
+    workflow_->nameNextArea(area.name);  // the recording taken back used up the name
+  }
   if (workflow_->subStage() == SubStage::kPosed || workflow_->subStage() == SubStage::kRecording) {
-    // A touch now would not start an approach but a recording where the arm happens to be.
     area.failure = std::string("the workflow is in ") + workflow_->stateName() + ", not ready for an approach";
     return false;
   }
