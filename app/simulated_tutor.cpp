@@ -35,6 +35,8 @@ constexpr double kPosedTolerance = 0.02;
 constexpr double kTipStiffness = 1500.0;  // [N/m] of the hand drawing circles
 constexpr double kTipDamping = 60.0;      // [Ns/m]
 constexpr double kMaxTipForce = 60.0;     // [N]
+// The fastest a small helix is drawn, as a multiple of TutorOptions::circle_period's pace.
+constexpr double kMaxHelixPace = 8.0;
 
 }  // namespace
 
@@ -552,7 +554,7 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
   axis.normalize();
   const Eigen::Vector3d u = axis.unitOrthogonal();
   const Eigen::Vector3d w = axis.cross(u);
-  const double omega = 2.0 * std::numbers::pi / options_.circle_period;
+  double omega = 2.0 * std::numbers::pi / options_.circle_period;
   const double duration = options_.circles * options_.circle_period;
   double scale = 1.0;
   const auto helix = [&](double t) {
@@ -568,6 +570,27 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     if (helixFree(q_fixed, points, 0.5 * options_.min_clearance)) break;
   }
   scale = std::max(scale, smallest);
+  // The workflow counts the arm as still while no joint moves faster than its still speed; a
+  // helix shrunk near obstacles and drawn at the usual pace moved the tip so slowly that the
+  // joints stayed below it, and on_converged ended the recording after 2 s (setup_II's II10: 114
+  // samples, the rest of the helix recorded into the next area). A person draws a small circle
+  // faster: the turns speed up until the slowest stretch asks the joints for 1.25 times the still
+  // speed, taking the π_rec motion as the minimum-norm joint velocity of the tip's.
+  {
+    kinematics_.update(q_fixed);
+    robot::Matrix6Xd J_WT;
+    kinematics_.tipJacobian(J_WT);
+    const Eigen::MatrixXd Jp = J_WT.topRows<3>();
+    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> inverse(Jp);
+    double slowest = std::numeric_limits<double>::infinity();
+    const double dt = 1e-3 * options_.circle_period;
+    for (double t = 0.0; t <= duration; t += 0.01 * options_.circle_period) {
+      const Eigen::Vector3d v = (helix(t + dt) - helix(t)) / dt;
+      slowest = std::min(slowest, Eigen::VectorXd(inverse.solve(v)).cwiseAbs().maxCoeff());
+    }
+    const double wanted = 1.25 * workflow_->options().still_velocity;
+    if (slowest > 0.0 && slowest < wanted) omega *= std::min(kMaxHelixPace, wanted / slowest);
+  }
   // The recording starts as a person starts it: press the tip and hold until the arm stands
   // still (on_affected needs τ_ext above threshold while the arm is not moving). A push drawn
   // from the first cycle on would have the arm moving by the time a robot measures the force.

@@ -1,6 +1,7 @@
 // The simulated tutor teaching the simulated LWR IV in setup A through the workflow.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -503,6 +504,26 @@ TEST(SimulatedTutor, AnArmPosedUnderTheHandsAtTheEndOfItsWayIsTaughtOneArea) {
   ASSERT_EQ(teaching.workflow->areas().size(), 1U);
   // The whole helix (4 turns of 4 s) went into the one area.
   EXPECT_GT(teaching.workflow->areas()[0].X.cols(), 600);
+}
+
+// A small helix (setup_II's II10 lies so close to the boxes that it shrinks to a few centimetres;
+// here the tutor is asked for a 2 cm one) drawn at the usual pace moved the tip so slowly that no
+// joint reached the workflow's still speed: on_converged ended the recording after 2 s (114
+// samples of 16 s in II10), and the rest of the helix went into the next area. The small helix is
+// drawn faster, and the whole of it is recorded into its own area.
+TEST(SimulatedTutor, RecordsTheWholeOfASmallHelix) {
+  robot::Scene scene = robot::loadScene("setup_A");
+  scene.training_areas.resize(1);
+  ShortTeaching teaching(scene);
+  teaching.tutor_options = TutorOptions{};
+  teaching.tutor_options.check_points = 0;
+  teaching.tutor_options.circle_diameter = 0.02;
+  const TutorReport report = teaching.configure(1);
+  ASSERT_EQ(report.areas.size(), 1U);
+  EXPECT_TRUE(report.areas[0].taught) << report.areas[0].failure;
+  ASSERT_EQ(teaching.workflow->areas().size(), 1U);
+  // 4 turns of 4 s at 0.02 s per sample.
+  EXPECT_GT(teaching.workflow->areas()[0].X.cols(), 750);
 }
 
 // Kinematic IK for the tip position p_W with the hierarchical controller (Eq. 2.11), its
