@@ -189,17 +189,21 @@ int Itm::nearestNode(const Eigen::VectorXd& xi, bool position_only) const {
   return nearestTwo(xi.data()).first;
 }
 
-std::vector<int> Itm::nodesWithin(const Eigen::VectorXd& xi, double radius) const {
-  if (xi.size() != task_size_) throw std::invalid_argument("ITM: point of wrong size");
+std::vector<int> Itm::nodesWithin(const Eigen::VectorXd& xi, double radius, bool position_only) const {
+  if (position_only ? xi.size() < 3 : xi.size() != task_size_) throw std::invalid_argument("ITM: point of wrong size");
   std::vector<int> result;
-  const double half_width = radius / metric_.translationFactor();
+  const double half_width = position_only ? radius : radius / metric_.translationFactor();
   double lo[3], hi[3];
   for (int i = 0; i < 3; ++i) {
     lo[i] = xi[i] - half_width;
     hi[i] = xi[i] + half_width;
   }
   const auto consider = [&](int id) {
-    if (metric_.distance(xi.data(), omega(id)) < radius) result.push_back(id);
+    const double* w = omega(id);
+    const double d = position_only ? std::sqrt((w[0] - xi[0]) * (w[0] - xi[0]) + (w[1] - xi[1]) * (w[1] - xi[1]) +
+                                               (w[2] - xi[2]) * (w[2] - xi[2]))
+                                   : metric_.distance(xi.data(), w);
+    if (d < radius) result.push_back(id);
   };
   if (grid_.cellsInBox(lo, hi) > 2 * static_cast<std::int64_t>(node_count_) + 27) {
     for (int id = 0; id < slotCount(); ++id) {

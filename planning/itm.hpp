@@ -110,8 +110,10 @@ class Itm {
   /// Nearest node to xi in D_xi, or -1 for an empty graph. With position_only, only the first
   /// three numbers of xi are used and the distance is translational (for pose graphs).
   int nearestNode(const Eigen::VectorXd& xi, bool position_only = false) const;
-  /// Ids of the nodes with D_xi(xi, omega) < radius, in no particular order.
-  std::vector<int> nodesWithin(const Eigen::VectorXd& xi, double radius) const;
+  /// Ids of the nodes with D_xi(xi, omega) < radius, in no particular order. With
+  /// position_only, only the first three numbers of xi are used and the distance is
+  /// translational [m] (for pose graphs).
+  std::vector<int> nodesWithin(const Eigen::VectorXd& xi, double radius, bool position_only = false) const;
 
   ItmStatistics statistics() const;
 

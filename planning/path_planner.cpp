@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -12,6 +13,9 @@ void PathOptions::validate() const {
   limits.validate();
   if (!(shortcut_radius > 0.0 && shortcut_radius <= 1.0)) {
     throw std::invalid_argument("path: expected a shortcut radius in (0, 1] (fraction of e_max), got " + std::to_string(shortcut_radius));
+  }
+  if (!(shortcut_corridor > 0.0 && shortcut_corridor <= 1.0)) {
+    throw std::invalid_argument("path: expected a shortcut corridor in (0, 1] (fraction of e_max), got " + std::to_string(shortcut_corridor));
   }
   if (!(shortcut_waypoint_spacing > 0.0 && shortcut_waypoint_spacing <= 1.0)) {
     throw std::invalid_argument("path: expected a shortcut waypoint spacing in (0, 1] (fraction of e_max), got " +
@@ -46,6 +50,8 @@ class Shortcutter {
         // Samples are accepted only with a margin below the radius, which bounds the number of
         // nearest-node queries per segment by its length / (0.1 radius).
         margin_(0.1 * radius_),
+        corridor_(options.shortcut_corridor * graph.parameters().e_max),
+        reach_(corridor_ + graph.parameters().e_max),
         d_theta_max_(graph.parameters().d_theta_max) {}
 
   // True when the straight segment from point a to point b stays inside the mapped space of
@@ -67,15 +73,58 @@ class Shortcutter {
       const double d = graph_.distanceTo(c, p);
       if (!(d <= radius_ - margin_)) return false;  // NaN fails too
       if (!(graph_.jointDistance(c, joints_a) < d_theta_max_ && graph_.jointDistance(c, joints_b) < d_theta_max_)) return false;
-      if (t >= 1.0) return true;
+      if (t >= 1.0) break;
       t = std::min(1.0, t + (radius_ - d) / total);
     }
+    return withinCorridor(a.head<3>(), b.head<3>());
   }
 
  private:
+  // True when every point of the segment a-b lies within corridor_ of a graph edge. The distance
+  // of a point to the edges changes by at most the distance it moves, so as in admissible() the
+  // walk's steps are (corridor_ - d) long and a point is accepted only with a margin.
+  bool withinCorridor(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
+    const double length = (b - a).norm();
+    const double margin = 0.1 * corridor_;
+    for (double t = 0.0;;) {
+      const Eigen::Vector3d p = a + t * (b - a);
+      // The edges of the nearest node usually pass close enough; their distance bounds the
+      // nearest edge's from above, which only shortens the step.
+      double d = distanceToEdgesOf(graph_.nearestNode(p, true), p);
+      if (!(d <= corridor_ - margin)) d = distanceToEdges(p);
+      if (!(d <= corridor_ - margin)) return false;
+      if (t >= 1.0 || length <= 0.0) return true;
+      t = std::min(1.0, t + (corridor_ - d) / length);
+    }
+  }
+
+  // Translational distance from p to the nearest edge with an end within reach_ of p (infinity if
+  // none). An edge of up to 2 e_max that passes within corridor_ of p has an end that near; the
+  // ITM joins the two nodes nearest to a sample, which are seldom farther apart, and a longer
+  // edge left out only makes the test stricter.
+  double distanceToEdges(const Eigen::Vector3d& p) const {
+    double best = std::numeric_limits<double>::infinity();
+    for (const int c : graph_.nodesWithin(p, reach_, true)) best = std::min(best, distanceToEdgesOf(c, p));
+    return best;
+  }
+
+  // Translational distance from p to the nearest edge of node c (infinity if it has none).
+  double distanceToEdgesOf(int c, const Eigen::Vector3d& p) const {
+    double best = std::numeric_limits<double>::infinity();
+    const Eigen::Vector3d from = graph_.prototype(c).head<3>();
+    for (const int n : graph_.neighbors(c)) {
+      const Eigen::Vector3d edge = graph_.prototype(n).head<3>() - from;
+      const double s = std::clamp(edge.dot(p - from) / std::max(edge.squaredNorm(), 1e-18), 0.0, 1.0);
+      best = std::min(best, (from + s * edge - p).norm());
+    }
+    return best;
+  }
+
   const Itm& graph_;
   double radius_;
   double margin_;
+  double corridor_;
+  double reach_;
   double d_theta_max_;
 };
 

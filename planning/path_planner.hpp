@@ -33,6 +33,13 @@ struct PathOptions {
   /// 10 % of the edges have a point farther than 0.094 m from every node). Nodes are at least
   /// e_max apart, so a radius below about 0.6 e_max would not even join a straight chain of them.
   double shortcut_radius = 1.0;
+  /// (c) Every point of the segment also lies within shortcut_corridor e_max (translational
+  /// distance) of an edge of the graph. The ITM joins the two nodes nearest to each sample, so its
+  /// edges trace where the tutor moved, while the balls of (a) bulge up to e_max out of a thin
+  /// sheet of visited space: on the 9-DoF scene a shortcut between two nodes of a helix drawn
+  /// 7 cm above the bridge's slab, each within 0.09 m of a node, cut through the slab's edge.
+  /// The middle of a square of edges e_max apart is 0.5 e_max from them. In (0, 1].
+  double shortcut_corridor = 0.5;
   /// Points the spline passes through along a shortcut are at most this fraction of e_max apart,
   /// so that the spline follows the straight segment as closely as it followed the node path
   /// (whose waypoints are about e_max apart) and does not swing wide at the corners. In (0, 1].

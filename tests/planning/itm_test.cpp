@@ -442,6 +442,37 @@ TEST(Itm, PoseItmSeparatesOrientationsAtOnePlace) {
   for (int id : itm.nodeIds()) EXPECT_TRUE(itm.prototype(id).head<3>().isApprox(Eigen::Vector3d(-0.5, 0.2, 0.4)));
 }
 
+TEST(Itm, PositionOnlyNeighbourhoodOfAPoseGraphIsTranslational) {
+  // Nodes at one place and turned by 0.5 rad each (D_xi 0.05 apart), and nodes farther along x.
+  ItmParameters p;
+  p.task_space = TaskSpace::kPose;
+  Itm itm(p, 1);
+  const auto pose = [](double x, double angle) {
+    const Eigen::Quaterniond quaternion(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()));
+    Eigen::VectorXd xi(7);
+    xi << x, 0.0, 0.5, quaternion.w(), quaternion.x(), quaternion.y(), quaternion.z();
+    return xi;
+  };
+  std::set<int> here, near;
+  for (int k = 0; k < 6; ++k) here.insert(itm.addNode(pose(0.0, 0.5 * k), Eigen::VectorXd::Zero(1)));
+  near.insert(itm.addNode(pose(0.07, 2.0), Eigen::VectorXd::Zero(1)));
+  itm.addNode(pose(0.2, 0.0), Eigen::VectorXd::Zero(1));
+  const auto within = [&](const Eigen::VectorXd& xi, double radius, bool position_only) {
+    const auto ids = itm.nodesWithin(xi, radius, position_only);
+    return std::set<int>(ids.begin(), ids.end());
+  };
+  // Translationally the turned nodes are all at the query point, the one at 0.07 m inside 0.1 m.
+  std::set<int> expected = here;
+  expected.insert(near.begin(), near.end());
+  EXPECT_EQ(within(Eigen::Vector3d(0.0, 0.0, 0.5), 0.1, true), expected);
+  EXPECT_EQ(within(pose(0.0, 0.0), 0.1, true), expected) << "the orientation of the query is ignored";
+  EXPECT_EQ(within(Eigen::Vector3d(0.0, 0.0, 0.5), 0.05, true), here);
+  // In D_xi (Eq. 7.5) the turned nodes count their angles.
+  EXPECT_EQ(within(pose(0.0, 0.0), 0.075, false).size(), 2U);
+  EXPECT_THROW(itm.nodesWithin(Eigen::Vector3d(0.0, 0.0, 0.5), 0.1, false), std::invalid_argument);
+  EXPECT_THROW(itm.nodesWithin(Eigen::Vector2d(0.0, 0.0), 0.1, true), std::invalid_argument);
+}
+
 TEST(Itm, RefusesMalformedSamplesAndParameters) {
   Itm itm(ItmParameters{}, 7);
   EXPECT_THROW(itm.insert(Eigen::VectorXd::Zero(2), joints(0)), std::invalid_argument);

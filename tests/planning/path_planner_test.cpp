@@ -334,12 +334,40 @@ TEST(PathShortcut, PoseGraphShortcutsOnlyWhereTheOrientationsFollow) {
   }
 }
 
+TEST(PathShortcut, KeepsToTheEdgesWhereTheMapIsOneNodeWide) {
+  // A chain that bends around an obstacle, as the tutor's tip moved over a slab: A, the bend B
+  // 0.07 m off the chord, C. Every point of the chord A-C lies within 0.07 m of a node, inside
+  // the radius of (a), but its middle is 0.053 m from the edges the tutor moved along.
+  Itm itm(ItmParameters{}, 1);
+  const Eigen::Vector3d a(0.0, 0.0, 0.5), b(0.08, 0.07, 0.5), c(0.16, 0.0, 0.5);
+  const int node_a = itm.addNode(a, Eigen::VectorXd::Zero(1));
+  const int node_b = itm.addNode(b, Eigen::VectorXd::Zero(1));
+  const int node_c = itm.addNode(c, Eigen::VectorXd::Zero(1));
+  itm.addEdge(node_a, node_b);
+  itm.addEdge(node_b, node_c);
+  ASSERT_LT(((a + c) / 2 - b).norm(), 0.09) << "the chord lies in the balls of (a)";
+  PathOptions options;
+  options.include_endpoints = false;
+  const PlannedPath path = planPath(itm, a, c, options);
+  ASSERT_TRUE(path.found);
+  EXPECT_EQ(path.waypoint_nodes, (std::vector<int>{node_a, node_b, node_c})) << "the bend is kept";
+  EXPECT_EQ(path.shortcuts, 0);
+  // A corridor wide enough for the chord's middle cuts the bend.
+  options.shortcut_corridor = 0.6;
+  const PlannedPath wide = planPath(itm, a, c, options);
+  EXPECT_EQ(wide.shortcuts, 1);
+  EXPECT_EQ(std::count(wide.waypoint_nodes.begin(), wide.waypoint_nodes.end(), node_b), 0);
+}
+
 TEST(PathShortcut, RefusesOptionsOutOfRange) {
   const LCorridor corridor;
   for (const double bad : {0.0, -0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
     PathOptions radius;
     radius.shortcut_radius = bad;
     EXPECT_THROW(planPath(corridor.itm, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), radius), std::invalid_argument);
+    PathOptions corridor_width;
+    corridor_width.shortcut_corridor = bad;
+    EXPECT_THROW(planPath(corridor.itm, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), corridor_width), std::invalid_argument);
     PathOptions spacing;
     spacing.shortcut_waypoint_spacing = bad;
     EXPECT_THROW(planPath(corridor.itm, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), spacing), std::invalid_argument);
