@@ -37,6 +37,16 @@ constexpr double kTipDamping = 60.0;      // [Ns/m]
 constexpr double kMaxTipForce = 60.0;     // [N]
 // The fastest a small helix is drawn, as a multiple of TutorOptions::circle_period's pace.
 constexpr double kMaxHelixPace = 8.0;
+// A recording spanning less than this fraction of the helix drawn is a spot, not an area: the arm
+// did not follow the hands (held at its joint limits, or by its own links).
+constexpr double kMinSpanOfTheHelix = 0.25;
+
+// Twice the largest distance of a column of X from the columns' mean [m].
+double spanOf(const Eigen::MatrixXd& X) {
+  if (X.cols() == 0) return 0.0;
+  const Eigen::Vector3d mean = X.rowwise().mean();
+  return 2.0 * (X.colwise() - mean).colwise().norm().maxCoeff();
+}
 
 }  // namespace
 
@@ -570,6 +580,7 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     if (helixFree(q_fixed, points, 0.5 * options_.min_clearance)) break;
   }
   scale = std::max(scale, smallest);
+  area.helix_diameter = scale * options_.circle_diameter;
   // The workflow counts the arm as still while no joint moves faster than its still speed; a
   // helix shrunk near obstacles and drawn at the usual pace moved the tip so slowly that the
   // joints stayed below it, and on_converged ended the recording after 2 s (setup_II's II10: 114
@@ -749,6 +760,21 @@ TutorReport SimulatedTutor::configure(int area_count) {
     if (!area.taught && workflow_->areas().size() > areas_before) {
       area.taught = true;
       area.failure.clear();
+    }
+    if (area.taught) {
+      const TrainingArea& recorded = workflow_->areas().back();
+      area.samples = recorded.X.cols();
+      area.span = spanOf(recorded.X);
+      // A person looks at what the arm did and takes a spot back, so that `teach` does not
+      // report an area that was never explored (the learner would read it as a posture to keep).
+      if (area.helix_diameter > 0.0 && area.span < kMinSpanOfTheHelix * area.helix_diameter &&
+          workflow_->removeArea(static_cast<int>(workflow_->areas().size()) - 1)) {
+        std::ostringstream failure;
+        failure << std::fixed << std::setprecision(1) << "taken back: the recording spans " << 100.0 * area.span << " cm of the "
+                << 100.0 * area.helix_diameter << " cm helix drawn (the arm did not follow the hands)";
+        area.taught = false;
+        area.failure = failure.str();
+      }
     }
     if (!area.taught) discardPose();
     if (automatic) last_automatic_taught = area.taught;

@@ -71,6 +71,11 @@ struct TutorAreaReport {
   /// (TutorOptions::check_points); -1 where not checked.
   int map_failures_before = -1;
   int map_failures_with = -1;
+  double helix_diameter = 0.0;  ///< [m] of the helix drawn (smaller near obstacles); 0 if none was drawn
+  Eigen::Index samples = 0;     ///< samples the area's recording holds (0 if none)
+  /// [m] twice the largest distance of a recorded tip position from their mean: about 1.2 times
+  /// the helix diameter when the arm followed the hands.
+  double span = 0.0;
 };
 
 struct TutorReport {

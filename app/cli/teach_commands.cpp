@@ -221,7 +221,10 @@ Json runTeach(const TeachOptions& options) {
                            {"failure", area.failure},
                            {"automatic", area.automatic},
                            {"map_failures_before", area.map_failures_before},
-                           {"map_failures_with", area.map_failures_with}});
+                           {"map_failures_with", area.map_failures_with},
+                           {"helix_diameter_m", area.helix_diameter},
+                           {"samples", area.samples},
+                           {"span_m", area.span}});
   }
   const Json session = {{"format", "flexirob-session-json"},
                         {"version", 1},

@@ -442,7 +442,8 @@ TEST(SimulatedTutor, PushesEveryJointOfAnArmWithParallelJointAxes) {
 // helix's 943).
 constexpr double kDegree = std::numbers::pi / 180.0;
 
-std::string creepingArm() {
+// limits: per joint (lower, upper) [rad]; ±2.9 rad each where empty.
+std::string creepingArm(const std::vector<std::pair<double, double>>& limits = {}) {
   struct Segment {
     const char* axis;
     double length;
@@ -457,11 +458,12 @@ std::string creepingArm() {
     return text.str();
   };
   const auto joint = [](const std::string& name, const std::string& type, const std::string& parent, const std::string& child,
-                        double z, const char* axis) {
+                        double z, const char* axis, std::pair<double, double> limit = {-2.9, 2.9}) {
     std::ostringstream text;
     text << "<joint name=\"" << name << "\" type=\"" << type << "\"><parent link=\"" << parent << "\"/><child link=\"" << child
-         << "\"/><origin xyz=\"0 0 " << z << "\"/><axis xyz=\"" << axis << "\"/>"
-         << (type == "fixed" ? "" : "<limit lower=\"-2.9\" upper=\"2.9\" velocity=\"2\" effort=\"100\"/>") << "</joint>\n";
+         << "\"/><origin xyz=\"0 0 " << z << "\"/><axis xyz=\"" << axis << "\"/>";
+    if (type != "fixed") text << "<limit lower=\"" << limit.first << "\" upper=\"" << limit.second << "\" velocity=\"2\" effort=\"100\"/>";
+    text << "</joint>\n";
     return text.str();
   };
   std::string urdf = "<robot name=\"creeping\">\n" + link("l0", 0.1, 0.08);
@@ -469,7 +471,9 @@ std::string creepingArm() {
   for (int i = 0; i < 6; ++i) {
     const std::string parent = "l" + std::to_string(i);
     const std::string child = "l" + std::to_string(i + 1);
-    urdf += joint("j" + std::to_string(i + 1), "revolute", parent, child, previous_length, segments[i].axis) + link(child, segments[i].length, 0.04);
+    const std::pair<double, double> limit = limits.empty() ? std::pair(-2.9, 2.9) : limits[static_cast<std::size_t>(i)];
+    urdf += joint("j" + std::to_string(i + 1), "revolute", parent, child, previous_length, segments[i].axis, limit) +
+            link(child, segments[i].length, 0.04);
     previous_length = segments[i].length;
   }
   urdf += joint("tool_joint", "fixed", "l6", "tool", 0.08, "0 0 1") + link("tool", 0.1, 0.02);
@@ -504,6 +508,38 @@ TEST(SimulatedTutor, AnArmPosedUnderTheHandsAtTheEndOfItsWayIsTaughtOneArea) {
   ASSERT_EQ(teaching.workflow->areas().size(), 1U);
   // The whole helix (4 turns of 4 s) went into the one area.
   EXPECT_GT(teaching.workflow->areas()[0].X.cols(), 600);
+}
+
+// An arm whose joints can hardly move (limits 0.01 rad wide about its posture) does not follow
+// the helix: the recording is a spot of a few millimetres. Before, `teach` reported it as a taught
+// area, and the learner read it as a posture to keep there.
+TEST(SimulatedTutor, TakesBackARecordingTheArmDidNotSpread) {
+  Eigen::VectorXd home(6);
+  home << 0.0, 30 * kDegree, 60 * kDegree, 0.0, 60 * kDegree, 0.0;
+  std::vector<std::pair<double, double>> limits;
+  for (Eigen::Index i = 0; i < home.size(); ++i) limits.emplace_back(home[i] - 0.005, home[i] + 0.005);
+  const robot::RobotModel model = robot::RobotModel::fromUrdfString(creepingArm(limits), ".");
+  robot::Scene scene;
+  scene.name = "free";
+  scene.home_posture = home;
+  robot::Area area;
+  area.name = "here";
+  area.p_WA = robot::tipPose(model, home).translation();
+  area.radius = 0.08;
+  scene.training_areas = {area};
+  ShortTeaching teaching(scene, model);
+  teaching.tutor_options.check_points = 0;
+  const TutorReport report = teaching.configure(1);
+  // The listed area first; the places the tutor then tries on its own are out of the arm's reach.
+  ASSERT_GE(report.areas.size(), 1U);
+  const TutorAreaReport& here = report.areas[0];
+  EXPECT_EQ(here.name, "here");
+  EXPECT_FALSE(here.taught);
+  EXPECT_NE(here.failure.find("taken back: the recording spans"), std::string::npos) << here.failure;
+  EXPECT_GT(here.helix_diameter, 0.1);
+  EXPECT_LT(here.span, 0.25 * here.helix_diameter);
+  EXPECT_GT(here.samples, 0);
+  EXPECT_TRUE(teaching.workflow->areas().empty());
 }
 
 // A small helix (setup_II's II10 lies so close to the boxes that it shrinks to a few centimetres;
