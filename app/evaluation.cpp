@@ -252,6 +252,15 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     }
     const bool reached = !outcome.collided && outcome.final_error_m <= grid.tolerance;
     if (reached) ++result.reached;
+    // The resolved posture: the run above where it started at q_c(x) and met no contact (the
+    // world only watches), otherwise the same run without stopping at contacts.
+    if (approach == ApproachFrom::kLearnedPosture && !outcome.collided) {
+      if (reached) ++result.resolved_free;
+    } else {
+      const MotionOutcome resolved = approachTarget(model, parameters, map, learnedPosture(model, map, p), p, nullptr);
+      world.update(resolved.q);
+      if (world.contacts().empty() && resolved.final_error_m <= grid.tolerance) ++result.resolved_free;
+    }
     result.target_points.push_back(p);
     result.target_reached.push_back(reached);
     result.final_postures.push_back(outcome.q);
@@ -260,6 +269,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   if (progress) progress(1.0);
   if (result.targets > 0) {
     result.reachable_fraction = static_cast<double>(result.reached) / result.targets;
+    result.resolved_fraction = static_cast<double>(result.resolved_free) / result.targets;
     result.explored_fraction = static_cast<double>(explored) / result.targets;
   }
   return result;

@@ -84,6 +84,13 @@ struct ReachableResult {
   int reached = 0;       ///< reached within the tolerance without collision
   int collided = 0;
   double reachable_fraction = 0.0;  ///< reached / targets
+  /// Targets where the posture the learned redundancy resolution resolves is within the
+  /// tolerance and without a contact: the controller run from q_c(x_target) until it settles,
+  /// as in kLearnedPosture, but only its final posture checked (the learned IK mapping's own
+  /// solution, as Sect. 4.2.2 stores "for each target the resulting posture"; the way there from
+  /// q_c(x_target), a posture the arm never stands in with its tip at the target, is not judged).
+  int resolved_free = 0;
+  double resolved_fraction = 0.0;  ///< resolved_free / targets
   double explored_fraction = 0.0;   ///< targets whose grid cell holds a training sample
   std::map<std::string, int> contacts;         ///< collided targets per first contact "body/other"
   std::vector<Eigen::Vector3d> target_points;  ///< T

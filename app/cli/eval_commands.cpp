@@ -249,6 +249,8 @@ Json runReachable(const EvalOptions& options) {
                {"reachable_fraction", fraction(result.reachable_fraction)},
                {"explored_fraction", fraction(result.explored_fraction)},
                {"collided", result.collided},
+               {"resolved_free", result.resolved_free},
+               {"resolved_fraction", fraction(result.resolved_fraction)},
                {"grid_points", result.grid_points},
                {"out_of_reach", result.out_of_reach},
                {"in_obstacles", result.in_obstacles},

@@ -119,8 +119,8 @@ Json table33(const SweepOptions& options, std::ostream& md) {
   const app::ApproachFrom approach = app::parseApproach(options.approach);
   md << "\n## Tab. 3.3 — reachable workspace (ELM, tutor seed 1, targets approached from: " << options.approach
      << "), with the implicit scene model (Eq. 4.1)\n\n"
-     << "| setup | areas (taught / given up) | samples | targets in T | explored % | reachable % | collided targets | S encloses obstacle points | free points in S | thesis explored / reachable % | wall s |\n"
-     << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+     << "| setup | areas (taught / given up) | samples | targets in T | explored % | reachable % | resolved posture free % | collided targets | S encloses obstacle points | free points in S | thesis explored / reachable % | wall s |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   Json out = Json::array();
   for (const auto& [scene_name, areas, thesis] : rows) {
     if (areas > options.max_areas) continue;
@@ -141,7 +141,8 @@ Json table33(const SweepOptions& options, std::ostream& md) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     md << "| " << scene_name << " | " << taught.areas.size() << " / " << taught.areas_given_up << " | " << taught.data.size() << " | "
        << reachable.targets << " | " << fixed(100.0 * reachable.explored_fraction, 1) << " | "
-       << fixed(100.0 * reachable.reachable_fraction, 1) << " | " << reachable.collided << " | " << model.obstacle_points_enclosed
+       << fixed(100.0 * reachable.reachable_fraction, 1) << " | " << fixed(100.0 * reachable.resolved_fraction, 1) << " | "
+       << reachable.collided << " | " << model.obstacle_points_enclosed
        << " / " << model.obstacle_points << " | " << model.free_points_in_model << " | " << thesis << " | " << fixed(wall, 0) << " |\n";
     md.flush();
     out.push_back({{"scene", scene_name}, {"areas_requested", areas}, {"areas", taught.areas.size()},
@@ -149,6 +150,7 @@ Json table33(const SweepOptions& options, std::ostream& md) {
                    {"teaching_contacts", taught.tutor.collisions}, {"targets", reachable.targets},
                    {"inaccessible", reachable.inaccessible}, {"reached", reachable.reached}, {"collided", reachable.collided},
                    {"explored_fraction", reachable.explored_fraction}, {"reachable_fraction", reachable.reachable_fraction},
+                   {"resolved_fraction", reachable.resolved_fraction},
                    {"scene_model_points", model.model_points}, {"obstacle_points", model.obstacle_points},
                    {"obstacle_points_enclosed", model.obstacle_points_enclosed},
                    {"free_points_in_model", model.free_points_in_model}, {"contacts", reachable.contacts},

@@ -246,6 +246,45 @@ TEST(Evaluation, ReachabilityStartsEachTargetInTheLearnedPostureUnlessAskedForTh
   EXPECT_EQ(from_start.reached, 0);
   ASSERT_EQ(from_start.contacts.size(), 1U);
   EXPECT_NE(from_start.contacts.begin()->first.find("/box"), std::string::npos) << from_start.contacts.begin()->first;
+  // The posture the learned map resolves at the target is q_target, free, whichever way the arm
+  // was approached.
+  EXPECT_EQ(learned.resolved_free, 1);
+  EXPECT_EQ(from_start.resolved_free, 1);
+  EXPECT_DOUBLE_EQ(from_start.resolved_fraction, 1.0);
+}
+
+// The learned posture at the target may put the arm into an obstacle although the posture the
+// controller resolves from it, with the tip on the target, is free: the arm never stands in
+// q_c(x) with its tip at x. The reachable count judges the way from q_c(x) (a contact at once
+// here), the resolved count only where the arm ends.
+TEST(Evaluation, ResolvedPostureIsJudgedWhereTheArmEndsNotOnTheWayThere) {
+  Parameters s;
+  const Eigen::Vector3d tip_of_ready = robot::tipPose(lwr4(), ready()).translation();
+  const Eigen::Vector3d target = tip_of_ready + Eigen::Vector3d(0.0, 0.3, 0.0);
+  robot::Scene scene;
+  robot::Obstacle box;
+  box.name = "box";
+  box.size = Eigen::Vector3d(0.05, 0.05, 0.05);
+  box.X_WO.translation() = tip_of_ready;
+  scene.obstacles.push_back(box);
+  robot::CollisionWorld world(lwr4(), scene);
+  world.update(ready());
+  ASSERT_FALSE(world.contacts().empty()) << "the learned posture must touch the box for this test";
+  const auto map = mapOf(ready(), target);  // q_c(target) = the ready posture, its tip 0.3 m away
+  robot::EvaluationGrid grid;
+  grid.lower = grid.upper = target;
+  grid.spacing = 0.1;
+  const ReachableResult result = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0), {},
+                                                   ApproachFrom::kLearnedPosture);
+  ASSERT_EQ(result.targets, 1);
+  EXPECT_EQ(result.collided, 1);
+  EXPECT_EQ(result.reached, 0);
+  EXPECT_EQ(result.resolved_free, 1);
+  // Where the arm ends: tip on the target, no contact.
+  const MotionOutcome resolved = approachTarget(lwr4(), s.parameters, *map, ready(), target, nullptr);
+  EXPECT_LT(resolved.final_error_m, 0.01);
+  world.update(resolved.q);
+  EXPECT_TRUE(world.contacts().empty());
 }
 
 TEST(Evaluation, ReachabilityFromThePreviousTargetVisitsNeighboursInTurn) {
