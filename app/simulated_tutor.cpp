@@ -761,7 +761,7 @@ TutorReport SimulatedTutor::configure(int area_count) {
       area.taught = true;
       area.failure.clear();
     }
-    if (area.taught) {
+    if (area.taught && workflow_->areas().size() > areas_before) {
       const TrainingArea& recorded = workflow_->areas().back();
       area.samples = recorded.X.cols();
       area.span = spanOf(recorded.X);
