@@ -89,6 +89,8 @@ struct ReachableResult {
   /// as in kLearnedPosture, but only its final posture checked (the learned IK mapping's own
   /// solution, as Sect. 4.2.2 stores "for each target the resulting posture"; the way there from
   /// q_c(x_target), a posture the arm never stands in with its tip at the target, is not judged).
+  /// The same for every ApproachFrom; with kLearnedPosture it costs a second run only for the
+  /// collided targets, with the others one for every target.
   int resolved_free = 0;
   double resolved_fraction = 0.0;  ///< resolved_free / targets
   double explored_fraction = 0.0;   ///< targets whose grid cell holds a training sample

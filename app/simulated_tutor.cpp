@@ -767,13 +767,15 @@ TutorReport SimulatedTutor::configure(int area_count) {
       area.span = spanOf(recorded.X);
       // A person looks at what the arm did and takes a spot back, so that `teach` does not
       // report an area that was never explored (the learner would read it as a posture to keep).
-      if (area.helix_diameter > 0.0 && area.span < kMinSpanOfTheHelix * area.helix_diameter &&
-          workflow_->removeArea(static_cast<int>(workflow_->areas().size()) - 1)) {
-        std::ostringstream failure;
-        failure << std::fixed << std::setprecision(1) << "taken back: the recording spans " << 100.0 * area.span << " cm of the "
-                << 100.0 * area.helix_diameter << " cm helix drawn (the arm did not follow the hands)";
-        area.taught = false;
-        area.failure = failure.str();
+      if (area.helix_diameter > 0.0 && area.span < kMinSpanOfTheHelix * area.helix_diameter) {
+        std::ostringstream spot;
+        spot << std::fixed << std::setprecision(1) << "the recording spans " << 100.0 * area.span << " cm of the "
+             << 100.0 * area.helix_diameter << " cm helix drawn (the arm did not follow the hands)";
+        // The online learner refits after a removal in the background; removal waits for it.
+        workflow_->waitForLearning();
+        const RequestResult removed = workflow_->removeArea(static_cast<int>(workflow_->areas().size()) - 1);
+        area.taught = !removed;
+        area.failure = removed ? "taken back: " + spot.str() : spot.str() + ", and it could not be taken back: " + removed.reason;
       }
     }
     if (!area.taught) discardPose();

@@ -73,7 +73,7 @@ struct TutorAreaReport {
   int map_failures_with = -1;
   double helix_diameter = 0.0;  ///< [m] of the helix drawn (smaller near obstacles); 0 if none was drawn
   Eigen::Index samples = 0;     ///< samples the area's recording holds (0 if none)
-  /// [m] twice the largest distance of a recorded tip position from their mean: about 1.2 times
+  /// [m] twice the largest distance of a recorded tip position from their mean: 0.85-1.05 times
   /// the helix diameter when the arm followed the hands.
   double span = 0.0;
 };

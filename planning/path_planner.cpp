@@ -99,9 +99,10 @@ class Shortcutter {
   }
 
   // Translational distance from p to the nearest edge with an end within reach_ of p (infinity if
-  // none). An edge of up to 2 e_max that passes within corridor_ of p has an end that near; the
-  // ITM joins the two nodes nearest to a sample, which are seldom farther apart, and a longer
-  // edge left out only makes the test stricter.
+  // none). An edge of up to 2 e_max that passes within corridor_ of p has an end that near; a
+  // longer one is found only from its own nodes (the nearest node's edges above), and one left
+  // out only makes the test stricter. Searching out to half the longest edge instead cost five
+  // times the planning time on a 9 620-node map (docs/PLANNING.md).
   double distanceToEdges(const Eigen::Vector3d& p) const {
     double best = std::numeric_limits<double>::infinity();
     for (const int c : graph_.nodesWithin(p, reach_, true)) best = std::min(best, distanceToEdgesOf(c, p));

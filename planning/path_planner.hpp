@@ -38,7 +38,7 @@ struct PathOptions {
   /// edges trace where the tutor moved, while the balls of (a) bulge up to e_max out of a thin
   /// sheet of visited space: on the 9-DoF scene a shortcut between two nodes of a helix drawn
   /// 7 cm above the bridge's slab, each within 0.09 m of a node, cut through the slab's edge.
-  /// The middle of a square of edges e_max apart is 0.5 e_max from them. In (0, 1].
+  /// As in (a), points are accepted with a margin, within 0.9 shortcut_corridor e_max. In (0, 1].
   double shortcut_corridor = 0.5;
   /// Points the spline passes through along a shortcut are at most this fraction of e_max apart,
   /// so that the spline follows the straight segment as closely as it followed the node path

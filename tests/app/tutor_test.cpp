@@ -506,8 +506,11 @@ TEST(SimulatedTutor, AnArmPosedUnderTheHandsAtTheEndOfItsWayIsTaughtOneArea) {
   ASSERT_EQ(report.areas.size(), 1U);
   EXPECT_TRUE(report.areas[0].taught) << report.areas[0].failure;
   ASSERT_EQ(teaching.workflow->areas().size(), 1U);
-  // The whole helix (4 turns of 4 s) went into the one area.
+  // The whole helix (4 turns of 4 s) went into the one area, and spans about its diameter.
   EXPECT_GT(teaching.workflow->areas()[0].X.cols(), 600);
+  EXPECT_EQ(report.areas[0].samples, teaching.workflow->areas()[0].X.cols());
+  EXPECT_GT(report.areas[0].span, 0.8 * report.areas[0].helix_diameter);
+  EXPECT_LT(report.areas[0].span, 1.1 * report.areas[0].helix_diameter);
 }
 
 // An arm whose joints can hardly move (limits 0.01 rad wide about its posture) does not follow

@@ -157,6 +157,18 @@ struct LCorridor {
     for (const int id : ids) best = std::min(best, (Eigen::Vector3d(itm.prototype(id)) - p).norm());
     return best;
   }
+  // Brute-force distance from p to the nearest edge.
+  double nearestEdgeDistance(const Eigen::Vector3d& p) const {
+    double best = std::numeric_limits<double>::infinity();
+    for (const int id : ids) {
+      for (const int n : itm.neighbors(id)) {
+        const Eigen::Vector3d a = itm.prototype(id), b = itm.prototype(n);
+        const double s = std::clamp((b - a).dot(p - a) / (b - a).squaredNorm(), 0.0, 1.0);
+        best = std::min(best, (a + s * (b - a) - p).norm());
+      }
+    }
+    return best;
+  }
 };
 
 // Does the segment a-b enter the open square x > lo, y > lo (the hole, extended beyond the
@@ -204,9 +216,12 @@ TEST(PathShortcut, LCorridorPathIsShorterAndNeverCrossesTheHole) {
   for (Eigen::Index k = 1; k < path.waypoints.cols(); ++k) {
     const Eigen::Vector3d a = path.waypoints.col(k - 1), b = path.waypoints.col(k);
     EXPECT_FALSE(segmentEntersQuadrant(a, b, hole)) << "segment " << k << " crosses the hole";
-    // Every point of every segment lies within the shortcut radius of a node.
+    // Every point of every segment lies within the shortcut radius of a node and within the
+    // corridor of an edge.
+    const double corridor_width = PathOptions{}.shortcut_corridor * corridor.itm.parameters().e_max;
     for (double s = 0.0; s <= 1.0; s += 1e-3) {
       ASSERT_LE(corridor.nearestNodeDistance(a + s * (b - a)), radius + 1e-9) << "segment " << k << " at " << s;
+      ASSERT_LE(corridor.nearestEdgeDistance(a + s * (b - a)), corridor_width + 1e-9) << "segment " << k << " at " << s;
     }
   }
   // The executed spline follows the polyline: it stays out of the hole (within 1 cm of it).
@@ -357,6 +372,32 @@ TEST(PathShortcut, KeepsToTheEdgesWhereTheMapIsOneNodeWide) {
   const PlannedPath wide = planPath(itm, a, c, options);
   EXPECT_EQ(wide.shortcuts, 1);
   EXPECT_EQ(std::count(wide.waypoint_nodes.begin(), wide.waypoint_nodes.end(), node_b), 0);
+}
+
+TEST(PathShortcut, FindsAnEdgeNearTheSegmentThatIsNotTheNearestNodes) {
+  // The bend of the test above, with a node D nearest to the chord's middle that has no edge of
+  // its own and an edge E-F of another stroke 3 cm beside the chord: the chord keeps to the
+  // corridor of E-F (though not to D's or the bend's edges), so the bend is cut; without E-F it
+  // is kept.
+  for (const bool with_edge : {true, false}) {
+    Itm itm(ItmParameters{}, 1);
+    const Eigen::Vector3d a(0.0, 0.0, 0.5), b(0.08, 0.07, 0.5), c(0.16, 0.0, 0.5);
+    const int node_a = itm.addNode(a, Eigen::VectorXd::Zero(1));
+    const int node_b = itm.addNode(b, Eigen::VectorXd::Zero(1));
+    const int node_c = itm.addNode(c, Eigen::VectorXd::Zero(1));
+    itm.addEdge(node_a, node_b);
+    itm.addEdge(node_b, node_c);
+    itm.addNode(Eigen::Vector3d(0.08, -0.01, 0.5), Eigen::VectorXd::Zero(1));  // D
+    const int node_e = itm.addNode(Eigen::Vector3d(0.04, -0.03, 0.5), Eigen::VectorXd::Zero(1));
+    const int node_f = itm.addNode(Eigen::Vector3d(0.12, -0.03, 0.5), Eigen::VectorXd::Zero(1));
+    if (with_edge) itm.addEdge(node_e, node_f);
+    PathOptions options;
+    options.include_endpoints = false;
+    const PlannedPath path = planPath(itm, a, c, options);
+    ASSERT_TRUE(path.found);
+    EXPECT_EQ(path.nodes, (std::vector<int>{node_a, node_b, node_c}));
+    EXPECT_EQ(path.shortcuts, with_edge ? 1 : 0) << (with_edge ? "with" : "without") << " the edge E-F";
+  }
 }
 
 TEST(PathShortcut, RefusesOptionsOutOfRange) {
