@@ -349,17 +349,25 @@ TEST(PathShortcut, PoseGraphShortcutsOnlyWhereTheOrientationsFollow) {
   }
 }
 
+// A chain that bends around an obstacle, as the tutor's tip moved over a slab: A, the bend B
+// 0.07 m off the chord, C. Every point of the chord A-C lies within 0.07 m of a node, inside the
+// radius of (a), but its middle is 0.053 m from the edges the tutor moved along.
+struct Bend {
+  Bend() {
+    node_a = itm.addNode(a, Eigen::VectorXd::Zero(1));
+    node_b = itm.addNode(b, Eigen::VectorXd::Zero(1));
+    node_c = itm.addNode(c, Eigen::VectorXd::Zero(1));
+    itm.addEdge(node_a, node_b);
+    itm.addEdge(node_b, node_c);
+  }
+  Itm itm{ItmParameters{}, 1};
+  Eigen::Vector3d a{0.0, 0.0, 0.5}, b{0.08, 0.07, 0.5}, c{0.16, 0.0, 0.5};
+  int node_a = -1, node_b = -1, node_c = -1;
+};
+
 TEST(PathShortcut, KeepsToTheEdgesWhereTheMapIsOneNodeWide) {
-  // A chain that bends around an obstacle, as the tutor's tip moved over a slab: A, the bend B
-  // 0.07 m off the chord, C. Every point of the chord A-C lies within 0.07 m of a node, inside
-  // the radius of (a), but its middle is 0.053 m from the edges the tutor moved along.
-  Itm itm(ItmParameters{}, 1);
-  const Eigen::Vector3d a(0.0, 0.0, 0.5), b(0.08, 0.07, 0.5), c(0.16, 0.0, 0.5);
-  const int node_a = itm.addNode(a, Eigen::VectorXd::Zero(1));
-  const int node_b = itm.addNode(b, Eigen::VectorXd::Zero(1));
-  const int node_c = itm.addNode(c, Eigen::VectorXd::Zero(1));
-  itm.addEdge(node_a, node_b);
-  itm.addEdge(node_b, node_c);
+  Bend bend;
+  auto& [itm, a, b, c, node_a, node_b, node_c] = bend;
   ASSERT_LT(((a + c) / 2 - b).norm(), 0.09) << "the chord lies in the balls of (a)";
   PathOptions options;
   options.include_endpoints = false;
@@ -380,13 +388,8 @@ TEST(PathShortcut, FindsAnEdgeNearTheSegmentThatIsNotTheNearestNodes) {
   // corridor of E-F (though not to D's or the bend's edges), so the bend is cut; without E-F it
   // is kept.
   for (const bool with_edge : {true, false}) {
-    Itm itm(ItmParameters{}, 1);
-    const Eigen::Vector3d a(0.0, 0.0, 0.5), b(0.08, 0.07, 0.5), c(0.16, 0.0, 0.5);
-    const int node_a = itm.addNode(a, Eigen::VectorXd::Zero(1));
-    const int node_b = itm.addNode(b, Eigen::VectorXd::Zero(1));
-    const int node_c = itm.addNode(c, Eigen::VectorXd::Zero(1));
-    itm.addEdge(node_a, node_b);
-    itm.addEdge(node_b, node_c);
+    Bend bend;
+    auto& [itm, a, b, c, node_a, node_b, node_c] = bend;
     itm.addNode(Eigen::Vector3d(0.08, -0.01, 0.5), Eigen::VectorXd::Zero(1));  // D
     const int node_e = itm.addNode(Eigen::Vector3d(0.04, -0.03, 0.5), Eigen::VectorXd::Zero(1));
     const int node_f = itm.addNode(Eigen::Vector3d(0.12, -0.03, 0.5), Eigen::VectorXd::Zero(1));
