@@ -101,6 +101,8 @@ struct CollisionWorld::Impl {
   std::vector<std::unique_ptr<btCollisionObject>> obstacle_objects;  // index = obstacle
   std::vector<std::string> shape_source;
   std::vector<char> checked_pairs;  // bodies × bodies
+  std::vector<char> table_exempt;   // per body: the base, and links on the table at the reference posture
+  int table = -1;                   // obstacle index of the table top, -1 without one
   int bodies = 0;
   PairFilter filter;
   Kinematics kinematics;
@@ -181,8 +183,8 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
   impl.filter.checked = &impl.checked_pairs;
   impl.filter.bodies = impl.bodies;
   impl.world.getPairCache()->setOverlapFilterCallback(&impl.filter);
-  // Robot links: group 1 collides with obstacles (group 2) and links; the base (group 4)
-  // collides with links only.
+  // Robot links: group 1 collides with obstacles (group 2), the table (group 8) and links; the
+  // base (group 4) collides with links only.
   for (int b = 0; b < impl.bodies; ++b) {
     const Body& body = bodies[static_cast<std::size_t>(b)];
     auto* compound = impl.make<btCompoundShape>();
@@ -219,7 +221,7 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
     object->setUserIndex(b);
     object->setUserIndex2(-1);
     const int group = b == 0 ? 4 : 1;
-    const int mask = b == 0 ? 1 : (1 | 2 | 4);
+    const int mask = b == 0 ? 1 : (1 | 2 | 4 | 8);
     impl.world.addCollisionObject(object.get(), group, mask);
     impl.body_objects.push_back(std::move(object));
     impl.shape_source.push_back(source);
@@ -246,22 +248,55 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
     impl.obstacle_objects.push_back(std::move(object));
     obstacle_names_.push_back(obstacle.name);
   }
+  impl.table_exempt.assign(static_cast<std::size_t>(impl.bodies), 0);
+  impl.table_exempt[0] = 1;
+  if (scene.table) {
+    // A slab under z = 0 wider than anything the arm can reach (Scene::table).
+    double reach = model.X_LastBodyTip().translation().norm();
+    for (const auto& joint : model.joints()) reach += joint.X_PJ.translation().norm();
+    const double half_width = reach + 1.0;
+    const double thickness = 0.2;
+    btCollisionShape* slab = impl.primitive(Geometry::Kind::kBox, Eigen::Vector3d(2 * half_width, 2 * half_width, thickness));
+    auto object = std::make_unique<btCollisionObject>();
+    object->setCollisionShape(slab);
+    object->setWorldTransform(toBt(Eigen::Isometry3d(Eigen::Translation3d(0, 0, -0.5 * thickness))));
+    object->setUserIndex(-1);
+    impl.table = static_cast<int>(impl.obstacle_objects.size());
+    object->setUserIndex2(impl.table);
+    impl.world.addCollisionObject(object.get(), 8, 1);
+    impl.obstacle_objects.push_back(std::move(object));
+    const bool taken = std::find(obstacle_names_.begin(), obstacle_names_.end(), "table") != obstacle_names_.end();
+    obstacle_names_.emplace_back(taken ? "table (z = 0)" : "table");
+  }
   impl.contacts.reserve(64);
 
   update(model.midPosture());
   bool dropped = false;
   for (const Contact& contact : contacts()) {
-    if (!contact.isSelfCollision()) continue;
-    impl.checked_pairs[static_cast<std::size_t>(contact.body * impl.bodies + contact.other_body)] = 0;
-    impl.checked_pairs[static_cast<std::size_t>(contact.other_body * impl.bodies + contact.body)] = 0;
-    dropped = true;
+    if (contact.isSelfCollision()) {
+      impl.checked_pairs[static_cast<std::size_t>(contact.body * impl.bodies + contact.other_body)] = 0;
+      impl.checked_pairs[static_cast<std::size_t>(contact.other_body * impl.bodies + contact.body)] = 0;
+      dropped = true;
+    }
+  }
+  if (impl.table >= 0) {
+    // A link on (or within 1 cm of) the table at the reference posture, such as a first link
+    // reaching down to the mounting plate, stands on it in every posture; like the base, it is
+    // not checked against it.
+    for (int b = 1; b < impl.bodies; ++b) {
+      if (distance(b, impl.table, 0.02) < 0.01) {
+        impl.table_exempt[static_cast<std::size_t>(b)] = 1;
+        dropped = true;
+      }
+    }
   }
   if (dropped) {
     // Re-adding the links rebuilds their broadphase pairs through the filter.
     for (int b = 0; b < impl.bodies; ++b) {
       btCollisionObject* object = impl.body_objects[static_cast<std::size_t>(b)].get();
       const int group = object->getBroadphaseHandle()->m_collisionFilterGroup;
-      const int mask = object->getBroadphaseHandle()->m_collisionFilterMask;
+      int mask = object->getBroadphaseHandle()->m_collisionFilterMask;
+      if (impl.table_exempt[static_cast<std::size_t>(b)] != 0) mask &= ~8;
       impl.world.removeCollisionObject(object);
       impl.world.addCollisionObject(object, group, mask);
     }
@@ -362,7 +397,8 @@ const std::vector<Contact>& CollisionWorld::contacts() {
 }
 
 double CollisionWorld::distance(int body, int obstacle, double max_distance) {
-  if (body <= 0 || body >= impl_->bodies || obstacle < 0 || obstacle >= obstacleCount()) {
+  if (body <= 0 || body >= impl_->bodies || obstacle < 0 || obstacle >= obstacleCount() ||
+      (obstacle == impl_->table && impl_->table_exempt[static_cast<std::size_t>(body)] != 0)) {
     return std::numeric_limits<double>::infinity();
   }
   ClosestCollector collector;
@@ -394,6 +430,7 @@ Clearance CollisionWorld::clearance(double max_distance) {
   best.distance = std::numeric_limits<double>::infinity();
   for (int b = 1; b < impl_->bodies; ++b) {
     for (int k = 0; k < obstacleCount(); ++k) {
+      if (k == impl_->table && impl_->table_exempt[static_cast<std::size_t>(b)] != 0) continue;
       ClosestCollector collector;
       collector.m_closestDistanceThreshold = btScalar(max_distance);
       collector.first = impl_->body_objects[static_cast<std::size_t>(b)].get();

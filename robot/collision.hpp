@@ -13,7 +13,9 @@
 // already touching at the robot's reference posture (all joints at the centre of their limits,
 // MoveIt's "default" rule), are not checked against each other. The base does not collide with
 // obstacles (it stands on them), only with the robot's own links. Obstacle meshes are used as
-// they are (concave allowed).
+// they are (concave allowed). Unless the scene says `table: false`, the table top z = 0 is one
+// more obstacle, named "table", after the scene's own; the base and links touching it at the
+// reference posture are not checked against it.
 // Frames: world W = the robot's base frame; metres.
 #include <Eigen/Geometry>
 #include <memory>
@@ -69,6 +71,7 @@ class CollisionWorld {
   double distance(int body, int obstacle, double max_distance = 1.0);
 
   const RobotModel& model() const { return *model_; }
+  /// The scene's obstacles in their order, then the table top (Scene::table).
   int obstacleCount() const { return static_cast<int>(obstacle_names_.size()); }
   const std::string& obstacleName(int obstacle) const { return obstacle_names_[static_cast<std::size_t>(obstacle)]; }
   const std::string& bodyName(int body) const;

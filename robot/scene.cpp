@@ -247,7 +247,7 @@ class SceneReader {
     if (!root.IsDefined() || root.IsNull()) fail(root, "", "the file holds no scene (it is empty)");
     if (!root.IsMap()) fail(root, "", "expected a mapping of scene keys (name, obstacles, ...) at the top level");
     checkKeys(root, "",
-              {"version", "name", "description", "robot", "home_posture", "obstacles",
+              {"version", "name", "description", "robot", "home_posture", "obstacles", "table",
                "training_areas", "working_areas", "grid", "targets", "trajectories", "parameters"});
     Scene scene;
     if (const auto node = root["version"]) {
@@ -269,6 +269,7 @@ class SceneReader {
         }
       }
     }
+    if (const auto node = root["table"]) scene.table = boolean(node, "table");
     if (const auto node = root["training_areas"]) scene.training_areas = areas(node, "training_areas");
     if (const auto node = root["working_areas"]) scene.working_areas = areas(node, "working_areas");
     if (const auto node = root["grid"]) scene.grid = grid(node, "grid");
@@ -399,8 +400,9 @@ class SceneReader {
     return v;
   }
 
-  // Places the arm is asked to reach: the robot stands on the table top z = 0, which is no
-  // obstacle in the collision model, so a place below it would count as free.
+  // Places the arm is asked to reach: the robot stands on the table top z = 0, so a place below
+  // it could only be reached through the table (or, with `table: false`, through what the
+  // collision model does not know).
   Eigen::Vector3d placeAboveTable(const Node& node, const std::string& path) {
     const Eigen::Vector3d p = position(node, path);
     if (p.z() < 0.0) {
@@ -409,6 +411,14 @@ class SceneReader {
       fail(node, path, "lies below the table top (z = " + z.str() + " m); the robot stands on z = 0");
     }
     return p;
+  }
+
+  bool boolean(const Node& node, const std::string& path) {
+    visit(node, path);
+    if (!node.IsScalar() || node.quoted() || (node.Scalar() != "true" && node.Scalar() != "false")) {
+      fail(node, path, "expected true or false (unquoted), got " + kind(node));
+    }
+    return node.Scalar() == "true";
   }
 
   Eigen::Vector3d positiveSize(const Node& node, const std::string& path) {
@@ -873,6 +883,7 @@ std::string sceneToYaml(const Scene& scene) {
     out << YAML::Key << "home_posture" << YAML::Value;
     emitNumbers(out, *scene.home_posture);
   }
+  if (!scene.table) out << YAML::Key << "table" << YAML::Value << false;
   if (!scene.obstacles.empty()) {
     out << YAML::Key << "obstacles" << YAML::Value << YAML::BeginSeq;
     for (const auto& obstacle : scene.obstacles) {

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "robot/collision.hpp"
@@ -119,6 +120,73 @@ TEST(CollisionWorld, DistanceToASphereMatchesTheGeometry) {
   EXPECT_EQ(clearance.body, 1);
   EXPECT_NEAR(clearance.distance, 0.25, 1e-3);
   EXPECT_TRUE(world.contacts().empty());
+}
+
+// The plane the robot stands on (Sect. 4.2.1: q2 ≫ π/2 "would result in collisions with the
+// table surface").
+TEST(CollisionWorld, TheTableTopStopsEveryLinkButThoseStandingOnIt) {
+  CollisionWorld world(threeLinkArm(), Scene{});
+  ASSERT_EQ(world.obstacleCount(), 1);
+  const int table = 0;
+  EXPECT_EQ(world.obstacleName(table), "table");
+  // Upright, link2's cylinder starts 0.4 m above the table; link1 stands on it and is not
+  // checked against it.
+  world.update(Eigen::Vector3d::Zero());
+  EXPECT_TRUE(world.contacts().empty());
+  EXPECT_EQ(world.distance(1, table), std::numeric_limits<double>::infinity());
+  const Clearance clearance = world.clearance();
+  EXPECT_EQ(clearance.body, 2);
+  EXPECT_NEAR(clearance.distance, 0.4, 1e-3);
+  // link2 along +x at z = 0.4 m and link3 hanging from its end: its 0.45 m reach 5 cm into the table.
+  world.update(Eigen::Vector3d(0.0, std::numbers::pi / 2, std::numbers::pi / 2));
+  const auto& contacts = world.contacts();
+  ASSERT_EQ(contacts.size(), 1U);
+  EXPECT_EQ(world.bodyName(contacts[0].body), "link3");
+  EXPECT_EQ(world.otherName(contacts[0]), "table");
+  EXPECT_NEAR(contacts[0].depth, 0.05, 1e-3);
+  EXPECT_NEAR(world.distance(3, table), -0.05, 1e-3);
+
+  // A scene can say the robot stands on no table; one naming an obstacle "table" keeps it.
+  Scene no_table;
+  no_table.table = false;
+  CollisionWorld without(threeLinkArm(), no_table);
+  EXPECT_EQ(without.obstacleCount(), 0);
+  without.update(Eigen::Vector3d(0.0, std::numbers::pi / 2, std::numbers::pi / 2));
+  EXPECT_TRUE(without.contacts().empty());
+  Scene named;
+  named.obstacles.push_back(box("table", Eigen::Vector3d(2.0, 0.0, 0.5), Eigen::Vector3d(0.1, 0.1, 0.1)));
+  CollisionWorld both(threeLinkArm(), named);
+  ASSERT_EQ(both.obstacleCount(), 2);
+  EXPECT_EQ(both.obstacleName(0), "table");
+  EXPECT_EQ(both.obstacleName(1), "table (z = 0)");
+}
+
+TEST(CollisionWorld, TheLwr4LowersItsFlangeIntoTheTableAndNotBefore) {
+  const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  CollisionWorld world(model, Scene{});
+  const int table = world.obstacleCount() - 1;
+  ASSERT_EQ(world.obstacleName(table), "table");
+  // Upright, link1's mesh starts 11 cm above the table (the base below it stands on it).
+  world.update(Eigen::VectorXd::Zero(7));
+  EXPECT_NEAR(world.distance(1, table), 0.11, 0.01);
+  // The stretched arm tilted forward at A2: the flange crosses z = 0 near A2 = 2 rad
+  // (shoulder 0.3105 m up, 0.868 m from shoulder to flange).
+  Kinematics kinematics(model);
+  for (const double a2 : {1.0, 1.5, 2.0}) {
+    SCOPED_TRACE(a2);
+    Eigen::VectorXd q = Eigen::VectorXd::Zero(7);
+    q[1] = a2;
+    kinematics.update(q);
+    world.update(q);
+    const bool flange_below = kinematics.p_WT().z() < 0.0;
+    EXPECT_EQ(flange_below, a2 == 2.0) << kinematics.p_WT().transpose();
+    bool flange_on_table = false;
+    for (const auto& contact : world.contacts()) {
+      EXPECT_EQ(world.otherName(contact), "table");
+      flange_on_table |= world.bodyName(contact.body) == "link7";
+    }
+    EXPECT_EQ(flange_on_table, flange_below);
+  }
 }
 
 TEST(CollisionWorld, ReportsSelfCollisionButNeverAdjacentLinks) {

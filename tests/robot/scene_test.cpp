@@ -87,6 +87,7 @@ name: workcell
 description: A test cell with every kind of element.
 robot: lwr4
 home_posture: {unit: deg, values: [0, 30, 0, -90, 0, 60, 0]}
+table: false
 obstacles:
   - name: table_leg
     shape: box
@@ -159,6 +160,7 @@ TEST_F(SceneFileTest, ReadsEveryElementWithUnitsAndDefaults) {
   EXPECT_EQ(scene.description, "A test cell with every kind of element.");
   EXPECT_EQ(scene.robot, "lwr4");
   EXPECT_EQ(scene.source, file);
+  EXPECT_FALSE(scene.table);
   ASSERT_TRUE(scene.home_posture.has_value());
   ASSERT_EQ(scene.home_posture->size(), 7);
   EXPECT_NEAR((*scene.home_posture)[1], kPi / 6.0, 1e-15);
@@ -229,6 +231,7 @@ void expectScenesEqual(const Scene& a, const Scene& b) {
   EXPECT_EQ(a.name, b.name);
   EXPECT_EQ(a.description, b.description);
   EXPECT_EQ(a.robot, b.robot);
+  EXPECT_EQ(a.table, b.table);
   ASSERT_EQ(a.home_posture.has_value(), b.home_posture.has_value());
   if (a.home_posture) {
     EXPECT_EQ(*a.home_posture, *b.home_posture);
@@ -298,6 +301,7 @@ TEST_F(SceneFileTest, RandomScenesSurviveAWriteReadCycleExactly) {
   for (int trial = 0; trial < 20; ++trial) {
     Scene scene;
     scene.name = "random_" + std::to_string(trial);
+    scene.table = trial % 2 == 0;
     scene.description = "line one: with a colon, 'quotes' and #hash";
     scene.home_posture = Eigen::VectorXd::NullaryExpr(7, [&] { return coordinate(rng) * kPi; });
     for (int i = 0; i < 6; ++i) {
@@ -447,6 +451,11 @@ TEST_F(SceneFileTest, RefusesValuesOfTheWrongType) {
            "obstacles:\n  - {shape: box, size: [1, 1, 1], colour: [0, 0, 0], color: [0, 0, 0]}\n",
            "obstacles:\n  - {name: a, shape: sphere, radius: 1}\n  - {name: a, shape: sphere, radius: 1}\n",
            "home_posture: 0.5\n",
+           "table: yes\n",
+           "table: 'false'\n",
+           "table: 0\n",
+           "table: [true]\n",
+           "table:\n",
            "home_posture: {unit: deg}\n",
            "home_posture: []\n",
            "training_areas:\n  - {radius: 0.1}\n",
@@ -503,8 +512,9 @@ TEST_F(SceneFileTest, RefusesNegativeZeroAndAbsurdSizes) {
   EXPECT_NE(huge.find("would have 4e+21 points"), std::string::npos) << huge;
 }
 
-// The table top z = 0 the robot stands on is no obstacle of the collision model: an area,
-// target, waypoint or grid below it would be taught or reached through it.
+// The table top z = 0 the robot stands on is solid: an area, target, waypoint or grid below it
+// could only be reached through it (and with `table: false` the collision model would not even
+// notice).
 TEST_F(SceneFileTest, RefusesPlacesBelowTheTableTop) {
   for (const std::string text : {
            "training_areas:\n  - {centre: [0.5, 0.3, -0.2]}\n",
@@ -645,6 +655,7 @@ TEST(BuiltinScenes, NoNameAndEmptyAreTheSameEmptyScene) {
   EXPECT_TRUE(none.source.empty());
   expectScenesEqual(none, empty);
   EXPECT_TRUE(empty.obstacles.empty());
+  EXPECT_TRUE(empty.table);
   EXPECT_TRUE(empty.training_areas.empty());
 }
 
