@@ -164,7 +164,8 @@ ApproachFrom parseApproach(const std::string& name) {
   if (name == "learned") return ApproachFrom::kLearnedPosture;
   if (name == "start") return ApproachFrom::kStartPosture;
   if (name == "previous") return ApproachFrom::kPreviousTarget;
-  throw InputError("approach: expected learned, start or previous, got '" + name + "'");
+  if (name == "nearest") return ApproachFrom::kNearestReached;
+  throw InputError("approach: expected learned, start, previous or nearest, got '" + name + "'");
 }
 
 std::string approachName(ApproachFrom approach) {
@@ -172,6 +173,7 @@ std::string approachName(ApproachFrom approach) {
     case ApproachFrom::kLearnedPosture: return "learned";
     case ApproachFrom::kStartPosture: return "start";
     case ApproachFrom::kPreviousTarget: return "previous";
+    case ApproachFrom::kNearestReached: return "nearest";
   }
   return "learned";
 }
@@ -221,7 +223,8 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     targets.push_back(p);
   }
   result.targets = static_cast<int>(targets.size());
-  if (approach == ApproachFrom::kPreviousTarget && !targets.empty()) {
+  const bool tour = approach == ApproachFrom::kPreviousTarget || approach == ApproachFrom::kNearestReached;
+  if (tour && !targets.empty()) {
     // Nearest-neighbour tour from the start posture's tip: consecutive targets one grid step
     // apart wherever the grid allows, as a person would command them.
     Eigen::Vector3d from = robot::tipPose(model, q_start).translation();
@@ -235,14 +238,27 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     }
   }
   Eigen::VectorXd q_previous = q_start;  // kPreviousTarget: last posture reached without contact
+  std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> reached_postures;  // kNearestReached
+  const auto nearestReachedPosture = [&](const Eigen::Vector3d& p) -> const Eigen::VectorXd& {
+    const Eigen::VectorXd* best = &q_start;
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (const auto& [target, q] : reached_postures) {
+      if ((target - p).squaredNorm() < best_distance) {
+        best_distance = (target - p).squaredNorm();
+        best = &q;
+      }
+    }
+    return *best;
+  };
   int explored = 0;
   for (std::size_t i = 0; i < targets.size(); ++i) {
     const Eigen::Vector3d& p = targets[i];
     const Eigen::Vector3d cell = ((p - grid.lower) / grid.spacing).array().round();
     if (explored_cells.count({std::lround(cell.x()), std::lround(cell.y()), std::lround(cell.z())}) != 0) ++explored;
-    const Eigen::VectorXd& q_from = approach == ApproachFrom::kLearnedPosture   ? learnedPosture(model, map, p)
-                                    : approach == ApproachFrom::kPreviousTarget ? q_previous
-                                                                                : q_start;
+    const Eigen::VectorXd q_from = approach == ApproachFrom::kLearnedPosture   ? learnedPosture(model, map, p)
+                                   : approach == ApproachFrom::kPreviousTarget ? q_previous
+                                   : approach == ApproachFrom::kNearestReached ? nearestReachedPosture(p)
+                                                                               : q_start;
     const MotionOutcome outcome = approachTarget(model, parameters, map, q_from, p, &world);
     if (outcome.collided) {
       ++result.collided;
@@ -252,6 +268,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     }
     const bool reached = !outcome.collided && outcome.final_error_m <= grid.tolerance;
     if (reached) ++result.reached;
+    if (reached && approach == ApproachFrom::kNearestReached) reached_postures.emplace_back(p, outcome.q);
     // The resolved posture: the run above where it started at q_c(x) and met no contact (the
     // world only watches), otherwise the same run without stopping at contacts.
     if (approach == ApproachFrom::kLearnedPosture && !outcome.collided) {

@@ -90,7 +90,8 @@ struct ReachableResult {
   /// solution, as Sect. 4.2.2 stores "for each target the resulting posture"; the way there from
   /// q_c(x_target), a posture the arm never stands in with its tip at the target, is not judged).
   /// The same for every ApproachFrom; with kLearnedPosture it costs a second run only for the
-  /// collided targets, with the others one for every target.
+  /// collided targets, with the others one for every target (kNearestReached: 1.5 times the
+  /// time of kLearnedPosture).
   int resolved_free = 0;
   double resolved_fraction = 0.0;  ///< resolved_free / targets
   double explored_fraction = 0.0;   ///< targets whose grid cell holds a training sample
@@ -111,11 +112,14 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
 /// Where the arm starts when the reachability evaluation commands it to a target. Sect. 3.3.2
 /// evaluates the learned map as "the inverse kinematic mapping from 3-D task-space to 7-D
 /// joint-space" and Sect. 4.2.2 stores "for each target the resulting posture"; it does not say
-/// from where each target is approached.
+/// from where each target is approached. The default, kNearestReached, starts every target from
+/// a posture the arm has stood in with its tip on a target next to it.
 enum class ApproachFrom {
   /// From the posture the learned map gives for the target, q_c(x_target) (clamped to the soft
   /// limits): the learned IK mapping evaluated at each target, independent of the order of the
-  /// targets. The controller then corrects the task error; contacts on that way count.
+  /// targets. The controller then corrects the task error; contacts on that way count. Between
+  /// and beyond the areas q_c(x)'s own tip lies up to 0.6 m from x, so this start is a posture
+  /// the arm is never in with its tip near x, and it may lie in an obstacle or the table.
   kLearnedPosture,
   /// Every target from the same posture q_start (e.g. the scene's home posture): also tests
   /// large motions from one place, where the null-space term (κ_q) lags the task term (κ_x).
@@ -123,9 +127,13 @@ enum class ApproachFrom {
   /// The targets one after another in nearest-neighbour order from q_start, each from where the
   /// previous one ended (after a contact: from the last posture reached without one).
   kPreviousTarget,
+  /// The same tour, each target from the posture the arm stood in at the nearest target it has
+  /// reached (within the tolerance, without a contact); from q_start until it has reached one.
+  /// A contact costs only its own target: the arm goes on from a place next to it.
+  kNearestReached,
 };
 
-/// Parses "learned", "start" or "previous"; throws InputError otherwise.
+/// Parses "learned", "start", "previous" or "nearest"; throws InputError otherwise.
 ApproachFrom parseApproach(const std::string& name);
 std::string approachName(ApproachFrom approach);
 
@@ -135,7 +143,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
                                   const robot::ParameterSet& parameters, const learning::Learner& map,
                                   const Eigen::VectorXd& q_start, const robot::EvaluationGrid& grid,
                                   const Eigen::MatrixXd& training_X, const ProgressCallback& progress = {},
-                                  ApproachFrom approach = ApproachFrom::kLearnedPosture);
+                                  ApproachFrom approach = ApproachFrom::kNearestReached);
 
 /// One goal of the planning evaluation, for pictures (Fig. 7.7, 8.4).
 struct PlannedMotion {

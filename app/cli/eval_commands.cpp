@@ -230,7 +230,7 @@ struct EvalOptions {
   std::uint64_t seed = 1;
   int per_area = 25;
   double speed = 0.1;
-  std::string approach = "learned";  ///< reachable / scene-model: where each target is approached from
+  std::string approach = "nearest";  ///< reachable / scene-model: where each target is approached from
 };
 
 Json runReachable(const EvalOptions& options) {
@@ -390,16 +390,16 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   reachable->add_option("--learner", options->learner, "elm, oselm or llm");
   reachable->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
   reachable->add_option("--approach", options->approach,
-                  "targets approached from the learned posture at the target (learned), the start posture (start) or the previous target (previous)")
-      ->check(CLI::IsMember({"learned", "start", "previous"}));
+                  "targets approached from the learned posture at the target (learned), the start posture (start), the previous target (previous) or the posture at the nearest target reached (nearest, the default)")
+      ->check(CLI::IsMember({"learned", "start", "previous", "nearest"}));
   reachable->callback([&runner, options] { runner.select([options] { return runReachable(*options); }); });
   CLI::App* scene_model = eval->add_subcommand("scene-model", "implicit scene model S of Eq. 4.1 and how much of the obstacles it encloses");
   scene_model->add_option("--session", options->session, "session file written by teach")->required();
   scene_model->add_option("--learner", options->learner, "elm, oselm or llm");
   scene_model->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
   scene_model->add_option("--approach", options->approach,
-                  "targets approached from the learned posture at the target (learned), the start posture (start) or the previous target (previous)")
-      ->check(CLI::IsMember({"learned", "start", "previous"}));
+                  "targets approached from the learned posture at the target (learned), the start posture (start), the previous target (previous) or the posture at the nearest target reached (nearest, the default)")
+      ->check(CLI::IsMember({"learned", "start", "previous", "nearest"}));
   scene_model->callback([&runner, options] { runner.select([options] { return runSceneModel(*options); }); });
   CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
   trajectories->add_option("--session", options->session, "session file written by teach")->required();

@@ -33,7 +33,7 @@ struct SweepOptions {
   int seeds = 10;              ///< Tab. 3.4 network initializations
   int goals = 100;             ///< Sect. 8.3
   int max_areas = 1000;        ///< Tab. 3.3 rows with more areas are skipped
-  std::string approach = "learned";  ///< Tab. 3.3 / 3.4: where each target is approached from
+  std::string approach = "nearest";  ///< Tab. 3.3 / 3.4: where each target is approached from
   std::vector<std::string> only;     ///< Tab. 3.3 rows to run ("setup_I:4"), empty: all
   std::string markdown;        ///< markdown table file, or empty
   std::string json_out;        ///< JSON file, or empty
@@ -306,8 +306,8 @@ void registerSweepCommand(CLI::App& app, CommandRunner& runner) {
   sweep->add_option("--seeds", options->seeds, "Tab. 3.4 network initializations")->check(finiteRange(1, 100));
   sweep->add_option("--goals", options->goals, "Sect. 8.3 goals")->check(finiteRange(1, 10000));
   sweep->add_option("--max-areas", options->max_areas, "skip Tab. 3.3 rows with more areas")->check(finiteRange(1, 1000));
-  sweep->add_option("--approach", options->approach, "Tab. 3.3/3.4: targets approached from the learned posture at the target (learned), the home posture (start) or the previous target (previous)")
-      ->check(CLI::IsMember({"learned", "start", "previous"}));
+  sweep->add_option("--approach", options->approach, "Tab. 3.3/3.4: targets approached from the learned posture at the target (learned), the home posture (start), the previous target (previous) or the posture at the nearest target reached (nearest, the default)")
+      ->check(CLI::IsMember({"learned", "start", "previous", "nearest"}));
   sweep->add_option("--only", options->only, "Tab. 3.3 rows to run, e.g. setup_I:4,setup_II:1")->delimiter(',');
   sweep->add_option("--markdown", options->markdown, "write the tables as markdown to this file");
   sweep->add_option("--json", options->json_out, "write the JSON result to this file as well");

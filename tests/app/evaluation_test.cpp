@@ -310,7 +310,38 @@ TEST(Evaluation, ReachabilityFromThePreviousTargetVisitsNeighboursInTurn) {
   EXPECT_GE(single_steps, 12);
 }
 
+TEST(Evaluation, ReachabilityFromTheNearestReachedTargetStartsWhereTheArmStoodNextToIt) {
+  Parameters s;
+  const auto map = constantMap();
+  robot::Scene empty;
+  robot::EvaluationGrid grid;
+  grid.lower = Eigen::Vector3d(-0.6, -0.2, 0.3);
+  grid.upper = Eigen::Vector3d(-0.4, 0.2, 0.3);
+  grid.spacing = 0.1;
+  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
+  ASSERT_EQ(result.targets, 15);
+  ASSERT_EQ(result.reached, 15);
+  // The default protocol: the first target from the start posture, every later one from the
+  // final posture at the nearest target reached before it; at the tour's jumps that is not the
+  // target visited last.
+  const auto& points = result.target_points;
+  EXPECT_EQ(result.final_postures[0], approachTarget(lwr4(), s.parameters, *map, ready(), points[0], nullptr).q);
+  int jumps = 0;
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    std::size_t nearest = 0;
+    for (std::size_t j = 1; j < i; ++j) {
+      if ((points[j] - points[i]).squaredNorm() < (points[nearest] - points[i]).squaredNorm()) nearest = j;
+    }
+    jumps += nearest != i - 1 ? 1 : 0;
+    const MotionOutcome expected = approachTarget(lwr4(), s.parameters, *map, result.final_postures[nearest], points[i], nullptr);
+    EXPECT_EQ(result.final_postures[i], expected.q) << "target " << i;
+  }
+  EXPECT_GE(jumps, 1);
+}
+
 TEST(Evaluation, ApproachNamesParseAndUnknownOnesAreRefused) {
+  EXPECT_EQ(parseApproach("nearest"), ApproachFrom::kNearestReached);
+  EXPECT_EQ(approachName(ApproachFrom::kNearestReached), "nearest");
   EXPECT_EQ(parseApproach("learned"), ApproachFrom::kLearnedPosture);
   EXPECT_EQ(parseApproach("start"), ApproachFrom::kStartPosture);
   EXPECT_EQ(parseApproach("previous"), ApproachFrom::kPreviousTarget);
