@@ -43,7 +43,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const auto again = flexirob::robot::parseScene(flexirob::robot::sceneToYaml(scene), base_dir, "round trip");
     if (again.obstacles.size() != scene.obstacles.size() || again.targets.size() != scene.targets.size() ||
-        again.training_areas.size() != scene.training_areas.size()) {
+        again.training_areas.size() != scene.training_areas.size() || again.table != scene.table) {
       flexirob::fuzz::invariantBroken("round trip changed the scene");
     }
   } catch (const flexirob::InputError& e) {

@@ -994,7 +994,7 @@ Scene loadScene(const std::string& name_or_path) {
     // No scene requested: nothing around the robot; needs no resources folder.
     Scene scene;
     scene.name = "empty";
-    scene.description = "No obstacles, no areas.";
+    scene.description = "Nothing but the table top the robot stands on: no obstacles, no areas.";
     return scene;
   }
   const auto& names = builtinSceneNames();

@@ -34,8 +34,8 @@ Json runReach(const ReachOptions& options) {
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
   if (scene) robot::checkPosturesFit(*scene, model, robot_name);
   const Eigen::Vector3d target = parseNumberList(options.target, "--target", 3);
-  // The table the robot stands on is no obstacle of the collision model (as in scene files,
-  // docs/SCENES.md): a target under it would be reached through it, contact-free.
+  // The robot stands on the table top z = 0 (as in scene files, docs/SCENES.md): a target under
+  // it could only be reached through it.
   if (target.z() < 0.0) {
     std::ostringstream z;
     z << target.z();

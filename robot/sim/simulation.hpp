@@ -33,8 +33,9 @@ std::span<const ParameterDeclaration> simulationParameters();
 
 class Simulation final : public RobotBackend {
  public:
-  /// The model must outlive the simulation. `scene` may be null (no obstacles, no collision
-  /// checks beyond self-collision). Starts at rest at the model's midPosture().
+  /// The model must outlive the simulation. `scene` may be null (an empty scene: the table top
+  /// z = 0 and self-collision are checked, nothing else). Starts at rest at the model's
+  /// midPosture().
   Simulation(const RobotModel& model, const Scene* scene, const ParameterSet& parameters);
   ~Simulation() override;
   Simulation(const Simulation&) = delete;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <string>
 
 #include "robot/collision.hpp"
 #include "robot/controllers.hpp"
@@ -137,6 +138,19 @@ TEST(CollisionWorld, TheTableTopStopsEveryLinkButThoseStandingOnIt) {
   const Clearance clearance = world.clearance();
   EXPECT_EQ(clearance.body, 2);
   EXPECT_NEAR(clearance.distance, 0.4, 1e-3);
+  // The same with link1's cylinder reaching 1 cm into the table: standing on it, not a contact.
+  std::string sunk_urdf = kPlanarArm;
+  const std::string link1_cylinder = R"(<collision><origin xyz="0 0 0.2"/><geometry><cylinder radius="0.05" length="0.4"/>)";
+  ASSERT_EQ(sunk_urdf.find(link1_cylinder), sunk_urdf.find("<collision>"));
+  sunk_urdf.replace(sunk_urdf.find(link1_cylinder), link1_cylinder.size(),
+                    R"(<collision><origin xyz="0 0 0.195"/><geometry><cylinder radius="0.05" length="0.41"/>)");
+  const RobotModel sunk = RobotModel::fromUrdfString(sunk_urdf, ".");
+  CollisionWorld sunk_world(sunk, Scene{});
+  for (const double j2 : {0.0, 1.0, 2.0}) {
+    sunk_world.update(Eigen::Vector3d(0.5, j2, 0.0));
+    EXPECT_TRUE(sunk_world.contacts().empty()) << "j2 = " << j2;
+  }
+  EXPECT_EQ(sunk_world.distance(1, table), std::numeric_limits<double>::infinity());
   // link2 along +x at z = 0.4 m and link3 hanging from its end: its 0.45 m reach 5 cm into the table.
   world.update(Eigen::Vector3d(0.0, std::numbers::pi / 2, std::numbers::pi / 2));
   const auto& contacts = world.contacts();
