@@ -124,14 +124,20 @@ TEST(Evaluation, PlannedMotionsThroughAContactGoOnToTheirGoalAndTheNextStartsThe
   EXPECT_EQ(counted, collided);
 }
 
+// Grid points in front of the robot at z = 0.3 m, 0.4 m wide and 0.2 m deep.
+robot::EvaluationGrid gridInFront(double spacing) {
+  robot::EvaluationGrid grid;
+  grid.lower = Eigen::Vector3d(-0.6, -0.2, 0.3);
+  grid.upper = Eigen::Vector3d(-0.4, 0.2, 0.3);
+  grid.spacing = spacing;
+  return grid;
+}
+
 TEST(Evaluation, ExploredFractionCountsCellsHoldingSamples) {
   Parameters s;
   const auto map = constantMap();
   robot::Scene empty;
-  robot::EvaluationGrid grid;
-  grid.lower = Eigen::Vector3d(-0.6, -0.2, 0.3);
-  grid.upper = Eigen::Vector3d(-0.4, 0.2, 0.3);
-  grid.spacing = 0.2;
+  const robot::EvaluationGrid grid = gridInFront(0.2);
   const std::vector<Eigen::Vector3d> points = grid.points();
   ASSERT_EQ(points.size(), 6U);
   // Samples near (within a third of a cell of) the first three points.
@@ -149,10 +155,7 @@ TEST(Evaluation, ExcludedBoxesOfTheGridHoldNoTargets) {
   Parameters s;
   const auto map = constantMap();
   robot::Scene empty;
-  robot::EvaluationGrid grid;
-  grid.lower = Eigen::Vector3d(-0.6, -0.2, 0.3);
-  grid.upper = Eigen::Vector3d(-0.4, 0.2, 0.3);
-  grid.spacing = 0.2;
+  robot::EvaluationGrid grid = gridInFront(0.2);
   // Holds the two points with y = 0.2 (on its boundary) and none other.
   grid.excluded.emplace_back(Eigen::Vector3d(-0.7, 0.2, 0.2), Eigen::Vector3d(-0.3, 0.5, 0.4));
   const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
@@ -291,10 +294,7 @@ TEST(Evaluation, ReachabilityFromThePreviousTargetVisitsNeighboursInTurn) {
   Parameters s;
   const auto map = constantMap();
   robot::Scene empty;
-  robot::EvaluationGrid grid;
-  grid.lower = Eigen::Vector3d(-0.6, -0.2, 0.3);
-  grid.upper = Eigen::Vector3d(-0.4, 0.2, 0.3);
-  grid.spacing = 0.1;
+  const robot::EvaluationGrid grid = gridInFront(0.1);
   const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0), {},
                                                    ApproachFrom::kPreviousTarget);
   ASSERT_EQ(result.targets, 15);
@@ -314,10 +314,7 @@ TEST(Evaluation, ReachabilityFromTheNearestReachedTargetStartsWhereTheArmStoodNe
   Parameters s;
   const auto map = constantMap();
   robot::Scene empty;
-  robot::EvaluationGrid grid;
-  grid.lower = Eigen::Vector3d(-0.6, -0.2, 0.3);
-  grid.upper = Eigen::Vector3d(-0.4, 0.2, 0.3);
-  grid.spacing = 0.1;
+  const robot::EvaluationGrid grid = gridInFront(0.1);
   const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
   ASSERT_EQ(result.targets, 15);
   ASSERT_EQ(result.reached, 15);
