@@ -14,8 +14,8 @@
 // MoveIt's "default" rule), are not checked against each other. The base does not collide with
 // obstacles (it stands on them), only with the robot's own links. Obstacle meshes are used as
 // they are (concave allowed). Unless the scene says `table: false`, the table top z = 0 is one
-// more obstacle, named "table", after the scene's own; the base and links touching it at the
-// reference posture are not checked against it.
+// more obstacle, named "table", after the scene's own; the base and links within 1 cm of it at
+// the reference posture (they stand on it) are not checked against it.
 // Frames: world W = the robot's base frame; metres.
 #include <Eigen/Geometry>
 #include <memory>

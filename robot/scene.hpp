@@ -87,7 +87,7 @@ struct Scene {
   std::optional<Eigen::VectorXd> home_posture;  ///< start posture [rad]
   std::vector<Obstacle> obstacles;
   /// The table top z = 0 the robot stands on is an obstacle below every link but the base (and
-  /// links touching it at the reference posture): the thesis' q2 ≫ π/2 "would result in
+  /// links within 1 cm of it at the reference posture): the thesis' q2 ≫ π/2 "would result in
   /// collisions with the table surface" (Sect. 4.2.1). Off for a robot that hangs or stands on
   /// a pedestal.
   bool table = true;
