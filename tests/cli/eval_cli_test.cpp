@@ -201,6 +201,7 @@ TEST(EvalCli, BadArgumentsGiveExitCodeTwoAndOneLine) {
       "eval trajectories --session " + session.string() + " --learner nonsense",
       "eval nonsense",
       "eval reachable --session " + session.string() + " --spacing nan",
+      "eval reachable --session " + session.string() + " --approach home",
       "eval scene-model --session " + session.string() + " --spacing -nan",
       "plan --session " + session.string() + " --seed -1",
       "plan --session " + session.string() + " --seed 18446744073709551616",
