@@ -1,6 +1,7 @@
 // `robot info` and `fk`: what a robot description says, and where its tip is.
 #include <Eigen/Geometry>
 #include <cmath>
+#include <iostream>
 
 #include "app/cli/cli_support.hpp"
 #include "robot/errors.hpp"
@@ -70,9 +71,27 @@ Json forwardKinematics(const robot::RobotModel& model, const Eigen::VectorXd& q)
   const Eigen::Quaterniond quaternion(X_WT.linear());
   Eigen::Vector4d wxyz(quaternion.w(), quaternion.x(), quaternion.y(), quaternion.z());
   if (wxyz[0] < 0) wxyz = -wxyz;  // one of the two equal quaternions, w >= 0
+  // The pose beyond a stop is still well defined (a user may ask where the tip would be), but
+  // the arm can never stand there: said in the result and once on stderr, not refused.
+  Json beyond_limits = Json::array();
+  for (Eigen::Index i = 0; i < q.size(); ++i) {
+    const auto& joint = model.joints()[static_cast<std::size_t>(i)];
+    if (q[i] >= joint.limits.lower && q[i] <= joint.limits.upper) continue;
+    beyond_limits.push_back({{"joint", joint.name},
+                             {"value", q[i]},
+                             {"lower", limitValue(joint.limits.lower)},
+                             {"upper", limitValue(joint.limits.upper)}});
+  }
+  if (!beyond_limits.empty()) {
+    const Json& first = beyond_limits.front();
+    std::cerr << "warning: " << beyond_limits.size() << " joint value(s) beyond the robot's limits, first "
+              << first["joint"].get<std::string>() << " = " << first["value"].get<double>() << " outside ["
+              << first["lower"].dump() << ", " << first["upper"].dump() << "]; the pose is computed all the same\n";
+  }
   return {{"robot", model.name()},
           {"tip_link", model.tipLink()},
           {"q", toJson(q)},
+          {"beyond_limits", beyond_limits},
           {"position", toJson(X_WT.translation())},
           {"quaternion", toJson(wxyz)},
           {"rotation", toJsonRows(X_WT.linear())},

@@ -56,6 +56,29 @@ TEST(RobotCli, FkPrintsPoseAndAWorldAlignedJacobianOfTheTip) {
 TEST(RobotCli, AcceptsNegativeFirstJointValue) {
   const auto result = runCliBinary("fk --robot lwr4 --q -0.5,0.3,0,0,0,0,0");
   ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_TRUE(result.json()["beyond_limits"].empty());
+  EXPECT_TRUE(result.err.empty()) << result.err;
+}
+
+TEST(RobotCli, FkNamesJointsBeyondTheirLimitsAndStillGivesThePose) {
+  // A2 of the LWR IV stops at 120 deg = 2.094 rad; A4 at -120 deg.
+  const auto result = runCliBinary("fk --robot lwr4 --q 0,2.5,0,-2.2,0,0,0");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = result.json();
+  ASSERT_EQ(json["beyond_limits"].size(), 2U);
+  EXPECT_EQ(json["beyond_limits"][0]["joint"], "A2");
+  EXPECT_DOUBLE_EQ(json["beyond_limits"][0]["value"].get<double>(), 2.5);
+  EXPECT_NEAR(json["beyond_limits"][0]["upper"].get<double>(), 120.0 * std::numbers::pi / 180.0, 1e-6);
+  EXPECT_EQ(json["beyond_limits"][1]["joint"], "A4");
+  Eigen::VectorXd q(7);
+  q << 0, 2.5, 0, -2.2, 0, 0, 0;
+  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  robot::Kinematics kinematics(model);
+  kinematics.update(q);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(json["position"][i].get<double>(), kinematics.p_WT()[i], 1e-12);
+  ASSERT_FALSE(result.err.empty());
+  EXPECT_EQ(result.err.find('\n'), result.err.size() - 1) << "one line: " << result.err;
+  EXPECT_NE(result.err.find("A2"), std::string::npos) << result.err;
 }
 
 struct BadInvocation {
