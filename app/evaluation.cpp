@@ -357,8 +357,12 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     if (area.samples.rows() != 3 || area.samples.cols() < 1) throw InputError("trajectories: an area has no samples");
   }
   // The regions: name -> list of point sequences (each a chain of straight segments).
-  std::vector<std::pair<std::string, std::vector<std::vector<Eigen::Vector3d>>>> regions;
-  const auto region = [&](const std::string& name) -> std::vector<std::vector<Eigen::Vector3d>>& {
+  struct NamedWaypoints {
+    std::string name;
+    std::vector<Eigen::Vector3d> waypoints;
+  };
+  std::vector<std::pair<std::string, std::vector<NamedWaypoints>>> regions;
+  const auto region = [&](const std::string& name) -> std::vector<NamedWaypoints>& {
     for (auto& r : regions) {
       if (r.first == name) return r.second;
     }
@@ -368,7 +372,9 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
   TrajectoryResult result;
   if (!scene.trajectories.empty()) {
     result.from_scene = true;
-    for (const auto& trajectory : scene.trajectories) region(trajectory.group.empty() ? "ungrouped" : trajectory.group).push_back(trajectory.waypoints);
+    for (const auto& trajectory : scene.trajectories) {
+      region(trajectory.group.empty() ? "ungrouped" : trajectory.group).push_back({trajectory.name, trajectory.waypoints});
+    }
   } else {
     if (areas.size() < 2) throw InputError("trajectories: the scene lists none and fewer than two areas were taught");
     if (per_area < 1) throw InputError("trajectories: expected at least one trajectory per area");
@@ -398,7 +404,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
       Eigen::Vector3d from = draw(box);
       for (int t = 0; t < count; ++t) {
         const Eigen::Vector3d to = draw(box);
-        region(name).push_back({from, to});
+        region(name).push_back({name + "_" + std::to_string(t + 1), {from, to}});
         from = to;
       }
     };
@@ -416,7 +422,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     out.name = name;
     // The arm starts in the taught posture of the area nearest the region's first point, is
     // brought there kinematically, then follows each straight segment at `speed`.
-    const Eigen::Vector3d first = trajectories.front().front();
+    const Eigen::Vector3d first = trajectories.front().waypoints.front();
     std::size_t nearest = 0;
     double nearest_distance = std::numeric_limits<double>::infinity();
     for (std::size_t k = 0; k < areas.size(); ++k) {
@@ -430,27 +436,26 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
                                                  [&](double) { return first; }, 0.0, 3.0, nullptr).q;
     Eigen::VectorXd q = q_area;
     std::vector<double> errors;
-    for (const auto& waypoints : trajectories) {
+    for (const auto& [trajectory_name, waypoints] : trajectories) {
       kinematics.update(q);
       std::vector<Eigen::Vector3d> line{kinematics.p_WT()};
       line.insert(line.end(), waypoints.begin(), waypoints.end());
       std::vector<double> at{0.0};
       for (std::size_t i = 1; i < line.size(); ++i) at.push_back(at.back() + (line[i] - line[i - 1]).norm() / speed);
       const double duration = std::max(at.back(), 1e-3);
-      const MotionOutcome outcome = executeMotion(
-          model, parameters, map, q,
-          [&](double t) {
-            for (std::size_t i = 1; i < line.size(); ++i) {
-              if (t <= at[i]) return Eigen::Vector3d(line[i - 1] + (line[i] - line[i - 1]) * ((t - at[i - 1]) / std::max(1e-9, at[i] - at[i - 1])));
-            }
-            return line.back();
-          },
-          duration, 0.5, &world);
+      const auto along = [&](double t) {
+        for (std::size_t i = 1; i < line.size(); ++i) {
+          if (t <= at[i]) return Eigen::Vector3d(line[i - 1] + (line[i] - line[i - 1]) * ((t - at[i - 1]) / std::max(1e-9, at[i] - at[i - 1])));
+        }
+        return line.back();
+      };
+      const MotionOutcome outcome = executeMotion(model, parameters, map, q, along, duration, 0.5, &world);
       errors.push_back(outcome.mean_error_m);
       out.e_task_max_mm = std::max(out.e_task_max_mm, 1e3 * outcome.max_error_m);
       if (outcome.collided) {
         ++out.collisions;
         ++out.contacts[outcome.contact];
+        out.collided.push_back({trajectory_name, outcome.contact, outcome.contact_time, along(std::min(outcome.contact_time, duration))});
         q = q_area;  // after a collision the arm is brought back, as on the real robot
       } else {
         q = outcome.q;

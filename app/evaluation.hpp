@@ -189,6 +189,13 @@ SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot:
 /// evaluation trajectories (grouped left / right / interpolation) those are run; otherwise
 /// `per_area` random straight trajectories in the axis-aligned box around each of the first two
 /// areas' samples and 2·per_area in the box between them (the thesis: 25 / 25 / 50).
+/// A trajectory of a region that met a contact: which one, where and when.
+struct CollidedTrajectory {
+  std::string name;          ///< the scene's name, or "<region>_<k>" (k from 1) for a drawn one
+  std::string contact;       ///< first contact "body/other"
+  double contact_time = 0.0; ///< [s] from the trajectory's start
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();  ///< [m, W] the desired tip position then
+};
 struct TrajectoryRegionResult {
   std::string name;
   int trajectories = 0;
@@ -197,6 +204,7 @@ struct TrajectoryRegionResult {
   double e_task_max_mm = 0.0;   ///< largest error at any sample
   int collisions = 0;           ///< E_coll: trajectories with a contact
   std::map<std::string, int> contacts;  ///< collided trajectories per first contact "body/other"
+  std::vector<CollidedTrajectory> collided;  ///< in the order they ran
 };
 struct TrajectoryResult {
   std::vector<TrajectoryRegionResult> regions;

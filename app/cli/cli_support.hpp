@@ -13,6 +13,10 @@
 
 #include "app/cli/number_list.hpp"
 
+namespace flexirob::app {
+struct TrajectoryRegionResult;
+}
+
 namespace flexirob::cli {
 
 using Json = nlohmann::ordered_json;
@@ -86,6 +90,9 @@ bool startsAsJson(std::istream& in);
 /// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.
 /// Returns the process exit code (0 success, 1 the command ran but failed, 2 bad input).
 int runCli(int argc, const char* const* argv);
+
+/// One region of `eval trajectories` (Tab. 3.2) as `eval trajectories` and `sweep` print it.
+Json trajectoryRegionJson(const app::TrajectoryRegionResult& region);
 
 Json toJson(const Eigen::VectorXd& v);
 Json toJsonRows(const Eigen::MatrixXd& m);

@@ -317,16 +317,31 @@ Json runSceneModel(const EvalOptions& options) {
           {"model", pointsJson(model.model)}};
 }
 
+}  // namespace
+
+Json trajectoryRegionJson(const app::TrajectoryRegionResult& region) {
+  Json collided = Json::array();
+  for (const auto& trajectory : region.collided) {
+    collided.push_back({{"name", trajectory.name},
+                        {"contact", trajectory.contact},
+                        {"time_s", trajectory.contact_time},
+                        {"target", toJson(trajectory.target)}});
+  }
+  return {{"region", region.name},
+          {"trajectories", region.trajectories},
+          {"e_task_mean_mm", region.e_task_mean_mm},
+          {"e_task_std_mm", region.e_task_std_mm},
+          {"e_task_max_mm", region.e_task_max_mm},
+          {"e_coll", region.collisions},
+          {"contacts", region.contacts},
+          {"collided", collided}};
+}
+
+namespace {
+
 Json trajectoryJson(const app::TrajectoryResult& result) {
   Json regions = Json::array();
-  for (const auto& region : result.regions) {
-    regions.push_back({{"region", region.name},
-                       {"trajectories", region.trajectories},
-                       {"e_task_mean_mm", region.e_task_mean_mm},
-                       {"e_task_std_mm", region.e_task_std_mm},
-                       {"e_task_max_mm", region.e_task_max_mm},
-                       {"e_coll", region.collisions}});
-  }
+  for (const auto& region : result.regions) regions.push_back(trajectoryRegionJson(region));
   return {{"source", result.from_scene ? "scene" : "drawn around the samples"}, {"regions", regions}};
 }
 

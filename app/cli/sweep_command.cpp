@@ -96,10 +96,11 @@ Json table32(std::ostream& md) {
       errors += (errors.empty() ? "" : " / ") + fixed(region.e_task_mean_mm, 1) + " ± " + fixed(region.e_task_std_mm, 1) +
                 " (" + fixed(region.e_task_max_mm, 1) + ")";
       collisions += (collisions.empty() ? "" : " / ") + std::to_string(region.collisions) + "/" + std::to_string(region.trajectories);
-      regions.push_back({{"region", region.name}, {"trajectories", region.trajectories}, {"e_task_mean_mm", region.e_task_mean_mm},
-                         {"e_task_std_mm", region.e_task_std_mm}, {"e_task_max_mm", region.e_task_max_mm}, {"e_coll", region.collisions},
-                         {"contacts", region.contacts}});
-      for (const auto& [contact, count] : region.contacts) log("Tab. 3.2 " + label + " " + region.name + ": " + contact + " x" + std::to_string(count));
+      regions.push_back(trajectoryRegionJson(region));
+      for (const auto& trajectory : region.collided) {
+        log("Tab. 3.2 " + label + " " + region.name + ": " + trajectory.name + " " + trajectory.contact + " at " +
+            fixed(trajectory.contact_time, 2) + " s");
+      }
     }
     md << "| " << label << " | " << taught.areas.size() << " | " << taught.data.size() << " | " << errors << " | " << collisions
        << " | " << thesis.at(label) << " |\n";

@@ -152,5 +152,43 @@ TEST(Experiments, TrajectoriesBetweenTwoAreasAreAccurateAndCountedPerRegion) {
   }
 }
 
+TEST(Experiments, TrajectoriesThatMeetAnObstacleAreNamedWithTheirContactAndWhereTheTipWasHeaded) {
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  robot::Scene scene;
+  // A thin wall across +y, 0.13-0.17 m beside the tip; only the second trajectory crosses it.
+  robot::Obstacle wall;
+  wall.name = "wall";
+  wall.size = Eigen::Vector3d(0.6, 0.04, 0.6);
+  wall.X_WO = Eigen::Isometry3d(Eigen::Translation3d(tip + Eigen::Vector3d(0.0, 0.15, 0.0)));
+  scene.obstacles.push_back(wall);
+  scene.trajectories.push_back({"short_of_it", "left", {tip + Eigen::Vector3d(0.0, 0.05, 0.0)}});
+  scene.trajectories.push_back({"through_it", "left", {tip + Eigen::Vector3d(0.0, 0.3, 0.0)}});
+  scene.trajectories.push_back({"away_from_it", "left", {tip + Eigen::Vector3d(0.0, -0.05, 0.0)}});
+  const auto map = constantMap();
+  std::vector<EvaluatedArea> areas(1);
+  areas[0].q_fixed = ready();
+  areas[0].samples = tip;
+  constexpr double kSpeed = 0.1;  // [m/s]
+  const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 1, kSpeed, 1);
+  ASSERT_TRUE(result.from_scene);
+  ASSERT_EQ(result.regions.size(), 1u);
+  const TrajectoryRegionResult& left = result.regions[0];
+  EXPECT_EQ(left.trajectories, 3);
+  EXPECT_EQ(left.collisions, 1);
+  ASSERT_EQ(left.collided.size(), 1u);
+  const CollidedTrajectory& collided = left.collided[0];
+  EXPECT_EQ(collided.name, "through_it");
+  EXPECT_TRUE(collided.contact.ends_with("/wall")) << collided.contact;
+  // It starts 0.05 m along, where the first ended; the tip was headed for a point before the
+  // wall's far face when some link met the wall, and the time matches that point at 0.1 m/s.
+  const double along = collided.target.y() - tip.y();
+  EXPECT_GT(along, 0.05);
+  EXPECT_LT(along, 0.17);
+  EXPECT_NEAR(collided.target.x(), tip.x(), 1e-6);
+  EXPECT_NEAR(collided.target.z(), tip.z(), 1e-6);
+  EXPECT_NEAR(collided.contact_time, (along - 0.05) / kSpeed, 0.02);
+  EXPECT_EQ(left.contacts.at(collided.contact), 1);
+}
+
 }  // namespace
 }  // namespace flexirob::app

@@ -150,6 +150,16 @@ TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
     EXPECT_GE(region.at("e_task_std_mm").get<double>(), 0.0);
     EXPECT_GE(region.at("e_coll").get<int>(), 0);
     EXPECT_LE(region.at("e_coll").get<int>(), region.at("trajectories").get<int>());
+    // Each collided trajectory is named after its region and counted under its first contact.
+    const nlohmann::json& collided = region.at("collided");
+    EXPECT_EQ(collided.size(), region.at("e_coll").get<std::size_t>());
+    int counted = 0;
+    for (const auto& [contact, count] : region.at("contacts").items()) counted += count.get<int>();
+    EXPECT_EQ(counted, region.at("e_coll").get<int>());
+    for (const auto& trajectory : collided) {
+      EXPECT_TRUE(trajectory.at("name").get<std::string>().starts_with(region.at("region").get<std::string>() + "_"));
+      EXPECT_EQ(trajectory.at("target").size(), 3U);
+    }
   }
   // Deterministic for a seed.
   const auto again = runCliBinary("eval trajectories --session " + session.string() + " --per-area 2 --speed 0.2 --seed 3");
