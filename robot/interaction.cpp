@@ -14,6 +14,8 @@ constexpr std::array kInteractionParameters{
                          "spring between the tip and x_des in assisted gravity compensation"},
     ParameterDeclaration{"interaction.cartesian_damping", 60.0, 0.01, 1e4, "Ns/m",
                          "Cartesian damping of assisted gravity compensation (stops drift)"},
+    ParameterDeclaration{"interaction.blending_anchor_rate", 5.0, 0.0, 1000.0, "1/s",
+                         "assistance blending: rate, times the confidence, at which q_des returns to the held arm"},
 };
 
 }  // namespace
@@ -57,6 +59,7 @@ InteractionController::InteractionController(const RobotModel& model, const Para
       joint_damping_(parameters.get("interaction.joint_damping")),
       cartesian_stiffness_(parameters.get("interaction.cartesian_stiffness")),
       cartesian_damping_(parameters.get("interaction.cartesian_damping")),
+      blending_anchor_rate_(parameters.get("interaction.blending_anchor_rate")),
       controller_(model, parameters),
       limiter_(model, parameters, cycle_time),
       kinematics_(model),
@@ -65,7 +68,9 @@ InteractionController::InteractionController(const RobotModel& model, const Para
       q_des_(model.midPosture()),
       qd_des_(Eigen::VectorXd::Zero(model.dof())),
       qd_(Eigen::VectorXd::Zero(model.dof())),
-      q_map_(model.midPosture()) {
+      q_map_(model.midPosture()),
+      J_des_(3, model.dof()),
+      q_des_to_held_(model.dof()) {
   gains_ = modeGains(mode_);
 }
 
@@ -165,6 +170,24 @@ void InteractionController::update(const RobotState& state, JointImpedanceComman
         const double push = state.tau_ext.size() == n && std::isfinite(state.tau_ext[j]) ? state.tau_ext[j] : 0.0;
         qd_des_[j] = (qd_des_[j] + dt_ * push / inertia) / (1.0 + dt_ * joint_damping_ / inertia);
         q_des_[j] = std::clamp(q_des_[j] + qd_des_[j] * dt_, limiter_.lower()[j], limiter_.upper()[j]);
+      }
+      // Where the robot is confident it holds the arm's null space against the hand, and a push
+      // there would pile up in q_des without moving the arm; leaving the confident region (α
+      // falling) would then swing the arm by itself to a posture far beyond where the hand had
+      // it. So the null-space part of q_des returns to the held arm (the command) at α times the
+      // anchor rate: the thesis' q_des "relates to the damped current position" (Sect. 6.1).
+      // Only the null-space part, so that x_des = K_fwd(q_des) stays where the hand put it
+      // instead of following the arm's own lag; at α = 0 π_q follows the hand as before.
+      const double anchor = std::clamp(dt_ * alpha_ * blending_anchor_rate_, 0.0, 1.0);
+      if (anchor > 0.0) {
+        kinematics_.update(q_des_);
+        kinematics_.tipPositionJacobian(J_des_);
+        q_des_to_held_ = limiter_.command() - q_des_;
+        // N = I − Jᵀ(JJᵀ + λ²I)⁻¹J, damped so that a stretched arm does not blow it up.
+        const Eigen::Matrix3d JJt = J_des_ * J_des_.transpose() + 1e-4 * Eigen::Matrix3d::Identity();
+        const Eigen::Vector3d task_part = JJt.ldlt().solve(J_des_ * q_des_to_held_);
+        q_des_to_held_.noalias() -= J_des_.transpose() * task_part;
+        q_des_ = (q_des_ + anchor * q_des_to_held_).cwiseMax(limiter_.lower()).cwiseMin(limiter_.upper());
       }
       kinematics_.update(q_des_);
       p_des_ = kinematics_.p_WT();

@@ -119,6 +119,7 @@ class InteractionController {
   double dt_;
   double joint_damping_;     // admittance damping [Nms/rad]
   double cartesian_stiffness_, cartesian_damping_;
+  double blending_anchor_rate_;  // [1/s] times α: how fast q_des returns to the held arm (Sect. 6.1)
   HierarchicalController controller_;
   CommandLimiter limiter_;
   Kinematics kinematics_;
@@ -128,6 +129,8 @@ class InteractionController {
   ModeGains gains_{};
   bool keyboard_ = false;
   Eigen::VectorXd q_fixed_, q_c_, q_des_, qd_des_, qd_, q_map_;
+  Matrix3Xd J_des_;                 // tip position Jacobian at q_des (assistance blending)
+  Eigen::VectorXd q_des_to_held_;   // q_held − q_des, then its null-space part
   Eigen::Vector3d p_des_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d pd_des_ = Eigen::Vector3d::Zero();     // the task-space admittance's velocity
   Eigen::Vector3d pd_target_ = Eigen::Vector3d::Zero();  // fed forward in hierarchical control

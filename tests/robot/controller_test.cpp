@@ -399,6 +399,43 @@ TEST(InteractionControllers, AssistanceBlendingFollowsEquationSixTwo) {
   }
 }
 
+// Where the robot is confident (α = 1) it holds its null space against the hand, so a hand can
+// push on without the arm following. What the hand asks for must stay a deflection of the arm
+// (Sect. 6.1: q_des "relates to the damped current position"), not pile up: once released and
+// out of the confident region (α = 0, gravity compensation) the arm stays where it is instead of
+// swinging by itself to a posture the hand had pushed for far beyond it.
+TEST(InteractionControllers, AssistanceBlendingDoesNotStoreUpAPushTheAssistanceHeldBack) {
+  FixedPosture map(restPosture());
+  InteractionRig rig(restPosture(), InteractionMode::kAssistanceBlending);
+  ConstantConfidence confident(1.0);
+  rig.controller.setRedundancyMap(&map);
+  rig.controller.setConfidence(&confident);
+  rig.run(500);
+  // The hand pushes the elbow sideways for 3 s: a null-space motion the assistance resists.
+  Kinematics kinematics(rig.model);
+  kinematics.update(rig.state.q);
+  const Eigen::Vector3d sideways = Eigen::Vector3d::UnitZ().cross(kinematics.X_WB(4).translation()).normalized();
+  for (int k = 0; k < 3000; ++k) {
+    kinematics.update(rig.state.q);
+    rig.sim.setHandForce(4, kinematics.X_WB(4).translation(), 20.0 * sideways);
+    rig.run(1);
+  }
+  const double held_back = (rig.state.q - restPosture()).norm();
+  rig.sim.clearHandForce();
+  rig.run(1000);  // the hand is off; the arm comes to rest
+  ConstantConfidence unsure(0.0);
+  rig.controller.setConfidence(&unsure);
+  const Eigen::VectorXd at_rest = rig.state.q;
+  double largest_move = 0.0;
+  for (int k = 0; k < 4000; ++k) {
+    rig.run(1);
+    largest_move = std::max(largest_move, (rig.state.q - at_rest).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(largest_move, 0.05) << "the arm moved by itself after the hand had let go (it had been held "
+                                << held_back << " rad from the assisted posture)";
+  EXPECT_LT(rig.state.qd.norm(), 2e-3);
+}
+
 TEST(InteractionControllers, HierarchicalControlFollowsAMovingTargetAndHoldsWhereItStops) {
   InteractionRig rig(restPosture(), InteractionMode::kHierarchicalControl);
   rig.controller.setFixedPosture(restPosture());
