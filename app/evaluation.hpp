@@ -185,10 +185,6 @@ SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot:
                                     const robot::EvaluationGrid& grid, const std::vector<Eigen::VectorXd>& postures,
                                     double distance = 0.1);
 
-/// Tab. 3.2: E_task and E_coll along straight trajectories per region. With the scene's
-/// evaluation trajectories (grouped left / right / interpolation) those are run; otherwise
-/// `per_area` random straight trajectories in the axis-aligned box around each of the first two
-/// areas' samples and 2·per_area in the box between them (the thesis: 25 / 25 / 50).
 /// A trajectory of a region that met a contact: which one, where and when.
 struct CollidedTrajectory {
   std::string name;          ///< the scene's name, or "<region>_<k>" (k from 1) for a drawn one
@@ -196,6 +192,10 @@ struct CollidedTrajectory {
   double contact_time = 0.0; ///< [s] from the trajectory's start
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  ///< [m, W] the desired tip position then
 };
+/// Tab. 3.2: E_task and E_coll along straight trajectories per region. With the scene's
+/// evaluation trajectories (grouped left / right / interpolation) those are run; otherwise
+/// `per_area` random straight trajectories in the axis-aligned box around each of the first two
+/// areas' samples and 2·per_area in the box between them (the thesis: 25 / 25 / 50).
 struct TrajectoryRegionResult {
   std::string name;
   int trajectories = 0;

@@ -324,8 +324,8 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region) {
   for (const auto& trajectory : region.collided) {
     collided.push_back({{"name", trajectory.name},
                         {"contact", trajectory.contact},
-                        {"time_s", trajectory.contact_time},
-                        {"target", toJson(trajectory.target)}});
+                        {"contact_time_s", trajectory.contact_time},
+                        {"target_m", toJson(trajectory.target)}});
   }
   return {{"region", region.name},
           {"trajectories", region.trajectories},
@@ -334,7 +334,7 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region) {
           {"e_task_max_mm", region.e_task_max_mm},
           {"e_coll", region.collisions},
           {"contacts", region.contacts},
-          {"collided", collided}};
+          {"collided_trajectories", collided}};
 }
 
 namespace {

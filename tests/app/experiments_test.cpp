@@ -190,5 +190,41 @@ TEST(Experiments, TrajectoriesThatMeetAnObstacleAreNamedWithTheirContactAndWhere
   EXPECT_EQ(left.contacts.at(collided.contact), 1);
 }
 
+TEST(Experiments, DrawnTrajectoriesThatMeetAnObstacleAreNamedAfterTheirRegion) {
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  // Two 5 cm areas 0.3 m apart along y and a 10 cm plate across y half way: only trajectories
+  // between the areas cross it.
+  std::vector<EvaluatedArea> areas(2);
+  for (int k = 0; k < 2; ++k) {
+    areas[static_cast<std::size_t>(k)].q_fixed = ready();
+    Eigen::MatrixXd& samples = areas[static_cast<std::size_t>(k)].samples;
+    samples.resize(3, 2);
+    samples.col(0) = tip + Eigen::Vector3d(-0.025, k == 0 ? 0.125 : -0.175, -0.025);
+    samples.col(1) = tip + Eigen::Vector3d(0.025, k == 0 ? 0.175 : -0.125, 0.025);
+  }
+  robot::Scene scene;
+  robot::Obstacle plate;
+  plate.name = "plate";
+  plate.size = Eigen::Vector3d(0.1, 0.02, 0.1);
+  plate.X_WO = Eigen::Isometry3d(Eigen::Translation3d(tip));
+  scene.obstacles.push_back(plate);
+  const auto map = constantMap();
+  const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 3, 0.1, 1);
+  ASSERT_EQ(result.regions.size(), 3u);
+  EXPECT_TRUE(result.regions[0].collided.empty());
+  EXPECT_TRUE(result.regions[1].collided.empty());
+  const TrajectoryRegionResult& between = result.regions[2];
+  ASSERT_EQ(between.name, "interpolation");
+  ASSERT_FALSE(between.collided.empty());
+  EXPECT_EQ(static_cast<int>(between.collided.size()), between.collisions);
+  for (const CollidedTrajectory& trajectory : between.collided) {
+    ASSERT_TRUE(trajectory.name.starts_with("interpolation_")) << trajectory.name;
+    const int k = std::stoi(trajectory.name.substr(std::string("interpolation_").size()));
+    EXPECT_GE(k, 1);
+    EXPECT_LE(k, 6);
+    EXPECT_TRUE(trajectory.contact.ends_with("/plate")) << trajectory.contact;
+  }
+}
+
 }  // namespace
 }  // namespace flexirob::app

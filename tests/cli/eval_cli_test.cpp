@@ -151,14 +151,15 @@ TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
     EXPECT_GE(region.at("e_coll").get<int>(), 0);
     EXPECT_LE(region.at("e_coll").get<int>(), region.at("trajectories").get<int>());
     // Each collided trajectory is named after its region and counted under its first contact.
-    const nlohmann::json& collided = region.at("collided");
+    const nlohmann::json& collided = region.at("collided_trajectories");
     EXPECT_EQ(collided.size(), region.at("e_coll").get<std::size_t>());
     int counted = 0;
     for (const auto& [contact, count] : region.at("contacts").items()) counted += count.get<int>();
     EXPECT_EQ(counted, region.at("e_coll").get<int>());
     for (const auto& trajectory : collided) {
       EXPECT_TRUE(trajectory.at("name").get<std::string>().starts_with(region.at("region").get<std::string>() + "_"));
-      EXPECT_EQ(trajectory.at("target").size(), 3U);
+      EXPECT_EQ(trajectory.at("target_m").size(), 3U);
+      EXPECT_GE(trajectory.at("contact_time_s").get<double>(), 0.0);
     }
   }
   // Deterministic for a seed.
