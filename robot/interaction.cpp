@@ -171,24 +171,6 @@ void InteractionController::update(const RobotState& state, JointImpedanceComman
         qd_des_[j] = (qd_des_[j] + dt_ * push / inertia) / (1.0 + dt_ * joint_damping_ / inertia);
         q_des_[j] = std::clamp(q_des_[j] + qd_des_[j] * dt_, limiter_.lower()[j], limiter_.upper()[j]);
       }
-      // Where the robot is confident it holds the arm's null space against the hand, and a push
-      // there would pile up in q_des without moving the arm; leaving the confident region (α
-      // falling) would then swing the arm by itself to a posture far beyond where the hand had
-      // it. So the null-space part of q_des returns to the held arm (the command) at α times the
-      // anchor rate: the thesis' q_des "relates to the damped current position" (Sect. 6.1).
-      // Only the null-space part, so that x_des = K_fwd(q_des) stays where the hand put it
-      // instead of following the arm's own lag; at α = 0 π_q follows the hand as before.
-      const double anchor = std::clamp(dt_ * alpha_ * blending_anchor_rate_, 0.0, 1.0);
-      if (anchor > 0.0) {
-        kinematics_.update(q_des_);
-        kinematics_.tipPositionJacobian(J_des_);
-        q_des_to_held_ = limiter_.command() - q_des_;
-        // N = I − Jᵀ(JJᵀ + λ²I)⁻¹J, damped so that a stretched arm does not blow it up.
-        const Eigen::Matrix3d JJt = J_des_ * J_des_.transpose() + 1e-4 * Eigen::Matrix3d::Identity();
-        const Eigen::Vector3d task_part = JJt.ldlt().solve(J_des_ * q_des_to_held_);
-        q_des_to_held_.noalias() -= J_des_.transpose() * task_part;
-        q_des_ = (q_des_ + anchor * q_des_to_held_).cwiseMax(limiter_.lower()).cwiseMin(limiter_.upper());
-      }
       kinematics_.update(q_des_);
       p_des_ = kinematics_.p_WT();
       const double c = confidence_ != nullptr ? confidence_->confidence(p_des_) : 0.0;
@@ -199,6 +181,24 @@ void InteractionController::update(const RobotState& state, JointImpedanceComman
         q_map_ = q_des_;
       }
       q_map_ = alpha_ * q_map_ + (1.0 - alpha_) * q_des_;  // Eq. 6.2
+      // Where the robot is confident it holds the arm's null space against the hand, and a push
+      // there would pile up in q_des without moving the arm; leaving the confident region (α
+      // falling) would then swing the arm by itself to a posture far beyond where the hand had
+      // it. So the null-space part of q_des returns to the held arm (the command) at α times the
+      // anchor rate: the thesis' q_des "relates to the damped current position" (Sect. 6.1).
+      // Only the null-space part, so that x_des = K_fwd(q_des) stays where the hand put it
+      // instead of following the arm's own lag; at α = 0 π_q follows the hand as before. It acts
+      // from the next cycle on, with this cycle's kinematics of q_des.
+      const double anchor = std::clamp(dt_ * alpha_ * blending_anchor_rate_, 0.0, 1.0);
+      if (anchor > 0.0) {
+        kinematics_.tipPositionJacobian(J_des_);  // still at q_des (x_des above)
+        q_des_to_held_ = limiter_.command() - q_des_;
+        // N = I − Jᵀ(JJᵀ + λ²I)⁻¹J, damped so that a stretched arm does not blow it up.
+        const Eigen::Matrix3d JJt = J_des_ * J_des_.transpose() + 1e-4 * Eigen::Matrix3d::Identity();
+        const Eigen::Vector3d task_part = JJt.ldlt().solve(J_des_ * q_des_to_held_);
+        q_des_to_held_.noalias() -= J_des_.transpose() * task_part;
+        q_des_ = (q_des_ + anchor * q_des_to_held_).cwiseMax(limiter_.lower()).cwiseMin(limiter_.upper());
+      }
       controller_.velocity(limiter_.command(), p_des_, q_map_, qd_, &limiter_);
       limiter_.updateVelocity(qd_);
       break;
