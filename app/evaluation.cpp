@@ -356,7 +356,8 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     model.checkPosture(area.q_fixed);
     if (area.samples.rows() != 3 || area.samples.cols() < 1) throw InputError("trajectories: an area has no samples");
   }
-  // The regions: name -> list of point sequences (each a chain of straight segments).
+  // The regions: name -> list of named point sequences (each a chain of straight segments; the
+  // name is what a collided trajectory is reported as).
   struct NamedWaypoints {
     std::string name;
     std::vector<Eigen::Vector3d> waypoints;
