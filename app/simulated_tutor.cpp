@@ -29,12 +29,17 @@ constexpr double kMaxPointForce = 150.0;  // [N]
 // Unbounded, its lead reached 0.5 rad on the 9-DoF arm and the links cut across the planned way
 // into the bridge and into the arm's own base.
 constexpr double kMaxLead = 0.05;
+// [rad] of any joint between the arm and the tutor's reference at which the tutor lets go.
+constexpr double kRunOffError = 0.5;
 // [rad] (largest joint) an arm that on_converged poses at the end of the way may stand off the
 // chosen posture and still be taken as there, as a person sees it.
 constexpr double kPosedTolerance = 0.02;
 constexpr double kTipStiffness = 1500.0;  // [N/m] of the hand drawing circles
 constexpr double kTipDamping = 60.0;      // [Ns/m]
 constexpr double kMaxTipForce = 60.0;     // [N]
+constexpr double kYieldingConfidence = 0.2;  // C(x) below which the assisted arm follows the hands' posture
+constexpr double kDriftingConfidence = 1e-3;  // C(x) above which a released arm drifts towards q_c
+constexpr double kLeadSpeed = 0.1;           // [m/s] of the tip led out of the assistance
 // The fastest a small helix is drawn, as a multiple of TutorOptions::circle_period's pace.
 constexpr double kMaxHelixPace = 8.0;
 // A recording spanning less than this fraction of the helix drawn is a spot, not an area: the arm
@@ -385,7 +390,7 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
     if (arm()->time() > deadline) {
       arm()->clearHandForce();
       std::ostringstream detail;
-      detail << "in " << workflow_->stateName() << ", at path point " << next << "/" << path.size() << ", posture error "
+      detail << "timed out in " << workflow_->stateName() << ", at path point " << next << "/" << path.size() << ", posture error "
              << std::setprecision(3) << (state_.q - q_ref).cwiseAbs().maxCoeff() << " rad, joint speed "
              << state_.qd.cwiseAbs().maxCoeff() << " rad/s (" << qd_mean.cwiseAbs().maxCoeff() << " over 0.1 s)";
       last_failure_detail_ = detail.str();
@@ -407,6 +412,16 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
     }
     // Move the reference along the path at the tutor's pace, waiting where the arm lags.
     const double lead = (state_.q - q_ref).cwiseAbs().maxCoeff();
+    if (lead > kRunOffError) {
+      // The arm went its own way (a robot's assistance or a contact turned it): a person lets
+      // go rather than wrestle with it.
+      arm()->clearHandForce();
+      std::ostringstream detail;
+      detail << "the arm ran off the way, " << std::setprecision(3) << lead << " rad from it, at path point " << next << "/" << path.size()
+             << "; let go";
+      last_failure_detail_ = detail.str();
+      return false;
+    }
     if (next < path.size()) report_.max_approach_lead = std::max(report_.max_approach_lead, lead);
     if (next < path.size() && lead <= kMaxLead) {
       const Eigen::VectorXd to = path[next] - q_ref;
@@ -456,10 +471,11 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
   }
 }
 
-void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref, double duration) {
+void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref, double duration,
+                             const std::function<bool()>& done) {
   const double start = arm()->time();
   Eigen::Vector3d p_last = state_.p_WT();
-  while (arm()->time() - start < duration) {
+  while (arm()->time() - start < duration && !(done && done())) {
     const Eigen::Vector3d p = state_.p_WT();
     const Eigen::Vector3d v = (p - p_last) / arm()->cycleTime();
     p_last = p;
@@ -469,6 +485,45 @@ void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref
     tick();
   }
   arm()->clearHandForce();
+}
+
+double SimulatedTutor::assistanceAt(const Eigen::Vector3d& p_W) const {
+  const bool blending = workflow_->options().learner == LearnerKind::kOsElm && !workflow_->areas().empty();
+  return blending ? workflow_->confidence().evaluate(p_W) : 0.0;
+}
+
+double SimulatedTutor::assistanceAtTip() const { return assistanceAt(state_.p_WT()); }
+
+void SimulatedTutor::leadTipOutOfAssistance(const std::vector<Eigen::VectorXd>& path) {
+  // The tip's way on the path, by arc length.
+  std::vector<Eigen::Vector3d> way;
+  std::vector<double> arc;
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const int samples = std::max(1, static_cast<int>(std::ceil((path[i + 1] - path[i]).cwiseAbs().maxCoeff() / 0.02)));
+    for (int k = i == 0 ? 0 : 1; k <= samples; ++k) {
+      kinematics_.update(path[i] + (path[i + 1] - path[i]) * (static_cast<double>(k) / samples));
+      arc.push_back(way.empty() ? 0.0 : arc.back() + (kinematics_.p_WT() - way.back()).norm());
+      way.push_back(kinematics_.p_WT());
+    }
+  }
+  if (way.size() < 2) return;
+  const auto on_way = [&](double t) -> Eigen::Vector3d {
+    const double s = kLeadSpeed * t;
+    const auto k = static_cast<std::size_t>(std::upper_bound(arc.begin(), arc.end(), s) - arc.begin());
+    if (k >= arc.size()) return way.back();
+    const double f = (s - arc[k - 1]) / std::max(1e-9, arc[k] - arc[k - 1]);
+    return way[k - 1] + f * (way[k] - way[k - 1]);
+  };
+  // The arm's posture is the robot's along the way, not the path's: a person stops where it
+  // comes near an obstacle (looked at every 20 ms).
+  int cycle = 0;
+  const double margin = 0.5 * options_.min_clearance;
+  pushTip(on_way, arc.back() / kLeadSpeed + 2.0, [&] {
+    if (assistanceAtTip() < kYieldingConfidence || (state_.p_WT() - way.back()).norm() < 0.02) return true;
+    if (++cycle % 20 != 0) return false;
+    world_->update(state_.q);
+    return !world_->contacts().empty() || world_->clearance(2.0 * margin).distance < margin;
+  });
 }
 
 bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested) {
@@ -535,19 +590,35 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
   area.q_chosen = choice.q;
   area.clearance = choice.clearance;
   // A person moves slowly where the arm passes close to an obstacle.
-  const double path_clearance = std::max(0.0, pathClearance(path));
-  const double speed = options_.approach_speed * std::clamp(path_clearance / 0.15, 0.1, 1.0);
+  const auto paceFor = [this](const std::vector<Eigen::VectorXd>& way) {
+    return options_.approach_speed * std::clamp(std::max(0.0, pathClearance(way)) / 0.15, 0.1, 1.0);
+  };
   // Touch (on_affected -> APPROACHING), push the links there, let go (on_converged -> POSED).
   kinematics_.update(choice.q);
   if (!grab(SubStage::kWaiting, kinematics_.p_WT() - state_.p_WT() + Eigen::Vector3d(0, 0, 1e-3))) {
     area.failure = "on_affected did not fire";
     return false;
   }
-  if (!pushAlong(path, speed)) {
-    area.failure = "the posture was not reached in time (" + last_failure_detail_ + ")";
+  if (assistanceAtTip() >= kYieldingConfidence) {
+    // Where the robot is already confident, assistance blending keeps the null space at what
+    // it learned: lead the tip away first, then push the links on from where the arm is.
+    const Eigen::Vector3d lead_from = state_.p_WT();
+    leadTipOutOfAssistance(path);
+    area.assistance_lead = (state_.p_WT() - lead_from).norm();
+    path = planApproach(state_.q, choice.q, options_.min_clearance);
+    if (path.empty()) path = planApproach(state_.q, choice.q, 0.5 * options_.min_clearance);
+    if (path.empty()) {
+      area.failure = "no collision-free way to the posture from where the assistance let the arm go";
+      return false;
+    }
+  }
+  if (!pushAlong(path, paceFor(path))) {
+    area.failure = "the posture was not reached (" + last_failure_detail_ + ")";
     return false;
   }
-  if (!waitFor(SubStage::kPosed, 6.0)) {
+  // Where assistance blending offers the learned posture, the released arm's null space drifts
+  // towards it before it comes to rest (the tip stays where it is).
+  if (!waitFor(SubStage::kPosed, assistanceAtTip() > kDriftingConfidence ? 30.0 : 6.0)) {
     area.failure = "on_converged did not fire after the approach";
     return false;
   }

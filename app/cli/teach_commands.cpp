@@ -224,7 +224,8 @@ Json runTeach(const TeachOptions& options) {
                            {"map_failures_with", area.map_failures_with},
                            {"helix_diameter_m", area.helix_diameter},
                            {"samples", area.samples},
-                           {"span_m", area.span}});
+                           {"span_m", area.span},
+                           {"assistance_lead_m", area.assistance_lead}});
   }
   const Json session = {{"format", "flexirob-session-json"},
                         {"version", 1},

@@ -91,6 +91,34 @@ TEST(SimulatedTutor, TeachesTwoAreasInSetupAWithoutCollisions) {
   ASSERT_EQ(run.checks.size(), 1U);
 }
 
+// With OS-ELM the second approach runs under assistance blending (Sect. 6.1), and where the
+// first area's confidence is high the robot holds the null space at what it learned: pushing the
+// links along the way to setup C's right posture stalled at its start, and the tutor's push then
+// swung the arm into the table and the right marker (before: the right area not taught, 22
+// contact events). The tutor now leads the tip out of the confident region first.
+TEST(SimulatedTutor, UnderAssistanceBlendingLeadsTheTipOutOfTheConfidentRegionFirst) {
+  const robot::Scene scene = robot::loadScene("setup_C");
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  robot::Simulation sim(lwr4(), &scene, parameters);
+  sim.reset(*scene.home_posture);
+  WorkflowOptions options;
+  options.learner = LearnerKind::kOsElm;
+  options.background_learning = false;
+  Workflow workflow(sim, parameters, options);
+  TutorOptions tutor_options;  // as `teach --scene setup_C --areas 2 --learner oselm`
+  tutor_options.check_points = 0;
+  SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
+  const TutorReport report = tutor.configure(2);
+  ASSERT_GE(report.areas.size(), 2U);
+  for (std::size_t k = 0; k < 2; ++k) EXPECT_TRUE(report.areas[k].taught) << report.areas[k].name << ": " << report.areas[k].failure;
+  EXPECT_EQ(report.areas.size(), 2U);  // no place of its own taken instead
+  EXPECT_EQ(report.collisions, 0U);
+  EXPECT_EQ(report.areas[0].assistance_lead, 0.0);  // nothing learned yet: π_q
+  EXPECT_GT(report.areas[1].assistance_lead, 0.05);
+  EXPECT_EQ(workflow.areas().size(), 2U);
+}
+
 TEST(SimulatedTutor, GuidesATeachInTrajectoryInProgramming) {
   const robot::Scene scene = robot::loadScene("setup_A");
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();

@@ -109,6 +109,7 @@ TEST(TeachCli, FailsWithOneLineWhenNoAreaCouldBeTaughtAndStillWritesTheSession) 
   ASSERT_FALSE(json.at("tutor").empty());
   EXPECT_EQ(json.at("tutor").at(0).at("name"), "far");
   EXPECT_FALSE(json.at("tutor").at(0).at("taught").get<bool>());
+  EXPECT_EQ(json.at("tutor").at(0).at("assistance_lead_m").get<double>(), 0.0);  // π_q: nothing to lead out of
   EXPECT_TRUE(fs::exists(out));
   fs::remove(out);
   fs::remove(scene);
