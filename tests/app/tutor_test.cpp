@@ -91,34 +91,6 @@ TEST(SimulatedTutor, TeachesTwoAreasInSetupAWithoutCollisions) {
   ASSERT_EQ(run.checks.size(), 1U);
 }
 
-// With OS-ELM the second approach runs under assistance blending (Sect. 6.1), and where the
-// first area's confidence is high the robot holds the null space at what it learned: pushing the
-// links along the way to setup C's right posture stalled at its start, and the tutor's push then
-// swung the arm into the table and the right marker (before: the right area not taught, 22
-// contact events). The tutor now leads the tip out of the confident region first.
-TEST(SimulatedTutor, UnderAssistanceBlendingLeadsTheTipOutOfTheConfidentRegionFirst) {
-  const robot::Scene scene = robot::loadScene("setup_C");
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-  robot::ParameterSet parameters(declarations);
-  robot::Simulation sim(lwr4(), &scene, parameters);
-  sim.reset(*scene.home_posture);
-  WorkflowOptions options;
-  options.learner = LearnerKind::kOsElm;
-  options.background_learning = false;
-  Workflow workflow(sim, parameters, options);
-  TutorOptions tutor_options;  // as `teach --scene setup_C --areas 2 --learner oselm`
-  tutor_options.check_points = 0;
-  SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
-  const TutorReport report = tutor.configure(2);
-  ASSERT_GE(report.areas.size(), 2U);
-  for (std::size_t k = 0; k < 2; ++k) EXPECT_TRUE(report.areas[k].taught) << report.areas[k].name << ": " << report.areas[k].failure;
-  EXPECT_EQ(report.areas.size(), 2U);  // no place of its own taken instead
-  EXPECT_EQ(report.collisions, 0U);
-  EXPECT_EQ(report.areas[0].assistance_lead, 0.0);  // nothing learned yet: π_q
-  EXPECT_GT(report.areas[1].assistance_lead, 0.05);
-  EXPECT_EQ(workflow.areas().size(), 2U);
-}
-
 TEST(SimulatedTutor, GuidesATeachInTrajectoryInProgramming) {
   const robot::Scene scene = robot::loadScene("setup_A");
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
@@ -218,10 +190,11 @@ namespace {
 // A short teaching run of `model` (which must outlive it) on `scene`: learning in the caller's
 // thread, one helix turn per area, eight posture candidates.
 struct ShortTeaching {
-  explicit ShortTeaching(robot::Scene scene_in, const robot::RobotModel& model = lwr4())
+  explicit ShortTeaching(robot::Scene scene_in, const robot::RobotModel& model = lwr4(), LearnerKind learner = LearnerKind::kElm)
       : scene(std::move(scene_in)), declarations(robot::reachParameters()), parameters(declarations), sim(model, &scene, parameters) {
     sim.reset(*scene.home_posture);
     WorkflowOptions options;
+    options.learner = learner;
     options.background_learning = false;
     workflow = std::make_unique<Workflow>(sim, parameters, options);
     tutor_options.circles = 1;
@@ -239,6 +212,25 @@ struct ShortTeaching {
   std::unique_ptr<Workflow> workflow;
   TutorOptions tutor_options;
 };
+
+// With OS-ELM the second approach runs under assistance blending (Sect. 6.1), and where the
+// first area's confidence is high the robot holds the null space at what it learned: pushing the
+// links along the way to setup C's right posture stalled at its start, and the tutor's push then
+// swung the arm into the table and the right marker (before: the right area not taught, 22
+// contact events). The tutor now leads the tip out of the confident region first.
+TEST(SimulatedTutor, UnderAssistanceBlendingLeadsTheTipOutOfTheConfidentRegionFirst) {
+  ShortTeaching teaching(robot::loadScene("setup_C"), lwr4(), LearnerKind::kOsElm);
+  teaching.tutor_options = TutorOptions{};  // as `teach --scene setup_C --areas 2 --learner oselm`
+  teaching.tutor_options.check_points = 0;
+  const TutorReport report = teaching.configure(2);
+  ASSERT_GE(report.areas.size(), 2U);
+  for (std::size_t k = 0; k < 2; ++k) EXPECT_TRUE(report.areas[k].taught) << report.areas[k].name << ": " << report.areas[k].failure;
+  EXPECT_EQ(report.areas.size(), 2U);  // no place of its own taken instead
+  EXPECT_EQ(report.collisions, 0U);
+  EXPECT_EQ(report.areas[0].assistance_lead, 0.0);  // nothing learned yet: π_q
+  EXPECT_GT(report.areas[1].assistance_lead, 0.05);
+  EXPECT_EQ(teaching.workflow->areas().size(), 2U);
+}
 
 // The scene's workspace box may reach beyond the arm: places the tutor picks itself lie within
 // reach (a person does not ask the arm for a place it cannot get to).
