@@ -37,9 +37,13 @@ constexpr double kPosedTolerance = 0.02;
 constexpr double kTipStiffness = 1500.0;  // [N/m] of the hand drawing circles
 constexpr double kTipDamping = 60.0;      // [Ns/m]
 constexpr double kMaxTipForce = 60.0;     // [N]
-constexpr double kYieldingConfidence = 0.2;  // C(x) below which the assisted arm follows the hands' posture
-constexpr double kDriftingConfidence = 1e-3;  // C(x) above which a released arm drifts towards q_c
-constexpr double kLeadSpeed = 0.1;           // [m/s] of the tip led out of the assistance
+// Assistance blending (Eq. 6.2) weighs the learned posture by α = C(x) everywhere. Below this
+// confidence the tutor's pushes on the links take over from leading the tip: the hands then
+// move the null space at four fifths of their push or more (docs/WORKFLOW.md).
+constexpr double kYieldingConfidence = 0.2;
+// A released arm's null space drifts towards q_c wherever C(x) > 0; above this it takes seconds.
+constexpr double kDriftingConfidence = 1e-3;
+constexpr double kLeadSpeed = 0.1;  // [m/s] of the tip led out of the assistance
 // The fastest a small helix is drawn, as a multiple of TutorOptions::circle_period's pace.
 constexpr double kMaxHelixPace = 8.0;
 // A recording spanning less than this fraction of the helix drawn is a spot, not an area: the arm
@@ -488,8 +492,9 @@ void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref
 }
 
 double SimulatedTutor::assistanceAt(const Eigen::Vector3d& p_W) const {
-  const bool blending = workflow_->options().learner == LearnerKind::kOsElm && !workflow_->areas().empty();
-  return blending ? workflow_->confidence().evaluate(p_W) : 0.0;
+  if (workflow_->controller() != InteractionController::kAssistanceBlending) return 0.0;
+  const double c = workflow_->confidence().evaluate(p_W);
+  return std::isfinite(c) ? c : 0.0;  // as the controller reads it
 }
 
 double SimulatedTutor::assistanceAtTip() const { return assistanceAt(state_.p_WT()); }
@@ -515,12 +520,15 @@ void SimulatedTutor::leadTipOutOfAssistance(const std::vector<Eigen::VectorXd>& 
     return way[k - 1] + f * (way[k] - way[k - 1]);
   };
   // The arm's posture is the robot's along the way, not the path's: a person stops where it
-  // comes near an obstacle (looked at every 20 ms).
+  // comes near an obstacle (looked at every 20 ms). A stall long enough for on_converged ends
+  // the lead too: a touch in POSED would start a recording.
   int cycle = 0;
+  const long look_every = std::max(1L, std::lround(0.02 / arm()->cycleTime()));
   const double margin = 0.5 * options_.min_clearance;
   pushTip(on_way, arc.back() / kLeadSpeed + 2.0, [&] {
+    if (workflow_->subStage() != SubStage::kApproaching) return true;
     if (assistanceAtTip() < kYieldingConfidence || (state_.p_WT() - way.back()).norm() < 0.02) return true;
-    if (++cycle % 20 != 0) return false;
+    if (++cycle % look_every != 0) return false;
     world_->update(state_.q);
     return !world_->contacts().empty() || world_->clearance(2.0 * margin).distance < margin;
   });
@@ -605,6 +613,10 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     const Eigen::Vector3d lead_from = state_.p_WT();
     leadTipOutOfAssistance(path);
     area.assistance_lead = (state_.p_WT() - lead_from).norm();
+    if (workflow_->subStage() != SubStage::kApproaching) {
+      area.failure = std::string("the arm stalled under the assistance while the tip was led (") + workflow_->stateName() + ")";
+      return false;
+    }
     path = planApproach(state_.q, choice.q, options_.min_clearance);
     if (path.empty()) path = planApproach(state_.q, choice.q, 0.5 * options_.min_clearance);
     if (path.empty()) {

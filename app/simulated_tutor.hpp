@@ -76,8 +76,9 @@ struct TutorAreaReport {
   /// [m] twice the largest distance of a recorded tip position from their mean: 0.85-1.05 times
   /// the helix diameter when the arm followed the hands.
   double span = 0.0;
-  /// [m] the tip was led under assistance blending before the links were pushed (Sect. 6.1:
-  /// where the robot is confident it holds the null space); 0 where that was not needed.
+  /// [m] from where the tip was grabbed to where it was when the lead under assistance blending
+  /// ended and the links were pushed (Sect. 6.1: where the robot is confident it holds the null
+  /// space); 0 where no lead was needed.
   double assistance_lead = 0.0;
 };
 
@@ -132,16 +133,16 @@ class SimulatedTutor {
   /// moving at `speed` [rad/s, largest joint]; false on timeout.
   bool pushAlong(const std::vector<Eigen::VectorXd>& path, double speed);
   /// Pushes the tip towards a moving reference p_ref(t) for `duration` seconds, or until
-  /// `done` (if given) says so after a cycle.
+  /// `done` (if given, asked before every cycle) says so.
   void pushTip(const std::function<Eigen::Vector3d(double)>& p_ref, double duration,
                const std::function<bool()>& done = {});
   /// Under assistance blending (Sect. 6.1) the robot holds the null space where it is
   /// confident, and pushing the links there moves only the tip: a person who feels that leads
   /// the tip along the way the tip takes on the joint-space `path` until the arm yields (C(x)
   /// at the tip below kYieldingConfidence), the tip is at the path's end, or the arm comes near
-  /// an obstacle.
+  /// an obstacle (closer than half min_clearance), or on_converged ends APPROACHING.
   void leadTipOutOfAssistance(const std::vector<Eigen::VectorXd>& path);
-  /// C(x) the workflow's assistance blending uses at p_W; 0 where π_q is used.
+  /// C(x) the workflow's assistance blending uses at p_W; 0 while another controller runs.
   double assistanceAt(const Eigen::Vector3d& p_W) const;
   double assistanceAtTip() const;
   /// Steps until the workflow reaches `sub_stage` (hands off); false on timeout.
