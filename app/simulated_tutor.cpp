@@ -39,7 +39,8 @@ constexpr double kTipDamping = 60.0;      // [Ns/m]
 constexpr double kMaxTipForce = 60.0;     // [N]
 // Assistance blending (Eq. 6.2) weighs the learned posture by α = C(x) everywhere. Below this
 // confidence the tutor's pushes on the links take over from leading the tip: the hands then
-// move the null space at four fifths of their push or more (docs/WORKFLOW.md).
+// move the null space at four fifths of their push or more (0.1 and 0.4 made more contacts in
+// setups I, A, II, B and C, docs/WORKFLOW.md).
 constexpr double kYieldingConfidence = 0.2;
 // A released arm's null space drifts towards q_c wherever C(x) > 0; above this it takes seconds.
 constexpr double kDriftingConfidence = 1e-3;
