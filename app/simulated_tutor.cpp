@@ -492,13 +492,11 @@ void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref
   arm()->clearHandForce();
 }
 
-double SimulatedTutor::assistanceAt(const Eigen::Vector3d& p_W) const {
+double SimulatedTutor::assistanceAtTip() const {
   if (workflow_->controller() != InteractionController::kAssistanceBlending) return 0.0;
-  const double c = workflow_->confidence().evaluate(p_W);
+  const double c = workflow_->confidence().evaluate(state_.p_WT());
   return std::isfinite(c) ? c : 0.0;  // as the controller reads it
 }
-
-double SimulatedTutor::assistanceAtTip() const { return assistanceAt(state_.p_WT()); }
 
 void SimulatedTutor::leadTipOutOfAssistance(const std::vector<Eigen::VectorXd>& path) {
   // The tip's way on the path, by arc length.
@@ -517,7 +515,7 @@ void SimulatedTutor::leadTipOutOfAssistance(const std::vector<Eigen::VectorXd>& 
     const double s = kLeadSpeed * t;
     const auto k = static_cast<std::size_t>(std::upper_bound(arc.begin(), arc.end(), s) - arc.begin());
     if (k >= arc.size()) return way.back();
-    const double f = (s - arc[k - 1]) / std::max(1e-9, arc[k] - arc[k - 1]);
+    const double f = (s - arc[k - 1]) / (arc[k] - arc[k - 1]);  // upper_bound: arc[k] > s >= arc[k - 1]
     return way[k - 1] + f * (way[k] - way[k - 1]);
   };
   // The arm's posture is the robot's along the way, not the path's: a person stops where it

@@ -130,7 +130,8 @@ class SimulatedTutor {
  private:
   bool teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested);
   /// Pushes the links so that the posture follows a joint-space path with the reference
-  /// moving at `speed` [rad/s, largest joint]; false on timeout.
+  /// moving at `speed` [rad/s, largest joint]; false on timeout or when the arm runs off the
+  /// way (kRunOffError), with the reason in last_failure_detail_.
   bool pushAlong(const std::vector<Eigen::VectorXd>& path, double speed);
   /// Pushes the tip towards a moving reference p_ref(t) for `duration` seconds, or until
   /// `done` (if given, asked before every cycle) says so.
@@ -142,8 +143,7 @@ class SimulatedTutor {
   /// at the tip below kYieldingConfidence), the tip is at the path's end, or the arm comes near
   /// an obstacle (closer than half min_clearance), or on_converged ends APPROACHING.
   void leadTipOutOfAssistance(const std::vector<Eigen::VectorXd>& path);
-  /// C(x) the workflow's assistance blending uses at p_W; 0 while another controller runs.
-  double assistanceAt(const Eigen::Vector3d& p_W) const;
+  /// C(x) the workflow's assistance blending uses at the tip now; 0 while another controller runs.
   double assistanceAtTip() const;
   /// Steps until the workflow reaches `sub_stage` (hands off); false on timeout.
   bool waitFor(SubStage sub_stage, double max_time);
