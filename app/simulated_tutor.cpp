@@ -492,6 +492,20 @@ void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref
   arm()->clearHandForce();
 }
 
+void SimulatedTutor::pushTipAlong(const std::vector<Eigen::Vector3d>& line, double speed, double extra_time,
+                                  const std::function<bool()>& done) {
+  std::vector<double> at{0.0};  // [s] when the reference passes each point
+  for (std::size_t i = 1; i < line.size(); ++i) at.push_back(at.back() + (line[i] - line[i - 1]).norm() / speed);
+  pushTip(
+      [&](double t) {
+        for (std::size_t i = 1; i < line.size(); ++i) {
+          if (t <= at[i]) return Eigen::Vector3d(line[i - 1] + (line[i] - line[i - 1]) * ((t - at[i - 1]) / std::max(1e-9, at[i] - at[i - 1])));
+        }
+        return line.back();
+      },
+      at.back() + extra_time, done);
+}
+
 double SimulatedTutor::assistanceAtTip() const {
   if (workflow_->controller() != InteractionController::kAssistanceBlending) return 0.0;
   const double c = workflow_->confidence().evaluate(state_.p_WT());
@@ -499,32 +513,23 @@ double SimulatedTutor::assistanceAtTip() const {
 }
 
 void SimulatedTutor::leadTipOutOfAssistance(const std::vector<Eigen::VectorXd>& path) {
-  // The tip's way on the path, by arc length.
+  // The tip's way on the path, every 0.02 rad of the largest joint motion.
   std::vector<Eigen::Vector3d> way;
-  std::vector<double> arc;
   for (std::size_t i = 0; i + 1 < path.size(); ++i) {
     const int samples = std::max(1, static_cast<int>(std::ceil((path[i + 1] - path[i]).cwiseAbs().maxCoeff() / 0.02)));
     for (int k = i == 0 ? 0 : 1; k <= samples; ++k) {
       kinematics_.update(path[i] + (path[i + 1] - path[i]) * (static_cast<double>(k) / samples));
-      arc.push_back(way.empty() ? 0.0 : arc.back() + (kinematics_.p_WT() - way.back()).norm());
       way.push_back(kinematics_.p_WT());
     }
   }
   if (way.size() < 2) return;
-  const auto on_way = [&](double t) -> Eigen::Vector3d {
-    const double s = kLeadSpeed * t;
-    const auto k = static_cast<std::size_t>(std::upper_bound(arc.begin(), arc.end(), s) - arc.begin());
-    if (k >= arc.size()) return way.back();
-    const double f = (s - arc[k - 1]) / (arc[k] - arc[k - 1]);  // upper_bound: arc[k] > s >= arc[k - 1]
-    return way[k - 1] + f * (way[k] - way[k - 1]);
-  };
   // The arm's posture is the robot's along the way, not the path's: a person stops where it
   // comes near an obstacle (looked at every 20 ms). A stall long enough for on_converged ends
   // the lead too: a touch in POSED would start a recording.
   int cycle = 0;
   const long look_every = std::max(1L, std::lround(0.02 / arm()->cycleTime()));
   const double margin = 0.5 * options_.min_clearance;
-  pushTip(on_way, arc.back() / kLeadSpeed + 2.0, [&] {
+  pushTipAlong(way, kLeadSpeed, 2.0, [&] {
     if (workflow_->subStage() != SubStage::kApproaching) return true;
     if (assistanceAtTip() < kYieldingConfidence || (state_.p_WT() - way.back()).norm() < 0.02) return true;
     if (++cycle % look_every != 0) return false;
@@ -596,10 +601,6 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
   }
   area.q_chosen = choice.q;
   area.clearance = choice.clearance;
-  // A person moves slowly where the arm passes close to an obstacle.
-  const auto paceFor = [this](const std::vector<Eigen::VectorXd>& way) {
-    return options_.approach_speed * std::clamp(std::max(0.0, pathClearance(way)) / 0.15, 0.1, 1.0);
-  };
   // Touch (on_affected -> APPROACHING), push the links there, let go (on_converged -> POSED).
   kinematics_.update(choice.q);
   if (!grab(SubStage::kWaiting, kinematics_.p_WT() - state_.p_WT() + Eigen::Vector3d(0, 0, 1e-3))) {
@@ -623,7 +624,9 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
       return false;
     }
   }
-  if (!pushAlong(path, paceFor(path))) {
+  // A person moves slowly where the arm passes close to an obstacle.
+  const double speed = options_.approach_speed * std::clamp(std::max(0.0, pathClearance(path)) / 0.15, 0.1, 1.0);
+  if (!pushAlong(path, speed)) {
     area.failure = "the posture was not reached (" + last_failure_detail_ + ")";
     return false;
   }
@@ -904,16 +907,7 @@ bool SimulatedTutor::program(const std::vector<Eigen::Vector3d>& waypoints) {
     // Piecewise linear reference from the current tip position through the points.
     std::vector<Eigen::Vector3d> line{state_.p_WT()};
     line.insert(line.end(), points.begin(), points.end());
-    std::vector<double> at{0.0};
-    for (std::size_t i = 1; i < line.size(); ++i) at.push_back(at.back() + (line[i] - line[i - 1]).norm() / speed);
-    pushTip(
-        [&](double t) {
-          for (std::size_t i = 1; i < line.size(); ++i) {
-            if (t <= at[i]) return Eigen::Vector3d(line[i - 1] + (line[i] - line[i - 1]) * ((t - at[i - 1]) / std::max(1e-9, at[i] - at[i - 1])));
-          }
-          return line.back();
-        },
-        at.back() + 1.0);
+    pushTipAlong(line, speed, 1.0);
   };
   const Eigen::Vector3d first = waypoints.front();
   bool ok = grab(SubStage::kWaiting, first - state_.p_WT() + Eigen::Vector3d(0, 0, 1e-3));

@@ -137,6 +137,10 @@ class SimulatedTutor {
   /// `done` (if given, asked before every cycle) says so.
   void pushTip(const std::function<Eigen::Vector3d(double)>& p_ref, double duration,
                const std::function<bool()>& done = {});
+  /// Pushes the tip along the polyline `line` (from its first point) at `speed` [m/s], for
+  /// `extra_time` [s] beyond its end, or until `done` says so.
+  void pushTipAlong(const std::vector<Eigen::Vector3d>& line, double speed, double extra_time,
+                    const std::function<bool()>& done = {});
   /// Under assistance blending (Sect. 6.1) the robot holds the null space where it is
   /// confident, and pushing the links there moves only the tip: a person who feels that leads
   /// the tip along the way the tip takes on the joint-space `path` until the arm yields (C(x)
