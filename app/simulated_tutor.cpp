@@ -128,6 +128,23 @@ bool SimulatedTutor::postureFree(const Eigen::VectorXd& q, double margin) {
          world_->selfClearance(3, 2.0 * margin) >= margin;
 }
 
+std::string SimulatedTutor::describePosture(const Eigen::VectorXd& q) {
+  world_->update(q);
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1);
+  if (!world_->contacts().empty()) {
+    const robot::Contact& contact = world_->contacts().front();
+    out << "a posture in contact (" << world_->bodyName(contact.body) << " on " << world_->otherName(contact) << ", "
+        << 1000.0 * contact.depth << " mm deep)";
+    return out.str();
+  }
+  const robot::Clearance clearance = world_->clearance(0.5);
+  if (clearance.obstacle < 0) return "a posture more than 50 cm from every obstacle";
+  out << "a posture " << 100.0 * clearance.distance << " cm from " << world_->obstacleName(clearance.obstacle) << " ("
+      << world_->bodyName(clearance.body) << "), " << 100.0 * world_->selfClearance(3, 0.5) << " cm between its links";
+  return out.str();
+}
+
 bool SimulatedTutor::helixFree(const Eigen::VectorXd& q_fixed, const std::vector<Eigen::Vector3d>& helix, double margin) {
   robot::HierarchicalController controller(*model_, parameters_);
   const Eigen::VectorXd lower = model_->softLowerLimits();
@@ -245,6 +262,67 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planApproach(const Eigen::VectorXd&
     std::swap(a, b);
   }
   return {};
+}
+
+double SimulatedTutor::signedClearance(const Eigen::VectorXd& q) {
+  world_->update(q);
+  return std::min(world_->clearance(0.2).distance, world_->selfClearance(3, 0.2));
+}
+
+std::vector<Eigen::VectorXd> SimulatedTutor::planRetreat(const Eigen::VectorXd& from, double margin) {
+  const int dof = model_->dof();
+  const Eigen::VectorXd lower = model_->softLowerLimits();
+  const Eigen::VectorXd upper = model_->softUpperLimits();
+  constexpr double kProbe = 0.005;  // [rad] central differences
+  constexpr double kStepOut = 0.02;  // [rad] of the largest joint per step, as segmentFree samples
+  std::vector<Eigen::VectorXd> path{from};
+  Eigen::VectorXd q = from.cwiseMax(lower).cwiseMin(upper);
+  double clearance = signedClearance(q);
+  Eigen::VectorXd gradient(dof), probe(dof);
+  for (int it = 0; it < 150; ++it) {
+    if (clearance >= margin && postureFree(q, margin)) return path;
+    for (int j = 0; j < dof; ++j) {
+      probe = q;
+      probe[j] = std::min(q[j] + kProbe, upper[j]);
+      const double up = signedClearance(probe);
+      probe[j] = std::max(q[j] - kProbe, lower[j]);
+      const double down = signedClearance(probe);
+      gradient[j] = (up - down) / std::max(1e-9, std::min(q[j] + kProbe, upper[j]) - std::max(q[j] - kProbe, lower[j]));
+    }
+    if (gradient.cwiseAbs().maxCoeff() < 1e-6) return {};
+    // The step shrinks until the clearance grows: the nearest pair may change on the way.
+    bool improved = false;
+    for (double step = kStepOut; step > 1e-3 && !improved; step *= 0.5) {
+      probe = (q + gradient * (step / gradient.cwiseAbs().maxCoeff())).cwiseMax(lower).cwiseMin(upper);
+      const double next = signedClearance(probe);
+      if (next > clearance) {
+        improved = true;
+        q = probe;
+        clearance = next;
+      }
+    }
+    if (!improved) return {};
+    path.push_back(q);
+  }
+  return {};
+}
+
+std::vector<Eigen::VectorXd> SimulatedTutor::planWay(const Eigen::VectorXd& from, const Eigen::VectorXd& to) {
+  // An approach that was given up can leave the arm resting on an obstacle (a let-go under
+  // assistance blending, setup_B): a person first pulls it free, then leads it on. Every way
+  // planned from inside the contact fails, and every later area with it.
+  std::vector<Eigen::VectorXd> retreat;
+  Eigen::VectorXd start = from;
+  if (!postureFree(from, 0.0)) {
+    retreat = planRetreat(from, 0.5 * options_.min_clearance);
+    if (retreat.empty()) return {};
+    start = retreat.back();
+  }
+  std::vector<Eigen::VectorXd> path = planApproach(start, to, options_.min_clearance);
+  if (path.empty()) path = planApproach(start, to, 0.5 * options_.min_clearance);
+  if (path.empty() || retreat.empty()) return path;
+  retreat.insert(retreat.end(), path.begin() + 1, path.end());
+  return retreat;
 }
 
 std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested,
@@ -588,15 +666,14 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
   // the next posture where no way to this one is found.
   std::vector<Eigen::VectorXd> path;
   for (const PostureChoice& posture : postures) {
-    path = planApproach(state_.q, posture.q, options_.min_clearance);
-    if (path.empty()) path = planApproach(state_.q, posture.q, 0.5 * options_.min_clearance);
+    path = planWay(state_.q, posture.q);
     if (!path.empty()) {
       choice = posture;
       break;
     }
   }
   if (path.empty()) {
-    area.failure = "no collision-free way to the posture (" + std::to_string(postures.size()) + " tried)";
+    area.failure = "no collision-free way to the posture (" + std::to_string(postures.size()) + " tried) from " + describePosture(state_.q);
     return false;
   }
   area.q_chosen = choice.q;
@@ -617,8 +694,7 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
       area.failure = std::string("the arm stalled under the assistance while the tip was led (") + workflow_->stateName() + ")";
       return false;
     }
-    path = planApproach(state_.q, choice.q, options_.min_clearance);
-    if (path.empty()) path = planApproach(state_.q, choice.q, 0.5 * options_.min_clearance);
+    path = planWay(state_.q, choice.q);
     if (path.empty()) {
       area.failure = "no collision-free way to the posture from where the assistance let the arm go";
       return false;

@@ -125,6 +125,12 @@ class SimulatedTutor {
   std::vector<PostureChoice> choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested,
                                             int* reaching = nullptr);
 
+  /// The joint-space way a person leads the arm on from `from` to `to`: first out of any
+  /// contact `from` rests in (small steps up the gradient of the signed clearance, to half
+  /// TutorOptions::min_clearance), then around the obstacles with min_clearance, or half of it
+  /// where that fails. Starts at `from`, ends at `to`; empty if no way was found.
+  std::vector<Eigen::VectorXd> planWay(const Eigen::VectorXd& from, const Eigen::VectorXd& to);
+
   const TutorReport& report() const { return report_; }
 
  private:
@@ -164,7 +170,16 @@ class SimulatedTutor {
   /// sample (RRT-Connect, then shortcuts), as a person leads the arm around an obstacle rather
   /// than straight through it; empty if none was found.
   std::vector<Eigen::VectorXd> planApproach(const Eigen::VectorXd& from, const Eigen::VectorXd& to, double margin);
+  /// Small joint steps from a posture in contact up the gradient of its signed clearance (to
+  /// the obstacles and among the links) until it keeps `margin` [m]; empty if it cannot get
+  /// out (a stationary point, or the joint limits).
+  std::vector<Eigen::VectorXd> planRetreat(const Eigen::VectorXd& from, double margin);
+  /// The smaller of the obstacle and the link-to-link clearance at q [m], negative inside.
+  double signedClearance(const Eigen::VectorXd& q);
   bool postureFree(const Eigen::VectorXd& q, double margin);
+  /// Where a posture stands, as a person would say it: the first contact, or the nearest
+  /// obstacle and the links' distance to each other.
+  std::string describePosture(const Eigen::VectorXd& q);
   bool segmentFree(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double margin);
   /// Whether the postures π_rec gives (IK with q_fixed as null-space target) along `helix`
   /// keep `margin` [m] from the obstacles: a person sees how far the arm can be deflected.

@@ -276,6 +276,56 @@ TEST(SimulatedTutor, RefusesToStartFromAPostureInsideAnObstacle) {
   EXPECT_EQ(teaching.workflow->stage(), Stage::kIdle) << "nothing was started";
 }
 
+// An approach given up can leave the arm resting in an obstacle (a let-go under assistance
+// blending, setup_B): every way planned from inside the contact failed, and so did every later
+// area. The tutor first pulls the arm out, the penetration shrinking at every step, and never
+// enters an obstacle again on the way on.
+TEST(SimulatedTutor, LeadsAnArmRestingInAnObstacleOutBeforeLeadingItOn) {
+  robot::Scene scene = robot::loadScene("setup_A");
+  const Eigen::VectorXd q_resting = *scene.home_posture;
+  robot::Kinematics kinematics(lwr4());
+  kinematics.update(q_resting);
+  robot::Obstacle post;
+  post.name = "post_at_the_elbow";
+  post.shape = robot::Obstacle::Shape::kSphere;
+  post.size = Eigen::Vector3d(0.04, 0.0, 0.0);
+  post.X_WO.translation() = kinematics.X_WB(4).translation() + Eigen::Vector3d(0.0, 0.05, 0.0);
+  scene.obstacles.push_back(post);
+  ShortTeaching teaching(scene);
+  robot::CollisionWorld world(lwr4(), teaching.scene);
+  const auto deepest = [&world](const Eigen::VectorXd& q) {
+    world.update(q);
+    double depth = 0.0;
+    for (const robot::Contact& contact : world.contacts()) depth = std::max(depth, contact.depth);
+    return depth;
+  };
+  ASSERT_GT(deepest(q_resting), 0.02) << "the arm must start well inside the post";
+  const Eigen::VectorXd q_goal = *teaching.scene.training_areas.front().posture;
+  ASSERT_EQ(deepest(q_goal), 0.0);
+
+  SimulatedTutor tutor(teaching.sim, *teaching.workflow, teaching.scene, teaching.parameters, teaching.tutor_options);
+  const std::vector<Eigen::VectorXd> way = tutor.planWay(q_resting, q_goal);
+  ASSERT_GE(way.size(), 2U) << "no way out of the post";
+  EXPECT_LT((way.front() - q_resting).norm(), 1e-12);
+  EXPECT_LT((way.back() - q_goal).norm(), 1e-12);
+  double depth = deepest(q_resting);
+  bool out = false;
+  for (std::size_t i = 0; i + 1 < way.size(); ++i) {
+    for (int s = 1; s <= 20; ++s) {
+      const Eigen::VectorXd q = way[i] + (way[i + 1] - way[i]) * (s / 20.0);
+      const double d = deepest(q);
+      if (out) {
+        ASSERT_EQ(d, 0.0) << "back into " << world.otherName(world.contacts().front()) << " at way point " << i;
+      } else {
+        ASSERT_LE(d, depth + 1e-4) << "deeper in at way point " << i;
+        depth = d;
+        out = d == 0.0;
+      }
+    }
+  }
+  EXPECT_TRUE(out);
+}
+
 // Areas a person would see at once cannot be taught are reported as such, and the next one is
 // taught as usual.
 TEST(SimulatedTutor, SaysWhyAnAreaInsideAnObstacleOrOutOfReachIsNotTaught) {
