@@ -141,7 +141,13 @@ std::string SimulatedTutor::describePosture(const Eigen::VectorXd& q) {
   const robot::Clearance clearance = world_->clearance(0.5);
   if (clearance.obstacle < 0) return "a posture more than 50 cm from every obstacle";
   out << "a posture " << 100.0 * clearance.distance << " cm from " << world_->obstacleName(clearance.obstacle) << " ("
-      << world_->bodyName(clearance.body) << "), " << 100.0 * world_->selfClearance(3, 0.5) << " cm between its links";
+      << world_->bodyName(clearance.body) << "), ";
+  const double links = world_->selfClearance(3, 0.5);
+  if (std::isfinite(links)) {
+    out << 100.0 * links << " cm between its links";
+  } else {
+    out << "its links more than 50 cm apart";
+  }
   return out.str();
 }
 
@@ -265,8 +271,16 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planApproach(const Eigen::VectorXd&
 }
 
 double SimulatedTutor::signedClearance(const Eigen::VectorXd& q) {
+  constexpr double kRange = 0.2;  // [m] beyond it every posture is as good (and the value finite)
   world_->update(q);
-  return std::min(world_->clearance(0.2).distance, world_->selfClearance(3, 0.2));
+  // Inside, the depths of every touching pair summed, the pairs postureFree counts included:
+  // climbing the deepest alone stalls where two links are in equally deep.
+  if (!world_->contacts().empty()) {
+    double depth = 0.0;
+    for (const robot::Contact& contact : world_->contacts()) depth += contact.depth;
+    return -depth;
+  }
+  return std::min({world_->clearance(kRange).distance, world_->selfClearance(3, kRange), kRange});
 }
 
 std::vector<Eigen::VectorXd> SimulatedTutor::planRetreat(const Eigen::VectorXd& from, double margin) {
@@ -290,13 +304,16 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planRetreat(const Eigen::VectorXd& 
       gradient[j] = (up - down) / std::max(1e-9, std::min(q[j] + kProbe, upper[j]) - std::max(q[j] - kProbe, lower[j]));
     }
     if (gradient.cwiseAbs().maxCoeff() < 1e-6) return {};
-    // The step shrinks until the clearance grows: the nearest pair may change on the way.
+    // The step shrinks until the clearance grows at its end and nowhere on it falls (looked at
+    // every quarter): the nearest pairs may change on the way.
     bool improved = false;
     for (double step = kStepOut; step > 1e-3 && !improved; step *= 0.5) {
       probe = (q + gradient * (step / gradient.cwiseAbs().maxCoeff())).cwiseMax(lower).cwiseMin(upper);
       const double next = signedClearance(probe);
-      if (next > clearance) {
-        improved = true;
+      if (!(next > clearance)) continue;
+      improved = true;
+      for (int k = 1; k < 4 && improved; ++k) improved = signedClearance(q + (probe - q) * (0.25 * k)) >= clearance;
+      if (improved) {
         q = probe;
         clearance = next;
       }
@@ -696,7 +713,7 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     }
     path = planWay(state_.q, choice.q);
     if (path.empty()) {
-      area.failure = "no collision-free way to the posture from where the assistance let the arm go";
+      area.failure = "no collision-free way to the posture from where the assistance let the arm go, " + describePosture(state_.q);
       return false;
     }
   }
@@ -886,6 +903,11 @@ TutorReport SimulatedTutor::configure(int area_count) {
   bool last_automatic_taught = true;
   while (static_cast<int>(workflow_->areas().size()) < area_count && attempts < 4 * area_count + 8) {
     ++attempts;
+    // The robot refits its map after an area (OS-ELM) and checks the transitions between the
+    // areas in the background (Sect. 4.3.4); a person moves on once it has reported. The
+    // simulation stands still meanwhile, so when the new map takes over no longer depends on
+    // how fast the machine learns: runs stay deterministic.
+    workflow_->waitForLearning();
     TutorAreaReport area;
     std::optional<Eigen::VectorXd> suggested;
     const bool automatic = listed >= static_cast<int>(scene_->training_areas.size());
@@ -939,9 +961,14 @@ TutorReport SimulatedTutor::configure(int area_count) {
         area.failure = removed ? "taken back: " + spot.str() : spot.str() + ", and it could not be taken back: " + removed.reason;
       }
     }
+    // An approach let go of halfway leaves the arm in APPROACHING, and under assistance blending
+    // it moves on by itself: a person waits for it to come to rest before taking it again
+    // (grabbed while it still moved, the next approach ran off its way at once, area after area).
+    if (!area.taught && workflow_->subStage() == SubStage::kApproaching) waitFor(SubStage::kPosed, 30.0);
     if (!area.taught) discardPose();
     if (automatic) last_automatic_taught = area.taught;
     if (automatic && area.taught && options_.check_points > 0) {
+      workflow_->waitForLearning();  // the map with the new area, whenever its refit ends
       const std::vector<bool> failed_without = check_failed_;
       const int with_area = mapFailures();
       area.map_failures_before = failures;

@@ -170,11 +170,12 @@ class SimulatedTutor {
   /// sample (RRT-Connect, then shortcuts), as a person leads the arm around an obstacle rather
   /// than straight through it; empty if none was found.
   std::vector<Eigen::VectorXd> planApproach(const Eigen::VectorXd& from, const Eigen::VectorXd& to, double margin);
-  /// Small joint steps from a posture in contact up the gradient of its signed clearance (to
-  /// the obstacles and among the links) until it keeps `margin` [m]; empty if it cannot get
-  /// out (a stationary point, or the joint limits).
+  /// Small joint steps from a posture in contact up the gradient of signedClearance until it
+  /// keeps `margin` [m]; empty if it cannot get out (a stationary point, or the joint limits).
   std::vector<Eigen::VectorXd> planRetreat(const Eigen::VectorXd& from, double margin);
-  /// The smaller of the obstacle and the link-to-link clearance at q [m], negative inside.
+  /// Out of contact, the smaller of the obstacle and the link-to-link clearance at q (links at
+  /// least 3 apart, as postureFree), at most 0.2 m; in contact, minus the summed penetration
+  /// depths of every touching pair [m].
   double signedClearance(const Eigen::VectorXd& q);
   bool postureFree(const Eigen::VectorXd& q, double margin);
   /// Where a posture stands, as a person would say it: the first contact, or the nearest
