@@ -188,17 +188,22 @@ namespace flexirob::app {
 namespace {
 
 // A short teaching run of `model` (which must outlive it) on `scene`: learning in the caller's
-// thread, one helix turn per area, eight posture candidates.
+// thread, one helix turn per area, eight posture candidates. As `teach` runs it (`as_the_cli`):
+// learning in the background, the transitions checked, the tutor's defaults.
 struct ShortTeaching {
-  explicit ShortTeaching(robot::Scene scene_in, const robot::RobotModel& model = lwr4(), LearnerKind learner = LearnerKind::kElm)
+  explicit ShortTeaching(robot::Scene scene_in, const robot::RobotModel& model = lwr4(), LearnerKind learner = LearnerKind::kElm,
+                         bool as_the_cli = false)
       : scene(std::move(scene_in)), declarations(robot::reachParameters()), parameters(declarations), sim(model, &scene, parameters) {
     sim.reset(*scene.home_posture);
     WorkflowOptions options;
     options.learner = learner;
-    options.background_learning = false;
+    options.background_learning = as_the_cli;
+    if (as_the_cli) options.check_scene = &scene;
     workflow = std::make_unique<Workflow>(sim, parameters, options);
-    tutor_options.circles = 1;
-    tutor_options.posture_candidates = 8;
+    if (!as_the_cli) {
+      tutor_options.circles = 1;
+      tutor_options.posture_candidates = 8;
+    }
   }
   TutorReport configure(int areas) {
     SimulatedTutor tutor(sim, *workflow, scene, parameters, tutor_options);
@@ -235,25 +240,15 @@ TEST(SimulatedTutor, UnderAssistanceBlendingLeadsTheTipOutOfTheConfidentRegionFi
 // An approach let go of because the arm ran off leaves it in APPROACHING, and under assistance
 // blending the robot moves it on by itself. Grabbed again while it still moved, every later
 // approach ran off at once (setup_A: 3 areas of 4 taught, 10 contact events). The tutor waits
-// for the arm to come to rest first. As `teach --scene setup_A --areas 4 --learner oselm`:
-// learning in the background, the transitions checked, the CLI's tutor.
+// for the arm to come to rest first. As `teach --scene setup_A --areas 4 --learner oselm`.
 TEST(SimulatedTutor, WaitsForAnArmLetGoUnderAssistanceToComeToRestBeforeTheNextArea) {
-  const robot::Scene scene = robot::loadScene("setup_A");
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-  robot::ParameterSet parameters(declarations);
-  robot::Simulation sim(lwr4(), &scene, parameters);
-  sim.reset(*scene.home_posture);
-  WorkflowOptions options;
-  options.learner = LearnerKind::kOsElm;
-  options.check_scene = &scene;
-  Workflow workflow(sim, parameters, options);
-  SimulatedTutor tutor(sim, workflow, scene, parameters, TutorOptions{});
-  const TutorReport report = tutor.configure(4);
+  ShortTeaching teaching(robot::loadScene("setup_A"), lwr4(), LearnerKind::kOsElm, /*as_the_cli=*/true);
+  const TutorReport report = teaching.configure(4);
   const auto ran_off = std::count_if(report.areas.begin(), report.areas.end(), [](const TutorAreaReport& area) {
     return area.failure.find("the arm ran off the way") != std::string::npos;
   });
   ASSERT_GE(ran_off, 1) << "the run no longer lets an arm go; it cannot show the wait";
-  EXPECT_EQ(workflow.areas().size(), 4U);
+  EXPECT_EQ(teaching.workflow->areas().size(), 4U);
   EXPECT_EQ(report.collisions, 0U);
 }
 
