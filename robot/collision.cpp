@@ -255,7 +255,9 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
     double reach = model.X_LastBodyTip().translation().norm();
     for (const auto& joint : model.joints()) reach += joint.X_PJ.translation().norm();
     const double half_width = reach + 1.0;
-    const double thickness = 0.2;
+    // As thick as it is wide: a link pushed far below z = 0 is still inside the slab and its
+    // depth is measured from the top face, never out through a nearer bottom face.
+    const double thickness = half_width;
     btCollisionShape* slab = impl.primitive(Geometry::Kind::kBox, Eigen::Vector3d(2 * half_width, 2 * half_width, thickness));
     auto object = std::make_unique<btCollisionObject>();
     object->setCollisionShape(slab);

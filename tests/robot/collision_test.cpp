@@ -159,6 +159,16 @@ TEST(CollisionWorld, TheTableTopStopsEveryLinkButThoseStandingOnIt) {
   EXPECT_EQ(world.otherName(contacts[0]), "table");
   EXPECT_NEAR(contacts[0].depth, 0.05, 1e-3);
   EXPECT_NEAR(world.distance(3, table), -0.05, 1e-3);
+  // Swung down to its limit, link3 ends 0.4176 m below the table top (its axis 2.8 rad from the
+  // vertical, the cap's rim 0.05 sin 2.8 below its centre): the depth is still taken from the top.
+  world.update(Eigen::Vector3d(0.0, 2.8, 0.0));
+  const double tip_z = 0.4 + (0.4 + 0.45) * std::cos(2.8) - 0.05 * std::sin(2.8);
+  double link3_depth = 0.0;
+  for (const auto& contact : world.contacts()) {
+    if (world.bodyName(contact.body) == "link3" && world.otherName(contact) == "table") link3_depth = contact.depth;
+  }
+  EXPECT_NEAR(link3_depth, -tip_z, 2e-3);
+  EXPECT_NEAR(world.distance(3, table), tip_z, 2e-3);
 
   // A scene can say the robot stands on no table; one naming an obstacle "table" keeps it.
   Scene no_table;
