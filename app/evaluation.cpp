@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
+#include <random>
 #include <set>
 #include <tuple>
 
@@ -96,7 +98,41 @@ MotionOutcome approachTarget(const robot::RobotModel& model, const robot::Parame
 }
 
 Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& scene) {
-  return scene.home_posture && scene.home_posture->size() == model.dof() ? *scene.home_posture : model.midPosture();
+  if (scene.home_posture && scene.home_posture->size() == model.dof()) return *scene.home_posture;
+  const Eigen::VectorXd mid = model.midPosture();
+  robot::CollisionWorld world(model, scene);
+  world.update(mid);
+  if (world.contacts().empty()) return mid;
+  // The middle of the limits touches something (a wrist hanging into the table, a ceiling over
+  // a stretched arm): the nearest posture with 5 cm clearance, searched outwards from it in
+  // rings of growing joint-space radius; failing that, the freest posture met. Seeded, so a
+  // scene always starts in the same posture.
+  const Eigen::VectorXd lower = model.sampleLowerLimits();
+  const Eigen::VectorXd upper = model.sampleUpperLimits();
+  std::mt19937_64 bits(20090601);
+  const auto uniform = [&bits] { return static_cast<double>(bits() >> 11) * 0x1.0p-53; };
+  constexpr int kRings = 20;
+  constexpr int kPerRing = 50;
+  Eigen::VectorXd freest = mid;
+  double freest_clearance = -1.0;
+  for (int ring = 1; ring <= kRings; ++ring) {
+    const double scale = static_cast<double>(ring) / kRings;
+    std::optional<Eigen::VectorXd> nearest;
+    for (int i = 0; i < kPerRing; ++i) {
+      Eigen::VectorXd q(model.dof());
+      for (int j = 0; j < model.dof(); ++j) q[j] = mid[j] + scale * (lower[j] + uniform() * (upper[j] - lower[j]) - mid[j]);
+      world.update(q);
+      if (!world.contacts().empty()) continue;
+      const double clearance = world.clearance(0.05).distance;
+      if (clearance > freest_clearance) {
+        freest_clearance = clearance;
+        freest = q;
+      }
+      if (clearance >= 0.05 && (!nearest || (q - mid).norm() < (*nearest - mid).norm())) nearest = q;
+    }
+    if (nearest) return *nearest;
+  }
+  return freest;
 }
 
 std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& model) {
@@ -380,6 +416,20 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     if (areas.size() < 2) throw InputError("trajectories: the scene lists none and fewer than two areas were taught");
     if (per_area < 1) throw InputError("trajectories: expected at least one trajectory per area");
     learning::UniformRandom random(seed);
+    // Points a trajectory may pass: within the arm's reach, off its base and the table, 5 cm
+    // clear of every obstacle; a box around two areas can hold the robot itself or a wall.
+    const auto& [shoulder, reach] = shoulderAndReach(model);
+    const auto passable = [&, shoulder = shoulder, reach = reach](const Eigen::Vector3d& p) {
+      return (p - shoulder).norm() <= reach - 0.05 && p.head<2>().norm() >= 0.2 && (!scene.table || p.z() >= 0.05) &&
+             robot::obstacleAt(scene, p, 0.05) == nullptr;
+    };
+    const auto segment_passable = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      const int steps = std::max(1, static_cast<int>(std::ceil((b - a).norm() / 0.02)));
+      for (int i = 0; i <= steps; ++i) {
+        if (!passable(a + (b - a) * (static_cast<double>(i) / steps))) return false;
+      }
+      return true;
+    };
     struct Box {
       Eigen::Vector3d lower, upper;
     };
@@ -395,16 +445,22 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     const Box& high = left_low ? right : left;
     between.lower[axis] = std::min(low.upper[axis], high.lower[axis]);
     between.upper[axis] = std::max(low.upper[axis], high.lower[axis]);
-    const auto draw = [&](const Box& box) {
-      Eigen::Vector3d p;
-      for (int a = 0; a < 3; ++a) p[a] = random.uniform(box.lower[a], box.upper[a]);
-      return p;
+    // A point of the box the way from `from` to it is passable along (any passable point when
+    // there is no `from` yet).
+    const auto draw = [&](const std::string& name, const Box& box, const Eigen::Vector3d* from) {
+      for (int attempt = 0; attempt < 2000; ++attempt) {
+        Eigen::Vector3d p;
+        for (int a = 0; a < 3; ++a) p[a] = random.uniform(box.lower[a], box.upper[a]);
+        if (from != nullptr ? segment_passable(*from, p) : passable(p)) return p;
+      }
+      throw InputError("trajectories: no straight way in the " + name +
+                       " region stays within reach and clear of the base, the table and the obstacles");
     };
     // Each region: a chain of random points, every trajectory starting where the last ended.
     const auto chain = [&](const std::string& name, const Box& box, int count) {
-      Eigen::Vector3d from = draw(box);
+      Eigen::Vector3d from = draw(name, box, nullptr);
       for (int t = 0; t < count; ++t) {
-        const Eigen::Vector3d to = draw(box);
+        const Eigen::Vector3d to = draw(name, box, &from);
         region(name).push_back({name + "_" + std::to_string(t + 1), {from, to}});
         from = to;
       }
@@ -422,19 +478,33 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     TrajectoryRegionResult out;
     out.name = name;
     // The arm starts in the taught posture of the area nearest the region's first point, is
-    // brought there kinematically, then follows each straight segment at `speed`.
+    // brought there kinematically, then follows each straight segment at `speed`. Where that
+    // start touches something, the next nearest area's is taken: otherwise every trajectory
+    // after a collision would restart in contact and count as collided at once.
     const Eigen::Vector3d first = trajectories.front().waypoints.front();
-    std::size_t nearest = 0;
-    double nearest_distance = std::numeric_limits<double>::infinity();
-    for (std::size_t k = 0; k < areas.size(); ++k) {
-      const double d = (areas[k].samples.col(0) - first).norm();
-      if (d < nearest_distance) {
-        nearest_distance = d;
-        nearest = k;
+    std::vector<std::size_t> by_distance(areas.size());
+    for (std::size_t k = 0; k < areas.size(); ++k) by_distance[k] = k;
+    std::stable_sort(by_distance.begin(), by_distance.end(), [&](std::size_t a, std::size_t b) {
+      return (areas[a].samples.col(0) - first).norm() < (areas[b].samples.col(0) - first).norm();
+    });
+    Eigen::VectorXd q_area;
+    for (const std::size_t k : by_distance) {
+      const Eigen::VectorXd q_start =
+          executeMotion(model, parameters, map, areas[k].q_fixed, [&](double) { return first; }, 0.0, 3.0, nullptr).q;
+      world.update(q_start);
+      if (world.contacts().empty()) {
+        q_area = q_start;
+        out.start_contact.clear();
+        break;
+      }
+      if (q_area.size() == 0) {
+        q_area = q_start;
+        out.start_contact = world.bodyName(world.contacts().front().body) + "/" + world.otherName(world.contacts().front());
       }
     }
-    const Eigen::VectorXd q_area = executeMotion(model, parameters, map, areas[nearest].q_fixed,
-                                                 [&](double) { return first; }, 0.0, 3.0, nullptr).q;
+    // After a collision the arm is brought back, as on the real robot: to the region's start,
+    // or, where that is in contact itself, to the last posture a trajectory ended in freely.
+    Eigen::VectorXd q_free = q_area;
     Eigen::VectorXd q = q_area;
     std::vector<double> errors;
     for (const auto& [trajectory_name, waypoints] : trajectories) {
@@ -457,9 +527,10 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
         ++out.collisions;
         ++out.contacts[outcome.contact];
         out.collided.push_back({trajectory_name, outcome.contact, outcome.contact_time, along(std::min(outcome.contact_time, duration))});
-        q = q_area;  // after a collision the arm is brought back, as on the real robot
+        q = q_free;
       } else {
         q = outcome.q;
+        if (!out.start_contact.empty()) q_free = q;
       }
       if (progress) progress(static_cast<double>(++done) / total);
     }

@@ -51,8 +51,10 @@ MotionOutcome approachTarget(const robot::RobotModel& model, const robot::Parame
                              const learning::Learner& map, const Eigen::VectorXd& q_start, const Eigen::Vector3d& p_W,
                              robot::CollisionWorld* world);
 
-/// The scene's home posture if it fits the robot, else the middle of the joint limits: where a
-/// taught session and its evaluations start [rad].
+/// The scene's home posture if it fits the robot, else the middle of the joint limits, or, where
+/// that touches an obstacle, the table or the arm itself, the nearest posture with 5 cm clearance
+/// (a seeded search; the freest posture found if none has it): where a taught session and its
+/// evaluations start [rad].
 Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& scene);
 
 /// The arm's shoulder (joint 2's axis point in the stretched posture) and its reach from there:
@@ -205,6 +207,9 @@ struct TrajectoryRegionResult {
   int collisions = 0;           ///< E_coll: trajectories with a contact
   std::map<std::string, int> contacts;  ///< collided trajectories per first contact "body/other"
   std::vector<CollidedTrajectory> collided;  ///< in the order they ran
+  /// "body/other" where even the region's start posture (the nearest area's, moved to the first
+  /// point) touches something; empty when it is free.
+  std::string start_contact;
 };
 struct TrajectoryResult {
   std::vector<TrajectoryRegionResult> regions;

@@ -672,8 +672,12 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     area.q_chosen = postures.front().q;
     area.clearance = postures.front().clearance;
     std::ostringstream failure;
+    world_->update(postures.front().q);
+    const robot::Clearance nearest = world_->clearance(options_.min_clearance);
     failure << std::fixed << std::setprecision(1) << "no posture with " << 100.0 * options_.min_clearance
-            << " cm clearance (the best found keeps " << 100.0 * postures.front().clearance << " cm)";
+            << " cm clearance (the best found keeps " << 100.0 * postures.front().clearance << " cm";
+    if (nearest.obstacle >= 0) failure << ", " << world_->bodyName(nearest.body) << " to " << world_->obstacleName(nearest.obstacle);
+    failure << ")";
     area.failure = failure.str();
     return false;
   }
@@ -889,7 +893,7 @@ TutorReport SimulatedTutor::configure(int area_count) {
   world_->update(state_.q);
   if (!world_->contacts().empty()) {
     const robot::Contact& contact = world_->contacts().front();
-    throw InputError("tutor: the start posture (the scene's home_posture, else the centre of the joint limits) puts " +
+    throw InputError("tutor: the start posture (the scene's home_posture) puts " +
                      world_->bodyName(contact.body) + " into " + world_->otherName(contact) +
                      "; give the scene a collision-free home_posture");
   }

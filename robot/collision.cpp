@@ -282,11 +282,19 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
     }
   }
   if (impl.table >= 0) {
-    // A link on (or within 1 cm of) the table at the reference posture, such as a first link
-    // reaching down to the mounting plate, stands on it in every posture; like the base, it is
-    // not checked against it.
+    // Like the base, a link no joint can raise or lower (every joint before it turns about a
+    // vertical axis) keeps its height: it stands on the table in every posture or never
+    // reaches it, and a gap to it that no motion can widen must not count as clearance. The
+    // first moving link also stands on the table when it lies on (or within 1 cm of) it at the
+    // reference posture, as a link reaching down to the mounting plate does; a link further
+    // along the chain that the reference posture happens to put into the table does not.
+    const auto& joints = model.joints();
+    bool height_fixed = true;
     for (int b = 1; b < impl.bodies; ++b) {
-      if (distance(b, impl.table, 0.02) < 0.01) {
+      const Joint& joint = joints[static_cast<std::size_t>(b - 1)];
+      const Eigen::Vector3d axis_W = impl.kinematics.X_WB(b).linear() * joint.axis_J;
+      height_fixed = height_fixed && joint.type != JointType::kPrismatic && std::abs(axis_W.z()) > 1.0 - 1e-9;
+      if (height_fixed || (b == 1 && distance(b, impl.table, 0.02) < 0.01)) {
         impl.table_exempt[static_cast<std::size_t>(b)] = 1;
         dropped = true;
       }

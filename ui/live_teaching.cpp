@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "app/evaluation.hpp"
 #include "robot/errors.hpp"
 #include "robot/sim/simulation.hpp"
 
@@ -43,8 +44,11 @@ LiveTeaching::LiveTeaching(const robot::RobotModel& model, const robot::Scene& s
   }
   connection_ = std::make_unique<app::RobotConnection>(backend, model, &scene, parameters_);
   simulation_ = dynamic_cast<robot::Simulation*>(&connection_->backend());
-  if (simulation_ != nullptr && scene.home_posture && scene.home_posture->size() == model.dof()) {
-    simulation_->reset(*scene.home_posture);
+  if (simulation_ != nullptr) {
+    // The simulation stands in the middle of the limits; a scene without a home posture whose
+    // obstacles that posture touches starts in the free posture nearest it (app::homePosture).
+    const Eigen::VectorXd home = app::homePosture(model, scene);
+    if (!home.isApprox(model.midPosture())) simulation_->reset(home);
   }
   workflow_options.check_scene = &scene;
   // The worker needs the simulation itself as the workflow's backend (hand forces, contacts);

@@ -24,6 +24,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "app/evaluation.hpp"
 #include "app/session_recorder.hpp"
 #include "learning/confidence.hpp"
 #include "planning/itm_file.hpp"
@@ -360,9 +361,8 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
     return false;
   }
   coloured_links_.clear();
-  // Start posture: the scene's, if it was made for a robot with this many joints.
-  Eigen::VectorXd q = model_->midPosture();
-  if (scene_.home_posture && scene_.home_posture->size() == model_->dof()) q = *scene_.home_posture;
+  // Start posture: the scene's, if it was made for a robot with this many joints, else a free one.
+  const Eigen::VectorXd q = app::homePosture(*model_, scene_);
   joint_panel_->setRobot(*model_, q);
   joint_panel_->setReadOnly(true);  // the panel mirrors the live arm; the backend owns the posture
   kinematics_->update(q);
@@ -408,9 +408,10 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
     startLive();
     return false;
   }
-  if (model_ && scene_.home_posture && scene_.home_posture->size() == model_->dof()) {
-    joint_panel_->setPosture(*scene_.home_posture);
-    kinematics_->update(*scene_.home_posture);
+  if (model_) {
+    const Eigen::VectorXd home = app::homePosture(*model_, scene_);
+    joint_panel_->setPosture(home);
+    kinematics_->update(home);
     world_.robot()->setPosture(*kinematics_);
   }
   view_->setHomeCamera(world_.defaultCamera(static_cast<double>(view_->width()) / std::max(1, view_->height())));

@@ -334,7 +334,8 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region) {
           {"e_task_max_mm", region.e_task_max_mm},
           {"e_coll", region.collisions},
           {"contacts", region.contacts},
-          {"collided_trajectories", collided}};
+          {"collided_trajectories", collided},
+          {"start_contact", region.start_contact}};
 }
 
 namespace {

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "app/backend_factory.hpp"
+#include "app/evaluation.hpp"
 #include "app/cli/cli_support.hpp"
 #include "app/session_recorder.hpp"
 #include "planning/itm_file.hpp"
@@ -81,7 +82,8 @@ Json runTeach(const TeachOptions& options) {
   }
   auto owned_sim = std::make_unique<robot::Simulation>(model, &scene, parameters);
   robot::Simulation& sim = *owned_sim;
-  if (scene.home_posture && scene.home_posture->size() == model.dof()) sim.reset(*scene.home_posture);
+  const Eigen::VectorXd home = app::homePosture(model, scene);
+  if (!home.isApprox(model.midPosture())) sim.reset(home);
   // fri-sim: the same Bullet arm behind the FRI controller stand-in in lockstep, in-process; the
   // workflow drives it through RobotConnection and the FRI backend over UDP loopback, as it
   // drives the real LWR IV, while the tutor's hands push the arm behind the stand-in.

@@ -48,6 +48,42 @@ struct Parameters {
   robot::ParameterSet parameters;
 };
 
+TEST(Evaluation, AStartPostureThatTouchesSomethingGivesWayToTheNearestFreeOne) {
+  // The LWR IV's limits are symmetric: the middle is the arm upright, its flange 1.18 m up.
+  const Eigen::VectorXd mid = lwr4().midPosture();
+  robot::Scene open_scene;
+  EXPECT_TRUE(homePosture(lwr4(), open_scene).isApprox(mid));
+  robot::Scene scene_with_home;
+  scene_with_home.home_posture = ready();
+  EXPECT_TRUE(homePosture(lwr4(), scene_with_home).isApprox(ready()));
+
+  // A ceiling 1 m up: upright, the arm is in it.
+  robot::Scene ceiling;
+  robot::Obstacle slab;
+  slab.name = "ceiling";
+  slab.shape = robot::Obstacle::Shape::kBox;
+  slab.X_WO.translation() = Eigen::Vector3d(0.0, 0.0, 1.05);
+  slab.size = Eigen::Vector3d(3.0, 3.0, 0.1);
+  ceiling.obstacles.push_back(slab);
+  robot::CollisionWorld world(lwr4(), ceiling);
+  world.update(mid);
+  ASSERT_FALSE(world.contacts().empty());
+  const Eigen::VectorXd home = homePosture(lwr4(), ceiling);
+  EXPECT_TRUE(home.isApprox(homePosture(lwr4(), ceiling))) << "seeded: the same posture every time";
+  world.update(home);
+  EXPECT_TRUE(world.contacts().empty());
+  EXPECT_GE(world.clearance(0.05).distance, 0.05);
+  EXPECT_GE(world.selfClearance(3, 0.05), 0.0);
+  for (int j = 0; j < 7; ++j) {
+    EXPECT_GE(home[j], lwr4().sampleLowerLimits()[j]);
+    EXPECT_LE(home[j], lwr4().sampleUpperLimits()[j]);
+  }
+  // Near the middle: bent little more than needed to stay 5 cm under the ceiling (A2 alone
+  // would need about 0.7 rad), not the nearest of postures drawn anywhere in the limits, which
+  // lies over 2 rad away.
+  EXPECT_LT((home - mid).norm(), 1.5);
+}
+
 TEST(Evaluation, MotionReachesAFreeTargetWithoutCollision) {
   Parameters s;
   const auto map = constantMap();

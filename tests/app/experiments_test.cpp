@@ -192,8 +192,9 @@ TEST(Experiments, TrajectoriesThatMeetAnObstacleAreNamedWithTheirContactAndWhere
 
 TEST(Experiments, DrawnTrajectoriesThatMeetAnObstacleAreNamedAfterTheirRegion) {
   const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
-  // Two 5 cm areas 0.3 m apart along y and a 10 cm plate across y half way: only trajectories
-  // between the areas cross it.
+  // Two 5 cm areas 0.3 m apart along y and a 10 cm plate across y half way, above the tip's way
+  // (the trajectories keep 5 cm from obstacles) but where the wrist, 7.8 cm above the tip,
+  // passes: only trajectories between the areas meet it.
   std::vector<EvaluatedArea> areas(2);
   for (int k = 0; k < 2; ++k) {
     areas[static_cast<std::size_t>(k)].q_fixed = ready();
@@ -206,11 +207,12 @@ TEST(Experiments, DrawnTrajectoriesThatMeetAnObstacleAreNamedAfterTheirRegion) {
   robot::Obstacle plate;
   plate.name = "plate";
   plate.size = Eigen::Vector3d(0.1, 0.02, 0.1);
-  plate.X_WO = Eigen::Isometry3d(Eigen::Translation3d(tip));
+  plate.X_WO = Eigen::Isometry3d(Eigen::Translation3d(tip + Eigen::Vector3d(0.0, 0.0, 0.13)));
   scene.obstacles.push_back(plate);
   const auto map = constantMap();
   const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 3, 0.1, 1);
   ASSERT_EQ(result.regions.size(), 3u);
+  for (const auto& region : result.regions) EXPECT_EQ(region.start_contact, "") << region.name;
   EXPECT_TRUE(result.regions[0].collided.empty());
   EXPECT_TRUE(result.regions[1].collided.empty());
   const TrajectoryRegionResult& between = result.regions[2];
@@ -224,6 +226,45 @@ TEST(Experiments, DrawnTrajectoriesThatMeetAnObstacleAreNamedAfterTheirRegion) {
     EXPECT_LE(k, 6);
     EXPECT_TRUE(trajectory.contact.ends_with("/plate")) << trajectory.contact;
   }
+}
+
+TEST(Experiments, DrawnTrajectoriesBetweenAreasOnEitherSideOfTheRobotKeepOffItsBase) {
+  // Areas to the left and to the right of the robot, 0.54 m out: the box between them holds the
+  // robot's own column. Every drawn way must be one the tip can follow.
+  Eigen::VectorXd left = ready();
+  left[0] = std::numbers::pi / 2;
+  Eigen::VectorXd right = ready();
+  right[0] = -std::numbers::pi / 2;
+  std::vector<EvaluatedArea> areas(2);
+  const Eigen::VectorXd postures[2] = {left, right};
+  for (int k = 0; k < 2; ++k) {
+    EvaluatedArea& area = areas[static_cast<std::size_t>(k)];
+    area.q_fixed = postures[k];
+    const Eigen::Vector3d tip = robot::tipPose(lwr4(), postures[k]).translation();
+    area.samples.resize(3, 2);
+    area.samples.col(0) = tip - Eigen::Vector3d(0.05, 0.05, 0.05);
+    area.samples.col(1) = tip + Eigen::Vector3d(0.05, 0.05, 0.05);
+  }
+  // A map that keeps the taught posture's side of the robot: q1 follows the target's azimuth.
+  learning::TrainingSet data;
+  data.X.resize(3, 16);
+  data.Y.resize(7, 16);
+  for (int l = 0; l < 16; ++l) {
+    const double azimuth = std::numbers::pi * l / 15.0 - std::numbers::pi / 2;
+    Eigen::VectorXd q = ready();
+    q[0] = azimuth;
+    data.X.col(l) = robot::tipPose(lwr4(), q).translation();
+    data.Y.col(l) = q;
+  }
+  learning::Elm map(3, 7);
+  map.fit(data);
+  robot::Scene scene;
+  const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), map, areas, 3, 0.1, 1);
+  ASSERT_EQ(result.regions.size(), 3u);
+  const TrajectoryRegionResult& between = result.regions[2];
+  ASSERT_EQ(between.name, "interpolation");
+  // Through the base, the tip would trail its target by decimetres.
+  EXPECT_LT(between.e_task_max_mm, 50.0);
 }
 
 }  // namespace

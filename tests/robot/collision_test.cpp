@@ -185,14 +185,51 @@ TEST(CollisionWorld, TheTableTopStopsEveryLinkButThoseStandingOnIt) {
   EXPECT_EQ(both.obstacleName(1), "table (z = 0)");
 }
 
+TEST(CollisionWorld, ALinkNoJointCanLowerIsNoClearanceProblemButOneTheReferencePutsInTheTableIs) {
+  // link1 raised 1.4 cm above the table: j1 only turns it about the vertical, so the gap can
+  // never close or widen and the clearance is that of link2 and link3, 0.4 m upright.
+  std::string raised_urdf = kPlanarArm;
+  const std::string link1_cylinder = R"(<collision><origin xyz="0 0 0.2"/><geometry><cylinder radius="0.05" length="0.4"/>)";
+  ASSERT_EQ(raised_urdf.find(link1_cylinder), raised_urdf.find("<collision>"));
+  raised_urdf.replace(raised_urdf.find(link1_cylinder), link1_cylinder.size(),
+                      R"(<collision><origin xyz="0 0 0.207"/><geometry><cylinder radius="0.05" length="0.386"/>)");
+  const RobotModel raised = RobotModel::fromUrdfString(raised_urdf, ".");
+  CollisionWorld raised_world(raised, Scene{});
+  raised_world.update(Eigen::Vector3d::Zero());
+  EXPECT_EQ(raised_world.distance(1, 0), std::numeric_limits<double>::infinity());
+  const Clearance clearance = raised_world.clearance();
+  EXPECT_NE(clearance.body, 1);
+  EXPECT_NEAR(clearance.distance, 0.4, 1e-3);
+
+  // j2's range [1.6, 2.8] puts the reference (mid-range) posture's link3 into the table: that
+  // is a posture to avoid, not a link standing on the table.
+  std::string bent_urdf = kPlanarArm;
+  const std::string j2_limits = R"(<limit lower="-2.8" upper="2.8" velocity="2" effort="200"/></joint>
+  <link name="link2">)";
+  ASSERT_NE(bent_urdf.find(j2_limits), std::string::npos);
+  bent_urdf.replace(bent_urdf.find(j2_limits), j2_limits.size(), R"(<limit lower="1.6" upper="2.8" velocity="2" effort="200"/></joint>
+  <link name="link2">)");
+  const RobotModel bent = RobotModel::fromUrdfString(bent_urdf, ".");
+  ASSERT_NEAR(bent.midPosture()[1], 2.2, 1e-12);
+  CollisionWorld bent_world(bent, Scene{});
+  bent_world.update(bent.midPosture());
+  bool link3_on_table = false;
+  for (const auto& contact : bent_world.contacts()) link3_on_table |= bent_world.bodyName(contact.body) == "link3";
+  EXPECT_TRUE(link3_on_table);
+  EXPECT_LT(bent_world.distance(3, 0), 0.0);
+}
+
 TEST(CollisionWorld, TheLwr4LowersItsFlangeIntoTheTableAndNotBefore) {
   const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
   CollisionWorld world(model, Scene{});
   const int table = world.obstacleCount() - 1;
   ASSERT_EQ(world.obstacleName(table), "table");
-  // Upright, link1's mesh starts 11 cm above the table (the base below it stands on it).
+  // Upright, link1's mesh starts 11 cm above the table, and A1 only turns it about the
+  // vertical: it never reaches the table and is not checked against it. link2 is, 0.24 m above
+  // (A2 0.3105 m up, its mesh reaching 7 cm below the axis).
   world.update(Eigen::VectorXd::Zero(7));
-  EXPECT_NEAR(world.distance(1, table), 0.11, 0.01);
+  EXPECT_EQ(world.distance(1, table), std::numeric_limits<double>::infinity());
+  EXPECT_NEAR(world.distance(2, table), 0.24, 0.01);
   // The stretched arm tilted forward at A2: the flange crosses z = 0 near A2 = 2 rad
   // (shoulder 0.3105 m up, 0.868 m from shoulder to flange).
   Kinematics kinematics(model);
