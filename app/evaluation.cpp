@@ -552,13 +552,36 @@ PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Sce
                                 const planning::Itm& graph, const Eigen::VectorXd& q_start, int goals,
                                 std::uint64_t seed, const ProgressCallback& progress, planning::PlanPostures postures) {
   if (goals < 1) throw InputError("goals: expected at least 1");
-  const std::vector<int> nodes = graph.nodeIds();
-  if (nodes.size() < 2) throw InputError("plan: the session's ITM has fewer than two nodes");
+  const std::vector<int> all_nodes = graph.nodeIds();
+  if (all_nodes.size() < 2) throw InputError("plan: the session's ITM has fewer than two nodes");
   model.checkPosture(q_start);
+  // Goals are nodes the graph connects to where the arm starts: a node of another component
+  // (an approach the map recorded away from every area) has no path by construction, which
+  // says nothing about the planner; how many there are is reported.
+  const int start_node = graph.nearestNode(robot::tipPose(model, q_start).translation(), true);
+  std::vector<char> connected(static_cast<std::size_t>(graph.slotCount()), 0);
+  std::vector<int> frontier{start_node};
+  connected[static_cast<std::size_t>(start_node)] = 1;
+  while (!frontier.empty()) {
+    const int node = frontier.back();
+    frontier.pop_back();
+    for (const int next : graph.neighbors(node)) {
+      if (connected[static_cast<std::size_t>(next)] == 0) {
+        connected[static_cast<std::size_t>(next)] = 1;
+        frontier.push_back(next);
+      }
+    }
+  }
+  std::vector<int> nodes;
+  for (const int node : all_nodes) {
+    if (connected[static_cast<std::size_t>(node)] != 0) nodes.push_back(node);
+  }
+  if (nodes.size() < 2) throw InputError("plan: the ITM connects no other node to where the arm starts");
   robot::CollisionWorld world(model, scene);
   learning::UniformRandom random(seed);
   PlanningResult result;
   result.goals = goals;
+  result.disconnected_nodes = static_cast<int>(all_nodes.size() - nodes.size());
   Eigen::VectorXd q = q_start;
   double plan_ms = 0.0;
   for (int g = 0; g < goals; ++g) {

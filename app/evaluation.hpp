@@ -167,6 +167,8 @@ struct PlanningResult {
   int collision_free = 0; ///< executed without contact
   int reached_1cm = 0;    ///< ended within 1 cm of the goal node
   double mean_plan_ms = 0.0;
+  /// Nodes no edge path connects to the start's nearest node; goals are drawn from the others.
+  int disconnected_nodes = 0;
   std::map<std::string, int> contacts;  ///< collided motions per first contact "body/other"
   std::vector<PlannedMotion> motions;  ///< per goal, in the order visited
 };

@@ -391,6 +391,7 @@ Json runPlan(const EvalOptions& options) {
           {"mean_plan_ms", result.mean_plan_ms},
           {"contacts", result.contacts},
           {"itm_nodes", session.itm->nodeCount()},
+          {"disconnected_nodes", result.disconnected_nodes},
           {"learner", options.learner},
           {"motions", motions}};
 }

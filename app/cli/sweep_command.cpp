@@ -262,7 +262,8 @@ Json section83(const SweepOptions& options, std::ostream& md) {
        << fixed(result.mean_plan_ms, 2) << " | 100/100 collision-free, 99 within 1 cm |\n";
     rows.push_back({{"postures", name}, {"goals", result.goals}, {"found", result.found},
                     {"collision_free", result.collision_free}, {"reached_1cm", result.reached_1cm},
-                    {"mean_plan_ms", result.mean_plan_ms}, {"contacts", result.contacts}});
+                    {"mean_plan_ms", result.mean_plan_ms}, {"contacts", result.contacts},
+                    {"disconnected_nodes", result.disconnected_nodes}});
   }
   return {{"areas", taught.areas.size()}, {"areas_given_up", taught.areas_given_up}, {"teaching_contacts", taught.tutor.collisions},
           {"itm_nodes", taught.itm->nodeCount()}, {"executions", rows}};

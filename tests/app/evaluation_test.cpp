@@ -118,6 +118,34 @@ TEST(Evaluation, MotionThroughAnObstacleCountsAsCollision) {
 // the next motion starts there. Only the motions that cross the wall collide, whatever came
 // before them; stopping at the first contact would leave the arm on the near side and count
 // every later goal beyond the wall as well.
+TEST(Evaluation, PlanningGoalsAreNodesTheGraphConnectsToTheStart) {
+  Parameters s;
+  const auto map = constantMap();
+  const Eigen::Vector3d start = robot::tipPose(lwr4(), ready()).translation();
+  // Three nodes in a row from the start, and two joined to each other 0.3 m above them but to
+  // none of the three: a path to those cannot exist.
+  planning::Itm graph(planning::ItmParameters{}, 7);
+  const int a = graph.addNode(start, ready());
+  const int b = graph.addNode(start + Eigen::Vector3d(0.0, 0.1, 0.0), ready());
+  const int c = graph.addNode(start + Eigen::Vector3d(0.0, 0.2, 0.0), ready());
+  graph.addEdge(a, b);
+  graph.addEdge(b, c);
+  const int d = graph.addNode(start + Eigen::Vector3d(0.0, 0.0, 0.3), ready());
+  const int e = graph.addNode(start + Eigen::Vector3d(0.0, 0.1, 0.3), ready());
+  graph.addEdge(d, e);
+  robot::Scene empty;
+  const PlanningResult result = evaluatePlanning(lwr4(), empty, s.parameters, *map, graph, ready(), 20, 5);
+  EXPECT_EQ(result.disconnected_nodes, 2);
+  EXPECT_EQ(result.found, 20);
+  for (const PlannedMotion& motion : result.motions) EXPECT_LT(motion.goal_W.z(), start.z() + 0.01);
+
+  // Nothing joined to the start: refused with a reason, not 20 unfound paths.
+  planning::Itm scattered(planning::ItmParameters{}, 7);
+  scattered.addNode(start, ready());
+  scattered.addNode(start + Eigen::Vector3d(0.0, 0.1, 0.0), ready());
+  EXPECT_THROW(evaluatePlanning(lwr4(), empty, s.parameters, *map, scattered, ready(), 20, 5), InputError);
+}
+
 TEST(Evaluation, PlannedMotionsThroughAContactGoOnToTheirGoalAndTheNextStartsThere) {
   Parameters s;
   const auto map = constantMap();
