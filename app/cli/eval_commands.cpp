@@ -265,6 +265,30 @@ Json runReachable(const EvalOptions& options) {
                {"approach", options.approach},
                {"target_points", pointsJson(result.target_points)},
                {"target_reached", result.target_reached}};
+  // The scene's single targets, each from the taught posture of the area whose sample lies
+  // nearest it (the start posture without samples): reached within the grid's tolerance without
+  // a contact on the way.
+  Json scene_targets = Json::array();
+  int scene_targets_reached = 0;
+  robot::CollisionWorld world(*session.model, session.scene_data);
+  for (const Eigen::Vector3d& target : session.scene_data.targets) {
+    Eigen::VectorXd q_start = startPosture(session);
+    if (session.data.size() > 0) {
+      Eigen::Index nearest = 0;
+      (session.data.X.colwise() - target).colwise().squaredNorm().minCoeff(&nearest);
+      const int area = session.data.areaOf(nearest);
+      if (area >= 0 && area < static_cast<int>(session.q_fixed.size())) q_start = session.q_fixed[static_cast<std::size_t>(area)];
+    }
+    const app::MotionOutcome outcome = app::approachTarget(*session.model, parameters, *learner, q_start, target, &world);
+    const bool reached = !outcome.collided && outcome.final_error_m <= grid.tolerance;
+    scene_targets_reached += reached ? 1 : 0;
+    scene_targets.push_back({{"target_m", {target.x(), target.y(), target.z()}},
+                             {"reached", reached},
+                             {"error_m", outcome.final_error_m},
+                             {"contact", outcome.contact}});
+  }
+  json["scene_targets"] = scene_targets;
+  json["scene_targets_reached"] = scene_targets_reached;
   if (result.targets == 0) {
     throw CommandFailed("eval reachable: none of the grid's " + std::to_string(result.grid_points) + " points is a target (" +
                             std::to_string(result.out_of_reach) + " out of reach, " + std::to_string(result.in_obstacles) +

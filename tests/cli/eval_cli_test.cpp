@@ -126,6 +126,30 @@ TEST(EvalReachableCli, AGridWithNoTargetFailsSayingWhereItsPointsWent) {
   std::filesystem::remove(scene);
 }
 
+TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
+  // One target where the first area's posture puts the tip, one far beyond the arm's reach.
+  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
+  const Eigen::Vector3d taught =
+      robot::tipPose(model, (Eigen::VectorXd(7) << 0.1177, 0.6076, 0.0937, -1.7010, 0.0132, 0.9237, 0.0).finished()).translation();
+  const auto scene = scratchDir() / "single_targets.yaml";
+  std::ostringstream text;
+  text << "name: single_targets\ntargets: [[" << taught.x() << ", " << taught.y() << ", " << taught.z() << "], [-3.0, 0.0, 0.3]]\n";
+  writeText(scene, text.str());
+  const auto session = tinySession(scene.string(), "single-targets.json");
+  const auto result = runCliBinary("eval reachable --spacing 0.3 --session " + session.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json json = result.json();
+  const nlohmann::json& targets = json.at("scene_targets");
+  ASSERT_EQ(targets.size(), 2U);
+  EXPECT_TRUE(targets[0].at("reached").get<bool>()) << targets[0].dump();
+  EXPECT_LT(targets[0].at("error_m").get<double>(), 0.01);
+  EXPECT_FALSE(targets[1].at("reached").get<bool>());
+  EXPECT_GT(targets[1].at("error_m").get<double>(), 1.0);
+  EXPECT_EQ(json.at("scene_targets_reached"), 1);
+  std::filesystem::remove(session);
+  std::filesystem::remove(scene);
+}
+
 TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
   // The empty scene lists no trajectories: per area `per-area` are drawn, twice as many between.
   const auto session = tinySession("empty", "trajectories.json");
