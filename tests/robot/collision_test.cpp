@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 
 #include "robot/collision.hpp"
@@ -45,6 +47,19 @@ constexpr const char* kPlanarArm = R"(<?xml version="1.0"?>
 const RobotModel& threeLinkArm() {
   static const RobotModel model = RobotModel::fromUrdfString(kPlanarArm, ".");
   return model;
+}
+
+// The three-link arm with link1's cylinder centred `centre_z` up and `length` long (0.2 and 0.4
+// m: standing on the table).
+RobotModel withLink1Cylinder(double centre_z, double length) {
+  std::string urdf = kPlanarArm;
+  const std::string link1_cylinder = R"(<collision><origin xyz="0 0 0.2"/><geometry><cylinder radius="0.05" length="0.4"/>)";
+  const std::size_t at = urdf.find(link1_cylinder);
+  if (at == std::string::npos || at != urdf.find("<collision>")) throw std::logic_error("link1's cylinder not found");
+  std::ostringstream replacement;
+  replacement << R"(<collision><origin xyz="0 0 )" << centre_z << R"("/><geometry><cylinder radius="0.05" length=")" << length << R"("/>)";
+  urdf.replace(at, link1_cylinder.size(), replacement.str());
+  return RobotModel::fromUrdfString(urdf, ".");
 }
 
 Obstacle box(const std::string& name, const Eigen::Vector3d& centre, const Eigen::Vector3d& size) {
@@ -139,12 +154,7 @@ TEST(CollisionWorld, TheTableTopStopsEveryLinkButThoseStandingOnIt) {
   EXPECT_EQ(clearance.body, 2);
   EXPECT_NEAR(clearance.distance, 0.4, 1e-3);
   // The same with link1's cylinder reaching 1 cm into the table: standing on it, not a contact.
-  std::string sunk_urdf = kPlanarArm;
-  const std::string link1_cylinder = R"(<collision><origin xyz="0 0 0.2"/><geometry><cylinder radius="0.05" length="0.4"/>)";
-  ASSERT_EQ(sunk_urdf.find(link1_cylinder), sunk_urdf.find("<collision>"));
-  sunk_urdf.replace(sunk_urdf.find(link1_cylinder), link1_cylinder.size(),
-                    R"(<collision><origin xyz="0 0 0.195"/><geometry><cylinder radius="0.05" length="0.41"/>)");
-  const RobotModel sunk = RobotModel::fromUrdfString(sunk_urdf, ".");
+  const RobotModel sunk = withLink1Cylinder(0.195, 0.41);
   CollisionWorld sunk_world(sunk, Scene{});
   for (const double j2 : {0.0, 1.0, 2.0}) {
     sunk_world.update(Eigen::Vector3d(0.5, j2, 0.0));
@@ -188,12 +198,7 @@ TEST(CollisionWorld, TheTableTopStopsEveryLinkButThoseStandingOnIt) {
 TEST(CollisionWorld, ALinkNoJointCanLowerIsNoClearanceProblemButOneTheReferencePutsInTheTableIs) {
   // link1 raised 1.4 cm above the table: j1 only turns it about the vertical, so the gap can
   // never close or widen and the clearance is that of link2 and link3, 0.4 m upright.
-  std::string raised_urdf = kPlanarArm;
-  const std::string link1_cylinder = R"(<collision><origin xyz="0 0 0.2"/><geometry><cylinder radius="0.05" length="0.4"/>)";
-  ASSERT_EQ(raised_urdf.find(link1_cylinder), raised_urdf.find("<collision>"));
-  raised_urdf.replace(raised_urdf.find(link1_cylinder), link1_cylinder.size(),
-                      R"(<collision><origin xyz="0 0 0.207"/><geometry><cylinder radius="0.05" length="0.386"/>)");
-  const RobotModel raised = RobotModel::fromUrdfString(raised_urdf, ".");
+  const RobotModel raised = withLink1Cylinder(0.207, 0.386);
   CollisionWorld raised_world(raised, Scene{});
   raised_world.update(Eigen::Vector3d::Zero());
   EXPECT_EQ(raised_world.distance(1, 0), std::numeric_limits<double>::infinity());
