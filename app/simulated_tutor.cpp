@@ -71,6 +71,7 @@ SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const
       world_(std::make_unique<robot::CollisionWorld>(sim.model(), scene)),
       kinematics_(sim.model()),
       shoulder_and_reach_(shoulderAndReach(sim.model())),
+      home_(homePosture(sim.model(), scene)),
       random_(options_.seed) {
   if (!(options_.circle_diameter > 0.0) || options_.circle_diameter > 0.5) {
     throw InputError("tutor: circle diameter must be in (0, 0.5] m");
@@ -804,7 +805,7 @@ void SimulatedTutor::drawCheckPoints() {
   const robot::EvaluationGrid grid = scene_->grid.value_or(robot::EvaluationGrid{});
   const auto& [shoulder, reach] = shoulder_and_reach_;
   learning::UniformRandom draw(options_.seed + 0x5eed);
-  const Eigen::VectorXd q_start = homePosture(*model_, *scene_);
+  const Eigen::VectorXd& q_start = home_;
   check_points_.clear();
   for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < 100 * options_.check_points; ++k) {
     Eigen::Vector3d x;
@@ -864,7 +865,7 @@ Eigen::Vector3d SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid&
   // reaches (near the base the joint limits leave holes a person would not ask the arm into).
   Eigen::Vector3d target = Eigen::Vector3d::Zero();
   learning::UniformRandom ik_seeds(options_.seed + 0xacce55);
-  const Eigen::VectorXd q_home = homePosture(*model_, *scene_);
+  const Eigen::VectorXd& q_home = home_;
   for (int tries = 0; tries < 100; ++tries) {
     for (int a = 0; a < 3; ++a) target[a] = random_.uniform(grid.lower[a], grid.upper[a]);
     if (roomyForAnArea(target) && !near_tried(target) &&

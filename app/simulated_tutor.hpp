@@ -227,6 +227,7 @@ class SimulatedTutor {
   robot::Kinematics kinematics_;
   /// The arm's shoulder [m, W] and reach [m] (shoulderAndReach), for where areas can lie.
   std::pair<Eigen::Vector3d, double> shoulder_and_reach_;
+  Eigen::VectorXd home_;  ///< homePosture: where evaluations of the map start
   learning::UniformRandom random_;
   robot::RobotState state_;
   TutorReport report_;
