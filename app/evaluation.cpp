@@ -480,7 +480,9 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     // The arm starts in the taught posture of the area nearest the region's first point, is
     // brought there kinematically, then follows each straight segment at `speed`. Where that
     // start touches something, the next nearest area's is taken: otherwise every trajectory
-    // after a collision would restart in contact and count as collided at once.
+    // after a collision would restart in contact and count as collided at once. Where every
+    // one does, the region starts in the nearest area's taught posture itself, and each
+    // trajectory first leads the tip from there to its start.
     const Eigen::Vector3d first = trajectories.front().waypoints.front();
     std::vector<std::size_t> by_distance(areas.size());
     for (std::size_t k = 0; k < areas.size(); ++k) by_distance[k] = k;
@@ -497,14 +499,13 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
         out.start_contact.clear();
         break;
       }
-      if (q_area.size() == 0) {
-        q_area = q_start;
+      if (out.start_contact.empty()) {
         out.start_contact = world.bodyName(world.contacts().front().body) + "/" + world.otherName(world.contacts().front());
       }
     }
-    // After a collision the arm is brought back, as on the real robot: to the region's start,
-    // or, where that is in contact itself, to the last posture a trajectory ended in freely.
-    Eigen::VectorXd q_free = q_area;
+    if (q_area.size() == 0) q_area = areas[by_distance.front()].q_fixed;
+    // After a collision the arm is brought back, as on the real robot, to where the region
+    // started.
     Eigen::VectorXd q = q_area;
     std::vector<double> errors;
     for (const auto& [trajectory_name, waypoints] : trajectories) {
@@ -527,10 +528,9 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
         ++out.collisions;
         ++out.contacts[outcome.contact];
         out.collided.push_back({trajectory_name, outcome.contact, outcome.contact_time, along(std::min(outcome.contact_time, duration))});
-        q = q_free;
+        q = q_area;
       } else {
         q = outcome.q;
-        if (!out.start_contact.empty()) q_free = q;
       }
       if (progress) progress(static_cast<double>(++done) / total);
     }

@@ -209,8 +209,8 @@ struct TrajectoryRegionResult {
   int collisions = 0;           ///< E_coll: trajectories with a contact
   std::map<std::string, int> contacts;  ///< collided trajectories per first contact "body/other"
   std::vector<CollidedTrajectory> collided;  ///< in the order they ran
-  /// "body/other" where even the region's start posture (the nearest area's, moved to the first
-  /// point) touches something; empty when it is free.
+  /// "body/other" where every area's taught posture, moved to the region's first point, touches
+  /// something (the region then starts in the nearest area's posture); empty otherwise.
   std::string start_contact;
 };
 struct TrajectoryResult {

@@ -267,5 +267,42 @@ TEST(Experiments, DrawnTrajectoriesBetweenAreasOnEitherSideOfTheRobotKeepOffItsB
   EXPECT_LT(between.e_task_max_mm, 50.0);
 }
 
+TEST(Experiments, ARegionWhoseStartTouchesSomethingStartsInTheAreaInstead) {
+  // Two areas 0.15 m left and right of the ready posture's tip, and a plate above the way
+  // between them where the wrist (7.8 cm above the tip) passes: moved to any point between
+  // the areas, the map's posture puts the wrist into the plate.
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  std::vector<EvaluatedArea> areas(2);
+  for (int k = 0; k < 2; ++k) {
+    EvaluatedArea& area = areas[static_cast<std::size_t>(k)];
+    area.q_fixed = ready();
+    area.q_fixed[0] = k == 0 ? 0.27 : -0.27;
+    const Eigen::Vector3d centre = robot::tipPose(lwr4(), area.q_fixed).translation();
+    area.samples.resize(3, 2);
+    area.samples.col(0) = centre - Eigen::Vector3d::Constant(0.025);
+    area.samples.col(1) = centre + Eigen::Vector3d::Constant(0.025);
+  }
+  robot::Scene scene;
+  robot::Obstacle plate;
+  plate.name = "plate";
+  plate.size = Eigen::Vector3d(0.1, 0.12, 0.1);
+  plate.X_WO = Eigen::Isometry3d(Eigen::Translation3d(tip + Eigen::Vector3d(0.0, 0.0, 0.13)));
+  scene.obstacles.push_back(plate);
+  robot::CollisionWorld world(lwr4(), scene);
+  for (const EvaluatedArea& area : areas) {
+    world.update(area.q_fixed);
+    ASSERT_TRUE(world.contacts().empty()) << "the taught postures are free";
+  }
+  const auto map = constantMap();
+  const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 3, 0.1, 1);
+  const TrajectoryRegionResult& between = result.regions[2];
+  ASSERT_EQ(between.name, "interpolation");
+  EXPECT_TRUE(between.start_contact.ends_with("/plate")) << between.start_contact;
+  // Every trajectory starts in the area's free posture and meets the plate on its way, never
+  // at its first check as one started in contact would.
+  ASSERT_FALSE(between.collided.empty());
+  for (const CollidedTrajectory& trajectory : between.collided) EXPECT_GT(trajectory.contact_time, 0.05) << trajectory.name;
+}
+
 }  // namespace
 }  // namespace flexirob::app
