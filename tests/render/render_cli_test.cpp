@@ -402,5 +402,37 @@ TEST(RenderCommandOverlays, NoRobotLeavesTheTipsPixelToTheBackground) {
   std::filesystem::remove(file);
 }
 
+// --- Posture and viewpoint -------------------------------------------------------------------
+
+TEST(RenderCommand, SeesTheArmPastAWallUnlessTheUserChoseTheCamera) {
+  const auto scene = tempPng("wall.yaml");
+  const auto file = tempPng("wall.png");
+  // A wall between the default front-left eye and the arm.
+  writeText(scene, "name: wall\nrobot: lwr4\nhome_posture: [0, 0.6, 0, -1.6, 0, 0.9, 0]\n"
+                   "obstacles:\n  - {name: wall, shape: box, size: [0.04, 3.0, 1.6], position: [-0.85, 0, 0.8]}\n");
+  const std::vector<std::string> common{"render", "--scene", scene.string(), "--out", file.string(), "--width", "160",
+                                        "--height", "120", "--supersample", "1"};
+  const auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> arguments = common;
+    arguments.insert(arguments.end(), extra.begin(), extra.end());
+    const Result result = run(arguments);
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return nlohmann::json::parse(result.out);
+  };
+  const auto chosen = with({});
+  EXPECT_NE(chosen.at("camera").at("view"), "front-left");
+  EXPECT_LE(chosen.at("camera").at("robot_hidden_fraction").get<double>(), render::kAcceptableHiddenFraction);
+  EXPECT_TRUE(chosen.at("see_through_obstacles").empty());
+  const auto named = with({"--view", "front-left"});
+  EXPECT_EQ(named.at("camera").at("view"), "front-left");
+  EXPECT_EQ(named.at("see_through_obstacles"), nlohmann::json::array({"wall"}));
+  const auto fixed = with({"--camera", "-3,-2,1.5,0,0,0.4"});
+  EXPECT_EQ(fixed.at("camera").at("view"), "camera");
+  EXPECT_EQ(fixed.at("camera").at("eye"), nlohmann::json::array({-3.0, -2.0, 1.5}));
+  EXPECT_TRUE(fixed.at("see_through_obstacles").empty());
+  std::filesystem::remove(scene);
+  std::filesystem::remove(file);
+}
+
 }  // namespace
 }  // namespace flexirob::cli
