@@ -7,9 +7,12 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <set>
+#include <sstream>
 #include <unistd.h>
 
 #include "app/cli/cli_support.hpp"
@@ -193,6 +196,23 @@ void include(std::pair<Eigen::Vector3d, Eigen::Vector3d>& box, const std::vector
   }
 }
 
+// A posture beyond the joint limits is still drawn (a picture of what a stop prevents can be
+// wanted, as fk computes such a pose), but said once on stderr and in the result.
+Json warnBeyondLimits(const robot::RobotModel& model, const Eigen::VectorXd& q) {
+  Json beyond_limits = Json::array();
+  std::ostringstream outside;
+  outside << std::setprecision(4);
+  for (int j = 0; j < model.dof(); ++j) {
+    const robot::Joint& joint = model.joints()[static_cast<std::size_t>(j)];
+    if (q[j] >= joint.limits.lower && q[j] <= joint.limits.upper) continue;
+    outside << (beyond_limits.empty() ? "" : "; ") << "joint " << j + 1 << " (" << joint.name << ") at " << q[j]
+            << " outside [" << joint.limits.lower << ", " << joint.limits.upper << "]";
+    beyond_limits.push_back(joint.name);
+  }
+  if (!beyond_limits.empty()) std::cerr << "warning: --q beyond the joint limits, drawn all the same: " << outside.str() << "\n";
+  return beyond_limits;
+}
+
 Json renderPicture(const RenderOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   std::optional<SessionOverlay> session;
@@ -229,6 +249,7 @@ Json renderPicture(const RenderOptions& options) {
     q = *scene.home_posture;
   }
   model.checkPosture(q);
+  const Json beyond_limits = options.q.empty() ? Json::array() : warnBeyondLimits(model, q);
 
   std::set<render::OverlayLayer> hidden;
   if (!options.hide.empty()) {
@@ -443,6 +464,7 @@ Json renderPicture(const RenderOptions& options) {
           {"robot", model.name()},
           {"scene", scene.name.empty() ? std::string("empty") : scene.name},
           {"q", toJson(q)},
+          {"beyond_limits", beyond_limits},
           {"tip_position", toJson(kinematics.p_WT())},
           {"tip_pixel", tip_pixel ? toJson(*tip_pixel) : Json(nullptr)},
           {"camera",

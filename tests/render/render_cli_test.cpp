@@ -4,6 +4,7 @@
 #include <zlib.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 
@@ -403,6 +404,25 @@ TEST(RenderCommandOverlays, NoRobotLeavesTheTipsPixelToTheBackground) {
 }
 
 // --- Posture and viewpoint -------------------------------------------------------------------
+
+TEST(RenderCommand, WarnsOfAPostureBeyondTheJointLimitsAndDrawsItAllTheSame) {
+  const auto file = tempPng("beyond.png");
+  // A2 of the LWR IV stops at 120 degrees (2.094 rad).
+  const Result beyond = run({"render", "--robot", "lwr4", "--out", file.string(), "--width", "64", "--height", "48",
+                             "--supersample", "1", "--q", "0,2.5,0,-1.6,0,0.9,0"});
+  ASSERT_EQ(beyond.exit_code, 0) << beyond.err;
+  EXPECT_TRUE(std::filesystem::exists(file));
+  EXPECT_EQ(beyond.err.rfind("warning: ", 0), 0U) << beyond.err;
+  EXPECT_NE(beyond.err.find("(A2)"), std::string::npos) << beyond.err;
+  EXPECT_EQ(std::count(beyond.err.begin(), beyond.err.end(), '\n'), 1) << beyond.err;
+  EXPECT_EQ(nlohmann::json::parse(beyond.out).at("beyond_limits"), nlohmann::json::array({"A2"}));
+  const Result within = run({"render", "--robot", "lwr4", "--out", file.string(), "--width", "64", "--height", "48",
+                             "--supersample", "1", "--q", "0,0.6,0,-1.6,0,0.9,0"});
+  ASSERT_EQ(within.exit_code, 0) << within.err;
+  EXPECT_EQ(within.err, "");
+  EXPECT_TRUE(nlohmann::json::parse(within.out).at("beyond_limits").empty());
+  std::filesystem::remove(file);
+}
 
 TEST(RenderCommand, SeesTheArmPastAWallUnlessTheUserChoseTheCamera) {
   const auto scene = tempPng("wall.yaml");
