@@ -74,6 +74,14 @@ void namedView(const std::string& name, Eigen::Vector3d& direction_W, Eigen::Vec
   up_W = Eigen::Vector3d::UnitZ();
   if (name == "front-left") {
     direction_W = Eigen::Vector3d(-1.0, -0.62, 0.42);
+  } else if (name == "front-left-low") {
+    // Low enough that the eye stays under a ceiling over the robot.
+    direction_W = Eigen::Vector3d(-1.0, -0.62, 0.10);
+  } else if (name == "back-left") {
+    // From behind the robot: sees the arm when a wall stands between it and the front.
+    direction_W = Eigen::Vector3d(1.0, -0.62, 0.42);
+  } else if (name == "back-right") {
+    direction_W = Eigen::Vector3d(1.0, 0.62, 0.42);
   } else if (name == "front-right") {
     // Lower than front-left: shows what stands behind obstacles on the robot's left (+y).
     direction_W = Eigen::Vector3d(-1.0, 0.62, 0.30);
@@ -90,7 +98,8 @@ void namedView(const std::string& name, Eigen::Vector3d& direction_W, Eigen::Vec
     direction_W = Eigen::Vector3d::UnitZ();
     up_W = Eigen::Vector3d::UnitX();
   } else {
-    throw InputError("--view: unknown view '" + name + "' (front-left, front-right, front, back, left, right, top)");
+    throw InputError("--view: unknown view '" + name +
+                     "' (front-left, front-left-low, front-right, front, back, back-left, back-right, left, right, top)");
   }
 }
 

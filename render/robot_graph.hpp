@@ -1,6 +1,8 @@
 #pragma once
 // The robot as a scene graph: one osg::MatrixTransform per body, holding that body's visual
-// shapes (meshes through assimp, or URDF primitives) with their URDF material colours. The
+// shapes (meshes through assimp, or URDF primitives) with their URDF material colours. A link
+// without visuals is drawn with its collision shapes, and a body with no shapes at all with the
+// capsule the collision world gives it, so that every arm the simulation moves can be seen. The
 // posture comes from robot::Kinematics; this class computes no kinematics itself.
 #include <osg/Group>
 #include <osg/MatrixTransform>
@@ -17,7 +19,11 @@ namespace flexirob::render {
 
 class RobotGraph {
  public:
-  /// Builds the visual shapes of every body. Throws InputError if a mesh cannot be read.
+  /// Colour of the stand-ins drawn for links without visuals (collision shapes or capsules).
+  static Eigen::Vector4f standInColor() { return {0.55F, 0.58F, 0.64F, 1.0F}; }
+
+  /// Builds the visual shapes (or stand-ins) of every body. Throws InputError if a mesh cannot
+  /// be read.
   explicit RobotGraph(const robot::RobotModel& model);
 
   osg::Group* root() const { return root_.get(); }

@@ -9,8 +9,14 @@
 #include <osg/LineWidth>
 #include <osg/MatrixTransform>
 #include <osg/PolygonOffset>
+#include <osgUtil/IntersectionVisitor>
+#include <osgUtil/LineSegmentIntersector>
+
+#include <algorithm>
+#include <cmath>
 
 #include "render/shapes.hpp"
+#include "robot/errors.hpp"
 
 namespace flexirob::render {
 
@@ -66,6 +72,44 @@ osg::ref_ptr<osg::Geometry> makeLines(const std::vector<osg::Vec3>& points, GLen
 }
 
 }  // namespace
+
+std::pair<Eigen::Vector3d, double> reachSphere(const robot::RobotModel& model) {
+  double reach = model.X_LastBodyTip().translation().norm();
+  for (const robot::Joint& joint : model.joints()) {
+    reach += joint.X_PJ.translation().norm();
+    if (joint.type == robot::JointType::kPrismatic) {
+      const double travel = std::max(std::abs(joint.limits.lower), std::abs(joint.limits.upper));
+      if (std::isfinite(travel)) reach += travel;
+    }
+  }
+  return {Eigen::Vector3d::Zero(), reach};
+}
+
+std::optional<Box> clipBoxToSphere(const Box& box, const Eigen::Vector3d& center_W, double radius) {
+  Box clipped = box;
+  for (int axis = 0; axis < 3; ++axis) {
+    // Along this axis the box meets the sphere where the sphere's cross-section still reaches
+    // the box's extent in the two other axes.
+    double across_squared = 0.0;
+    for (int other = 0; other < 3; ++other) {
+      if (other == axis) continue;
+      const double nearest = std::clamp(center_W[other], box.first[other], box.second[other]);
+      across_squared += (nearest - center_W[other]) * (nearest - center_W[other]);
+    }
+    if (across_squared > radius * radius) return std::nullopt;
+    const double half_chord = std::sqrt(radius * radius - across_squared);
+    clipped.first[axis] = std::max(box.first[axis], center_W[axis] - half_chord);
+    clipped.second[axis] = std::min(box.second[axis], center_W[axis] + half_chord);
+    if (clipped.first[axis] > clipped.second[axis]) return std::nullopt;
+  }
+  return clipped;
+}
+
+const std::vector<std::string>& defaultViewOrder() {
+  static const std::vector<std::string> views{"front-left", "front-left-low", "back-left", "front-right", "back-right",
+                                              "left",       "right",          "front",     "back"};
+  return views;
+}
 
 osg::ref_ptr<osg::Node> makeSceneNode(const robot::Scene& scene) {
   osg::ref_ptr<osg::Group> group = new osg::Group();
@@ -189,14 +233,31 @@ void World::setRobot(const robot::RobotModel& model) {
   if (robot_) content_->removeChild(robot_->root());
   content_->addChild(graph->root());
   robot_ = std::move(graph);
+  // A quarter of the reach and 0.25 m beyond it: obstacles the arm can touch are framed whole,
+  // with some of their surroundings.
+  const auto [center_W, reach] = reachSphere(model);
+  setFocusSphere(center_W, 1.25 * reach + 0.25);
+  surroundings_radius_ = 0.08 * reach;
 }
 
 void World::setScene(const robot::Scene& scene) {
-  osg::ref_ptr<osg::Node> node = makeSceneNode(scene);
+  osg::ref_ptr<osg::Group> node = makeSceneNode(scene)->asGroup();
   if (scene_node_) content_->removeChild(scene_node_);
   content_->addChild(node);
   scene_node_ = node;
+  area_centers_.clear();
+  for (const robot::Area& area : scene.training_areas) area_centers_.push_back(area.p_WA);
+  for (const robot::Area& area : scene.working_areas) area_centers_.push_back(area.p_WA);
+  // makeSceneNode places the obstacles first, in the scene's order.
+  obstacles_.clear();
+  for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
+    osg::Group* placed_shape = node->getChild(static_cast<unsigned>(k))->asGroup();
+    if (placed_shape == nullptr || placed_shape->getNumChildren() == 0) continue;
+    obstacles_.push_back({placed_shape, placed_shape->getChild(0), scene.obstacles[k].name, scene.obstacles[k].rgba});
+  }
 }
+
+void World::setFocusSphere(const Eigen::Vector3d& center_W, double radius) { focus_sphere_ = {center_W, radius}; }
 
 void World::setGridVisible(bool visible) { grid_->setNodeMask(visible ? ~0U : 0U); }
 
@@ -219,13 +280,202 @@ std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> World::contentBox() c
                         Eigen::Vector3f(box.xMax(), box.yMax(), box.zMax()).cast<double>());
 }
 
-CameraPose World::defaultCamera(double aspect) const {
+namespace {
+
+std::optional<Box> boundsOf(osg::Node& node) {
   osg::ComputeBoundsVisitor visitor;
-  content_->accept(visitor);
+  node.accept(visitor);
   const osg::BoundingBox& box = visitor.getBoundingBox();
-  if (!box.valid()) return frameSphere(Eigen::Vector3d(0.0, 0.0, 0.5), 1.0, aspect);
-  return frameBox(Eigen::Vector3d(box.xMin(), box.yMin(), box.zMin()),
-                  Eigen::Vector3d(box.xMax(), box.yMax(), box.zMax()), aspect);
+  if (!box.valid()) return std::nullopt;
+  return Box(Eigen::Vector3f(box.xMin(), box.yMin(), box.zMin()).cast<double>(),
+             Eigen::Vector3f(box.xMax(), box.yMax(), box.zMax()).cast<double>());
+}
+
+void grow(std::optional<Box>& box, const std::optional<Box>& part) {
+  if (!part) return;
+  if (!box) {
+    box = part;
+    return;
+  }
+  box->first = box->first.cwiseMin(part->first);
+  box->second = box->second.cwiseMax(part->second);
+}
+
+bool isOpaque(const Eigen::Vector4f& rgba) { return rgba[3] >= 0.999F; }
+
+}  // namespace
+
+std::optional<Box> World::focusBox() const {
+  std::optional<Box> box;
+  if (robot_) grow(box, boundsOf(*robot_->root()));
+  if (scene_node_) {
+    for (unsigned i = 0; i < scene_node_->getNumChildren(); ++i) {
+      // Obstacles are framed below, clipped.
+      if (scene_node_->getChild(i)->getName().rfind("obstacle:", 0) != 0) grow(box, boundsOf(*scene_node_->getChild(i)));
+    }
+  }
+  for (const ObstacleNode& obstacle : obstacles_) {
+    const std::optional<Box> bounds = boundsOf(*obstacle.node);
+    if (bounds && focus_sphere_) {
+      grow(box, clipBoxToSphere(*bounds, focus_sphere_->first, focus_sphere_->second));
+    } else {
+      grow(box, bounds);
+    }
+  }
+  return box;
+}
+
+std::vector<Eigen::Vector3d> World::robotSamplePoints() const {
+  std::vector<Eigen::Vector3d> points;
+  if (!robot_ || robot_->root()->getNodeMask() == 0U) return points;
+  // Evenly along the chain of joints, then the last link's centre (towards the tool): each part
+  // of the arm counts by its length, not by how many joints crowd into it (the LWR's shoulder
+  // holds three).
+  std::vector<Eigen::Vector3d> chain;
+  for (int i = 0; i < robot_->bodyCount(); ++i) {
+    const osg::Vec3d origin = robot_->body(i)->getMatrix().getTrans();
+    chain.emplace_back(origin.x(), origin.y(), origin.z());
+  }
+  if (const std::optional<Box> bounds = boundsOf(*robot_->body(robot_->bodyCount() - 1))) {
+    chain.push_back(0.5 * (bounds->first + bounds->second));
+  }
+  double length = 0.0;
+  for (std::size_t i = 1; i < chain.size(); ++i) length += (chain[i] - chain[i - 1]).norm();
+  if (length < 1e-6) return {chain.front()};
+  constexpr int kSamples = 24;
+  std::size_t segment = 1;
+  double walked = 0.0;  // chain length before `segment`
+  for (int n = 0; n < kSamples; ++n) {
+    const double at = length * (n + 0.5) / kSamples;
+    while (segment + 1 < chain.size() && walked + (chain[segment] - chain[segment - 1]).norm() < at) {
+      walked += (chain[segment] - chain[segment - 1]).norm();
+      ++segment;
+    }
+    const double piece = (chain[segment] - chain[segment - 1]).norm();
+    const double along = piece > 1e-9 ? std::clamp((at - walked) / piece, 0.0, 1.0) : 0.0;
+    points.push_back(chain[segment - 1] + along * (chain[segment] - chain[segment - 1]));
+  }
+  return points;
+}
+
+bool World::obstacleHides(std::size_t k, const Eigen::Vector3d& eye_W, const Eigen::Vector3d& p_W) const {
+  if (!isOpaque(obstacles_[k].rgba)) return false;
+  // Stop just short of the point: an obstacle the robot rests on does not hide it.
+  const Eigen::Vector3d towards = p_W - eye_W;
+  if (towards.norm() < 1e-6) return false;
+  const Eigen::Vector3d end_W = p_W - 0.005 * towards.normalized();
+  osg::ref_ptr<osgUtil::LineSegmentIntersector> ray = new osgUtil::LineSegmentIntersector(toOsg(eye_W), toOsg(end_W));
+  osgUtil::IntersectionVisitor visitor(ray.get());
+  obstacles_[k].node->accept(visitor);
+  return ray->containsIntersections();
+}
+
+std::optional<std::size_t> World::hidingObstacle(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& p_W) const {
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) {
+    if (obstacleHides(k, eye_W, p_W)) return k;
+  }
+  return std::nullopt;
+}
+
+std::vector<World::SamplePoint> World::visibleSamplePoints() const {
+  // A point inside an obstacle (or closed in by obstacles) is hidden from every side: no view
+  // can do better there, so it does not take part in choosing one.
+  const auto enclosed = [&](const Eigen::Vector3d& p_W) {
+    for (int axis = 0; axis < 3; ++axis) {
+      for (const double sign : {-1.0, 1.0}) {
+        if (!hidingObstacle(p_W + sign * 1e3 * Eigen::Vector3d::Unit(axis), p_W)) return false;
+      }
+    }
+    return true;
+  };
+  std::vector<Eigen::Vector3d> arm;
+  for (const Eigen::Vector3d& p_W : robotSamplePoints()) {
+    if (!enclosed(p_W)) arm.push_back(p_W);
+  }
+  std::vector<Eigen::Vector3d> areas;
+  for (const Eigen::Vector3d& p_W : area_centers_) {
+    if (!enclosed(p_W)) areas.push_back(p_W);
+  }
+  // The arm counts most; where the scene has areas, seeing where the arm is to work counts too
+  // (a shelf's back wall hides the areas between its boards more than the arm in front).
+  const double area_share = arm.empty() ? 1.0 : areas.empty() ? 0.0 : kAreaShare;
+  std::vector<SamplePoint> points;
+  for (const Eigen::Vector3d& p_W : arm) points.push_back({p_W, (1.0 - area_share) / static_cast<double>(arm.size()), false});
+  for (const Eigen::Vector3d& p_W : areas) points.push_back({p_W, area_share / static_cast<double>(areas.size()), true});
+  return points;
+}
+
+bool World::hiddenWithSurroundings(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& p_W) const {
+  if (!hidingObstacle(eye_W, p_W)) return false;
+  // A pillar or a board edge may cover a link and leave the arm around it in sight; a wall or a
+  // ceiling hides the point and its surroundings too.
+  const Eigen::Vector3d forward = (p_W - eye_W).normalized();
+  Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ());
+  if (right.norm() < 1e-6) right = forward.cross(Eigen::Vector3d::UnitX());
+  right.normalize();
+  const Eigen::Vector3d up = right.cross(forward);
+  for (const Eigen::Vector3d& offset : {right, Eigen::Vector3d(-right), up, Eigen::Vector3d(-up)}) {
+    if (!hidingObstacle(eye_W, p_W + surroundings_radius_ * offset)) return false;
+  }
+  return true;
+}
+
+double World::hiddenWeight(const std::vector<SamplePoint>& points, const Eigen::Vector3d& eye_W) const {
+  double hidden = 0.0;
+  for (const SamplePoint& point : points) {
+    if (hiddenWithSurroundings(eye_W, point.p_W)) hidden += point.weight;
+  }
+  return hidden;
+}
+
+double World::hiddenFraction(const CameraPose& camera) const { return hiddenWeight(visibleSamplePoints(), camera.eye_W); }
+
+ViewChoice World::chooseView(const Box& box, double aspect, const std::vector<std::string>& views, double margin) const {
+  const std::vector<SamplePoint> points = visibleSamplePoints();
+  std::optional<ViewChoice> best;
+  for (const std::string& view : views) {
+    Eigen::Vector3d direction_W, up_W;
+    namedView(view, direction_W, up_W);
+    ViewChoice choice;
+    choice.view = view;
+    choice.camera = frameBoxFrom(box.first, box.second, aspect, direction_W, up_W, margin);
+    choice.hidden_fraction = hiddenWeight(points, choice.camera.eye_W);
+    if (choice.hidden_fraction <= kAcceptableHiddenFraction) return choice;
+    if (!best || choice.hidden_fraction < best->hidden_fraction) best = choice;
+  }
+  if (!best) throw InputError("no view to choose from");
+  return *best;
+}
+
+std::vector<std::string> World::revealRobot(const CameraPose& camera) {
+  std::vector<std::string> revealed;
+  const std::vector<SamplePoint> points = visibleSamplePoints();
+  if (hiddenWeight(points, camera.eye_W) <= kAcceptableHiddenFraction) return revealed;
+  // Every opaque obstacle on the way counts, not only the first: the one behind would hide the
+  // point as soon as the first turns see-through.
+  std::vector<bool> hides(obstacles_.size(), false);
+  for (const SamplePoint& point : points) {
+    for (std::size_t k = 0; k < obstacles_.size(); ++k) hides[k] = hides[k] || obstacleHides(k, camera.eye_W, point.p_W);
+  }
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) {
+    if (!hides[k]) continue;
+    ObstacleNode& obstacle = obstacles_[k];
+    // Faint enough that the arm behind reads clearly, solid enough that the obstacle's extent
+    // still shows.
+    Eigen::Vector4f see_through = obstacle.rgba;
+    see_through[3] = 0.25F;
+    applyColor(*obstacle.shape, see_through);
+    makeTranslucent(*obstacle.shape);
+    obstacle.rgba = see_through;
+    revealed.push_back(obstacle.name);
+  }
+  return revealed;
+}
+
+CameraPose World::defaultCamera(double aspect) const {
+  const std::optional<Box> box = focusBox();
+  if (!box) return frameSphere(Eigen::Vector3d(0.0, 0.0, 0.5), 1.0, aspect);
+  return chooseView(*box, aspect, defaultViewOrder()).camera;
 }
 
 }  // namespace flexirob::render

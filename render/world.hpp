@@ -8,6 +8,8 @@
 #include <Eigen/Core>
 #include <memory>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "render/camera.hpp"
 #include "render/overlays.hpp"
@@ -29,6 +31,36 @@ struct Palette {
 /// if an obstacle mesh cannot be read.
 osg::ref_ptr<osg::Node> makeSceneNode(const robot::Scene& scene);
 
+/// An axis-aligned box: lower and upper corners in W [m].
+using Box = std::pair<Eigen::Vector3d, Eigen::Vector3d>;
+
+/// The sphere (centre in W, radius in m) holding everything the robot can reach: around its base
+/// frame's origin, with the lengths from joint to joint and to the tip (and prismatic travel)
+/// added up.
+std::pair<Eigen::Vector3d, double> reachSphere(const robot::RobotModel& model);
+
+/// The bounding box of the part of `box` inside the sphere (centre, radius); nothing when they
+/// do not meet. Exact for the intersection of the box with the sphere, computed per axis.
+std::optional<Box> clipBoxToSphere(const Box& box, const Eigen::Vector3d& center_W, double radius);
+
+/// A viewpoint chosen by World::chooseView: its camera, the name of its side (namedView) and the
+/// fraction of the robot and its areas that opaque obstacles hide from it (0..1, see
+/// World::hiddenFraction).
+struct ViewChoice {
+  CameraPose camera;
+  std::string view;
+  double hidden_fraction = 0.0;
+};
+
+/// The sides World::defaultCamera tries, best first: the front-left, lower under a ceiling, from
+/// behind past a wall in front, then the other sides.
+const std::vector<std::string>& defaultViewOrder();
+
+/// A view hiding at most this fraction of the robot and its areas counts as seeing them. From
+/// the front-left, the thesis' setups hide at most 3 % (a board or pillar covers a link, the arm
+/// around it stays in sight); a shelf's back wall hides 20 %, a ceiling 100 %.
+inline constexpr double kAcceptableHiddenFraction = 0.15;
+
 /// A square grid on z = 0 of the given half extent and line spacing [m], every fifth line
 /// darker, with the world axes (x red, y green, z blue) at the origin.
 osg::ref_ptr<osg::Node> makeGroundGrid(double half_extent = 1.5, double spacing = 0.1);
@@ -42,7 +74,8 @@ class World {
 
   osg::Group* root() const { return root_.get(); }
 
-  /// Replaces the robot (nullptr-safe: the view shows no robot until the first call).
+  /// Replaces the robot (nullptr-safe: the view shows no robot until the first call) and focuses
+  /// the default framing on its reach (setFocusSphere).
   void setRobot(const robot::RobotModel& model);
   RobotGraph* robot() const { return robot_.get(); }
   /// Replaces the scene.
@@ -52,19 +85,74 @@ class World {
   /// contentBound() or defaultCamera(), so a large confidence slice does not move the camera.
   Overlays& overlays() { return *overlays_; }
 
+  /// Limits what focusBox() takes of the obstacles to this sphere (centre in W, radius in m);
+  /// setRobot() sets the robot's reachSphere() grown by a margin. Without a focus sphere every
+  /// obstacle is framed whole.
+  void setFocusSphere(const Eigen::Vector3d& center_W, double radius);
+
   /// Bounding sphere (centre in W, radius in m) of the robot and the scene, grid excluded.
   std::pair<Eigen::Vector3d, double> contentBound() const;
   /// Axis-aligned bounding box (lower, upper corners in W, m) of the robot and the scene, grid
   /// excluded; nothing when there is neither.
   std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> contentBox() const;
-  /// A camera that shows the robot and the scene from the front-left, slightly above.
+  /// What a picture of the robot is about: the robot, the scene's areas, targets and
+  /// trajectories, and of each obstacle only the part inside the focus sphere, so that a huge or
+  /// far obstacle does not shrink the robot to a speck. Nothing when there is nothing to frame.
+  std::optional<Box> focusBox() const;
+  /// Frames `box` (aspect = width / height, margin a fraction of the image) from the first of
+  /// `views` (namedView names) from which opaque obstacles hide at most kAcceptableHiddenFraction
+  /// of the robot, else from the one hiding least. Throws InputError for an unknown name.
+  ViewChoice chooseView(const Box& box, double aspect, const std::vector<std::string>& views,
+                        double margin = 0.05) const;
+  /// Fraction (0..1) of the robot and its areas that opaque obstacles hide from the camera's eye:
+  /// 24 points evenly along the robot's chain of joints (weight 0.7, or 1 without areas) and the
+  /// centres of the scene's training and working areas (0.3). A point counts as hidden when it
+  /// and four points around it (8 % of the reach across the line of sight) are all hidden, so a
+  /// pillar in front of a link does not count but a wall does. Points enclosed by obstacles
+  /// (hidden from every side) do not count. 0 without a robot.
+  double hiddenFraction(const CameraPose& camera) const;
+  /// If obstacles hide more than kAcceptableHiddenFraction of the robot from the camera, draws
+  /// every opaque obstacle that hides part of it see-through; returns the names of those.
+  /// setScene() draws them opaque again.
+  std::vector<std::string> revealRobot(const CameraPose& camera);
+  /// A camera that shows focusBox() from the front-left, slightly above, or from the first side
+  /// of defaultViewOrder() from which obstacles do not hide the robot.
   CameraPose defaultCamera(double aspect) const;
 
  private:
   osg::ref_ptr<osg::Group> root_;
   osg::ref_ptr<osg::Group> content_;  // robot and scene: what the default camera frames
   osg::ref_ptr<osg::Node> grid_;
-  osg::ref_ptr<osg::Node> scene_node_;
+  osg::ref_ptr<osg::Group> scene_node_;
+  struct ObstacleNode {
+    osg::ref_ptr<osg::Node> node;   // placed in W: what the camera sees and rays hit
+    osg::ref_ptr<osg::Node> shape;  // carries the colour
+    std::string name;
+    Eigen::Vector4f rgba;
+  };
+  struct SamplePoint {
+    Eigen::Vector3d p_W;
+    double weight;  // the weights of all points add up to 1
+    bool is_area;
+  };
+  // Share of the areas' centres in the hidden fraction, where the scene has areas.
+  static constexpr double kAreaShare = 0.3;
+  std::vector<Eigen::Vector3d> robotSamplePoints() const;
+  // Whether opaque obstacle k lies on the line of sight from the eye to p_W.
+  bool obstacleHides(std::size_t k, const Eigen::Vector3d& eye_W, const Eigen::Vector3d& p_W) const;
+  // The first opaque obstacle hiding p_W from the eye, if any (index into obstacles_).
+  std::optional<std::size_t> hidingObstacle(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& p_W) const;
+  // The robot's and the areas' points that some view may see, weighted.
+  std::vector<SamplePoint> visibleSamplePoints() const;
+  // Whether obstacles hide p_W and the points around it (surroundings_radius_ across the line of
+  // sight) from the eye.
+  bool hiddenWithSurroundings(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& p_W) const;
+  double hiddenWeight(const std::vector<SamplePoint>& points, const Eigen::Vector3d& eye_W) const;
+
+  std::vector<ObstacleNode> obstacles_;
+  std::vector<Eigen::Vector3d> area_centers_;
+  double surroundings_radius_ = 0.1;  // [m], 8 % of the robot's reach
+  std::optional<std::pair<Eigen::Vector3d, double>> focus_sphere_;
   std::unique_ptr<RobotGraph> robot_;
   std::unique_ptr<Overlays> overlays_;
 };

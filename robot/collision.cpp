@@ -165,6 +165,16 @@ struct CollisionWorld::Impl {
   }
 };
 
+LinkCapsule linkCapsule(const RobotModel& model, int body) {
+  const Body& link = model.bodies().at(static_cast<std::size_t>(body));
+  LinkCapsule capsule;
+  capsule.radius = capsuleRadius(link);
+  capsule.b_B = body < model.dof() ? Eigen::Vector3d(model.joints()[static_cast<std::size_t>(body)].X_PJ.translation())
+                                   : Eigen::Vector3d(model.X_LastBodyTip().translation());
+  if ((capsule.b_B - capsule.a_B).norm() < capsule.radius) capsule.b_B = 2.0 * link.p_BCom;
+  return capsule;
+}
+
 CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
     : model_(&model), impl_(std::make_unique<Impl>(model)) {
   Impl& impl = *impl_;
@@ -195,26 +205,16 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
       if (child != nullptr) compound->addChildShape(toBt(geometry.X_BG), child);
     }
     if (compound->getNumChildShapes() == 0) {
-      // A capsule from this body's joint to the next joint (or the tip); a link whose joints
-      // coincide reaches to twice its centre of mass instead.
       source = "capsule";
-      const Eigen::Vector3d a = Eigen::Vector3d::Zero();
-      Eigen::Vector3d b_end = Eigen::Vector3d::Zero();
-      if (b < model.dof()) {
-        b_end = model.joints()[static_cast<std::size_t>(b)].X_PJ.translation();
-      } else {
-        b_end = model.X_LastBodyTip().translation();
-      }
-      const double radius = capsuleRadius(body);
-      if ((b_end - a).norm() < radius) b_end = 2.0 * body.p_BCom;
-      const double length = (b_end - a).norm();
+      const LinkCapsule capsule = linkCapsule(model, b);
+      const double length = (capsule.b_B - capsule.a_B).norm();
       btCollisionShape* child = nullptr;
       if (length < 1e-6) {
-        child = impl.make<btSphereShape>(btScalar(radius));
+        child = impl.make<btSphereShape>(btScalar(capsule.radius));
       } else {
-        child = impl.make<btCapsuleShapeZ>(btScalar(radius), btScalar(length));
+        child = impl.make<btCapsuleShapeZ>(btScalar(capsule.radius), btScalar(length));
       }
-      compound->addChildShape(toBt(segmentPose(a, b_end)), child);
+      compound->addChildShape(toBt(segmentPose(capsule.a_B, capsule.b_B)), child);
     }
     auto object = std::make_unique<btCollisionObject>();
     object->setCollisionShape(compound);

@@ -28,6 +28,19 @@
 
 namespace flexirob::robot {
 
+/// The stand-in shape of a body without collision geometry: a capsule (a sphere when
+/// `a_B == b_B`) around the segment from a_B to b_B in the body's frame [m], with `radius` [m].
+/// The renderer draws the same capsule for a link that has no geometry at all.
+struct LinkCapsule {
+  Eigen::Vector3d a_B = Eigen::Vector3d::Zero();
+  Eigen::Vector3d b_B = Eigen::Vector3d::Zero();
+  double radius = 0.0;
+};
+
+/// The capsule of body `body` (0 = base): from its joint to the next joint (or the tip); a
+/// body whose joints coincide reaches to twice its centre of mass instead.
+LinkCapsule linkCapsule(const RobotModel& model, int body);
+
 /// One touching pair. `body` indexes RobotModel::bodies(); the other side is an obstacle
 /// (obstacle >= 0, other_body == -1) or another body (self-collision, obstacle == -1).
 struct Contact {

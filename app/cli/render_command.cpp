@@ -7,9 +7,12 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <set>
+#include <sstream>
 #include <unistd.h>
 
 #include "app/cli/cli_support.hpp"
@@ -193,6 +196,23 @@ void include(std::pair<Eigen::Vector3d, Eigen::Vector3d>& box, const std::vector
   }
 }
 
+// A posture beyond the joint limits is still drawn (a picture of what a stop prevents can be
+// wanted, as fk computes such a pose), but said once on stderr and in the result.
+Json warnBeyondLimits(const robot::RobotModel& model, const Eigen::VectorXd& q) {
+  Json beyond_limits = Json::array();
+  std::ostringstream outside;
+  outside << std::setprecision(4);
+  for (int j = 0; j < model.dof(); ++j) {
+    const robot::Joint& joint = model.joints()[static_cast<std::size_t>(j)];
+    if (q[j] >= joint.limits.lower && q[j] <= joint.limits.upper) continue;
+    outside << (beyond_limits.empty() ? "" : "; ") << "joint " << j + 1 << " (" << joint.name << ") at " << q[j]
+            << " outside [" << joint.limits.lower << ", " << joint.limits.upper << "]";
+    beyond_limits.push_back(joint.name);
+  }
+  if (!beyond_limits.empty()) std::cerr << "warning: --q beyond the joint limits, drawn all the same: " << outside.str() << "\n";
+  return beyond_limits;
+}
+
 Json renderPicture(const RenderOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   std::optional<SessionOverlay> session;
@@ -229,6 +249,7 @@ Json renderPicture(const RenderOptions& options) {
     q = *scene.home_posture;
   }
   model.checkPosture(q);
+  const Json beyond_limits = options.q.empty() ? Json::array() : warnBeyondLimits(model, q);
 
   std::set<render::OverlayLayer> hidden;
   if (!options.hide.empty()) {
@@ -249,14 +270,18 @@ Json renderPicture(const RenderOptions& options) {
 
   render::World world;
   if (!options.no_robot) world.setRobot(model);
+  // Without the arm the picture is still about its workspace: far obstacles stay out of it.
+  const auto [reach_center_W, reach] = render::reachSphere(model);
+  if (options.no_robot) world.setFocusSphere(reach_center_W, 1.25 * reach + 0.25);
   world.setScene(scene);
   world.setGridVisible(!options.no_grid);
   robot::Kinematics kinematics(model);
   kinematics.update(q);
   if (world.robot() != nullptr) world.robot()->setPosture(kinematics);
-  // What the named views frame: robot and scene, grown by every overlay drawn (empty at first
-  // when there is neither robot nor scene, so that the overlays alone are framed).
-  std::pair<Eigen::Vector3d, Eigen::Vector3d> box = world.contentBox().value_or(
+  // What the views frame: the robot, the scene's areas and targets and the obstacles near the
+  // robot (World::focusBox), grown by every overlay drawn (empty at first when there is neither
+  // robot nor scene, so that the overlays alone are framed).
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> box = world.focusBox().value_or(
       std::make_pair(Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()),
                      Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity())));
 
@@ -397,15 +422,24 @@ Json renderPicture(const RenderOptions& options) {
 
   const double aspect = static_cast<double>(options.width) / options.height;
   render::CameraPose camera;
+  std::string view = "camera";
+  double hidden_fraction = 0.0;
+  std::vector<std::string> see_through;
   if (!options.camera.empty()) {
     camera = render::parseCamera(options.camera);
   } else {
-    // Without a view the picture is taken from the front-left, as the GUI's home view; it frames
-    // the overlays too, since a picture that crops the targets it was asked to show is wrong.
-    Eigen::Vector3d direction, up;
-    render::namedView(options.view.empty() ? "front-left" : options.view, direction, up);
+    // Without a view the picture is taken from the front-left, as the GUI's home view, unless
+    // obstacles hide the arm from there (a ceiling, a wall in front): then from the first side of
+    // defaultViewOrder() that sees it. It frames the overlays too, since a picture that crops the
+    // targets it was asked to show is wrong. A view the user names is kept.
     if (!(box.first.array() <= box.second.array()).all()) box = {Eigen::Vector3d(-1.0, -1.0, 0.0), Eigen::Vector3d(1.0, 1.0, 1.0)};
-    camera = render::frameBoxFrom(box.first, box.second, aspect, direction, up, 0.04);
+    const render::ViewChoice choice = world.chooseView(
+        box, aspect, options.view.empty() ? render::defaultViewOrder() : std::vector<std::string>{options.view}, 0.04);
+    camera = choice.camera;
+    view = choice.view;
+    hidden_fraction = choice.hidden_fraction;
+    // Where no side sees the arm, the obstacles in the way are drawn see-through.
+    see_through = world.revealRobot(camera);
   }
   if (options.legend && !legend.empty() && shown(render::OverlayLayer::kLegend)) {
     overlays.setContent(render::OverlayLayer::kLegend, render::makeLegend(legend, options.width, options.height));
@@ -430,13 +464,17 @@ Json renderPicture(const RenderOptions& options) {
           {"robot", model.name()},
           {"scene", scene.name.empty() ? std::string("empty") : scene.name},
           {"q", toJson(q)},
+          {"beyond_limits", beyond_limits},
           {"tip_position", toJson(kinematics.p_WT())},
           {"tip_pixel", tip_pixel ? toJson(*tip_pixel) : Json(nullptr)},
           {"camera",
            {{"eye", toJson(camera.eye_W)},
             {"center", toJson(camera.center_W)},
             {"up", toJson(camera.up_W)},
-            {"fovy_deg", camera.fovy_deg}}},
+            {"fovy_deg", camera.fovy_deg},
+            {"view", view},
+            {"robot_hidden_fraction", hidden_fraction}}},
+          {"see_through_obstacles", see_through},
           {"overlays", drawn},
           {"legend", legend_json},
           {"seconds", seconds}};
@@ -458,7 +496,8 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
                       "eye and look-at point in the world frame [m], optionally the vertical field of view "
                       "[deg]: ex,ey,ez,cx,cy,cz[,fovy] (default: --view front-left)");
   command->add_option("--view", options->view,
-                      "front-left (the default), front-right, front, back, left, right or top: frames robot, scene and overlays from that side");
+                      "front-left, front-left-low, front-right, front, back, back-left, back-right, left, right or top: frames "
+                      "robot, scene and overlays from that side (default: front-left, or another side where obstacles hide the arm)");
   command->add_option("--supersample", options->supersampling, "anti-aliasing: render at this multiple and average")
       ->capture_default_str()
       ->check(finiteRange(1, 4));

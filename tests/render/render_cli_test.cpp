@@ -4,6 +4,7 @@
 #include <zlib.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 
@@ -399,6 +400,57 @@ TEST(RenderCommandOverlays, NoRobotLeavesTheTipsPixelToTheBackground) {
     const Picture picture = readPicture(file);
     EXPECT_EQ(static_cast<bool>(near(picture.at(tip), bytesOf(render::Palette::background()), 2)), !robot) << (robot ? "with" : "without");
   }
+  std::filesystem::remove(file);
+}
+
+// --- Posture and viewpoint -------------------------------------------------------------------
+
+TEST(RenderCommand, WarnsOfAPostureBeyondTheJointLimitsAndDrawsItAllTheSame) {
+  const auto file = tempPng("beyond.png");
+  // A2 of the LWR IV stops at 120 degrees (2.094 rad).
+  const Result beyond = run({"render", "--robot", "lwr4", "--out", file.string(), "--width", "64", "--height", "48",
+                             "--supersample", "1", "--q", "0,2.5,0,-1.6,0,0.9,0"});
+  ASSERT_EQ(beyond.exit_code, 0) << beyond.err;
+  EXPECT_TRUE(std::filesystem::exists(file));
+  EXPECT_EQ(beyond.err.rfind("warning: ", 0), 0U) << beyond.err;
+  EXPECT_NE(beyond.err.find("(A2)"), std::string::npos) << beyond.err;
+  EXPECT_EQ(std::count(beyond.err.begin(), beyond.err.end(), '\n'), 1) << beyond.err;
+  EXPECT_EQ(nlohmann::json::parse(beyond.out).at("beyond_limits"), nlohmann::json::array({"A2"}));
+  const Result within = run({"render", "--robot", "lwr4", "--out", file.string(), "--width", "64", "--height", "48",
+                             "--supersample", "1", "--q", "0,0.6,0,-1.6,0,0.9,0"});
+  ASSERT_EQ(within.exit_code, 0) << within.err;
+  EXPECT_EQ(within.err, "");
+  EXPECT_TRUE(nlohmann::json::parse(within.out).at("beyond_limits").empty());
+  std::filesystem::remove(file);
+}
+
+TEST(RenderCommand, SeesTheArmPastAWallUnlessTheUserChoseTheCamera) {
+  const auto scene = tempPng("wall.yaml");
+  const auto file = tempPng("wall.png");
+  // A wall between the default front-left eye and the arm.
+  writeText(scene, "name: wall\nrobot: lwr4\nhome_posture: [0, 0.6, 0, -1.6, 0, 0.9, 0]\n"
+                   "obstacles:\n  - {name: wall, shape: box, size: [0.04, 3.0, 1.6], position: [-0.85, 0, 0.8]}\n");
+  const std::vector<std::string> common{"render", "--scene", scene.string(), "--out", file.string(), "--width", "160",
+                                        "--height", "120", "--supersample", "1"};
+  const auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> arguments = common;
+    arguments.insert(arguments.end(), extra.begin(), extra.end());
+    const Result result = run(arguments);
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return nlohmann::json::parse(result.out);
+  };
+  const auto chosen = with({});
+  EXPECT_NE(chosen.at("camera").at("view"), "front-left");
+  EXPECT_LE(chosen.at("camera").at("robot_hidden_fraction").get<double>(), render::kAcceptableHiddenFraction);
+  EXPECT_TRUE(chosen.at("see_through_obstacles").empty());
+  const auto named = with({"--view", "front-left"});
+  EXPECT_EQ(named.at("camera").at("view"), "front-left");
+  EXPECT_EQ(named.at("see_through_obstacles"), nlohmann::json::array({"wall"}));
+  const auto fixed = with({"--camera", "-3,-2,1.5,0,0,0.4"});
+  EXPECT_EQ(fixed.at("camera").at("view"), "camera");
+  EXPECT_EQ(fixed.at("camera").at("eye"), nlohmann::json::array({-3.0, -2.0, 1.5}));
+  EXPECT_TRUE(fixed.at("see_through_obstacles").empty());
+  std::filesystem::remove(scene);
   std::filesystem::remove(file);
 }
 

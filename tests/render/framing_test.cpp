@@ -1,0 +1,176 @@
+// What the default view frames and from where: the robot and its surroundings, not a far or
+// huge obstacle, and a side from which the arm is seen.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <string>
+
+#include "render/camera.hpp"
+#include "render/offscreen.hpp"
+#include "render/world.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+#include "robot/scene.hpp"
+
+namespace flexirob::render {
+namespace {
+
+constexpr int kWidth = 320;
+constexpr int kHeight = 240;
+constexpr double kAspect = static_cast<double>(kWidth) / kHeight;
+
+std::array<float, 4> background() {
+  const Eigen::Vector4f c = Palette::background();
+  return {c[0], c[1], c[2], c[3]};
+}
+
+robot::Obstacle box(const std::string& name, const Eigen::Vector3d& size, const Eigen::Vector3d& p_W) {
+  robot::Obstacle obstacle;
+  obstacle.name = name;
+  obstacle.size = size;
+  obstacle.X_WO.translation() = p_W;
+  obstacle.rgba = Eigen::Vector4f(0.25F, 0.27F, 0.30F, 1.0F);
+  return obstacle;
+}
+
+// The LWR IV reaching forward and down (-x), as in the thesis' setups.
+Eigen::VectorXd reachingForward() {
+  Eigen::VectorXd q(7);
+  q << 0.0, 0.6, 0.0, -1.6, 0.0, 0.9, 0.0;
+  return q;
+}
+
+struct Lwr4InScene {
+  robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  World world;
+  explicit Lwr4InScene(const robot::Scene& scene, const Eigen::VectorXd& q = reachingForward()) {
+    world.setRobot(model);
+    world.setScene(scene);
+    robot::Kinematics kinematics(model);
+    kinematics.update(q);
+    world.robot()->setPosture(kinematics);
+  }
+};
+
+// How many pixels of the picture are the robot's: those that change when it is left out.
+int visibleRobotPixels(World& world, const CameraPose& camera) {
+  OffscreenRenderer renderer(kWidth, kHeight, 1);
+  const Image with = renderer.render(world.root(), camera, background());
+  world.robot()->root()->setNodeMask(0U);
+  const Image without = renderer.render(world.root(), camera, background());
+  world.robot()->root()->setNodeMask(~0U);
+  int count = 0;
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      int difference = 0;
+      for (int c = 0; c < 3; ++c) difference += std::abs(int{with.pixel(x, y)[c]} - int{without.pixel(x, y)[c]});
+      count += difference > 12 ? 1 : 0;
+    }
+  }
+  return count;
+}
+
+TEST(Framing, ClipsABoxToThePartInsideASphere) {
+  const Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  // Inside: unchanged.
+  const Box inside(Eigen::Vector3d(-0.2, -0.1, 0.0), Eigen::Vector3d(0.3, 0.2, 0.5));
+  const auto kept = clipBoxToSphere(inside, center, 1.0);
+  ASSERT_TRUE(kept);
+  EXPECT_TRUE(kept->first.isApprox(inside.first));
+  EXPECT_TRUE(kept->second.isApprox(inside.second));
+  // Far away: nothing.
+  EXPECT_FALSE(clipBoxToSphere(Box(Eigen::Vector3d(-250, 350, 0), Eigen::Vector3d(250, 850, 10)), center, 2.0));
+  // A ceiling slab at z = 0.6..0.7 over a unit sphere: the circle the sphere cuts at z = 0.6.
+  const auto slab = clipBoxToSphere(Box(Eigen::Vector3d(-3, -3, 0.6), Eigen::Vector3d(3, 3, 0.7)), center, 1.0);
+  ASSERT_TRUE(slab);
+  EXPECT_NEAR(slab->second.x(), 0.8, 1e-12);
+  EXPECT_NEAR(slab->first.y(), -0.8, 1e-12);
+  EXPECT_NEAR(slab->first.z(), 0.6, 1e-12);
+  EXPECT_NEAR(slab->second.z(), 0.7, 1e-12);
+}
+
+TEST(Framing, AFarHugeObstacleLeavesTheViewAsWithoutIt) {
+  robot::Scene near_only;
+  near_only.obstacles.push_back(box("near", Eigen::Vector3d(0.2, 0.2, 0.3), Eigen::Vector3d(-0.5, 0.3, 0.15)));
+  robot::Scene with_far = near_only;
+  // A building wall 600 m away (hold-out scene far_box.yaml).
+  with_far.obstacles.push_back(box("far", Eigen::Vector3d(500, 500, 10), Eigen::Vector3d(0, 600, 5)));
+  Lwr4InScene plain(near_only);
+  Lwr4InScene far(with_far);
+  const CameraPose expected = plain.world.defaultCamera(kAspect);
+  const CameraPose camera = far.world.defaultCamera(kAspect);
+  EXPECT_LT((camera.eye_W - expected.eye_W).norm(), 1e-6) << camera.eye_W.transpose();
+  EXPECT_LT((camera.center_W - expected.center_W).norm(), 1e-6) << camera.center_W.transpose();
+  // The arm fills a good part of the picture's height, not a speck.
+  robot::Kinematics kinematics(far.model);
+  kinematics.update(reachingForward());
+  double top = kHeight;
+  double bottom = 0.0;
+  for (int body = 0; body < static_cast<int>(far.model.bodies().size()); ++body) {
+    const auto pixel = projectToPixel(camera, kWidth, kHeight, kinematics.X_WB(body).translation());
+    ASSERT_TRUE(pixel);
+    top = std::min(top, pixel->y());
+    bottom = std::max(bottom, pixel->y());
+  }
+  EXPECT_GT(bottom - top, 0.3 * kHeight);
+}
+
+TEST(Framing, BuiltInScenesKeepTheirFramingAndTheFrontLeftView) {
+  for (const std::string& name : robot::builtinSceneNames()) {
+    const robot::Scene scene = robot::loadScene(name);
+    const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot::robotFor("", scene)));
+    World world;
+    world.setRobot(model);
+    world.setScene(scene);
+    robot::Kinematics kinematics(model);
+    kinematics.update(scene.home_posture && scene.home_posture->size() == model.dof() ? *scene.home_posture
+                                                                                       : model.midPosture());
+    world.robot()->setPosture(kinematics);
+    // Every obstacle of the thesis' setups lies within the robot's reach: framed whole.
+    const auto whole = world.contentBox();
+    const auto focus = world.focusBox();
+    ASSERT_TRUE(whole && focus) << name;
+    EXPECT_TRUE(focus->first.isApprox(whole->first)) << name << ": " << focus->first.transpose();
+    EXPECT_TRUE(focus->second.isApprox(whole->second)) << name << ": " << focus->second.transpose();
+    const ViewChoice choice = world.chooseView(*focus, kAspect, defaultViewOrder());
+    EXPECT_EQ(choice.view, "front-left") << name << " hides " << choice.hidden_fraction << " of the arm";
+  }
+}
+
+TEST(Framing, ACeilingOverTheRobotDoesNotHideTheArm) {
+  robot::Scene scene;
+  // Hold-out scene ceiling.yaml: a 6 x 6 m slab at 1.35..1.45 m.
+  scene.obstacles.push_back(box("ceiling", Eigen::Vector3d(6, 6, 0.1), Eigen::Vector3d(0, 0, 1.4)));
+  Lwr4InScene setup(scene);
+  const CameraPose camera = setup.world.defaultCamera(kAspect);
+  EXPECT_LT(camera.eye_W.z(), 1.35) << "the eye should stay under the ceiling";
+  EXPECT_GT(visibleRobotPixels(setup.world, camera), 400);
+}
+
+TEST(Framing, AWallBetweenTheFrontAndTheRobotDoesNotHideTheArm) {
+  robot::Scene scene;
+  // A shelf's back wall in front of the robot (hold-out scene ur5b_shelf.yaml, wider).
+  scene.obstacles.push_back(box("wall", Eigen::Vector3d(0.04, 3.0, 1.6), Eigen::Vector3d(-0.85, 0, 0.8)));
+  Lwr4InScene setup(scene);
+  const CameraPose camera = setup.world.defaultCamera(kAspect);
+  EXPECT_GT(camera.eye_W.x(), -0.85) << "the eye should be on the robot's side of the wall";
+  EXPECT_GT(visibleRobotPixels(setup.world, camera), 400);
+}
+
+TEST(Framing, ANamedViewIsKeptAndTheObstaclesInTheWayTurnSeeThrough) {
+  robot::Scene scene;
+  scene.obstacles.push_back(box("wall", Eigen::Vector3d(0.04, 3.0, 1.6), Eigen::Vector3d(-0.85, 0, 0.8)));
+  scene.obstacles.push_back(box("aside", Eigen::Vector3d(0.2, 0.2, 0.3), Eigen::Vector3d(0.4, 0.6, 0.15)));
+  Lwr4InScene setup(scene);
+  const ViewChoice choice = setup.world.chooseView(*setup.world.focusBox(), kAspect, {"front-left"});
+  EXPECT_EQ(choice.view, "front-left");
+  EXPECT_GT(choice.hidden_fraction, 0.8);
+  EXPECT_EQ(visibleRobotPixels(setup.world, choice.camera), 0) << "the wall hides the arm";
+  EXPECT_EQ(setup.world.revealRobot(choice.camera), std::vector<std::string>{"wall"});
+  EXPECT_GT(visibleRobotPixels(setup.world, choice.camera), 400);
+}
+
+}  // namespace
+}  // namespace flexirob::render
