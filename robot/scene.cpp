@@ -18,6 +18,7 @@
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/mesh.hpp"
+#include "robot/mesh_solid.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 
@@ -563,6 +564,7 @@ class SceneReader {
           obstacle.mesh_scale = scale.IsSequence() ? positiveSize(scale, join(path, "scale"))
                                                    : Eigen::Vector3d::Constant(length(scale, join(path, "scale"), false));
         }
+        obstacle.mesh_solid = loadMeshSolidCached(obstacle.mesh_file, obstacle.mesh_scale);
         break;
       }
     }
@@ -789,8 +791,11 @@ bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, doub
     }
     case Obstacle::Shape::kSphere:
       return p_O.norm() <= obstacle.size.x() + margin;
-    case Obstacle::Shape::kMesh:
-      return false;
+    case Obstacle::Shape::kMesh: {
+      const std::shared_ptr<const MeshSolid> solid =
+          obstacle.mesh_solid ? obstacle.mesh_solid : loadMeshSolidCached(obstacle.mesh_file, obstacle.mesh_scale);
+      return solid->contains(p_O, margin);
+    }
   }
   return false;
 }

@@ -9,12 +9,14 @@
 #include <Eigen/Geometry>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace flexirob::robot {
 
+class MeshSolid;
 class RobotModel;
 
 struct Obstacle {
@@ -25,6 +27,10 @@ struct Obstacle {
   Eigen::Vector3d size = Eigen::Vector3d::Zero();  ///< box: edge lengths; cylinder: (radius, length, 0) along z; sphere: (radius, 0, 0)
   std::filesystem::path mesh_file;                 ///< resolved path (meshes only)
   Eigen::Vector3d mesh_scale = Eigen::Vector3d::Ones();
+  /// The solid of mesh_file at mesh_scale (meshes only), built once by the scene reader so that
+  /// point tests do not reload the file. May be empty (an obstacle built in code): the point
+  /// tests then fetch it from a cache. Code that changes mesh_file or mesh_scale resets it.
+  std::shared_ptr<const MeshSolid> mesh_solid;
   Eigen::Vector4f rgba{0.55F, 0.6F, 0.65F, 1.0F};
 };
 
@@ -100,8 +106,9 @@ struct Scene {
 };
 
 /// True if p_W (world frame, metres) lies inside the obstacle or within `margin` [m] of its
-/// surface. Primitive shapes only: a mesh never contains a point here (the simulator tests
-/// meshes with its own collision engine).
+/// surface; the surface counts as inside. A mesh's inside is that of robot/mesh_solid.hpp
+/// (generalized winding number ≥ 0.5, in the obstacle's frame with its scale). Throws
+/// InputError if a mesh obstacle built in code names a file that cannot be loaded.
 bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, double margin = 0.0);
 
 /// The first of the scene's obstacles that contains p_W within `margin` [m] (as obstacleContains),

@@ -2,6 +2,11 @@
 // reachable-workspace count and the explored fraction.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
 #include "app/evaluation.hpp"
 #include "learning/elm.hpp"
 #include "planning/itm.hpp"
@@ -229,6 +234,38 @@ TEST(Evaluation, ExcludedBoxesOfTheGridHoldNoTargets) {
   ASSERT_EQ(result.target_points.size(), 4U);
   for (const Eigen::Vector3d& p : result.target_points) EXPECT_LT(p.y(), 0.1) << p.transpose();
   EXPECT_EQ(result.reached, 4);
+}
+
+// A mesh block and the box of its size hold the same grid points: neither is a target.
+TEST(Evaluation, GridPointsInsideAMeshObstacleAreNoTargetsAsInItsBoxTwin) {
+  Parameters s;
+  const auto map = constantMap();
+  const robot::EvaluationGrid grid = gridInFront(0.2);
+  const std::filesystem::path cube_file =
+      std::filesystem::temp_directory_path() / ("flexirob_evaluation_cube_" + std::to_string(::getpid()) + ".obj");
+  std::ofstream(cube_file) << "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv 0.5 0.5 -0.5\nv -0.5 0.5 -0.5\n"
+                              "v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\n"
+                              "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+                              "f 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
+  // Holds the grid points (-0.6, 0, 0.3) and (-0.6, 0.2, 0.3).
+  robot::Obstacle box;
+  box.name = "block";
+  box.size = Eigen::Vector3d(0.1, 0.3, 0.1);
+  box.X_WO.translation() = Eigen::Vector3d(-0.6, 0.1, 0.3);
+  robot::Obstacle mesh = box;
+  mesh.shape = robot::Obstacle::Shape::kMesh;
+  mesh.mesh_file = cube_file;
+  mesh.mesh_scale = box.size;
+  robot::Scene box_scene, mesh_scene;
+  box_scene.obstacles = {box};
+  mesh_scene.obstacles = {mesh};
+  const ReachableResult with_box = evaluateReachable(lwr4(), box_scene, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
+  const ReachableResult with_mesh = evaluateReachable(lwr4(), mesh_scene, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
+  std::filesystem::remove(cube_file);
+  EXPECT_EQ(with_box.in_obstacles, 2);
+  EXPECT_EQ(with_mesh.in_obstacles, 2);
+  EXPECT_EQ(with_mesh.target_points, with_box.target_points);
+  for (const Eigen::Vector3d& p : with_mesh.target_points) EXPECT_GT((p - box.X_WO.translation()).norm(), 0.15) << p.transpose();
 }
 
 // Joint limits and the arm's own links bound the workspace without any obstacle: a point beside

@@ -409,6 +409,78 @@ TEST(ObstacleGeometry, ContainsPointsInsideAndWithinTheMarginOnly) {
   EXPECT_TRUE(area.contains(Eigen::Vector3d(0.09, 0.09, 0.09)));
 }
 
+// The cube [-0.5, 0.5]^3 as an OBJ, triangles facing outwards.
+constexpr const char* kCenteredCubeObj =
+    "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv 0.5 0.5 -0.5\nv -0.5 0.5 -0.5\n"
+    "v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\n"
+    "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+    "f 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
+
+// An L: [0, 2] x [0, 2] without the notch [1, 2] x [1, 2], from z = 0 to 1, triangles facing
+// outwards.
+constexpr const char* kLShapeObj =
+    "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\n"
+    "v 0 0 1\nv 2 0 1\nv 2 1 1\nv 1 1 1\nv 1 2 1\nv 0 2 1\n"
+    "f 1 3 2\nf 1 4 3\nf 1 5 4\nf 1 6 5\nf 7 8 9\nf 7 9 10\nf 7 10 11\nf 7 11 12\n"
+    "f 1 2 8\nf 1 8 7\nf 2 3 9\nf 2 9 8\nf 3 4 10\nf 3 10 9\n"
+    "f 4 5 11\nf 4 11 10\nf 5 6 12\nf 5 12 11\nf 6 1 7\nf 6 7 12\n";
+
+// A mesh cube scaled to a box's size and posed like it holds the same points, inside, outside
+// and within a margin of the surface (points too close to the box's surface or margin for the
+// mesh's float coordinates to decide are left out).
+TEST_F(SceneFileTest, MeshObstacleHoldsWhatItsBoxTwinHoldsWhereverItIsPutTurnedOrScaled) {
+  write("meshes/cube.obj", kCenteredCubeObj);
+  const Scene scene = loadSceneFile(write("twins.yaml",
+                                          "obstacles:\n"
+                                          "  - {name: mesh, shape: mesh, file: meshes/cube.obj, scale: [0.2, 0.4, 0.6],\n"
+                                          "     position: [-0.5, 0.2, 0.4], rotation: {rpy: [0.3, -0.5, 0.8]}}\n"
+                                          "  - {name: box, shape: box, size: [0.2, 0.4, 0.6],\n"
+                                          "     position: [-0.5, 0.2, 0.4], rotation: {rpy: [0.3, -0.5, 0.8]}}\n"));
+  const Obstacle& mesh = scene.obstacles.at(0);
+  const Obstacle& box = scene.obstacles.at(1);
+  ASSERT_NE(mesh.mesh_solid, nullptr);  // built with the scene, not per point
+  Obstacle built_in_code = mesh;        // without it, the file is read through the cache
+  built_in_code.mesh_solid.reset();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> around(-0.5, 0.5);
+  int inside = 0, compared = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const Eigen::Vector3d p_W = box.X_WO.translation() + Eigen::Vector3d(around(rng), around(rng), around(rng));
+    const Eigen::Vector3d p_O = box.X_WO.inverse() * p_W;
+    const Eigen::Vector3d beyond = p_O.cwiseAbs() - 0.5 * box.size;
+    const double signed_distance = beyond.maxCoeff() > 0.0 ? beyond.cwiseMax(0.0).norm() : beyond.maxCoeff();
+    for (const double margin : {0.0, 0.03}) {
+      if (std::abs(signed_distance - margin) < 1e-5 || std::abs(signed_distance) < 1e-5) continue;
+      ++compared;
+      const bool expected = obstacleContains(box, p_W, margin);
+      inside += expected ? 1 : 0;
+      ASSERT_EQ(obstacleContains(mesh, p_W, margin), expected) << p_W.transpose() << " margin " << margin;
+      ASSERT_EQ(obstacleContains(built_in_code, p_W, margin), expected) << p_W.transpose() << " margin " << margin;
+    }
+  }
+  EXPECT_GT(inside, 300);
+  EXPECT_GT(compared - inside, 300);
+  EXPECT_EQ(obstacleAt(scene, box.X_WO.translation()), &mesh);
+}
+
+TEST_F(SceneFileTest, ConcaveMeshObstacleLeavesItsNotchFreeWhenTurnedAndScaled) {
+  write("l_shape.obj", kLShapeObj);
+  // 0.2 x 0.2 x 0.1 m, turned by 90 degrees about z: the L's local (x, y) lies along world (y, -x).
+  const Scene scene = loadSceneFile(write("notch.yaml",
+                                          "obstacles:\n"
+                                          "  - {name: ell, shape: mesh, file: l_shape.obj, scale: 0.1, position: [-0.5, 0, 0.1],\n"
+                                          "     rotation: {rpy: [0, 0, 90], unit: deg}}\n"));
+  const Obstacle& ell = scene.obstacles.at(0);
+  EXPECT_TRUE(obstacleContains(ell, Eigen::Vector3d(-0.55, 0.05, 0.15)));   // the corner square
+  EXPECT_TRUE(obstacleContains(ell, Eigen::Vector3d(-0.55, 0.15, 0.15)));   // one arm
+  EXPECT_TRUE(obstacleContains(ell, Eigen::Vector3d(-0.65, 0.05, 0.15)));   // the other arm
+  const Eigen::Vector3d notch(-0.65, 0.15, 0.15);
+  EXPECT_FALSE(obstacleContains(ell, notch));
+  EXPECT_FALSE(obstacleContains(ell, notch, 0.04));  // 5 cm from both inner faces
+  EXPECT_TRUE(obstacleContains(ell, notch, 0.06));
+  EXPECT_FALSE(obstacleContains(ell, Eigen::Vector3d(-0.55, 0.05, 0.21)));  // above it
+}
+
 // ---------------------------------------------------------------------------------------------
 // Refusing broken and hostile files
 

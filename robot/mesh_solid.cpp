@@ -1,0 +1,202 @@
+#include "robot/mesh_solid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <numbers>
+#include <utility>
+
+namespace flexirob::robot {
+namespace {
+
+// A point this close to the surface lies on it: the winding number jumps there and its value is
+// noise, so the boundary is decided by distance, as a box's boundary counts as inside.
+constexpr double kOnSurface = 1e-9;  // [m]
+
+using Triangle = std::array<std::uint32_t, 3>;
+
+bool hasDirectedEdge(const Triangle& t, std::uint32_t from, std::uint32_t to) {
+  for (int i = 0; i < 3; ++i) {
+    if (t[i] == from && t[(i + 1) % 3] == to) return true;
+  }
+  return false;
+}
+
+Triangle flipped(const Triangle& t) { return {t[0], t[2], t[1]}; }
+
+std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
+  return (static_cast<std::uint64_t>(std::min(a, b)) << 32U) | std::max(a, b);
+}
+
+// Closest point to p on triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
+Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + d1 / (d1 - d3) * ab;
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double denominator = va + vb + vc;
+  if (!(std::abs(denominator) > 0.0)) return a;  // a degenerate sliver: its corner is close enough
+  return a + (vb / denominator) * ab + (vc / denominator) * ac;
+}
+
+}  // namespace
+
+MeshSolid::MeshSolid(const TriangleMesh& mesh, const Eigen::Vector3d& scale) : scale_(scale) {
+  // The loader keeps one vertex per corner normal, so the corners of a box are several vertices:
+  // weld them by position to see which triangles share an edge.
+  std::map<std::array<float, 3>, std::uint32_t> welded_index;
+  std::vector<std::uint32_t> weld(mesh.vertices.size());
+  std::vector<Eigen::Vector3d> positions;
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Eigen::Vector3f& p = mesh.vertices[v];
+    const auto [it, inserted] = welded_index.try_emplace({p.x(), p.y(), p.z()}, static_cast<std::uint32_t>(positions.size()));
+    if (inserted) positions.push_back(scale.cwiseProduct(p.cast<double>()));
+    weld[v] = it->second;
+  }
+  std::vector<Triangle> triangles;
+  triangles.reserve(mesh.triangleCount());
+  for (std::size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const Triangle triangle{weld[mesh.indices[t]], weld[mesh.indices[t + 1]], weld[mesh.indices[t + 2]]};
+    if (triangle[0] == triangle[1] || triangle[1] == triangle[2] || triangle[2] == triangle[0]) continue;
+    triangles.push_back(triangle);
+  }
+
+  // Edges sorted by their (undirected) vertex pair: the triangles of one run share that edge.
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
+  edges.reserve(3 * triangles.size());
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    for (int i = 0; i < 3; ++i) edges.emplace_back(edgeKey(triangles[t][i], triangles[t][(i + 1) % 3]), t);
+  }
+  std::sort(edges.begin(), edges.end());
+  const auto neighboursAcross = [&edges](std::uint32_t a, std::uint32_t b) {
+    const std::uint64_t key = edgeKey(a, b);
+    const auto first = std::lower_bound(edges.begin(), edges.end(), std::make_pair(key, std::uint32_t{0}));
+    auto last = first;
+    while (last != edges.end() && last->first == key) ++last;
+    return std::make_pair(first, last);
+  };
+
+  // Walk each connected piece from one triangle, turning every neighbour to run a shared edge
+  // the other way (as two faces of one consistently wound surface do).
+  constexpr std::uint32_t kUnvisited = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> piece(triangles.size(), kUnvisited);
+  std::vector<std::uint32_t> queue;
+  std::uint32_t piece_count = 0;
+  for (std::uint32_t seed = 0; seed < triangles.size(); ++seed) {
+    if (piece[seed] != kUnvisited) continue;
+    piece[seed] = piece_count;
+    queue.assign(1, seed);
+    while (!queue.empty()) {
+      const std::uint32_t t = queue.back();
+      queue.pop_back();
+      for (int i = 0; i < 3; ++i) {
+        const std::uint32_t from = triangles[t][i], to = triangles[t][(i + 1) % 3];
+        const auto [first, last] = neighboursAcross(from, to);
+        for (auto it = first; it != last; ++it) {
+          const std::uint32_t n = it->second;
+          if (piece[n] != kUnvisited) continue;
+          if (hasDirectedEdge(triangles[n], from, to)) triangles[n] = flipped(triangles[n]);
+          piece[n] = piece_count;
+          queue.push_back(n);
+        }
+      }
+    }
+    ++piece_count;
+  }
+
+  // Each piece faces outwards if the volume it encloses is positive (divergence theorem, taken
+  // about the piece's own centre so that an open piece is judged by its own shape).
+  std::vector<Eigen::AlignedBox3d> piece_bounds(piece_count);
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    for (const std::uint32_t v : triangles[t]) piece_bounds[piece[t]].extend(positions[v]);
+  }
+  std::vector<double> piece_volume(piece_count, 0.0);
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const Eigen::Vector3d centre = piece_bounds[piece[t]].center();
+    const Eigen::Vector3d a = positions[triangles[t][0]] - centre;
+    const Eigen::Vector3d b = positions[triangles[t][1]] - centre;
+    const Eigen::Vector3d c = positions[triangles[t][2]] - centre;
+    piece_volume[piece[t]] += a.dot(b.cross(c));
+  }
+  triangles_.reserve(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const Triangle triangle = piece_volume[piece[t]] < 0.0 ? flipped(triangles[t]) : triangles[t];
+    triangles_.push_back({positions[triangle[0]], positions[triangle[1]], positions[triangle[2]]});
+    for (const std::uint32_t v : triangle) bounds_.extend(positions[v]);
+  }
+}
+
+double MeshSolid::windingNumber(const Eigen::Vector3d& p) const {
+  // Solid angle of each triangle seen from p (Van Oosterom and Strackee 1983), signed positive
+  // for a triangle facing away from p.
+  double solid_angle = 0.0;
+  for (const auto& triangle : triangles_) {
+    const Eigen::Vector3d a = triangle[0] - p, b = triangle[1] - p, c = triangle[2] - p;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    const double numerator = a.dot(b.cross(c));
+    const double denominator = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+    solid_angle += 2.0 * std::atan2(numerator, denominator);
+  }
+  return solid_angle / (4.0 * std::numbers::pi);
+}
+
+double MeshSolid::distanceToSurface(const Eigen::Vector3d& p) const {
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const auto& triangle : triangles_) {
+    nearest = std::min(nearest, (closestPointOnTriangle(p, triangle[0], triangle[1], triangle[2]) - p).squaredNorm());
+  }
+  return std::sqrt(nearest);
+}
+
+bool MeshSolid::contains(const Eigen::Vector3d& p, double margin) const {
+  if (triangles_.empty()) return false;
+  const double reach = std::max(margin, 0.0) + kOnSurface;
+  // Most points of an evaluation grid lie far from any one obstacle: the box settles them.
+  if (bounds_.exteriorDistance(p) > reach) return false;
+  if (windingNumber(p) >= 0.5) return true;
+  return distanceToSurface(p) <= reach;
+}
+
+namespace {
+struct SolidCacheEntry {
+  std::shared_ptr<const TriangleMesh> mesh;  // held so that its address names this mesh only
+  Eigen::Vector3d scale;
+  std::shared_ptr<const MeshSolid> solid;
+};
+constexpr std::size_t kMaxCachedSolids = 256;  // as the mesh cache
+std::mutex solid_cache_mutex;
+std::vector<SolidCacheEntry> solid_cache;
+}  // namespace
+
+std::shared_ptr<const MeshSolid> loadMeshSolidCached(const std::filesystem::path& file, const Eigen::Vector3d& scale) {
+  // The mesh cache notices a changed file and then hands out a new mesh: key on that mesh.
+  std::shared_ptr<const TriangleMesh> mesh = loadMeshCached(file);
+  {
+    const std::lock_guard lock(solid_cache_mutex);
+    for (const auto& entry : solid_cache) {
+      if (entry.mesh == mesh && entry.scale == scale) return entry.solid;
+    }
+  }
+  auto solid = std::make_shared<const MeshSolid>(*mesh, scale);
+  const std::lock_guard lock(solid_cache_mutex);
+  if (solid_cache.size() >= kMaxCachedSolids) solid_cache.clear();
+  solid_cache.push_back(SolidCacheEntry{std::move(mesh), scale, solid});
+  return solid;
+}
+
+}  // namespace flexirob::robot

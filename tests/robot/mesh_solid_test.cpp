@@ -1,0 +1,191 @@
+// Meshes read as solids (robot/mesh_solid.hpp): the generalized winding number, the inside
+// test and the distance to the surface, against boxes and prisms whose answers are known.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "robot/mesh.hpp"
+#include "robot/mesh_solid.hpp"
+
+namespace flexirob::robot {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A closed right prism over a counter-clockwise polygon (seen from +z) between z = 0 and
+// z = height, every triangle counter-clockwise seen from outside. The caps are fans from the
+// first corner, so the polygon must be star-shaped around it.
+TriangleMesh prism(const std::vector<Eigen::Vector2f>& polygon, float height) {
+  TriangleMesh mesh;
+  const auto n = static_cast<std::uint32_t>(polygon.size());
+  for (const auto& p : polygon) mesh.vertices.emplace_back(p.x(), p.y(), 0.0F);
+  for (const auto& p : polygon) mesh.vertices.emplace_back(p.x(), p.y(), height);
+  mesh.normals.assign(mesh.vertices.size(), Eigen::Vector3f::UnitZ());
+  for (std::uint32_t i = 1; i + 1 < n; ++i) {
+    mesh.indices.insert(mesh.indices.end(), {0, i + 1, i});          // bottom, facing -z
+    mesh.indices.insert(mesh.indices.end(), {n, n + i, n + i + 1});  // top, facing +z
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t j = (i + 1) % n;
+    mesh.indices.insert(mesh.indices.end(), {i, j, n + j});
+    mesh.indices.insert(mesh.indices.end(), {i, n + j, n + i});
+  }
+  return mesh;
+}
+
+// The unit cube [0, 1]^3.
+TriangleMesh unitCube() { return prism({{0, 0}, {1, 0}, {1, 1}, {0, 1}}, 1.0F); }
+
+// An L: the square [0, 2] x [0, 2] without its notch [1, 2] x [1, 2], 1 high.
+TriangleMesh lShape() { return prism({{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}}, 1.0F); }
+
+TEST(MeshSolid, UnitCubeWindsOnceAroundItsInsideAndNotAroundItsOutside) {
+  const MeshSolid cube(unitCube());
+  EXPECT_NEAR(cube.windingNumber(Eigen::Vector3d(0.5, 0.5, 0.5)), 1.0, 1e-12);
+  EXPECT_NEAR(cube.windingNumber(Eigen::Vector3d(0.01, 0.99, 0.02)), 1.0, 1e-9);
+  EXPECT_NEAR(cube.windingNumber(Eigen::Vector3d(1.5, 0.5, 0.5)), 0.0, 1e-12);
+  EXPECT_NEAR(cube.windingNumber(Eigen::Vector3d(-3.0, 7.0, 0.5)), 0.0, 1e-12);
+  EXPECT_TRUE(cube.contains(Eigen::Vector3d(0.5, 0.5, 0.5)));
+  EXPECT_TRUE(cube.contains(Eigen::Vector3d(0.999, 0.001, 0.999)));
+  // Just outside each face, and beyond an edge and a corner (where a ray would graze).
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(1.001, 0.5, 0.5), Eigen::Vector3d(-0.001, 0.5, 0.5),
+                                   Eigen::Vector3d(0.5, 1.001, 0.5), Eigen::Vector3d(0.5, -0.001, 0.5),
+                                   Eigen::Vector3d(0.5, 0.5, 1.001), Eigen::Vector3d(0.5, 0.5, -0.001),
+                                   Eigen::Vector3d(1.001, 1.001, 0.5), Eigen::Vector3d(1.001, 1.001, 1.001)}) {
+    EXPECT_FALSE(cube.contains(p)) << p.transpose();
+  }
+}
+
+TEST(MeshSolid, DistanceToTheSurfaceIsThatToTheNearestFaceEdgeOrCorner) {
+  const MeshSolid cube(unitCube());
+  EXPECT_NEAR(cube.distanceToSurface(Eigen::Vector3d(1.5, 0.5, 0.5)), 0.5, 1e-12);           // face
+  EXPECT_NEAR(cube.distanceToSurface(Eigen::Vector3d(1.3, 1.4, 0.5)), 0.5, 1e-12);           // edge
+  EXPECT_NEAR(cube.distanceToSurface(Eigen::Vector3d(-0.2, -0.3, 1.6)), std::sqrt(0.49), 1e-12);  // corner
+  EXPECT_NEAR(cube.distanceToSurface(Eigen::Vector3d(0.5, 0.5, 0.4)), 0.4, 1e-12);           // inside
+}
+
+TEST(MeshSolid, CountsTheSurfaceAndPointsWithinTheMarginAsInside) {
+  const MeshSolid cube(unitCube());
+  EXPECT_TRUE(cube.contains(Eigen::Vector3d(1.0, 0.5, 0.5)));  // on a face
+  EXPECT_TRUE(cube.contains(Eigen::Vector3d(1.0, 1.0, 1.0)));  // on a corner
+  const Eigen::Vector3d beside(1.05, 0.5, 0.5);
+  EXPECT_FALSE(cube.contains(beside, 0.04));
+  EXPECT_TRUE(cube.contains(beside, 0.06));
+  const Eigen::Vector3d beyond_edge(1.03, 1.04, 0.5);  // 0.05 m from the edge
+  EXPECT_FALSE(cube.contains(beyond_edge, 0.049));
+  EXPECT_TRUE(cube.contains(beyond_edge, 0.051));
+}
+
+TEST(MeshSolid, LShapeLeavesItsNotchOutside) {
+  const MeshSolid l_shape(lShape());
+  EXPECT_TRUE(l_shape.contains(Eigen::Vector3d(0.5, 0.5, 0.5)));
+  EXPECT_TRUE(l_shape.contains(Eigen::Vector3d(1.5, 0.5, 0.5)));
+  EXPECT_TRUE(l_shape.contains(Eigen::Vector3d(0.5, 1.5, 0.5)));
+  EXPECT_TRUE(l_shape.contains(Eigen::Vector3d(0.99, 0.99, 0.5)));  // at the inner corner
+  const Eigen::Vector3d notch(1.5, 1.5, 0.5);  // inside the bounding box, outside the L
+  EXPECT_NEAR(l_shape.windingNumber(notch), 0.0, 1e-12);
+  EXPECT_FALSE(l_shape.contains(notch));
+  EXPECT_FALSE(l_shape.contains(Eigen::Vector3d(1.01, 1.01, 0.5)));
+  EXPECT_NEAR(l_shape.distanceToSurface(notch), 0.5, 1e-12);
+  EXPECT_FALSE(l_shape.contains(notch, 0.49));
+  EXPECT_TRUE(l_shape.contains(notch, 0.51));
+}
+
+TEST(MeshSolid, TurnsTrianglesOutwardsWhateverWayTheFileWindsThem) {
+  TriangleMesh inward = unitCube();
+  for (std::size_t t = 0; t < inward.indices.size(); t += 3) std::swap(inward.indices[t + 1], inward.indices[t + 2]);
+  TriangleMesh mixed = unitCube();
+  for (std::size_t t = 0; t < mixed.indices.size(); t += 6) std::swap(mixed.indices[t + 1], mixed.indices[t + 2]);
+  for (const TriangleMesh& mesh : {inward, mixed}) {
+    const MeshSolid cube(mesh);
+    EXPECT_NEAR(cube.windingNumber(Eigen::Vector3d(0.5, 0.5, 0.5)), 1.0, 1e-12);
+    EXPECT_NEAR(cube.windingNumber(Eigen::Vector3d(0.2, 0.9, 0.3)), 1.0, 1e-12);
+    EXPECT_NEAR(cube.windingNumber(Eigen::Vector3d(1.5, 0.5, 0.5)), 0.0, 1e-12);
+  }
+}
+
+TEST(MeshSolid, WeldsCornersThatTheLoaderKeptApartPerFace) {
+  // One vertex per triangle corner, as the loader leaves a box with flat faces; the second
+  // face winds the other way, so only welding lets the triangles agree.
+  const TriangleMesh shared = unitCube();
+  TriangleMesh split;
+  for (std::size_t t = 0; t < shared.indices.size(); ++t) {
+    split.vertices.push_back(shared.vertices[shared.indices[t]]);
+    split.indices.push_back(static_cast<std::uint32_t>(t));
+  }
+  split.normals.assign(split.vertices.size(), Eigen::Vector3f::UnitZ());
+  std::swap(split.indices[4], split.indices[5]);
+  const MeshSolid cube(split);
+  EXPECT_EQ(cube.triangleCount(), 12U);
+  EXPECT_NEAR(cube.windingNumber(Eigen::Vector3d(0.5, 0.5, 0.5)), 1.0, 1e-12);
+}
+
+TEST(MeshSolid, ScalesEachAxisBeforeTesting) {
+  const MeshSolid box(unitCube(), Eigen::Vector3d(2.0, 0.5, 3.0));
+  EXPECT_TRUE(box.contains(Eigen::Vector3d(1.9, 0.45, 2.9)));
+  EXPECT_FALSE(box.contains(Eigen::Vector3d(1.9, 0.55, 1.0)));
+  EXPECT_FALSE(box.contains(Eigen::Vector3d(2.1, 0.25, 1.0)));
+  EXPECT_NEAR(box.distanceToSurface(Eigen::Vector3d(1.0, 0.25, 4.0)), 1.0, 1e-12);
+  EXPECT_TRUE(box.bounds().isApprox(Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d(2.0, 0.5, 3.0))));
+}
+
+TEST(MeshSolid, OpenBoxHoldsWhatItMostlySurroundsAndASheetHoldsNothing) {
+  // The cube without its top (the two triangles facing +z): at the centre five of six faces
+  // surround the point, each a sixth of the full solid angle.
+  TriangleMesh open = unitCube();
+  for (std::size_t t = 0; t < open.indices.size(); t += 3) {
+    const bool top = open.vertices[open.indices[t]].z() == 1.0F && open.vertices[open.indices[t + 1]].z() == 1.0F &&
+                     open.vertices[open.indices[t + 2]].z() == 1.0F;
+    if (top) {
+      open.indices.erase(open.indices.begin() + static_cast<std::ptrdiff_t>(t), open.indices.begin() + static_cast<std::ptrdiff_t>(t + 3));
+      t -= 3;
+    }
+  }
+  ASSERT_EQ(open.triangleCount(), 10U);
+  const MeshSolid box(open);
+  EXPECT_NEAR(box.windingNumber(Eigen::Vector3d(0.5, 0.5, 0.5)), 5.0 / 6.0, 1e-12);
+  EXPECT_TRUE(box.contains(Eigen::Vector3d(0.5, 0.5, 0.5)));
+  EXPECT_TRUE(box.contains(Eigen::Vector3d(0.5, 0.5, 0.1)));
+  // The opening reads about as if it were closed: just below it the walls still surround more
+  // than half the view, just above it less.
+  EXPECT_TRUE(box.contains(Eigen::Vector3d(0.5, 0.5, 0.99)));
+  EXPECT_FALSE(box.contains(Eigen::Vector3d(0.5, 0.5, 1.01)));
+  EXPECT_FALSE(box.contains(Eigen::Vector3d(0.5, 0.5, 1.5)));
+  TriangleMesh sheet;
+  sheet.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  sheet.normals.assign(4, Eigen::Vector3f::UnitZ());
+  sheet.indices = {0, 1, 2, 0, 2, 3};
+  const MeshSolid plate(sheet);
+  EXPECT_FALSE(plate.contains(Eigen::Vector3d(0.5, 0.5, 0.01)));
+  EXPECT_FALSE(plate.contains(Eigen::Vector3d(0.5, 0.5, -0.01)));
+  EXPECT_TRUE(plate.contains(Eigen::Vector3d(0.5, 0.5, 0.0)));
+  EXPECT_TRUE(plate.contains(Eigen::Vector3d(0.5, 0.5, 0.01), 0.02));
+}
+
+TEST(MeshSolid, IsBuiltOncePerFileAndScale) {
+  const fs::path file = fs::temp_directory_path() / ("flexirob_mesh_solid_test_" + std::to_string(::getpid()) + ".obj");
+  {
+    std::ofstream out(file);
+    const TriangleMesh cube = unitCube();
+    for (const auto& v : cube.vertices) out << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+    for (std::size_t t = 0; t < cube.indices.size(); t += 3) {
+      out << "f " << cube.indices[t] + 1 << ' ' << cube.indices[t + 1] + 1 << ' ' << cube.indices[t + 2] + 1 << '\n';
+    }
+  }
+  const auto once = loadMeshSolidCached(file, Eigen::Vector3d::Ones());
+  EXPECT_EQ(loadMeshSolidCached(file, Eigen::Vector3d::Ones()), once);
+  const auto doubled = loadMeshSolidCached(file, Eigen::Vector3d::Constant(2.0));
+  EXPECT_NE(doubled, once);
+  EXPECT_TRUE(doubled->contains(Eigen::Vector3d(1.5, 1.5, 1.5)));
+  EXPECT_FALSE(once->contains(Eigen::Vector3d(1.5, 1.5, 1.5)));
+  fs::remove(file);
+}
+
+}  // namespace
+}  // namespace flexirob::robot
