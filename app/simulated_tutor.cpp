@@ -894,7 +894,7 @@ TutorReport SimulatedTutor::configure(int area_count) {
   world_->update(state_.q);
   if (!world_->contacts().empty()) {
     const robot::Contact& contact = world_->contacts().front();
-    throw InputError("tutor: the start posture (the scene's home_posture) puts " +
+    throw InputError("tutor: the start posture (the scene's home_posture, else the freest posture found around the middle of the joint limits) puts " +
                      world_->bodyName(contact.body) + " into " + world_->otherName(contact) +
                      "; give the scene a collision-free home_posture");
   }

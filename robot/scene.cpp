@@ -793,7 +793,9 @@ bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, doub
       return p_O.norm() <= obstacle.size.x() + margin;
     case Obstacle::Shape::kMesh: {
       const std::shared_ptr<const MeshSolid> solid =
-          obstacle.mesh_solid ? obstacle.mesh_solid : loadMeshSolidCached(obstacle.mesh_file, obstacle.mesh_scale);
+          obstacle.mesh_solid && obstacle.mesh_solid->scale() == obstacle.mesh_scale
+              ? obstacle.mesh_solid
+              : loadMeshSolidCached(obstacle.mesh_file, obstacle.mesh_scale);
       return solid->contains(p_O, margin);
     }
   }

@@ -63,6 +63,17 @@ std::string readText(const std::filesystem::path& file) {
 
 Eigen::Vector4f collisionColour() { return {0.90F, 0.10F, 0.10F, 1.0F}; }
 
+// The posture shown before the live robot reports: where teaching starts, or the middle of the
+// limits where no collision world can be built for the robot and scene (starting the live robot
+// then reports why, in the GUI).
+Eigen::VectorXd shownHomePosture(const robot::RobotModel& model, const robot::Scene& scene) {
+  try {
+    return app::homePosture(model, scene);
+  } catch (const std::exception&) {
+    return model.midPosture();
+  }
+}
+
 }  // namespace
 
 MainWindow::MainWindow(const std::string& robot, const std::string& scene, QWidget* parent)
@@ -362,7 +373,7 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
   }
   coloured_links_.clear();
   // Start posture: the scene's, if it was made for a robot with this many joints, else a free one.
-  const Eigen::VectorXd q = app::homePosture(*model_, scene_);
+  const Eigen::VectorXd q = shownHomePosture(*model_, scene_);
   joint_panel_->setRobot(*model_, q);
   joint_panel_->setReadOnly(true);  // the panel mirrors the live arm; the backend owns the posture
   kinematics_->update(q);
@@ -409,7 +420,7 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
     return false;
   }
   if (model_) {
-    const Eigen::VectorXd home = app::homePosture(*model_, scene_);
+    const Eigen::VectorXd home = shownHomePosture(*model_, scene_);
     joint_panel_->setPosture(home);
     kinematics_->update(home);
     world_.robot()->setPosture(*kinematics_);

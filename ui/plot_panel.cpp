@@ -101,8 +101,9 @@ void TimePlot::autoscale() {
   }
   if (!(upper >= lower)) return;
   const double margin = std::max(0.05 * (upper - lower), 1e-9 + 1e-3 * std::abs(upper));
-  // A quantity that cannot be negative (an error norm, a compute time) gets no negative axis.
-  value_axis_->setRange(lower >= 0.0 ? std::max(0.0, lower - margin) : lower - margin, upper + margin);
+  // A quantity that cannot be negative (an error norm, a compute time) is read against zero:
+  // its axis starts there, never below, and not above either where all its values are large.
+  value_axis_->setRange(lower >= 0.0 ? 0.0 : lower - margin, upper + margin);
   updateCursorLine();
 }
 

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "app/cli/cli_support.hpp"
+#include "app/evaluation.hpp"
 #include "robot/errors.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
@@ -50,8 +51,8 @@ Json runReach(const ReachOptions& options) {
   if (!options.from.empty()) {
     request.start = parseNumberList(options.from, "--from", model.dof());
     model.checkWithinLimits(request.start, "--from");
-  } else if (scene && scene->home_posture) {
-    request.start = *scene->home_posture;
+  } else if (scene) {
+    request.start = app::homePosture(model, *scene);
   }
   if (!options.posture.empty()) {
     request.posture = parseNumberList(options.posture, "--posture", model.dof());

@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "app/cli/cli_support.hpp"
+#include "app/evaluation.hpp"
 #include "app/session_reader.hpp"
 #include "app/session_teaching.hpp"
 #include "learning/confidence.hpp"
@@ -241,12 +242,12 @@ Json renderPicture(const RenderOptions& options) {
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), tip);
   robot::checkPosturesFit(scene, model, robot_name);
 
-  // Posture: --q, else the scene's home posture, else the middle of the software limits.
-  Eigen::VectorXd q = model.midPosture();
+  // Posture: --q, else where teaching starts (the scene's home posture, else a free one).
+  Eigen::VectorXd q;
   if (!options.q.empty()) {
     q = parseNumberList(options.q, "--q", model.dof());
-  } else if (scene.home_posture) {
-    q = *scene.home_posture;
+  } else {
+    q = app::homePosture(model, scene);
   }
   model.checkPosture(q);
   const Json beyond_limits = options.q.empty() ? Json::array() : warnBeyondLimits(model, q);
@@ -489,12 +490,12 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
   command->add_option("--tip", options->tip, "tip link (default: the last link of the longest serial chain)");
   command->add_option("--scene", options->scene, "built-in scene name or a scene file (default: the session's, else empty)");
   command->add_option("--out", options->out, "PNG file to write")->required();
-  command->add_option("--q", options->q, "joint values q1,...,qN [rad] (default: the scene's home posture, else mid-range)");
+  command->add_option("--q", options->q, "joint values q1,...,qN [rad] (default: the scene's home posture, else the free posture nearest mid-range)");
   command->add_option("--width", options->width, "image width [px]")->capture_default_str()->check(finiteRange(1, 8192));
   command->add_option("--height", options->height, "image height [px]")->capture_default_str()->check(finiteRange(1, 8192));
   command->add_option("--camera", options->camera,
                       "eye and look-at point in the world frame [m], optionally the vertical field of view "
-                      "[deg]: ex,ey,ez,cx,cy,cz[,fovy] (default: --view front-left)");
+                      "[deg]: ex,ey,ez,cx,cy,cz[,fovy] (default: the first side of --view's order from which obstacles do not hide the arm)");
   command->add_option("--view", options->view,
                       "front-left, front-left-low, front-right, front, back, back-left, back-right, left, right or top: frames "
                       "robot, scene and overlays from that side (default: front-left, or another side where obstacles hide the arm)");

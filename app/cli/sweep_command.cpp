@@ -228,7 +228,7 @@ Json table71(std::ostream& md) {
     const planning::ItmStatistics stats = taught.itm->statistics();
     const bool bootstrapped = stats.bootstrapped_nodes > 0;
     md << "| " << delta << " | " << stats.nodes << " | " << stats.edges << " | " << stats.max_valence << " | "
-       << fixed(stats.mean_valence, 2) << " | " << (bootstrapped ? fixed(stats.bootstrap_error_max, 3) : "n.a.") << " | "
+       << fixed(stats.mean_valence, 2) << " | " << (bootstrapped ? fixed(stats.bootstrap_error_max, 4) : "n.a.") << " | "
        << (bootstrapped ? fixed(stats.bootstrap_error_mean, 4) : "n.a.") << " |\n";
     out.push_back({{"delta", delta}, {"nodes", stats.nodes}, {"edges", stats.edges}, {"max_valence", stats.max_valence},
                    {"mean_valence", stats.mean_valence}, {"bootstrapped_nodes", stats.bootstrapped_nodes},

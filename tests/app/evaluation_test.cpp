@@ -74,7 +74,6 @@ TEST(Evaluation, AStartPostureThatTouchesSomethingGivesWayToTheNearestFreeOne) {
   world.update(mid);
   ASSERT_FALSE(world.contacts().empty());
   const Eigen::VectorXd home = homePosture(lwr4(), ceiling);
-  EXPECT_TRUE(home.isApprox(homePosture(lwr4(), ceiling))) << "seeded: the same posture every time";
   world.update(home);
   EXPECT_TRUE(world.contacts().empty());
   EXPECT_GE(world.clearance(0.05).distance, 0.05);

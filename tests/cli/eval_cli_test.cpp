@@ -29,13 +29,16 @@ using testing::writeText;
 // A session as `teach --out F.json` writes it, made by hand: in each area the postures are
 // q_fixed plus small joint offsets and the task positions their forward kinematics, so the
 // training data are exact; the ITM graph is a chain through some samples.
+// Two of setup_I's suggested areas (I1 in front, I2 front-right): collision-free postures.
+std::vector<Eigen::VectorXd> tinySessionPostures() {
+  return {(Eigen::VectorXd(7) << 0.1177, 0.6076, 0.0937, -1.7010, 0.0132, 0.9237, 0.0).finished(),
+          (Eigen::VectorXd(7) << 0.4676, 0.5650, 0.3476, -1.3731, 0.0518, 0.8482, 0.0).finished()};
+}
+
 std::filesystem::path tinySession(const std::string& scene_name, const std::string& name) {
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
   const robot::Scene scene = robot::loadScene(scene_name);
-  // Two of setup_I's suggested areas (I1 in front, I2 front-right): collision-free postures.
-  const std::vector<Eigen::VectorXd> postures = {
-      (Eigen::VectorXd(7) << 0.1177, 0.6076, 0.0937, -1.7010, 0.0132, 0.9237, 0.0).finished(),
-      (Eigen::VectorXd(7) << 0.4676, 0.5650, 0.3476, -1.3731, 0.0518, 0.8482, 0.0).finished()};
+  const std::vector<Eigen::VectorXd> postures = tinySessionPostures();
   robot::Kinematics kinematics(model);
   nlohmann::json areas = nlohmann::json::array();
   nlohmann::json nodes = nlohmann::json::array();
@@ -129,8 +132,7 @@ TEST(EvalReachableCli, AGridWithNoTargetFailsSayingWhereItsPointsWent) {
 TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   // One target where the first area's posture puts the tip, one far beyond the arm's reach.
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
-  const Eigen::Vector3d taught =
-      robot::tipPose(model, (Eigen::VectorXd(7) << 0.1177, 0.6076, 0.0937, -1.7010, 0.0132, 0.9237, 0.0).finished()).translation();
+  const Eigen::Vector3d taught = robot::tipPose(model, tinySessionPostures().front()).translation();
   const auto scene = scratchDir() / "single_targets.yaml";
   std::ostringstream text;
   text << "name: single_targets\ntargets: [[" << taught.x() << ", " << taught.y() << ", " << taught.z() << "], [-3.0, 0.0, 0.3]]\n";
