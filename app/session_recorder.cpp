@@ -471,8 +471,11 @@ void SessionRecorder::close() {
     } catch (const SqliteError&) {
       // The file is full or gone: its content up to the last commit stays valid.
     }
-    // Fold the WAL into the database so the file stands alone.
+    // Fold the WAL into the database so the file stands alone, and leave WAL mode: readers of
+    // a WAL file create -wal and -shm files beside it (and, read-only, leave them behind).
+    // A reader still attached keeps the mode; the file is complete either way.
     sqlite3_wal_checkpoint_v2(impl_->db.handle(), nullptr, SQLITE_CHECKPOINT_TRUNCATE, nullptr, nullptr);
+    sqlite3_exec(impl_->db.handle(), "PRAGMA journal_mode=DELETE", nullptr, nullptr, nullptr);
   }
   std::lock_guard lock(impl_->mutex);
   if (impl_->status.health == RecorderHealth::Recording) impl_->status.health = RecorderHealth::Closed;

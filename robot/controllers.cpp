@@ -53,12 +53,7 @@ CommandLimiter::CommandLimiter(const RobotModel& model, const ParameterSet& para
       upper_(model.softUpperLimits()),
       v_max_(model.velocityLimits() * parameters.get("limits.velocity_scale")),
       q_(model.midPosture()),
-      qd_(Eigen::VectorXd::Zero(model.dof())) {
-  // A URDF without velocity limits (0) would freeze the arm; such joints get 1 rad/s.
-  for (Eigen::Index i = 0; i < v_max_.size(); ++i) {
-    if (!(v_max_[i] > 0.0)) v_max_[i] = parameters.get("limits.velocity_scale");
-  }
-}
+      qd_(Eigen::VectorXd::Zero(model.dof())) {}
 
 void CommandLimiter::reset(const Eigen::VectorXd& q) {
   qd_.setZero();
@@ -188,9 +183,7 @@ HierarchicalController::HierarchicalController(const RobotModel& model, const Pa
       qd_task_(model.dof()),
       qd_null_(model.dof()) {
   const double scale = parameters.has("limits.velocity_scale") ? parameters.get("limits.velocity_scale") : 1.0;
-  for (Eigen::Index i = 0; i < v_max_.size(); ++i) {
-    v_max_[i] = v_max_[i] > 0.0 ? v_max_[i] * scale : scale;
-  }
+  v_max_ *= scale;
 }
 
 HierarchicalController::Status HierarchicalController::velocity(const Eigen::VectorXd& q, const Eigen::Vector3d& p_des,

@@ -507,6 +507,8 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
     if (!std::isfinite(limits.velocity) || limits.velocity < 0 || !std::isfinite(limits.effort) || limits.effort < 0) {
       throw InputError("joint '" + joint.name + "': expected finite, non-negative velocity and effort limits");
     }
+    limits.velocity_from_urdf = limits.velocity > 0.0;
+    if (!limits.velocity_from_urdf) limits.velocity = kUnspecifiedVelocityLimit;
     if (joint.dynamics) {
       model_joint.damping = joint.dynamics->damping;
       model_joint.friction = joint.dynamics->friction;

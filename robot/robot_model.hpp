@@ -16,12 +16,17 @@ enum class JointType { kRevolute, kContinuous, kPrismatic };
 
 const char* toString(JointType type);
 
+/// The velocity limit of a joint whose URDF gives none or 0 (a common placeholder): the
+/// joint would otherwise never move, and the controllers and the FRI checks need one figure.
+inline constexpr double kUnspecifiedVelocityLimit = 1.0;  // [rad/s or m/s]
+
 struct JointLimits {
   double lower = 0.0;       ///< hardware position limit [rad or m]; -inf for continuous joints
   double upper = 0.0;       ///< hardware position limit [rad or m]; +inf for continuous joints
   double soft_lower = 0.0;  ///< software limit (URDF <safety_controller>), else = lower
   double soft_upper = 0.0;  ///< software limit (URDF <safety_controller>), else = upper
-  double velocity = 0.0;    ///< [rad/s or m/s]
+  double velocity = 0.0;    ///< [rad/s or m/s]; kUnspecifiedVelocityLimit where the URDF gives 0 or none
+  bool velocity_from_urdf = false;  ///< false: the URDF gave no positive velocity limit
   double effort = 0.0;      ///< [Nm or N]
 };
 

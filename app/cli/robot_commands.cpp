@@ -38,6 +38,7 @@ Json robotInfo(const robot::RobotModel& model) {
                       {"soft_lower", limitValue(joint.limits.soft_lower)},
                       {"soft_upper", limitValue(joint.limits.soft_upper)},
                       {"velocity", joint.limits.velocity},
+                      {"velocity_from_urdf", joint.limits.velocity_from_urdf},
                       {"effort", joint.limits.effort}});
   }
   Json links = Json::array();

@@ -303,6 +303,18 @@ TEST_F(SessionTest, QueriesStatesByTimeRange) {
   EXPECT_DOUBLE_EQ(reader.stateAt(-5.0)->time, 0.0);
 }
 
+TEST_F(SessionTest, AClosedSessionIsOneFileThatReadingLeavesAlone) {
+  const auto file = path("alone.flexirob");
+  writeStates(file, 200);
+  {
+    SessionReader reader(file);
+    EXPECT_EQ(reader.states(0.0, 1.0).size(), 200u);
+  }
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir_)) names.push_back(entry.path().filename().string());
+  EXPECT_EQ(names, std::vector<std::string>{"alone.flexirob"}) << "no -wal or -shm files beside a finished session";
+}
+
 TEST_F(SessionTest, RefusesToOverwriteAnExistingFile) {
   const auto file = path("exists.flexirob");
   std::ofstream(file) << "keep me";

@@ -152,6 +152,18 @@ TEST(RobotModel, GivesAnUnboundedJointOneTurnToDrawPosturesFrom) {
   EXPECT_DOUBLE_EQ(model.midPosture()[1], 0.0) << "the default posture of an unbounded joint";
 }
 
+TEST(RobotModel, AJointWithoutAVelocityLimitGetsTheDocumentedOneInsteadOfStandingStill) {
+  TempDir dir;
+  std::string urdf = twoJointArm();
+  const std::string given = R"(velocity="3")";
+  urdf.replace(urdf.find(given), given.size(), R"(velocity="0")");
+  const auto model = RobotModel::fromUrdfFile(dir.write("zero.urdf", urdf));
+  EXPECT_TRUE(model.joints()[0].limits.velocity_from_urdf);
+  EXPECT_DOUBLE_EQ(model.velocityLimits()[0], 2.0);
+  EXPECT_FALSE(model.joints()[1].limits.velocity_from_urdf);
+  EXPECT_DOUBLE_EQ(model.velocityLimits()[1], kUnspecifiedVelocityLimit);
+}
+
 TEST(RobotModel, AcceptsAnExplicitTipInsideTheChain) {
   TempDir dir;
   const auto model = RobotModel::fromUrdfFile(dir.write("two.urdf", twoJointArm()), "l1");
