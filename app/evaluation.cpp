@@ -135,17 +135,32 @@ Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& 
   return freest;
 }
 
-std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& model) {
+ArmReach armReach(const robot::RobotModel& model) {
   const Eigen::VectorXd q = Eigen::VectorXd::Zero(model.dof())
                                 .cwiseMax(model.softLowerLimits())
                                 .cwiseMin(model.softUpperLimits());
   robot::Kinematics kinematics(model);
   kinematics.update(q);
-  const Eigen::Vector3d shoulder = kinematics.X_WB(std::min(2, model.dof())).translation();
-  double reach = 0.0;
-  for (int b = 2; b <= model.dof(); ++b) reach = std::max(reach, (kinematics.X_WB(b).translation() - shoulder).norm());
-  reach = std::max(reach, (kinematics.p_WT() - shoulder).norm());
-  return {shoulder, reach};
+  ArmReach result;
+  result.shoulder = kinematics.X_WB(std::min(2, model.dof())).translation();
+  for (int b = 2; b <= model.dof(); ++b) {
+    result.reach = std::max(result.reach, result.fromShoulder(kinematics.X_WB(b).translation()));
+  }
+  result.reach = std::max(result.reach, result.fromShoulder(kinematics.p_WT()));
+  if (model.dof() >= 1) {
+    // A joint turns its body about its own axis, so the axis reads the same in the body frame.
+    const Eigen::Isometry3d& X_WB1 = kinematics.X_WB(1);
+    result.base_point = X_WB1.translation();
+    result.base_axis = (X_WB1.linear() * model.joints()[0].axis_J).normalized();
+  }
+  result.base_radius = std::min(0.2, 0.25 * result.reach);
+  return result;
+}
+
+bool ArmReach::roomFor(const Eigen::Vector3d& p_W, double margin) const {
+  const Eigen::Vector3d offset = p_W - base_point;
+  const double off_axis = (offset - offset.dot(base_axis) * base_axis).norm();
+  return fromShoulder(p_W) <= reach - margin && off_axis >= base_radius;
 }
 
 namespace {
@@ -221,7 +236,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
                                   ApproachFrom approach) {
   model.checkPosture(q_start);
   robot::CollisionWorld world(model, scene);
-  const auto [shoulder, reach] = shoulderAndReach(model);
+  const ArmReach arm_reach = armReach(model);
   const std::vector<Eigen::Vector3d> points = grid.points();
   // Grid cells holding a training sample (explored space, Tab. 3.3).
   std::set<std::tuple<long, long, long>> explored_cells;
@@ -234,7 +249,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   std::vector<Eigen::Vector3d> targets;
   learning::UniformRandom random(7);  // the IK seeds of the accessibility test: fixed, T must not vary
   for (const auto& p : points) {
-    if ((p - shoulder).norm() > reach - grid.tolerance) {
+    if (arm_reach.fromShoulder(p) > arm_reach.reach - grid.tolerance) {
       ++result.out_of_reach;
       continue;
     }
@@ -331,7 +346,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
 SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot::Scene& scene,
                                     const robot::EvaluationGrid& grid, const std::vector<Eigen::VectorXd>& postures,
                                     double distance) {
-  const auto [shoulder, reach] = shoulderAndReach(model);
+  const ArmReach arm_reach = armReach(model);
   robot::Kinematics kinematics(model);
   std::vector<Eigen::Vector3d> maneuvering;  // M
   for (const auto& q : postures) {
@@ -347,7 +362,7 @@ SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot:
   for (const auto& p : maneuvering) buckets[key(p)].push_back(p);
   SceneModelResult result;
   for (const auto& x : grid.points()) {
-    if ((x - shoulder).norm() > reach - grid.tolerance) continue;
+    if (arm_reach.fromShoulder(x) > arm_reach.reach - grid.tolerance) continue;
     ++result.workspace_points;
     bool near = false;
     const auto [i, j, k] = key(x);
@@ -418,10 +433,9 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     learning::UniformRandom random(seed);
     // Points a trajectory may pass: within the arm's reach, off its base and the table, 5 cm
     // clear of every obstacle; a box around two areas can hold the robot itself or a wall.
-    const auto& [shoulder, reach] = shoulderAndReach(model);
-    const auto passable = [&, shoulder = shoulder, reach = reach](const Eigen::Vector3d& p) {
-      return (p - shoulder).norm() <= reach - 0.05 && p.head<2>().norm() >= 0.2 && (!scene.table || p.z() >= 0.05) &&
-             robot::obstacleAt(scene, p, 0.05) == nullptr;
+    const ArmReach arm_reach = armReach(model);
+    const auto passable = [&](const Eigen::Vector3d& p) {
+      return arm_reach.roomFor(p, 0.05) && (!scene.table || p.z() >= 0.05) && robot::obstacleAt(scene, p, 0.05) == nullptr;
     };
     const auto segment_passable = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
       const int steps = std::max(1, static_cast<int>(std::ceil((b - a).norm() / 0.02)));

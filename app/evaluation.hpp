@@ -57,9 +57,24 @@ MotionOutcome approachTarget(const robot::RobotModel& model, const robot::Parame
 /// evaluations start [rad].
 Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& scene);
 
-/// The arm's shoulder (joint 2's axis point in the stretched posture) and its reach from there:
-/// the largest distance of a body origin or the tip from the shoulder [m].
-std::pair<Eigen::Vector3d, double> shoulderAndReach(const robot::RobotModel& model);
+/// Where the tip can usefully be asked to go: within reach of the shoulder and off the column
+/// around the first joint's axis, which the arm cannot put its own tip into. Used wherever a
+/// place is chosen for the arm (an area, a drawn trajectory) and to bound the grid targets.
+struct ArmReach {
+  Eigen::Vector3d shoulder = Eigen::Vector3d::Zero();  ///< joint 2's origin, stretched posture [m, W]
+  double reach = 0.0;  ///< the largest distance of a body origin or the tip from the shoulder [m]
+  Eigen::Vector3d base_point = Eigen::Vector3d::Zero();  ///< a point of the first joint's axis [m, W]
+  Eigen::Vector3d base_axis = Eigen::Vector3d::UnitZ();  ///< its direction (unit) [W]
+  /// The column's radius: 0.2 m (the LWR IV's base and first links), a quarter of the reach on
+  /// smaller arms [m].
+  double base_radius = 0.2;
+
+  double fromShoulder(const Eigen::Vector3d& p_W) const { return (p_W - shoulder).norm(); }
+  /// Within reach - margin of the shoulder and outside the base column.
+  bool roomFor(const Eigen::Vector3d& p_W, double margin) const;
+};
+
+ArmReach armReach(const robot::RobotModel& model);
 
 /// Drives the command from q_start towards p_des(t) (t in [0, duration], held after) for up to
 /// duration + settle seconds at 1 kHz, feeding the path's velocity forward (Eq. 2.6); ends early

@@ -30,6 +30,7 @@ TaughtSystem teachInSimulation(const robot::RobotModel& model, const robot::Scen
   Workflow workflow(sim, parameters, workflow_options);
   TutorOptions tutor_options = spec.tutor;
   tutor_options.seed = spec.seed;
+  tutor_options.home = taught.home;
   SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
   const auto start = std::chrono::steady_clock::now();
   taught.tutor = tutor.configure(spec.areas);

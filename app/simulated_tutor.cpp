@@ -70,9 +70,10 @@ SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const
       options_(std::move(options)),
       world_(std::make_unique<robot::CollisionWorld>(sim.model(), scene)),
       kinematics_(sim.model()),
-      shoulder_and_reach_(shoulderAndReach(sim.model())),
-      home_(homePosture(sim.model(), scene)),
+      arm_reach_(armReach(sim.model())),
+      home_(options_.home ? *options_.home : homePosture(sim.model(), scene)),
       random_(options_.seed) {
+  if (home_.size() != model_->dof()) throw InputError("tutor: the home posture has the wrong number of joints");
   if (!(options_.circle_diameter > 0.0) || options_.circle_diameter > 0.5) {
     throw InputError("tutor: circle diameter must be in (0, 0.5] m");
   }
@@ -640,10 +641,10 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     area.failure = "the area's centre lies inside " + obstacle->name;
     return false;
   }
-  const auto& [shoulder, reach] = shoulder_and_reach_;
-  if ((area.target - shoulder).norm() > reach) {
+  const double reach = arm_reach_.reach;
+  if (arm_reach_.fromShoulder(area.target) > reach) {
     std::ostringstream failure;
-    failure << std::fixed << std::setprecision(2) << "out of the arm's reach (" << (area.target - shoulder).norm()
+    failure << std::fixed << std::setprecision(2) << "out of the arm's reach (" << arm_reach_.fromShoulder(area.target)
             << " m from the shoulder, reach " << reach << " m)";
     area.failure = failure.str();
     return false;
@@ -803,14 +804,13 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
 
 void SimulatedTutor::drawCheckPoints() {
   const robot::EvaluationGrid grid = scene_->grid.value_or(robot::EvaluationGrid{});
-  const auto& [shoulder, reach] = shoulder_and_reach_;
   learning::UniformRandom draw(options_.seed + 0x5eed);
   const Eigen::VectorXd& q_start = home_;
   check_points_.clear();
   for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < 100 * options_.check_points; ++k) {
     Eigen::Vector3d x;
     for (int a = 0; a < 3; ++a) x[a] = draw.uniform(grid.lower[a], grid.upper[a]);
-    if ((x - shoulder).norm() > reach || grid.excludes(x)) continue;
+    if (arm_reach_.fromShoulder(x) > arm_reach_.reach || grid.excludes(x)) continue;
     // Only where some posture reaches without a contact (a person sees the arm cannot get there).
     if (robot::obstacleAt(*scene_, x, 0.05) == nullptr && accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw)) {
       check_points_.push_back(x);
@@ -883,8 +883,7 @@ bool SimulatedTutor::roomyForAnArea(const Eigen::Vector3d& p_W) const {
   // arm cannot get to).
   if (robot::obstacleAt(*scene_, p_W, 0.1) != nullptr) return false;
   if (scene_->grid && scene_->grid->excludes(p_W)) return false;
-  const auto& [shoulder, reach] = shoulder_and_reach_;
-  return p_W.z() >= 0.08 && p_W.head<2>().norm() >= 0.2 && (p_W - shoulder).norm() <= reach - 0.05;
+  return p_W.z() >= 0.08 && arm_reach_.roomFor(p_W, 0.05);
 }
 
 TutorReport SimulatedTutor::configure(int area_count) {

@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "app/evaluation.hpp"
 #include "app/workflow.hpp"
 #include "learning/learner.hpp"
 #include "robot/collision.hpp"
@@ -56,6 +57,9 @@ struct TutorOptions {
   std::mutex* arm_mutex = nullptr;
   /// Progress callback (what, fraction in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
+  /// Where the map's checks start (homePosture of the scene); computed when empty. A caller
+  /// that has it already passes it in, as the search behind it is not free.
+  std::optional<Eigen::VectorXd> home;
 };
 
 /// What the tutor did in one area.
@@ -225,8 +229,7 @@ class SimulatedTutor {
   TutorOptions options_;
   std::unique_ptr<robot::CollisionWorld> world_;
   robot::Kinematics kinematics_;
-  /// The arm's shoulder [m, W] and reach [m] (shoulderAndReach), for where areas can lie.
-  std::pair<Eigen::Vector3d, double> shoulder_and_reach_;
+  ArmReach arm_reach_;  ///< where areas can lie
   Eigen::VectorXd home_;  ///< homePosture: where evaluations of the map start
   learning::UniformRandom random_;
   robot::RobotState state_;

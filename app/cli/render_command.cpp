@@ -428,6 +428,8 @@ Json renderPicture(const RenderOptions& options) {
   std::vector<std::string> see_through;
   if (!options.camera.empty()) {
     camera = render::parseCamera(options.camera);
+    // A camera the user places is kept as it is; how much of the arm it sees is still reported.
+    hidden_fraction = world.hiddenFraction(camera);
   } else {
     // Without a view the picture is taken from the front-left, as the GUI's home view, unless
     // obstacles hide the arm from there (a ceiling, a wall in front): then from the first side of

@@ -122,6 +122,7 @@ Json runTeach(const TeachOptions& options) {
 
   app::TutorOptions tutor_options;
   tutor_options.seed = options.seed;
+  tutor_options.home = home;
   tutor_options.realtime = options.realtime;
   tutor_options.circle_diameter = options.diameter;
   tutor_options.posture_candidates = options.candidates;

@@ -88,6 +88,48 @@ TEST(Evaluation, AStartPostureThatTouchesSomethingGivesWayToTheNearestFreeOne) {
   EXPECT_LT((home - mid).norm(), 1.5);
 }
 
+TEST(Evaluation, TheArmsRoomIsWithinReachAndOffTheColumnAroundItsFirstAxis) {
+  // LWR IV: the column stands on the origin; the shoulder is body 2's origin.
+  const ArmReach lwr = armReach(lwr4());
+  EXPECT_NEAR(std::abs(lwr.base_axis.z()), 1.0, 1e-12);
+  EXPECT_NEAR(lwr.base_point.head<2>().norm(), 0.0, 1e-12);
+  robot::Kinematics kinematics(lwr4());
+  kinematics.update(Eigen::VectorXd::Zero(7));
+  EXPECT_TRUE(lwr.shoulder.isApprox(kinematics.X_WB(2).translation()));
+  EXPECT_NEAR(lwr.reach, (kinematics.p_WT() - lwr.shoulder).norm(), 1e-12) << "stretched upright, the tip is farthest";
+  EXPECT_FALSE(lwr.roomFor(Eigen::Vector3d(0.1, 0.05, 0.5), 0.05)) << "inside the column";
+  EXPECT_TRUE(lwr.roomFor(Eigen::Vector3d(-0.5, 0.1, 0.4), 0.05));
+  EXPECT_FALSE(lwr.roomFor(lwr.shoulder + Eigen::Vector3d(0.0, lwr.reach - 0.04, 0.0), 0.05)) << "beyond reach - margin";
+
+  // An arm lying on its side 0.5 m up: its column runs along world x, not z.
+  const std::string urdf = R"(<?xml version="1.0"?>
+<robot name="lying">
+  <link name="world"/>
+  <joint name="mount" type="fixed"><parent link="world"/><child link="base"/><origin xyz="0 0 0.5" rpy="0 1.5707963267948966 0"/></joint>
+  <link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" velocity="1" effort="1"/></joint>
+  <link name="l1"/>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="1" effort="1"/></joint>
+  <link name="l2"/>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0 0 0.5"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="1" effort="1"/></joint>
+  <link name="l3"/>
+  <joint name="tool" type="fixed"><parent link="l3"/><child link="tip"/><origin xyz="0 0 0.3"/></joint>
+  <link name="tip"/>
+</robot>
+)";
+  const auto lying_model = robot::RobotModel::fromUrdfString(urdf, ".");
+  const ArmReach lying = armReach(lying_model);
+  EXPECT_NEAR(std::abs(lying.base_axis.x()), 1.0, 1e-12);
+  EXPECT_TRUE(lying.shoulder.isApprox(Eigen::Vector3d(0.1, 0.0, 0.5), 1e-12));
+  EXPECT_NEAR(lying.reach, 0.8, 1e-12);
+  EXPECT_DOUBLE_EQ(lying.base_radius, 0.2);
+  EXPECT_FALSE(lying.roomFor(Eigen::Vector3d(0.3, 0.0, 0.55), 0.05)) << "5 cm off its axis, though 0.3 m off world z";
+  EXPECT_TRUE(lying.roomFor(Eigen::Vector3d(0.3, 0.0, 1.0), 0.05));
+}
+
 TEST(Evaluation, MotionReachesAFreeTargetWithoutCollision) {
   Parameters s;
   const auto map = constantMap();

@@ -450,6 +450,9 @@ TEST(RenderCommand, SeesTheArmPastAWallUnlessTheUserChoseTheCamera) {
   EXPECT_EQ(fixed.at("camera").at("view"), "camera");
   EXPECT_EQ(fixed.at("camera").at("eye"), nlohmann::json::array({-3.0, -2.0, 1.5}));
   EXPECT_TRUE(fixed.at("see_through_obstacles").empty());
+  EXPECT_GT(fixed.at("camera").at("robot_hidden_fraction").get<double>(), 0.5) << "the wall stands between";
+  const auto behind = with({"--camera", "3,2,1.5,0,0,0.4"});
+  EXPECT_LE(behind.at("camera").at("robot_hidden_fraction").get<double>(), render::kAcceptableHiddenFraction);
   std::filesystem::remove(scene);
   std::filesystem::remove(file);
 }
