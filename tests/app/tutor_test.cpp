@@ -343,7 +343,9 @@ TEST(SimulatedTutor, LeadsAnArmRestingInAnObstacleOutBeforeLeadingItOn) {
         ASSERT_LE(d, depth + 5e-4) << "deeper in after way point " << i;
       }
     }
-    if (!out) ASSERT_LT(deepest(way[i + 1]), depth + (depth == 0.0 ? 1e-12 : 0.0)) << "no step out at way point " << i;
+    if (!out) {
+      ASSERT_LT(deepest(way[i + 1]), depth + (depth == 0.0 ? 1e-12 : 0.0)) << "no step out at way point " << i;
+    }
     out = out || deepest(way[i + 1]) == 0.0;
   }
   EXPECT_TRUE(out);

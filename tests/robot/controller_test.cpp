@@ -436,7 +436,9 @@ double moveAfterAHeldBackPush(double anchor_rate) {
     rig.run(1);
     largest_move = std::max(largest_move, (rig.state.q - at_rest).cwiseAbs().maxCoeff());
   }
-  if (anchor_rate > 0.0) EXPECT_LT(rig.state.qd.norm(), 2e-3) << "held " << held_back << " rad from the assisted posture";
+  if (anchor_rate > 0.0) {
+    EXPECT_LT(rig.state.qd.norm(), 2e-3) << "held " << held_back << " rad from the assisted posture";
+  }
   return largest_move;
 }
 
