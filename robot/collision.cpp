@@ -9,6 +9,8 @@
 
 #include "robot/errors.hpp"
 #include "robot/mesh.hpp"
+#include "robot/mesh_solid.hpp"
+#include "robot/scene.hpp"
 
 namespace flexirob::robot {
 namespace {
@@ -147,18 +149,23 @@ struct CollisionWorld::Impl {
     return hull;
   }
 
-  // An obstacle mesh as it is (concave allowed), for a static object.
-  btCollisionShape* triangleMesh(const std::filesystem::path& file, const Eigen::Vector3d& scale) {
-    const TriangleMesh mesh = transformedMesh(*loadMeshCached(file), Eigen::Isometry3d::Identity(), scale);
-    if (mesh.empty()) return nullptr;
+  // An obstacle mesh (concave allowed), for a static object: the triangles of its solid, which
+  // the point tests use too (simplified there when the file holds very many).
+  btCollisionShape* triangleMesh(const MeshSolid& solid) {
+    if (solid.triangles().empty()) return nullptr;
     auto& vertices = mesh_vertices.emplace_back();
     auto& indices = mesh_indices.emplace_back();
-    vertices.reserve(mesh.vertices.size() * 3);
-    for (const Eigen::Vector3f& v : mesh.vertices) vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
-    indices.assign(mesh.indices.begin(), mesh.indices.end());
+    vertices.reserve(solid.triangles().size() * 9);
+    indices.reserve(solid.triangles().size() * 3);
+    for (const auto& triangle : solid.triangles()) {
+      for (const Eigen::Vector3d& corner : triangle) {
+        indices.push_back(static_cast<int>(vertices.size() / 3));
+        vertices.insert(vertices.end(), {btScalar(corner.x()), btScalar(corner.y()), btScalar(corner.z())});
+      }
+    }
     auto array = std::make_unique<btTriangleIndexVertexArray>(
-        static_cast<int>(mesh.triangleCount()), indices.data(), static_cast<int>(3 * sizeof(int)),
-        static_cast<int>(mesh.vertices.size()), vertices.data(), static_cast<int>(3 * sizeof(btScalar)));
+        static_cast<int>(solid.triangles().size()), indices.data(), static_cast<int>(3 * sizeof(int)),
+        static_cast<int>(vertices.size() / 3), vertices.data(), static_cast<int>(3 * sizeof(btScalar)));
     btCollisionShape* shape = make<btBvhTriangleMeshShape>(array.get(), true);
     mesh_interfaces.push_back(std::move(array));
     return shape;
@@ -234,7 +241,7 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
       case Obstacle::Shape::kBox: shape = impl.primitive(Geometry::Kind::kBox, obstacle.size); break;
       case Obstacle::Shape::kCylinder: shape = impl.primitive(Geometry::Kind::kCylinder, obstacle.size); break;
       case Obstacle::Shape::kSphere: shape = impl.primitive(Geometry::Kind::kSphere, obstacle.size); break;
-      case Obstacle::Shape::kMesh: shape = impl.triangleMesh(obstacle.mesh_file, obstacle.mesh_scale); break;
+      case Obstacle::Shape::kMesh: shape = impl.triangleMesh(*meshSolidOf(obstacle)); break;
     }
     if (shape == nullptr) {
       throw InputError("obstacle '" + obstacle.name + "': unsupported shape or non-positive size");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -54,26 +55,79 @@ Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Ve
   return a + (vb / denominator) * ab + (vc / denominator) * ac;
 }
 
-}  // namespace
-
-MeshSolid::MeshSolid(const TriangleMesh& mesh, const Eigen::Vector3d& scale) : scale_(scale) {
-  // The loader keeps one vertex per corner normal, so the corners of a box are several vertices:
-  // weld them by position to see which triangles share an edge.
-  std::map<std::array<float, 3>, std::uint32_t> welded_index;
-  std::vector<std::uint32_t> weld(mesh.vertices.size());
-  std::vector<Eigen::Vector3d> positions;
-  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-    const Eigen::Vector3f& p = mesh.vertices[v];
-    const auto [it, inserted] = welded_index.try_emplace({p.x(), p.y(), p.z()}, static_cast<std::uint32_t>(positions.size()));
-    if (inserted) positions.push_back(scale.cwiseProduct(p.cast<double>()));
+// Vertices merged by `key(index)` into their mean; the triangles that keep three distinct
+// corners, each wound way once (clustering folds neighbouring triangles onto each other). Two
+// that wind opposite ways stay: a sheet's two faces, or a wall thinner than a cell folded flat,
+// cancel in the winding number as before.
+template <typename Key>
+void weldVertices(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& indices,
+                  const Key& key, std::vector<Eigen::Vector3d>& positions, std::vector<Triangle>& triangles) {
+  std::map<std::array<std::int64_t, 3>, std::uint32_t> welded_index;
+  std::vector<std::uint32_t> weld(points.size());
+  std::vector<int> members;
+  positions.clear();
+  for (std::size_t v = 0; v < points.size(); ++v) {
+    const auto [it, inserted] = welded_index.try_emplace(key(v), static_cast<std::uint32_t>(positions.size()));
+    if (inserted) {
+      positions.push_back(Eigen::Vector3d::Zero());
+      members.push_back(0);
+    }
+    positions[it->second] += points[v];
+    ++members[it->second];
     weld[v] = it->second;
   }
-  std::vector<Triangle> triangles;
-  triangles.reserve(mesh.triangleCount());
-  for (std::size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    const Triangle triangle{weld[mesh.indices[t]], weld[mesh.indices[t + 1]], weld[mesh.indices[t + 2]]};
+  for (std::size_t i = 0; i < positions.size(); ++i) positions[i] /= members[i];
+  triangles.clear();
+  triangles.reserve(indices.size() / 3);
+  std::map<std::array<std::uint32_t, 3>, bool> seen;
+  for (std::size_t t = 0; t + 2 < indices.size(); t += 3) {
+    const Triangle triangle{weld[indices[t]], weld[indices[t + 1]], weld[indices[t + 2]]};
     if (triangle[0] == triangle[1] || triangle[1] == triangle[2] || triangle[2] == triangle[0]) continue;
+    // The same triangle from its smallest corner on, its winding kept.
+    const auto first = static_cast<std::size_t>(std::min_element(triangle.begin(), triangle.end()) - triangle.begin());
+    const std::array<std::uint32_t, 3> corners{triangle[first], triangle[(first + 1) % 3], triangle[(first + 2) % 3]};
+    if (!seen.emplace(corners, true).second) continue;
     triangles.push_back(triangle);
+  }
+}
+
+}  // namespace
+
+MeshSolid::MeshSolid(const TriangleMesh& mesh, const Eigen::Vector3d& scale, std::size_t max_triangles) : scale_(scale) {
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(mesh.vertices.size());
+  for (const Eigen::Vector3f& p : mesh.vertices) points.push_back(scale.cwiseProduct(p.cast<double>()));
+  // The loader keeps one vertex per corner normal, so the corners of a box are several vertices:
+  // weld them by position to see which triangles share an edge.
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<Triangle> triangles;
+  weldVertices(
+      points, mesh.indices,
+      [&mesh](std::size_t v) {
+        // The file's float coordinates, bit for bit: equal corners weld, nothing else does.
+        std::array<std::int64_t, 3> key{};
+        for (int a = 0; a < 3; ++a) {
+          const float value = mesh.vertices[v][a] == 0.0F ? 0.0F : mesh.vertices[v][a];  // -0 and +0 are one corner
+          std::int32_t bits = 0;
+          static_assert(sizeof(bits) == sizeof(value));
+          std::memcpy(&bits, &value, sizeof(bits));
+          key[static_cast<std::size_t>(a)] = bits;
+        }
+        return key;
+      },
+      positions, triangles);
+  source_triangles_ = triangles.size();
+  constexpr double kFirstCell = 0.002, kLargestCell = 0.02;  // [m]
+  for (double cell = kFirstCell; triangles.size() > max_triangles && cell <= kLargestCell * 1.0001; cell *= 1.25) {
+    weldVertices(
+        points, mesh.indices,
+        [cell, &points](std::size_t v) {
+          const Eigen::Vector3d& p = points[v];
+          return std::array<std::int64_t, 3>{std::llround(std::floor(p.x() / cell)), std::llround(std::floor(p.y() / cell)),
+                                             std::llround(std::floor(p.z() / cell))};
+        },
+        positions, triangles);
+    deviation_ = cell * std::sqrt(3.0);
   }
 
   // Edges sorted by their (undirected) vertex pair: the triangles of one run share that edge.

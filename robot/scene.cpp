@@ -791,15 +791,15 @@ bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, doub
     }
     case Obstacle::Shape::kSphere:
       return p_O.norm() <= obstacle.size.x() + margin;
-    case Obstacle::Shape::kMesh: {
-      const std::shared_ptr<const MeshSolid> solid =
-          obstacle.mesh_solid && obstacle.mesh_solid->scale() == obstacle.mesh_scale
-              ? obstacle.mesh_solid
-              : loadMeshSolidCached(obstacle.mesh_file, obstacle.mesh_scale);
-      return solid->contains(p_O, margin);
-    }
+    case Obstacle::Shape::kMesh: return meshSolidOf(obstacle)->contains(p_O, margin);
   }
   return false;
+}
+
+std::shared_ptr<const MeshSolid> meshSolidOf(const Obstacle& obstacle) {
+  return obstacle.mesh_solid && obstacle.mesh_solid->scale() == obstacle.mesh_scale
+             ? obstacle.mesh_solid
+             : loadMeshSolidCached(obstacle.mesh_file, obstacle.mesh_scale);
 }
 
 const Obstacle* obstacleAt(const Scene& scene, const Eigen::Vector3d& p_W, double margin) {
@@ -1016,6 +1016,22 @@ Scene loadScene(const std::string& name_or_path) {
                      ") nor a readable scene file");
   }
   return loadSceneFile(name_or_path);
+}
+
+std::vector<std::string> sceneNotes(const Scene& scene) {
+  std::vector<std::string> notes;
+  for (const Obstacle& obstacle : scene.obstacles) {
+    if (obstacle.shape != Obstacle::Shape::kMesh) continue;
+    const std::shared_ptr<const MeshSolid> solid = meshSolidOf(obstacle);
+    if (solid->deviation() <= 0.0) continue;
+    std::ostringstream note;
+    note << "obstacle '" << obstacle.name << "': its " << solid->sourceTriangleCount()
+         << " triangles are simplified to " << solid->triangles().size()
+         << " for collisions and inside tests; the surface moves by up to " << std::fixed << std::setprecision(1)
+         << 1000.0 * solid->deviation() << " mm";
+    notes.push_back(note.str());
+  }
+  return notes;
 }
 
 }  // namespace flexirob::robot

@@ -111,6 +111,11 @@ struct Scene {
 /// InputError if a mesh obstacle built in code names a file that cannot be loaded.
 bool obstacleContains(const Obstacle& obstacle, const Eigen::Vector3d& p_W, double margin = 0.0);
 
+/// The solid of a mesh obstacle (mesh_solid when it matches the obstacle's file and scale, else
+/// from the cache): what the point tests and the collision model use. Throws InputError if the
+/// file cannot be loaded.
+std::shared_ptr<const MeshSolid> meshSolidOf(const Obstacle& obstacle);
+
 /// The first of the scene's obstacles that contains p_W within `margin` [m] (as obstacleContains),
 /// or nullptr when p_W lies in free space.
 const Obstacle* obstacleAt(const Scene& scene, const Eigen::Vector3d& p_W, double margin = 0.0);
@@ -147,5 +152,10 @@ std::string sceneToYaml(const Scene& scene);
 /// A built-in name (see builtinSceneNames) or a path to a scene file; "" or "empty" is the
 /// empty scene.
 Scene loadScene(const std::string& name_or_path);
+
+/// What a user should know about how the scene is modelled, one line each: mesh obstacles whose
+/// triangles were simplified for the collision model and the point tests (MeshSolid), with the
+/// largest deviation. Empty for most scenes.
+std::vector<std::string> sceneNotes(const Scene& scene);
 
 }  // namespace flexirob::robot

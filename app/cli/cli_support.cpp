@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstdint>
 #include <limits>
+#include <set>
 
 #include <unistd.h>
 
@@ -66,6 +67,15 @@ Json toJsonRows(const Eigen::MatrixXd& m) {
   Json rows = Json::array();
   for (Eigen::Index r = 0; r < m.rows(); ++r) rows.push_back(toJson(m.row(r).transpose()));
   return rows;
+}
+
+robot::Scene loadSceneNoting(const std::string& name_or_path) {
+  robot::Scene scene = robot::loadScene(name_or_path);
+  static std::set<std::string> noted;
+  if (noted.insert(name_or_path).second) {
+    for (const std::string& note : robot::sceneNotes(scene)) std::fprintf(stderr, "note: %s\n", note.c_str());
+  }
+  return scene;
 }
 
 void reportProgress(const std::string& what, double fraction) {

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "app/cli/number_list.hpp"
+#include "robot/scene.hpp"
 
 namespace flexirob::app {
 struct TrajectoryRegionResult;
@@ -96,6 +97,9 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region);
 
 Json toJson(const Eigen::VectorXd& v);
 Json toJsonRows(const Eigen::MatrixXd& m);
+
+/// robot::loadScene, and its sceneNotes on stderr ("note: ..."), once per scene and process.
+robot::Scene loadSceneNoting(const std::string& name_or_path);
 
 /// Progress on stderr for long work ("what: 42%"); silent when stderr is not a terminal
 /// unless FLEXIROB_PROGRESS=1.

@@ -99,7 +99,7 @@ Session loadRecordedSession(const std::string& file) {
   session.scene = teaching.scene;
   session.model = std::make_unique<robot::RobotModel>(
       robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
-  session.scene_data = robot::loadScene(session.scene);
+  session.scene_data = loadSceneNoting(session.scene);
   robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
   const int n = session.model->dof();
   // The complete areas with samples, labelled by their position here: q_fixed[k] is area k's.
@@ -156,7 +156,7 @@ Session loadSession(const std::string& file) {
     session.scene = json.at("scene").get<std::string>();
     session.model = std::make_unique<robot::RobotModel>(
         robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
-    session.scene_data = robot::loadScene(session.scene);
+    session.scene_data = loadSceneNoting(session.scene);
     robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
     const int n = session.model->dof();
     std::vector<Eigen::VectorXd> xs, qs;

@@ -30,7 +30,7 @@ struct ReachOptions {
 
 Json runReach(const ReachOptions& options) {
   std::optional<robot::Scene> scene;
-  if (!options.scene.empty()) scene = robot::loadScene(options.scene);
+  if (!options.scene.empty()) scene = loadSceneNoting(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene ? *scene : robot::Scene{});
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
   if (scene) robot::checkPosturesFit(*scene, model, robot_name);

@@ -220,7 +220,7 @@ Json renderPicture(const RenderOptions& options) {
   if (!options.session.empty()) session = loadSessionOverlay(options.session);
   // Scene and robot: the options', else the session's, else an empty scene and the scene's robot.
   const std::string scene_name = !options.scene.empty() ? options.scene : session ? session->scene : "";
-  robot::Scene scene = robot::loadScene(scene_name);
+  robot::Scene scene = loadSceneNoting(scene_name);
   const std::string robot_name = !options.robot.empty() ? options.robot : session ? session->robot : robot::robotFor("", scene);
   if (session && !options.robot.empty()) {
     // The session's postures and samples belong to its robot: drawn on another arm of the same

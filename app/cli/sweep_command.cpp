@@ -53,7 +53,7 @@ struct Loaded {
 };
 
 Loaded load(const std::string& scene_name) {
-  robot::Scene scene = robot::loadScene(scene_name);
+  robot::Scene scene = loadSceneNoting(scene_name);
   const std::string robot_name = robot::robotFor("", scene);
   robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), "");
   robot::checkPosturesFit(scene, model, robot_name);

@@ -66,7 +66,7 @@ Json runTeach(const TeachOptions& options) {
     }
   }
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);
-  const robot::Scene scene = robot::loadScene(options.scene);
+  const robot::Scene scene = loadSceneNoting(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene);
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
   robot::checkPosturesFit(scene, model, robot_name);

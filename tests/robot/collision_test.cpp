@@ -10,6 +10,7 @@
 
 #include "robot/collision.hpp"
 #include "robot/controllers.hpp"
+#include "robot/mesh_solid.hpp"
 #include "robot/resources.hpp"
 #include "robot/sim/simulation.hpp"
 #include "test_urdf.hpp"
@@ -136,6 +137,43 @@ TEST(CollisionWorld, DistanceToASphereMatchesTheGeometry) {
   EXPECT_EQ(clearance.body, 1);
   EXPECT_NEAR(clearance.distance, 0.25, 1e-3);
   EXPECT_TRUE(world.contacts().empty());
+}
+
+TEST(CollisionWorld, AFineMeshObstacleCollidesAsTheSimplifiedSolidTheInsideTestsUse) {
+  // A ball of 0.1 m as 80 000 triangles: simplified, and the collision model takes those.
+  TriangleMesh fine;
+  constexpr std::uint32_t kRings = 200, kSegments = 200;
+  for (std::uint32_t i = 0; i <= kRings; ++i) {
+    for (std::uint32_t j = 0; j < kSegments; ++j) {
+      const double polar = std::numbers::pi * i / kRings, azimuth = 2.0 * std::numbers::pi * j / kSegments;
+      fine.vertices.emplace_back(Eigen::Vector3d(std::sin(polar) * std::cos(azimuth), std::sin(polar) * std::sin(azimuth),
+                                                 std::cos(polar)).cast<float>() * 0.1F);
+    }
+  }
+  fine.normals = fine.vertices;
+  const auto at = [](std::uint32_t i, std::uint32_t j) { return i * kSegments + j % kSegments; };
+  for (std::uint32_t i = 0; i < kRings; ++i) {
+    for (std::uint32_t j = 0; j < kSegments; ++j) {
+      if (i > 0) fine.indices.insert(fine.indices.end(), {at(i, j), at(i + 1, j), at(i, j + 1)});
+      if (i + 1 < kRings) fine.indices.insert(fine.indices.end(), {at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  }
+  Obstacle ball;
+  ball.name = "scanned ball";
+  ball.shape = Obstacle::Shape::kMesh;
+  ball.X_WO.translation() = Eigen::Vector3d(0.4, 0.0, 0.2);
+  ball.mesh_solid = std::make_shared<const MeshSolid>(fine);  // no file: the model must take the solid's triangles
+  const double deviation = ball.mesh_solid->deviation();
+  ASSERT_GT(deviation, 0.0);
+  Scene scene;
+  scene.obstacles.push_back(ball);
+  CollisionWorld world(threeLinkArm(), scene);
+  world.update(Eigen::Vector3d::Zero());
+  // As the primitive ball above: 0.4 − 0.1 − 0.05, up to what the simplification moved.
+  EXPECT_NEAR(world.clearance().distance, 0.25, deviation + 1e-3);
+  ASSERT_EQ(sceneNotes(scene).size(), 1U);
+  EXPECT_NE(sceneNotes(scene)[0].find("'scanned ball': its 79600 triangles are simplified to"), std::string::npos)
+      << sceneNotes(scene)[0];
 }
 
 // The plane the robot stands on (Sect. 4.2.1: q2 ≫ π/2 "would result in collisions with the

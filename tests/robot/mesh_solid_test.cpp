@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
+#include <numbers>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -166,6 +168,62 @@ TEST(MeshSolid, OpenBoxHoldsWhatItMostlySurroundsAndASheetHoldsNothing) {
   EXPECT_FALSE(plate.contains(Eigen::Vector3d(0.5, 0.5, -0.01)));
   EXPECT_TRUE(plate.contains(Eigen::Vector3d(0.5, 0.5, 0.0)));
   EXPECT_TRUE(plate.contains(Eigen::Vector3d(0.5, 0.5, 0.01), 0.02));
+}
+
+// A UV sphere of `radius` about the origin, rings x segments quads (the poles as fans), facing
+// outwards: the fine tessellation of a scan or a CAD export.
+TriangleMesh uvSphere(double radius, std::uint32_t rings, std::uint32_t segments) {
+  TriangleMesh mesh;
+  for (std::uint32_t i = 0; i <= rings; ++i) {
+    const double polar = std::numbers::pi * i / rings;
+    for (std::uint32_t j = 0; j < segments; ++j) {
+      const double azimuth = 2.0 * std::numbers::pi * j / segments;
+      mesh.vertices.emplace_back(Eigen::Vector3d(std::sin(polar) * std::cos(azimuth), std::sin(polar) * std::sin(azimuth),
+                                                 std::cos(polar)).cast<float>() * static_cast<float>(radius));
+    }
+  }
+  mesh.normals = mesh.vertices;
+  const auto at = [segments](std::uint32_t i, std::uint32_t j) { return i * segments + j % segments; };
+  for (std::uint32_t i = 0; i < rings; ++i) {
+    for (std::uint32_t j = 0; j < segments; ++j) {
+      if (i > 0) mesh.indices.insert(mesh.indices.end(), {at(i, j), at(i + 1, j), at(i, j + 1)});
+      if (i + 1 < rings) mesh.indices.insert(mesh.indices.end(), {at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  }
+  return mesh;
+}
+
+TEST(MeshSolid, AFinelyTessellatedMeshIsSimplifiedWithinTheDeviationItReports) {
+  constexpr double kRadius = 0.1;
+  const TriangleMesh fine = uvSphere(kRadius, 200, 200);
+  ASSERT_GT(fine.triangleCount(), 30000U);
+  const MeshSolid solid(fine);
+  EXPECT_EQ(solid.sourceTriangleCount(), fine.triangleCount());
+  EXPECT_LE(solid.triangles().size(), kMaxSolidTriangles);
+  EXPECT_GT(solid.triangles().size(), kMaxSolidTriangles / 4) << "no coarser than it needs to be";
+  ASSERT_GT(solid.deviation(), 0.0);
+  EXPECT_LE(solid.deviation(), 0.035);
+  // Every corner of the simplified surface lies within the deviation of the true sphere.
+  double farthest = 0.0;
+  for (const auto& triangle : solid.triangles()) {
+    for (const Eigen::Vector3d& corner : triangle) farthest = std::max(farthest, std::abs(corner.norm() - kRadius));
+  }
+  EXPECT_LE(farthest, solid.deviation());
+  // Inside and outside hold beyond the deviation, in every direction.
+  for (const Eigen::Vector3d& direction : {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, 1),
+                                           Eigen::Vector3d(1, 1, 1).normalized(), Eigen::Vector3d(-1, 2, -3).normalized()}) {
+    EXPECT_TRUE(solid.contains((kRadius - solid.deviation() - 1e-3) * direction)) << direction.transpose();
+    EXPECT_FALSE(solid.contains((kRadius + solid.deviation() + 1e-3) * direction)) << direction.transpose();
+  }
+  EXPECT_TRUE(solid.contains(Eigen::Vector3d::Zero()));
+}
+
+TEST(MeshSolid, AModestMeshIsKeptAsItIs) {
+  const TriangleMesh coarse = uvSphere(0.1, 20, 20);
+  const MeshSolid solid(coarse);
+  EXPECT_EQ(solid.triangles().size(), coarse.triangleCount());
+  EXPECT_EQ(solid.sourceTriangleCount(), coarse.triangleCount());
+  EXPECT_DOUBLE_EQ(solid.deviation(), 0.0);
 }
 
 TEST(MeshSolid, IsBuiltOncePerFileAndScale) {
