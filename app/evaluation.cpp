@@ -142,18 +142,30 @@ ArmReach armReach(const robot::RobotModel& model) {
   robot::Kinematics kinematics(model);
   kinematics.update(q);
   ArmReach result;
-  result.shoulder = kinematics.X_WB(std::min(2, model.dof())).translation();
+  if (model.dof() == 0) return result;
+  // A joint turns its body about its own axis, so the axis reads the same in the body frame.
+  const auto axis_W = [&](int body) -> Eigen::Vector3d {
+    return (kinematics.X_WB(body).linear() * model.joints()[static_cast<std::size_t>(body - 1)].axis_J).normalized();
+  };
+  result.base_point = kinematics.X_WB(1).translation();
+  result.base_axis = axis_W(1);
+  // The shoulder: the first joint that does not turn about the same axis as the first (the
+  // LWR IV's A2 over A1); an arm whose joints all turn about parallel axes swings from its first.
+  int shoulder = 1;
   for (int b = 2; b <= model.dof(); ++b) {
+    if (axis_W(b).cross(result.base_axis).norm() > 1e-6) {
+      shoulder = b;
+      break;
+    }
+  }
+  result.shoulder = kinematics.X_WB(shoulder).translation();
+  for (int b = shoulder; b <= model.dof(); ++b) {
     result.reach = std::max(result.reach, result.fromShoulder(kinematics.X_WB(b).translation()));
   }
   result.reach = std::max(result.reach, result.fromShoulder(kinematics.p_WT()));
-  if (model.dof() >= 1) {
-    // A joint turns its body about its own axis, so the axis reads the same in the body frame.
-    const Eigen::Isometry3d& X_WB1 = kinematics.X_WB(1);
-    result.base_point = X_WB1.translation();
-    result.base_axis = (X_WB1.linear() * model.joints()[0].axis_J).normalized();
-  }
-  result.base_radius = std::min(0.2, 0.25 * result.reach);
+  // Without a joint turning the rest about another axis there is no base column around an axis
+  // of the first joint; the arm sweeps through it.
+  result.base_radius = shoulder == 1 ? 0.0 : std::min(0.2, 0.25 * result.reach);
   return result;
 }
 

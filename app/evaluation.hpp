@@ -61,12 +61,14 @@ Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& 
 /// around the first joint's axis, which the arm cannot put its own tip into. Used wherever a
 /// place is chosen for the arm (an area, a drawn trajectory) and to bound the grid targets.
 struct ArmReach {
-  Eigen::Vector3d shoulder = Eigen::Vector3d::Zero();  ///< joint 2's origin, stretched posture [m, W]
+  /// Origin of the first joint whose axis is not parallel to the first joint's (the LWR IV's A2),
+  /// of the first joint if there is none; in the posture nearest zero [m, W]
+  Eigen::Vector3d shoulder = Eigen::Vector3d::Zero();
   double reach = 0.0;  ///< the largest distance of a body origin or the tip from the shoulder [m]
   Eigen::Vector3d base_point = Eigen::Vector3d::Zero();  ///< a point of the first joint's axis [m, W]
   Eigen::Vector3d base_axis = Eigen::Vector3d::UnitZ();  ///< its direction (unit) [W]
   /// The column's radius: 0.2 m (the LWR IV's base and first links), a quarter of the reach on
-  /// smaller arms [m].
+  /// smaller arms; 0 when every joint turns about an axis parallel to the first [m].
   double base_radius = 0.2;
 
   double fromShoulder(const Eigen::Vector3d& p_W) const { return (p_W - shoulder).norm(); }

@@ -128,6 +128,17 @@ TEST(Evaluation, TheArmsRoomIsWithinReachAndOffTheColumnAroundItsFirstAxis) {
   EXPECT_DOUBLE_EQ(lying.base_radius, 0.2);
   EXPECT_FALSE(lying.roomFor(Eigen::Vector3d(0.3, 0.0, 0.55), 0.05)) << "5 cm off its axis, though 0.3 m off world z";
   EXPECT_TRUE(lying.roomFor(Eigen::Vector3d(0.3, 0.0, 1.0), 0.05));
+
+  // The same arm with every joint about y: it swings from its first joint, through its base.
+  std::string planar_urdf = urdf;
+  const std::string first_axis = R"(<axis xyz="0 0 1"/>)";
+  planar_urdf.replace(planar_urdf.find(first_axis), first_axis.size(), R"(<axis xyz="0 1 0"/>)");
+  const auto planar_model = robot::RobotModel::fromUrdfString(planar_urdf, ".");
+  const ArmReach planar = armReach(planar_model);
+  EXPECT_TRUE(planar.shoulder.isApprox(Eigen::Vector3d(0.0, 0.0, 0.5), 1e-12));
+  EXPECT_NEAR(planar.reach, 0.9, 1e-12);
+  EXPECT_DOUBLE_EQ(planar.base_radius, 0.0);
+  EXPECT_TRUE(planar.roomFor(Eigen::Vector3d(0.0, 0.0, 1.34), 0.05)) << "0.84 m out along its first link";
 }
 
 TEST(Evaluation, MotionReachesAFreeTargetWithoutCollision) {
