@@ -52,6 +52,10 @@ void WorkflowSessionWriter::recordModel(double time) {
   ++records_;
 }
 
+double itmSnapshotPeriod(double configured_period, std::size_t last_bytes) {
+  return std::max(configured_period, static_cast<double>(last_bytes) / kItmSnapshotBytesPerSecond);
+}
+
 void WorkflowSessionWriter::recordItm(double time) {
   const planning::Itm& itm = workflow_->itm();
   ItmRecord record;
@@ -59,6 +63,7 @@ void WorkflowSessionWriter::recordItm(double time) {
   record.nodes = itm.nodeCount();
   record.edges = itm.edgeCount();
   record.bytes = planning::itmToBytes(itm);
+  itm_bytes_ = record.bytes.size();
   recorder_->recordItm(std::move(record));
   itm_version_ = workflow_->itmVersion();
   itm_time_ = time;
@@ -232,7 +237,9 @@ void WorkflowSessionWriter::poll() {
   records_ += samples_.stream(*workflow_, *recorder_);
   trackExecution();
   const double time = workflow_->state().time;
-  if (workflow_->itmVersion() != itm_version_ && time - itm_time_ >= options_.itm_period - 1e-9) recordItm(time);
+  if (workflow_->itmVersion() != itm_version_ && time - itm_time_ >= itmSnapshotPeriod(options_.itm_period, itm_bytes_) - 1e-9) {
+    recordItm(time);
+  }
   if (simulation_ != nullptr) {
     robot::CollisionWorld* world = simulation_->collisionWorld();
     const auto& log = simulation_->collisions().eventLog();

@@ -32,6 +32,15 @@ struct WorkflowSessionOptions {
   std::filesystem::path scratch_directory;
 };
 
+/// Bytes of ITM snapshots a session may take per second of backend time. Each snapshot holds the
+/// whole graph, so at a fixed period a long configuration with a large graph grew the file with
+/// the square of its length (100 areas: 3.4 GB of snapshots).
+inline constexpr double kItmSnapshotBytesPerSecond = 10e3;
+
+/// The time [s] to wait after a snapshot of `last_bytes` before the next: the configured period,
+/// or longer as the graph grows, so that snapshots take at most kItmSnapshotBytesPerSecond.
+double itmSnapshotPeriod(double configured_period, std::size_t last_bytes);
+
 /// Streams the training samples of each RECORDING to a recorder as they are taken and ends each
 /// take with its area record (docs/SESSIONS.md), so that a kill -9 mid-RECORDING keeps the
 /// samples taken so far. Only the recorder's non-blocking pushes: WorkflowSessionWriter uses it
@@ -96,6 +105,7 @@ class WorkflowSessionWriter {
   std::size_t collisions_seen_ = 0;
   std::uint64_t itm_version_ = 0;
   double itm_time_ = -1e9;
+  std::size_t itm_bytes_ = 0;  ///< size of the last snapshot
   std::uint64_t records_ = 0;
   // The executed motion in progress.
   bool executing_ = false;

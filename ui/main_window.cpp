@@ -26,6 +26,7 @@
 
 #include "app/evaluation.hpp"
 #include "app/session_recorder.hpp"
+#include "app/workflow_session.hpp"
 #include "learning/confidence.hpp"
 #include "planning/itm_file.hpp"
 #include "robot/resources.hpp"
@@ -52,7 +53,7 @@ namespace {
 
 constexpr int kDisplayPeriodMs = 16;  // ~60 Hz mirror
 constexpr int kPlotPeriodMs = 200;    // plots take a sample every 200 ms (5 Hz: smooth, cheap to redraw)
-constexpr qint64 kItmRecordPeriodMs = 1000;  // ITM snapshots into the session at most once a second
+constexpr qint64 kItmRecordPeriodMs = 1000;  // ITM snapshots at most once a second, rarer as it grows (app::itmSnapshotPeriod)
 
 std::string readText(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -1009,7 +1010,8 @@ void MainWindow::updateGoalAndPath(const LiveSnapshot& s) {
 
 void MainWindow::recordItm(const LiveSnapshot& s, bool final) {
   if (!recorder_ || !s.itm || s.itm_version == recorded_itm_version_ || s.itm->nodeCount() == 0) return;
-  if (!final && itm_record_clock_.isValid() && itm_record_clock_.elapsed() < kItmRecordPeriodMs) return;
+  const double period_ms = 1000.0 * app::itmSnapshotPeriod(kItmRecordPeriodMs / 1000.0, recorded_itm_bytes_);
+  if (!final && itm_record_clock_.isValid() && static_cast<double>(itm_record_clock_.elapsed()) < period_ms) return;
   itm_record_clock_.start();
   recorded_itm_version_ = s.itm_version;
   try {
@@ -1018,6 +1020,7 @@ void MainWindow::recordItm(const LiveSnapshot& s, bool final) {
     record.nodes = s.itm->nodeCount();
     record.edges = s.itm->edgeCount();
     record.bytes = planning::itmToBytes(*s.itm);  // the graph's own format (planning/itm_file.hpp)
+    recorded_itm_bytes_ = record.bytes.size();
     recorder_->recordItm(std::move(record));
   } catch (const std::exception& error) {
     reportError(tr("Cannot record the ITM graph"), error);

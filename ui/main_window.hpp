@@ -228,6 +228,7 @@ class MainWindow : public QMainWindow {
   bool operator_heights_ = false;  // the operator chose the slice heights: no automatic centring
   std::optional<Eigen::Vector3d> goal_;
   QElapsedTimer itm_record_clock_;
+  std::size_t recorded_itm_bytes_ = 0;  ///< size of the last ITM snapshot recorded
   std::vector<QPointer<ReviewWindow>> reviews_;
 };
 

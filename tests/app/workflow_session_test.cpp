@@ -78,6 +78,23 @@ struct RecordedRig {
   WorkflowSessionWriter writer;
 };
 
+TEST(WorkflowSession, GraphSnapshotsTakeBoundedBytesPerSecondHoweverLargeTheGraphGrows) {
+  EXPECT_DOUBLE_EQ(itmSnapshotPeriod(1.0, 2000), 1.0) << "a small graph: every second it changes";
+  EXPECT_DOUBLE_EQ(itmSnapshotPeriod(1.0, 1000000), 100.0);
+  // A graph growing by 300 bytes a second over an hour, snapshotted as the writer does: the
+  // bytes stay within the budget instead of growing with the square of the time.
+  double next = 0.0, bytes_total = 0.0;
+  const double hour = 3600.0;
+  for (double t = 0.0; t < hour; t += 0.5) {
+    if (t + 1e-9 < next) continue;
+    const auto size = static_cast<std::size_t>(300.0 * t);
+    bytes_total += static_cast<double>(size);
+    next = t + itmSnapshotPeriod(1.0, size);
+  }
+  EXPECT_LE(bytes_total, kItmSnapshotBytesPerSecond * hour * 1.05);
+  EXPECT_GT(bytes_total, 0.5 * kItmSnapshotBytesPerSecond * hour) << "and still snapshots as often as that allows";
+}
+
 TEST(WorkflowSession, AreasSamplesModelAndGraphAreInTheFileBeforeTheSessionEnds) {
   RecordedRig rig("workflow-session");
   Workflow& workflow = rig.workflow;
