@@ -704,7 +704,8 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
   // Touch (on_affected -> APPROACHING), push the links there, let go (on_converged -> POSED).
   kinematics_.update(choice.q);
   if (!grab(SubStage::kWaiting, kinematics_.p_WT() - state_.p_WT() + Eigen::Vector3d(0, 0, 1e-3))) {
-    area.failure = "on_affected did not fire";
+    area.failure = "the arm did not take the hand's push as a touch (on_affected never fired: the external torques stayed "
+                   "below the trigger's threshold, or the arm never stood still)";
     return false;
   }
   if (assistanceAtTip() >= kYieldingConfidence) {
@@ -790,7 +791,8 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
   // still (on_affected needs τ_ext above threshold while the arm is not moving). A push drawn
   // from the first cycle on would have the arm moving by the time a robot measures the force.
   if (!grab(SubStage::kPosed, u)) {
-    area.failure = "on_affected did not fire for the recording";
+    area.failure = "the arm did not take the hand's push at the posture as a touch, so no recording started (on_affected "
+                   "never fired)";
     return false;
   }
   pushTip(helix, duration);

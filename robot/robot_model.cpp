@@ -490,7 +490,11 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
     if (joint.safety && model_joint.type != JointType::kContinuous) {
       const double soft_lower = joint.safety->soft_lower_limit;
       const double soft_upper = joint.safety->soft_upper_limit;
-      // urdfdom defaults both to 0 when absent; only a proper interval narrows the limits.
+      // urdfdom defaults both to 0 when absent; only a proper interval narrows the limits, and
+      // an inverted one is a mistake in the file, not a wish to ignore it.
+      if (soft_lower > soft_upper) {
+        throw InputError("joint '" + joint.name + "': <safety_controller> soft_lower_limit lies above soft_upper_limit");
+      }
       if (std::isfinite(soft_lower) && std::isfinite(soft_upper) && soft_lower < soft_upper) {
         // A software range that misses the hardware range leaves no posture the joint may take.
         if (soft_lower > limits.upper || soft_upper < limits.lower) {

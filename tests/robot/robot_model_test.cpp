@@ -271,6 +271,11 @@ INSTANTIATE_TEST_SUITE_P(
                    "<child link='b'/><axis xyz='0 0 1'/><limit lower='-1' upper='1' velocity='1' effort='1'/>"
                    "<safety_controller soft_lower_limit='-3' soft_upper_limit='-2' k_velocity='1'/></joint><link name='b'/></robot>",
                    "", "soft limits lie outside"},
+        BrokenUrdf{"software limits the wrong way round",
+                   "<robot name='x'><link name='a'/><joint name='j' type='revolute'><parent link='a'/>"
+                   "<child link='b'/><axis xyz='0 0 1'/><limit lower='-1' upper='1' velocity='1' effort='1'/>"
+                   "<safety_controller soft_lower_limit='0.5' soft_upper_limit='-0.5' k_velocity='1'/></joint><link name='b'/></robot>",
+                   "", "soft_lower_limit lies above soft_upper_limit"},
         BrokenUrdf{"floating joint on the chain",
                    "<robot name='x'><link name='a'/><joint name='free' type='floating'><parent link='a'/>"
                    "<child link='b'/></joint><link name='b'/></robot>",
