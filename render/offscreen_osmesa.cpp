@@ -13,6 +13,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
@@ -198,9 +199,9 @@ void writePng(const Image& image, const std::filesystem::path& file) {
   appendChunk(png, "IEND", "");
 
   std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) throw InputError("cannot write '" + file.string() + "'");
+  if (!out) throw InputError("cannot write '" + file.string() + "': " + std::strerror(errno));
   out.write(png.data(), static_cast<std::streamsize>(png.size()));
-  if (!out) throw InputError("cannot write '" + file.string() + "'");
+  if (!out) throw InputError("cannot write '" + file.string() + "': " + std::strerror(errno));
 }
 
 }  // namespace flexirob::render

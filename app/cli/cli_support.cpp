@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
 
 #include "robot/errors.hpp"
@@ -67,6 +69,18 @@ Json toJsonRows(const Eigen::MatrixXd& m) {
   Json rows = Json::array();
   for (Eigen::Index r = 0; r < m.rows(); ++r) rows.push_back(toJson(m.row(r).transpose()));
   return rows;
+}
+
+void checkOutputPath(const std::string& option, const std::string& path) {
+  namespace fs = std::filesystem;
+  if (path.empty()) throw InputError(option + ": expected a file path");
+  std::error_code error;
+  if (fs::is_directory(path, error)) throw InputError(option + ": '" + path + "' is a directory; expected a file path");
+  const fs::path folder = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
+  if (!fs::is_directory(folder, error)) throw InputError(option + ": the folder '" + folder.string() + "' does not exist");
+  if (::access(folder.c_str(), W_OK) != 0) {
+    throw InputError(option + ": cannot write in '" + folder.string() + "': " + std::strerror(errno));
+  }
 }
 
 robot::Scene loadSceneNoting(const std::string& name_or_path) {

@@ -98,6 +98,10 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region);
 Json toJson(const Eigen::VectorXd& v);
 Json toJsonRows(const Eigen::MatrixXd& m);
 
+/// Refuses (InputError naming `option`) an output path that is a directory or whose folder does
+/// not exist or cannot be written, before any work is done for it.
+void checkOutputPath(const std::string& option, const std::string& path);
+
 /// robot::loadScene, and its sceneNotes on stderr ("note: ..."), once per scene and process.
 robot::Scene loadSceneNoting(const std::string& name_or_path);
 

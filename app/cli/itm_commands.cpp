@@ -144,6 +144,7 @@ struct BuildOptions {
 };
 
 Json buildMap(const BuildOptions& options) {
+  checkOutputPath("--out", options.out);
   ItmParameters parameters = options.parameters;
   if (options.variant == "plain") {
     parameters.variant = planning::ItmVariant::kPlain;

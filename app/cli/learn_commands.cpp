@@ -160,6 +160,7 @@ struct FitOptions {
 };
 
 Json fit(const FitOptions& options) {
+  checkOutputPath("--out", options.out);
   LearningCsv csv = readLearningCsv(options.data, true);
   learning::TrainingSet& data = csv.data;
   const bool areas_inferred = !csv.has_area;

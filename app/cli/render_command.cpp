@@ -215,6 +215,7 @@ Json warnBeyondLimits(const robot::RobotModel& model, const Eigen::VectorXd& q) 
 }
 
 Json renderPicture(const RenderOptions& options) {
+  checkOutputPath("--out", options.out);
   const auto start = std::chrono::steady_clock::now();
   std::optional<SessionOverlay> session;
   if (!options.session.empty()) session = loadSessionOverlay(options.session);

@@ -274,6 +274,8 @@ Json runSweep(const SweepOptions& options) {
   for (const auto& table : options.tables) {
     if (known.count(table) == 0) throw InputError("--tables: unknown table '" + table + "' (3.2, 3.3, 3.4, 7.1, 8.3)");
   }
+  // A sweep runs for minutes: a --json file that cannot be written is refused before it starts.
+  if (!options.json_out.empty()) checkOutputPath("--json", options.json_out);
   std::ofstream file;
   if (!options.markdown.empty()) {
     file.open(options.markdown);

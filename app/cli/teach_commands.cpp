@@ -58,13 +58,7 @@ bool endsWith(const std::string& text, const std::string& suffix) {
 }
 
 Json runTeach(const TeachOptions& options) {
-  if (options.out.empty()) throw InputError("--out: expected a session file path");
-  {
-    std::error_code error;
-    if (std::filesystem::is_directory(options.out, error)) {
-      throw InputError("--out: '" + options.out + "' is a directory; expected a session file path");
-    }
-  }
+  checkOutputPath("--out", options.out);
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);
   const robot::Scene scene = loadSceneNoting(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene);

@@ -191,5 +191,17 @@ TEST(TeachCli, RefusesADirectoryAsTheSessionFileBeforeTeaching) {
   fs::remove_all(folder);
 }
 
+TEST(TeachCli, RefusesASessionFileInAMissingFolderBeforeTeaching) {
+  const fs::path out = scratch("no_such_folder") / "deeper" / "s.db";
+  const auto result = runCliBinary("teach --scene setup_A --areas 1 --out " + out.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("does not exist"), std::string::npos) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_TRUE(result.out.empty()) << "refused before any teaching: " << result.out;
+  const auto render = runCliBinary("render --robot lwr4 --width 64 --height 48 --out " + (out.parent_path() / "x.png").string());
+  EXPECT_EQ(render.exit_code, 2) << render.err;
+  EXPECT_NE(render.err.find("does not exist"), std::string::npos) << render.err;
+}
+
 }  // namespace
 }  // namespace flexirob
