@@ -2,11 +2,13 @@
 // writes the session through the SQLite session recorder (states at control rate, stages, triggers,
 // buttons, areas, samples, model, ITM), or as JSON when the path ends in .json.
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <optional>
 #include <iostream>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <unistd.h>
 
@@ -56,6 +58,8 @@ std::string readText(const std::filesystem::path& file) {
 bool endsWith(const std::string& text, const std::string& suffix) {
   return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
+
+constexpr std::size_t kWarningsOnStderr = 20;
 
 Json runTeach(const TeachOptions& options) {
   checkOutputPath("--out", options.out);
@@ -278,8 +282,25 @@ Json runTeach(const TeachOptions& options) {
       }
     }
   }
+  // The tutor's feedback (joint limits, transition checks) is what a person would have read on
+  // the screen: said on stderr too, each distinct line once, not only counted in the JSON.
   int warnings = 0;
-  for (const auto& event : workflow.events()) warnings += event.kind == app::WorkflowEvent::Kind::kWarning ? 1 : 0;
+  Json warning_lines = Json::array();
+  std::set<std::string> said;
+  for (const auto& event : workflow.events()) {
+    if (event.kind != app::WorkflowEvent::Kind::kWarning) continue;
+    ++warnings;
+    if (!said.insert(event.detail).second) continue;
+    warning_lines.push_back(event.detail);
+    if (said.size() <= kWarningsOnStderr) std::fprintf(stderr, "warning: %s\n", event.detail.c_str());
+  }
+  if (said.size() > kWarningsOnStderr) {
+    std::fprintf(stderr, "warning: ... and %zu more (\"warning_lines\" in the JSON)\n", said.size() - kWarningsOnStderr);
+  }
+  if (static_cast<int>(workflow.areas().size()) < options.areas && !workflow.areas().empty()) {
+    std::fprintf(stderr, "note: %zu of the %d areas asked for were taught; \"tutor\" in the JSON says why the others were not\n",
+                 workflow.areas().size(), options.areas);
+  }
   Json link = nullptr;
   if (connection) {
     const app::LinkStatus status = connection->status();
@@ -314,6 +335,7 @@ Json runTeach(const TeachOptions& options) {
                  {"itm_edges", itm.edgeCount()},
                  {"transition_checks", checks},
                  {"warnings", warnings},
+                 {"warning_lines", warning_lines},
                  {"tutor", tutor_areas},
                  {"simulated_time_s", report.simulated_time},
                  {"wall_time_s", wall_seconds}};

@@ -165,6 +165,13 @@ TEST(TeachCli, SaysWhetherAnAreaIsBeyondTheJointsOrOnlyReachedWithAContact) {
   EXPECT_EQ(tutor.at(1).at("name"), "pressed");
   EXPECT_FALSE(tutor.at(1).at("taught").get<bool>());
   EXPECT_EQ(tutor.at(1).at("failure").get<std::string>(), "every posture found that reaches it makes a contact");
+  // The tutor's warnings are said, not only counted.
+  const auto lines = result.json().at("warning_lines");
+  ASSERT_FALSE(lines.empty()) << "the replacement areas lie near a joint limit";
+  EXPECT_LE(lines.size(), result.json().at("warnings").get<std::size_t>());
+  for (const auto& line : lines) {
+    EXPECT_NE(result.err.find("warning: " + line.get<std::string>() + "\n"), std::string::npos) << result.err;
+  }
   fs::remove(out);
   fs::remove(scene);
 }
