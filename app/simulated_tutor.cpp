@@ -441,16 +441,27 @@ bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) 
   // A firm touch at the tip, held until the workflow takes it (on_affected, which fires for a
   // touch that began on a still arm; one that began while the arm moved waits until the arm has
   // come to rest under the hand, a second or two on an 80 Nm/rad arm).
-  const double until = arm()->time() + 3.0;
-  while (workflow_->subStage() == sub_stage) {
-    if (arm()->time() > until) {
-      arm()->clearHandForce();
-      return false;
+  // 15 N for up to 3 s; if the robot has not noticed (a tip near the base, a small arm: the
+  // torques stay under the trigger's threshold), a person presses harder, up to 60 N, enough
+  // for twice the threshold at some joint, for 3 s more.
+  const Eigen::Vector3d push = direction.normalized();
+  kinematics_.update(state_.q);
+  robot::Matrix3Xd Jp(3, model_->dof());
+  kinematics_.tipPositionJacobian(Jp);
+  const double torque_per_newton = (Jp.transpose() * push).cwiseAbs().maxCoeff();
+  const double firmer = std::clamp(2.0 * workflow_->options().affected_torque / std::max(torque_per_newton, 1e-6), 15.0, 60.0);
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    if (attempt == 1 && firmer <= 15.0) break;
+    const double force = attempt == 0 ? 15.0 : firmer;
+    const double until = arm()->time() + 3.0;
+    while (workflow_->subStage() == sub_stage && arm()->time() <= until) {
+      arm()->setHandForce(model_->dof(), state_.p_WT(), force * push);
+      tick();
     }
-    arm()->setHandForce(model_->dof(), state_.p_WT(), 15.0 * direction.normalized());
-    tick();
+    if (workflow_->subStage() != sub_stage) return true;
   }
-  return true;
+  arm()->clearHandForce();
+  return false;
 }
 
 bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double speed) {
@@ -868,8 +879,17 @@ Eigen::Vector3d SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid&
   Eigen::Vector3d target = Eigen::Vector3d::Zero();
   learning::UniformRandom ik_seeds(options_.seed + 0xacce55);
   const Eigen::VectorXd& q_home = home_;
-  for (int tries = 0; tries < 100; ++tries) {
-    for (int a = 0; a < 3; ++a) target[a] = random_.uniform(grid.lower[a], grid.upper[a]);
+  // Over the whole box first; where the box lies mostly beyond the arm (a small arm in a large
+  // box missed its reach a hundred times over), in the part of it within reach.
+  const Eigen::Vector3d reach = Eigen::Vector3d::Constant(arm_reach_.reach);
+  const Eigen::Vector3d within_lower = grid.lower.cwiseMax(arm_reach_.shoulder - reach);
+  const Eigen::Vector3d within_upper = grid.upper.cwiseMin(arm_reach_.shoulder + reach);
+  const bool box_reaches = (within_lower.array() <= within_upper.array()).all();
+  for (int tries = 0; tries < 200; ++tries) {
+    const bool within = tries >= 100 && box_reaches;
+    for (int a = 0; a < 3; ++a) {
+      target[a] = within ? random_.uniform(within_lower[a], within_upper[a]) : random_.uniform(grid.lower[a], grid.upper[a]);
+    }
     if (roomyForAnArea(target) && !near_tried(target) &&
         accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds)) {
       break;

@@ -1,6 +1,8 @@
 // `flexirob-cli teach`: the simulated tutor teaches through the direct simulation and through the
 // FRI backend against the in-process controller stand-in (`--backend fri-sim`), and writes a
 // session; bad backends are refused with one line.
+#include <array>
+#include <sstream>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -174,6 +176,46 @@ TEST(TeachCli, SaysWhetherAnAreaIsBeyondTheJointsOrOnlyReachedWithAContact) {
   }
   fs::remove(out);
   fs::remove(scene);
+}
+
+// A 6-joint arm of 0.3 m reach (joints about z, y, y, z, y, z), light links and capsules of 1.5 cm.
+std::string smallArmUrdf() {
+  const std::array<const char*, 6> axes{"0 0 1", "0 1 0", "0 1 0", "0 0 1", "0 1 0", "0 0 1"};
+  const std::array<double, 6> lengths{0.05, 0.12, 0.1, 0.04, 0.04, 0.03};
+  std::ostringstream urdf;
+  urdf << "<?xml version=\"1.0\"?>\n<robot name=\"small\">\n  <link name=\"base\"/>\n";
+  double offset = 0.03;
+  for (std::size_t j = 0; j < axes.size(); ++j) {
+    const std::string parent = j == 0 ? "base" : "l" + std::to_string(j);
+    const std::string child = "l" + std::to_string(j + 1);
+    urdf << "  <joint name=\"j" << j + 1 << "\" type=\"revolute\"><parent link=\"" << parent << "\"/><child link=\"" << child
+         << "\"/><origin xyz=\"0 0 " << offset << "\"/><axis xyz=\"" << axes[j]
+         << "\"/><limit lower=\"-2.9\" upper=\"2.9\" velocity=\"1.5\" effort=\"20\"/></joint>\n"
+         << "  <link name=\"" << child << "\"><inertial><origin xyz=\"0 0 " << lengths[j] / 2 << "\"/><mass value=\"0.3\"/>"
+         << "<inertia ixx=\"0.001\" ixy=\"0\" ixz=\"0\" iyy=\"0.001\" iyz=\"0\" izz=\"0.0005\"/></inertial>"
+         << "<collision><origin xyz=\"0 0 " << lengths[j] / 2 << "\"/><geometry><cylinder radius=\"0.015\" length=\""
+         << lengths[j] << "\"/></geometry></collision></link>\n";
+    offset = lengths[j];
+  }
+  urdf << "</robot>\n";
+  return urdf.str();
+}
+
+TEST(TeachCli, TeachesASmallArmInAWorkspaceBoxMostlyBeyondItsReach) {
+  const fs::path robot = scratch("small_arm.urdf");
+  flexirob::testing::writeText(robot, smallArmUrdf());
+  const fs::path out = scratch("small_arm.json");
+  const auto result = runCliBinary("teach --robot " + robot.string() + " --scene empty --areas 2 --seed 1 --check-points 0 --out " +
+                                   out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = result.json();
+  EXPECT_EQ(json.at("areas"), 2);
+  // Every place the tutor tried lies within the arm's reach, and the arm took every touch.
+  for (const auto& area : json.at("tutor")) {
+    EXPECT_TRUE(area.at("taught").get<bool>()) << area.dump();
+  }
+  fs::remove(robot);
+  fs::remove(out);
 }
 
 TEST(TeachCli, RefusesASceneWhosePosturesBelongToAnotherRobotWithOneLine) {
