@@ -49,6 +49,9 @@ struct Session {
   learning::TrainingSet data;
   std::vector<Eigen::VectorXd> q_fixed;
   std::vector<std::string> area_names;  ///< how messages name area k: as the file counts it
+  /// Area k's name as teach gave it ("I1", "auto_3"), which the drawn trajectories' regions
+  /// carry; as the file counts it where the file keeps no name (recordings).
+  std::vector<std::string> taught_names;
   std::unique_ptr<planning::Itm> itm;
 };
 
@@ -113,6 +116,7 @@ Session loadRecordedSession(const std::string& file) {
     taught.push_back(&area);
     session.q_fixed.push_back(area.q_fixed);
     session.area_names.push_back(std::to_string(area.index));
+    session.taught_names.push_back(std::to_string(area.index));
     count += area.X.cols();
   }
   if (count == 0) throw InputError("session: no training samples");
@@ -164,6 +168,8 @@ Session loadSession(const std::string& file) {
     for (const Json& area : json.at("areas")) {
       session.q_fixed.push_back(vectorOf(area.at("q_fixed"), n, "q_fixed"));
       session.area_names.push_back(std::to_string(k + 1));
+      const std::string taught_name = area.value("name", "");
+      session.taught_names.push_back(taught_name.empty() ? std::to_string(k + 1) : taught_name);
       const Json& x = area.at("x");
       const Json& q = area.at("q");
       if (x.size() != q.size()) throw InputError("session: area samples x and q differ in count");
@@ -310,6 +316,7 @@ std::vector<app::EvaluatedArea> sessionAreas(const Session& session) {
     if (columns.empty()) continue;
     app::EvaluatedArea area;
     area.q_fixed = session.q_fixed[k];
+    area.name = session.taught_names[k];
     area.samples.resize(3, static_cast<Eigen::Index>(columns.size()));
     for (std::size_t i = 0; i < columns.size(); ++i) area.samples.col(static_cast<Eigen::Index>(i)) = session.data.X.col(columns[i]);
     areas.push_back(area);
@@ -445,7 +452,7 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
   trajectories->add_option("--session", options->session, "session file written by teach")->required();
   trajectories->add_option("--learner", options->learner, "elm, oselm or llm");
-  trajectories->add_option("--per-area", options->per_area, "trajectories per training area without scene trajectories (interpolation: twice)")->check(finiteRange(1, 10000));
+  trajectories->add_option("--per-area", options->per_area, "trajectories per training area without scene trajectories (between areas taught one after the other: twice)")->check(finiteRange(1, 10000));
   trajectories->add_option("--speed", options->speed, "tip speed [m/s]")->check(finiteRange(0.01, 1.0));
   trajectories->add_option("--seed", options->seed, "random seed for drawn trajectories")->check(seedValidator());
   trajectories->callback([&runner, options] { runner.select([options] { return runTrajectories(*options); }); });

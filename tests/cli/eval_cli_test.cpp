@@ -44,6 +44,7 @@ std::filesystem::path tinySession(const std::string& scene_name, const std::stri
   nlohmann::json nodes = nlohmann::json::array();
   nlohmann::json edges = nlohmann::json::array();
   for (const Eigen::VectorXd& q_fixed : postures) {
+    const std::string area_name = "I" + std::to_string(areas.size() + 1);  // as teach names taught areas
     nlohmann::json x = nlohmann::json::array();
     nlohmann::json q = nlohmann::json::array();
     for (int l = 0; l < 40; ++l) {
@@ -59,7 +60,7 @@ std::filesystem::path tinySession(const std::string& scene_name, const std::stri
         nodes.push_back({{"x", {p.x(), p.y(), p.z()}}, {"q", q.back()}});
       }
     }
-    areas.push_back({{"q_fixed", std::vector<double>(q_fixed.data(), q_fixed.data() + q_fixed.size())}, {"x", x}, {"q", q}});
+    areas.push_back({{"name", area_name}, {"q_fixed", std::vector<double>(q_fixed.data(), q_fixed.data() + q_fixed.size())}, {"x", x}, {"q", q}});
   }
   const nlohmann::json session = {{"format", "flexirob-session-json"},
                                   {"version", 1},
@@ -162,9 +163,9 @@ TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
   EXPECT_DOUBLE_EQ(json.at("speed_m_s").get<double>(), 0.2);
   const nlohmann::json& regions = json.at("regions");
   ASSERT_EQ(regions.size(), 3U);
-  EXPECT_EQ(regions[0].at("region"), "left");
-  EXPECT_EQ(regions[1].at("region"), "right");
-  EXPECT_EQ(regions[2].at("region"), "interpolation");
+  EXPECT_EQ(regions[0].at("region"), "I1");
+  EXPECT_EQ(regions[1].at("region"), "I2");
+  EXPECT_EQ(regions[2].at("region"), "between I1 and I2");
   EXPECT_EQ(regions[0].at("trajectories"), 2);
   EXPECT_EQ(regions[1].at("trajectories"), 2);
   EXPECT_EQ(regions[2].at("trajectories"), 4);
