@@ -239,6 +239,17 @@ struct EvalOptions {
   std::string approach = "nearest";  ///< reachable / scene-model: where each target is approached from
 };
 
+// A grid without targets has no reachability to report (0 of 0 is not 0 %): `command` fails
+// saying why each point was left out, with `json` as its result.
+void requireTargets(const std::string& command, const app::ReachableResult& result, Json json) {
+  if (result.targets > 0) return;
+  throw CommandFailed(command + ": none of the grid's " + std::to_string(result.grid_points) + " points is a target (" +
+                          std::to_string(result.out_of_reach) + " out of reach, " + std::to_string(result.in_obstacles) +
+                          " inside obstacles, " + std::to_string(result.excluded) + " excluded, " +
+                          std::to_string(result.inaccessible) + " inaccessible)",
+                      std::move(json));
+}
+
 Json runReachable(const EvalOptions& options) {
   const Session session = loadSession(options.session);
   const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
@@ -295,13 +306,7 @@ Json runReachable(const EvalOptions& options) {
   }
   json["scene_targets"] = scene_targets;
   json["scene_targets_reached"] = scene_targets_reached;
-  if (result.targets == 0) {
-    throw CommandFailed("eval reachable: none of the grid's " + std::to_string(result.grid_points) + " points is a target (" +
-                            std::to_string(result.out_of_reach) + " out of reach, " + std::to_string(result.in_obstacles) +
-                            " inside obstacles, " + std::to_string(result.excluded) + " excluded, " +
-                            std::to_string(result.inaccessible) + " inaccessible)",
-                        std::move(json));
-  }
+  requireTargets("eval reachable", result, json);
   return json;
 }
 
@@ -334,12 +339,26 @@ Json runSceneModel(const EvalOptions& options) {
       app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
                              session.data.X, [](double f) { reportProgress("eval scene-model", f); },
                              app::parseApproach(options.approach));
+  // Without targets the reachability run ended in no posture, M is empty and every point of T
+  // would count as model: the same failure as `eval reachable` on this session.
+  requireTargets("eval scene-model", reachable,
+                 {{"targets", reachable.targets},
+                  {"grid_points", reachable.grid_points},
+                  {"out_of_reach", reachable.out_of_reach},
+                  {"in_obstacles", reachable.in_obstacles},
+                  {"excluded", reachable.excluded},
+                  {"inaccessible", reachable.inaccessible},
+                  {"spacing_m", grid.spacing},
+                  {"learner", options.learner},
+                  {"areas", session.q_fixed.size()}});
   const app::SceneModelResult model = app::evaluateSceneModel(*session.model, session.scene_data, grid, reachable.final_postures);
   return {{"workspace_points", model.workspace_points},
           {"model_points", model.model_points},
           {"obstacle_points", model.obstacle_points},
           {"obstacle_points_enclosed", model.obstacle_points_enclosed},
-          {"obstacle_enclosed_fraction", model.obstacle_enclosed_fraction},
+          // Without obstacle points there is no fraction of them enclosed (0 of 0 is not 0 %).
+          {"obstacle_enclosed_fraction",
+           model.obstacle_points > 0 ? Json(model.obstacle_enclosed_fraction) : Json(nullptr)},
           {"free_points_in_model", model.free_points_in_model},
           {"reachable_fraction", reachable.reachable_fraction},
           {"spacing_m", grid.spacing},

@@ -130,6 +130,38 @@ TEST(EvalReachableCli, AGridWithNoTargetFailsSayingWhereItsPointsWent) {
   std::filesystem::remove(scene);
 }
 
+// Eq. 4.1's model is built from the reachability run's final postures: without a target there
+// are none, and scene-model fails as eval reachable does (it reported every point as model).
+TEST(EvalSceneModelCli, AGridWithNoTargetFailsAsEvalReachableDoes) {
+  const auto scene = scratchDir() / "far_grid_model.yaml";
+  writeText(scene, "name: far_grid_model\ngrid: {lower: [2.5, 2.5, 0.1], upper: [3.0, 3.0, 0.5], spacing: 0.25}\n");
+  const auto session = tinySession(scene.string(), "far-grid-model.json");
+  const auto result = runCliBinary("eval scene-model --session " + session.string());
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  EXPECT_NE(result.err.find("eval scene-model: none of the grid's 18 points is a target (18 out of reach"), std::string::npos)
+      << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  const nlohmann::json json = result.json();
+  EXPECT_EQ(json.at("targets"), 0);
+  EXPECT_FALSE(json.contains("model")) << json.dump();
+  std::filesystem::remove(session);
+  std::filesystem::remove(scene);
+}
+
+// A grid with no point inside an obstacle has no fraction of such points enclosed (0 of 0).
+TEST(EvalSceneModelCli, WithoutObstaclePointsTheEnclosedFractionIsNull) {
+  const auto scene = scratchDir() / "free_grid.yaml";
+  writeText(scene, "name: free_grid\ngrid: {lower: [0.3, -0.2, 0.3], upper: [0.5, 0.2, 0.5], spacing: 0.2}\n");
+  const auto session = tinySession(scene.string(), "free-grid.json");
+  const auto result = runCliBinary("eval scene-model --session " + session.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json json = result.json();
+  EXPECT_EQ(json.at("obstacle_points"), 0);
+  EXPECT_TRUE(json.at("obstacle_enclosed_fraction").is_null()) << json.at("obstacle_enclosed_fraction");
+  std::filesystem::remove(session);
+  std::filesystem::remove(scene);
+}
+
 TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   // One target where the first area's posture puts the tip, one far beyond the arm's reach.
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
