@@ -459,18 +459,22 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     struct Box {
       Eigen::Vector3d lower, upper;
     };
-    const Box left{areas[0].samples.rowwise().minCoeff(), areas[0].samples.rowwise().maxCoeff()};
-    const Box right{areas[1].samples.rowwise().minCoeff(), areas[1].samples.rowwise().maxCoeff()};
-    // The interpolation area: between the boxes along the axis that separates their centres
-    // most, spanning both boxes along the other two (Fig. 3.7).
-    Box between{left.lower.cwiseMin(right.lower), left.upper.cwiseMax(right.upper)};
-    Eigen::Index axis = 0;
-    (0.5 * (left.lower + left.upper) - 0.5 * (right.lower + right.upper)).cwiseAbs().maxCoeff(&axis);
-    const bool left_low = left.lower[axis] + left.upper[axis] < right.lower[axis] + right.upper[axis];
-    const Box& low = left_low ? left : right;
-    const Box& high = left_low ? right : left;
-    between.lower[axis] = std::min(low.upper[axis], high.lower[axis]);
-    between.upper[axis] = std::max(low.upper[axis], high.lower[axis]);
+    const auto sampleBox = [](const EvaluatedArea& area) {
+      return Box{area.samples.rowwise().minCoeff(), area.samples.rowwise().maxCoeff()};
+    };
+    // The interpolation area of two boxes: between them along the axis that separates their
+    // centres most, spanning both along the other two (Fig. 3.7).
+    const auto boxBetween = [](const Box& a, const Box& b) {
+      Box between{a.lower.cwiseMin(b.lower), a.upper.cwiseMax(b.upper)};
+      Eigen::Index axis = 0;
+      (0.5 * (a.lower + a.upper) - 0.5 * (b.lower + b.upper)).cwiseAbs().maxCoeff(&axis);
+      const bool a_low = a.lower[axis] + a.upper[axis] < b.lower[axis] + b.upper[axis];
+      const Box& low = a_low ? a : b;
+      const Box& high = a_low ? b : a;
+      between.lower[axis] = std::min(low.upper[axis], high.lower[axis]);
+      between.upper[axis] = std::max(low.upper[axis], high.lower[axis]);
+      return between;
+    };
     // A point of the box the way from `from` to it is passable along (any passable point when
     // there is no `from` yet).
     const auto draw = [&](const std::string& name, const Box& box, const Eigen::Vector3d* from) {
@@ -491,9 +495,18 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
         from = to;
       }
     };
-    chain("left", left, per_area);
-    chain("right", right, per_area);
-    chain("interpolation", between, 2 * per_area);
+    // Every area is a region of its own (Tab. 3.2's left and right). The interpolation regions
+    // lie between areas taught one after the other: the tutor moves on to a neighbouring area,
+    // and N areas give N - 1 such regions, with two areas the thesis' one between them.
+    std::vector<std::string> names;
+    for (std::size_t k = 0; k < areas.size(); ++k) {
+      names.push_back(areas[k].name.empty() ? "area " + std::to_string(k + 1) : areas[k].name);
+    }
+    for (std::size_t k = 0; k < areas.size(); ++k) chain(names[k], sampleBox(areas[k]), per_area);
+    for (std::size_t k = 0; k + 1 < areas.size(); ++k) {
+      chain("between " + names[k] + " and " + names[k + 1], boxBetween(sampleBox(areas[k]), sampleBox(areas[k + 1])),
+            2 * per_area);
+    }
   }
   robot::CollisionWorld world(model, scene);
   robot::Kinematics kinematics(model);
@@ -548,6 +561,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
         return line.back();
       };
       const MotionOutcome outcome = executeMotion(model, parameters, map, q, along, duration, 0.5, &world);
+      out.waypoints.push_back(waypoints);
       errors.push_back(outcome.mean_error_m);
       out.e_task_max_mm = std::max(out.e_task_max_mm, 1e3 * outcome.max_error_m);
       if (outcome.collided) {

@@ -215,8 +215,9 @@ struct CollidedTrajectory {
 };
 /// Tab. 3.2: E_task and E_coll along straight trajectories per region. With the scene's
 /// evaluation trajectories (grouped left / right / interpolation) those are run; otherwise
-/// `per_area` random straight trajectories in the axis-aligned box around each of the first two
-/// areas' samples and 2·per_area in the box between them (the thesis: 25 / 25 / 50).
+/// `per_area` random straight trajectories in the axis-aligned box around each area's samples
+/// (a region named after the area) and 2·per_area in the box between each two areas taught one
+/// after the other ("between A and B"); with two areas the thesis' 25 / 25 / 50.
 struct TrajectoryRegionResult {
   std::string name;
   int trajectories = 0;
@@ -226,6 +227,8 @@ struct TrajectoryRegionResult {
   int collisions = 0;           ///< E_coll: trajectories with a contact
   std::map<std::string, int> contacts;  ///< collided trajectories per first contact "body/other"
   std::vector<CollidedTrajectory> collided;  ///< in the order they ran
+  /// Each trajectory's waypoints [m, W] in the order they ran (a drawn one: its start and end).
+  std::vector<std::vector<Eigen::Vector3d>> waypoints;
   /// "body/other" where every area's taught posture, moved to the region's first point, touches
   /// something (the region then starts in the nearest area's posture); empty otherwise.
   std::string start_contact;
@@ -238,6 +241,7 @@ struct TrajectoryResult {
 struct EvaluatedArea {
   Eigen::MatrixXd samples;  ///< 3 x L [m, W]
   Eigen::VectorXd q_fixed;  ///< [rad]
+  std::string name;         ///< as the session names it ("I1", "auto_3"); empty: "area <k>" (k from 1)
 };
 TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robot::Scene& scene,
                                       const robot::ParameterSet& parameters, const learning::Learner& map,

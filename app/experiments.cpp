@@ -101,7 +101,7 @@ robot::EvaluationGrid sceneGrid(const robot::Scene& scene, double spacing) {
 
 std::vector<EvaluatedArea> evaluatedAreas(const TaughtSystem& taught) {
   std::vector<EvaluatedArea> out;
-  for (const auto& area : taught.areas) out.push_back({area.X, area.q_fixed});
+  for (const auto& area : taught.areas) out.push_back({area.X, area.q_fixed, area.name});
   return out;
 }
 

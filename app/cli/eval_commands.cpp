@@ -49,6 +49,9 @@ struct Session {
   learning::TrainingSet data;
   std::vector<Eigen::VectorXd> q_fixed;
   std::vector<std::string> area_names;  ///< how messages name area k: as the file counts it
+  /// Area k's name as teach gave it ("I1", "auto_3"), which the drawn trajectories' regions
+  /// carry; as the file counts it where the file keeps no name (recordings).
+  std::vector<std::string> taught_names;
   std::unique_ptr<planning::Itm> itm;
 };
 
@@ -113,6 +116,7 @@ Session loadRecordedSession(const std::string& file) {
     taught.push_back(&area);
     session.q_fixed.push_back(area.q_fixed);
     session.area_names.push_back(std::to_string(area.index));
+    session.taught_names.push_back(std::to_string(area.index));
     count += area.X.cols();
   }
   if (count == 0) throw InputError("session: no training samples");
@@ -164,6 +168,8 @@ Session loadSession(const std::string& file) {
     for (const Json& area : json.at("areas")) {
       session.q_fixed.push_back(vectorOf(area.at("q_fixed"), n, "q_fixed"));
       session.area_names.push_back(std::to_string(k + 1));
+      const std::string taught_name = area.value("name", "");
+      session.taught_names.push_back(taught_name.empty() ? std::to_string(k + 1) : taught_name);
       const Json& x = area.at("x");
       const Json& q = area.at("q");
       if (x.size() != q.size()) throw InputError("session: area samples x and q differ in count");
@@ -233,6 +239,17 @@ struct EvalOptions {
   std::string approach = "nearest";  ///< reachable / scene-model: where each target is approached from
 };
 
+// A grid without targets has no reachability to report (0 of 0 is not 0 %): `command` fails
+// saying why each point was left out, with `json` as its result.
+void requireTargets(const std::string& command, const app::ReachableResult& result, Json json) {
+  if (result.targets > 0) return;
+  throw CommandFailed(command + ": none of the grid's " + std::to_string(result.grid_points) + " points is a target (" +
+                          std::to_string(result.out_of_reach) + " out of reach, " + std::to_string(result.in_obstacles) +
+                          " inside obstacles, " + std::to_string(result.excluded) + " excluded, " +
+                          std::to_string(result.inaccessible) + " inaccessible)",
+                      std::move(json));
+}
+
 Json runReachable(const EvalOptions& options) {
   const Session session = loadSession(options.session);
   const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
@@ -289,13 +306,7 @@ Json runReachable(const EvalOptions& options) {
   }
   json["scene_targets"] = scene_targets;
   json["scene_targets_reached"] = scene_targets_reached;
-  if (result.targets == 0) {
-    throw CommandFailed("eval reachable: none of the grid's " + std::to_string(result.grid_points) + " points is a target (" +
-                            std::to_string(result.out_of_reach) + " out of reach, " + std::to_string(result.in_obstacles) +
-                            " inside obstacles, " + std::to_string(result.excluded) + " excluded, " +
-                            std::to_string(result.inaccessible) + " inaccessible)",
-                        std::move(json));
-  }
+  requireTargets("eval reachable", result, json);
   return json;
 }
 
@@ -310,6 +321,7 @@ std::vector<app::EvaluatedArea> sessionAreas(const Session& session) {
     if (columns.empty()) continue;
     app::EvaluatedArea area;
     area.q_fixed = session.q_fixed[k];
+    area.name = session.taught_names[k];
     area.samples.resize(3, static_cast<Eigen::Index>(columns.size()));
     for (std::size_t i = 0; i < columns.size(); ++i) area.samples.col(static_cast<Eigen::Index>(i)) = session.data.X.col(columns[i]);
     areas.push_back(area);
@@ -327,12 +339,26 @@ Json runSceneModel(const EvalOptions& options) {
       app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
                              session.data.X, [](double f) { reportProgress("eval scene-model", f); },
                              app::parseApproach(options.approach));
+  // Without targets the reachability run ended in no posture, M is empty and every point of T
+  // would count as model: the same failure as `eval reachable` on this session.
+  requireTargets("eval scene-model", reachable,
+                 {{"targets", reachable.targets},
+                  {"grid_points", reachable.grid_points},
+                  {"out_of_reach", reachable.out_of_reach},
+                  {"in_obstacles", reachable.in_obstacles},
+                  {"excluded", reachable.excluded},
+                  {"inaccessible", reachable.inaccessible},
+                  {"spacing_m", grid.spacing},
+                  {"learner", options.learner},
+                  {"areas", session.q_fixed.size()}});
   const app::SceneModelResult model = app::evaluateSceneModel(*session.model, session.scene_data, grid, reachable.final_postures);
   return {{"workspace_points", model.workspace_points},
           {"model_points", model.model_points},
           {"obstacle_points", model.obstacle_points},
           {"obstacle_points_enclosed", model.obstacle_points_enclosed},
-          {"obstacle_enclosed_fraction", model.obstacle_enclosed_fraction},
+          // Without obstacle points there is no fraction of them enclosed (0 of 0 is not 0 %).
+          {"obstacle_enclosed_fraction",
+           model.obstacle_points > 0 ? Json(model.obstacle_enclosed_fraction) : Json(nullptr)},
           {"free_points_in_model", model.free_points_in_model},
           {"reachable_fraction", reachable.reachable_fraction},
           {"spacing_m", grid.spacing},
@@ -445,7 +471,7 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
   trajectories->add_option("--session", options->session, "session file written by teach")->required();
   trajectories->add_option("--learner", options->learner, "elm, oselm or llm");
-  trajectories->add_option("--per-area", options->per_area, "trajectories per training area without scene trajectories (interpolation: twice)")->check(finiteRange(1, 10000));
+  trajectories->add_option("--per-area", options->per_area, "trajectories per training area without scene trajectories (between areas taught one after the other: twice)")->check(finiteRange(1, 10000));
   trajectories->add_option("--speed", options->speed, "tip speed [m/s]")->check(finiteRange(0.01, 1.0));
   trajectories->add_option("--seed", options->seed, "random seed for drawn trajectories")->check(seedValidator());
   trajectories->callback([&runner, options] { runner.select([options] { return runTrajectories(*options); }); });

@@ -152,6 +152,53 @@ TEST(Experiments, TrajectoriesBetweenTwoAreasAreAccurateAndCountedPerRegion) {
   }
 }
 
+TEST(Experiments, DrawnTrajectoriesRunInEveryAreaNamedAfterItAndBetweenAreasTaughtOneAfterTheOther) {
+  // Three 5 cm areas 0.15 m apart along y, taught from +y to -y: each is a region under its own
+  // name, and the two regions between them lie between the first and second, second and third.
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  const std::vector<std::string> names = {"I1", "auto_2", "I3"};
+  std::vector<EvaluatedArea> areas(3);
+  for (std::size_t k = 0; k < 3; ++k) {
+    areas[k].name = names[k];
+    areas[k].q_fixed = ready();
+    const Eigen::Vector3d centre = tip + Eigen::Vector3d(0.0, 0.15 - 0.15 * static_cast<double>(k), 0.0);
+    areas[k].samples.resize(3, 2);
+    areas[k].samples.col(0) = centre - Eigen::Vector3d::Constant(0.025);
+    areas[k].samples.col(1) = centre + Eigen::Vector3d::Constant(0.025);
+  }
+  robot::Scene empty;
+  const auto map = constantMap();
+  const TrajectoryResult result = evaluateTrajectories(lwr4(), empty, sceneParameters(empty), *map, areas, 2, 0.1, 1);
+  EXPECT_FALSE(result.from_scene);
+  // Each region with the box its points must lie in: an area's samples' box, or between two
+  // areas' boxes along y (the axis separating them) and spanning them along x and z.
+  struct Expected {
+    std::string name;
+    int trajectories;
+    Eigen::Vector3d lower, upper;
+  };
+  std::vector<Expected> expected;
+  for (std::size_t k = 0; k < 3; ++k) {
+    expected.push_back({names[k], 2, areas[k].samples.col(0), areas[k].samples.col(1)});
+  }
+  expected.push_back({"between I1 and auto_2", 4, tip + Eigen::Vector3d(-0.025, 0.025, -0.025), tip + Eigen::Vector3d(0.025, 0.125, 0.025)});
+  expected.push_back({"between auto_2 and I3", 4, tip + Eigen::Vector3d(-0.025, -0.125, -0.025), tip + Eigen::Vector3d(0.025, -0.025, 0.025)});
+  ASSERT_EQ(result.regions.size(), expected.size());
+  for (std::size_t r = 0; r < expected.size(); ++r) {
+    const TrajectoryRegionResult& region = result.regions[r];
+    EXPECT_EQ(region.name, expected[r].name);
+    EXPECT_EQ(region.trajectories, expected[r].trajectories) << region.name;
+    ASSERT_EQ(static_cast<int>(region.waypoints.size()), region.trajectories) << region.name;
+    for (const auto& waypoints : region.waypoints) {
+      ASSERT_EQ(waypoints.size(), 2u) << region.name;
+      for (const Eigen::Vector3d& p : waypoints) {
+        EXPECT_TRUE((p.array() >= expected[r].lower.array() - 1e-9).all() && (p.array() <= expected[r].upper.array() + 1e-9).all())
+            << region.name << ": " << p.transpose();
+      }
+    }
+  }
+}
+
 TEST(Experiments, TrajectoriesThatMeetAnObstacleAreNamedWithTheirContactAndWhereTheTipWasHeaded) {
   const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
   robot::Scene scene;
@@ -216,12 +263,12 @@ TEST(Experiments, DrawnTrajectoriesThatMeetAnObstacleAreNamedAfterTheirRegion) {
   EXPECT_TRUE(result.regions[0].collided.empty());
   EXPECT_TRUE(result.regions[1].collided.empty());
   const TrajectoryRegionResult& between = result.regions[2];
-  ASSERT_EQ(between.name, "interpolation");
+  ASSERT_EQ(between.name, "between area 1 and area 2");
   ASSERT_FALSE(between.collided.empty());
   EXPECT_EQ(static_cast<int>(between.collided.size()), between.collisions);
   for (const CollidedTrajectory& trajectory : between.collided) {
-    ASSERT_TRUE(trajectory.name.starts_with("interpolation_")) << trajectory.name;
-    const int k = std::stoi(trajectory.name.substr(std::string("interpolation_").size()));
+    ASSERT_TRUE(trajectory.name.starts_with("between area 1 and area 2_")) << trajectory.name;
+    const int k = std::stoi(trajectory.name.substr(std::string("between area 1 and area 2_").size()));
     EXPECT_GE(k, 1);
     EXPECT_LE(k, 6);
     EXPECT_TRUE(trajectory.contact.ends_with("/plate")) << trajectory.contact;
@@ -262,7 +309,7 @@ TEST(Experiments, DrawnTrajectoriesBetweenAreasOnEitherSideOfTheRobotKeepOffItsB
   const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), map, areas, 3, 0.1, 1);
   ASSERT_EQ(result.regions.size(), 3u);
   const TrajectoryRegionResult& between = result.regions[2];
-  ASSERT_EQ(between.name, "interpolation");
+  ASSERT_EQ(between.name, "between area 1 and area 2");
   // Through the base, the tip would trail its target by decimetres.
   EXPECT_LT(between.e_task_max_mm, 50.0);
 }
@@ -296,7 +343,7 @@ TEST(Experiments, ARegionWhoseStartTouchesSomethingStartsInTheAreaInstead) {
   const auto map = constantMap();
   const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 3, 0.1, 1);
   const TrajectoryRegionResult& between = result.regions[2];
-  ASSERT_EQ(between.name, "interpolation");
+  ASSERT_EQ(between.name, "between area 1 and area 2");
   EXPECT_TRUE(between.start_contact.ends_with("/plate")) << between.start_contact;
   // Every trajectory starts in the area's free posture and meets the plate on its way, never
   // at its first check as one started in contact would.

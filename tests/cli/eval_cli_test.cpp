@@ -44,6 +44,7 @@ std::filesystem::path tinySession(const std::string& scene_name, const std::stri
   nlohmann::json nodes = nlohmann::json::array();
   nlohmann::json edges = nlohmann::json::array();
   for (const Eigen::VectorXd& q_fixed : postures) {
+    const std::string area_name = "I" + std::to_string(areas.size() + 1);  // as teach names taught areas
     nlohmann::json x = nlohmann::json::array();
     nlohmann::json q = nlohmann::json::array();
     for (int l = 0; l < 40; ++l) {
@@ -59,7 +60,7 @@ std::filesystem::path tinySession(const std::string& scene_name, const std::stri
         nodes.push_back({{"x", {p.x(), p.y(), p.z()}}, {"q", q.back()}});
       }
     }
-    areas.push_back({{"q_fixed", std::vector<double>(q_fixed.data(), q_fixed.data() + q_fixed.size())}, {"x", x}, {"q", q}});
+    areas.push_back({{"name", area_name}, {"q_fixed", std::vector<double>(q_fixed.data(), q_fixed.data() + q_fixed.size())}, {"x", x}, {"q", q}});
   }
   const nlohmann::json session = {{"format", "flexirob-session-json"},
                                   {"version", 1},
@@ -129,6 +130,38 @@ TEST(EvalReachableCli, AGridWithNoTargetFailsSayingWhereItsPointsWent) {
   std::filesystem::remove(scene);
 }
 
+// Eq. 4.1's model is built from the reachability run's final postures: without a target there
+// are none, and scene-model fails as eval reachable does (it reported every point as model).
+TEST(EvalSceneModelCli, AGridWithNoTargetFailsAsEvalReachableDoes) {
+  const auto scene = scratchDir() / "far_grid_model.yaml";
+  writeText(scene, "name: far_grid_model\ngrid: {lower: [2.5, 2.5, 0.1], upper: [3.0, 3.0, 0.5], spacing: 0.25}\n");
+  const auto session = tinySession(scene.string(), "far-grid-model.json");
+  const auto result = runCliBinary("eval scene-model --session " + session.string());
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  EXPECT_NE(result.err.find("eval scene-model: none of the grid's 18 points is a target (18 out of reach"), std::string::npos)
+      << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  const nlohmann::json json = result.json();
+  EXPECT_EQ(json.at("targets"), 0);
+  EXPECT_FALSE(json.contains("model")) << json.dump();
+  std::filesystem::remove(session);
+  std::filesystem::remove(scene);
+}
+
+// A grid with no point inside an obstacle has no fraction of such points enclosed (0 of 0).
+TEST(EvalSceneModelCli, WithoutObstaclePointsTheEnclosedFractionIsNull) {
+  const auto scene = scratchDir() / "free_grid.yaml";
+  writeText(scene, "name: free_grid\ngrid: {lower: [0.3, -0.2, 0.3], upper: [0.5, 0.2, 0.5], spacing: 0.2}\n");
+  const auto session = tinySession(scene.string(), "free-grid.json");
+  const auto result = runCliBinary("eval scene-model --session " + session.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json json = result.json();
+  EXPECT_EQ(json.at("obstacle_points"), 0);
+  EXPECT_TRUE(json.at("obstacle_enclosed_fraction").is_null()) << json.at("obstacle_enclosed_fraction");
+  std::filesystem::remove(session);
+  std::filesystem::remove(scene);
+}
+
 TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   // One target where the first area's posture puts the tip, one far beyond the arm's reach.
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
@@ -162,9 +195,9 @@ TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
   EXPECT_DOUBLE_EQ(json.at("speed_m_s").get<double>(), 0.2);
   const nlohmann::json& regions = json.at("regions");
   ASSERT_EQ(regions.size(), 3U);
-  EXPECT_EQ(regions[0].at("region"), "left");
-  EXPECT_EQ(regions[1].at("region"), "right");
-  EXPECT_EQ(regions[2].at("region"), "interpolation");
+  EXPECT_EQ(regions[0].at("region"), "I1");
+  EXPECT_EQ(regions[1].at("region"), "I2");
+  EXPECT_EQ(regions[2].at("region"), "between I1 and I2");
   EXPECT_EQ(regions[0].at("trajectories"), 2);
   EXPECT_EQ(regions[1].at("trajectories"), 2);
   EXPECT_EQ(regions[2].at("trajectories"), 4);
