@@ -188,7 +188,8 @@ TEST(EvalReachableCli, EvaluatesTheRobotAndSceneTheSessionStoresNotTheFilesChang
   std::filesystem::remove(robot_dir / "lwr4.urdf");                                 // and the URDF moved away
   const auto result = runCliBinary("eval reachable --spacing 0.3 --session " + session.string());
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  const nlohmann::json& targets = result.json().at("scene_targets");
+  const nlohmann::json json = result.json();
+  const nlohmann::json& targets = json.at("scene_targets");
   ASSERT_EQ(targets.size(), 2U);
   EXPECT_TRUE(targets[0].at("reached").get<bool>()) << targets[0].dump();
   EXPECT_NE(result.err.find("note: the scene '" + scene.string() + "' is not the one the session was taught with"), std::string::npos)
