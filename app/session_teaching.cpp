@@ -115,6 +115,9 @@ RecordedTeaching readRecordedTeaching(const SessionReader& reader, bool read_gra
   teaching.robot = reader.meta("robot_name");
   teaching.tip = reader.meta("tip_link");
   teaching.scene = reader.meta("scene_name", "empty");
+  teaching.robot_urdf = reader.metadata().robot_urdf;
+  teaching.scene_text = reader.metadata().scene_text;
+  teaching.closed_cleanly = !reader.meta("end_time_utc").empty();
   teaching.areas = replayTeaching(reader.areas(), reader.samples(), reader.signals());
 
   const std::optional<ItmRecord> graph = read_graph ? reader.lastItmSnapshot() : std::nullopt;

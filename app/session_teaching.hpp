@@ -33,6 +33,10 @@ struct RecordedArea {
 
 struct RecordedTeaching {
   std::string robot, tip, scene;
+  /// The URDF and scene text the session was taught with (empty in sessions that predate them).
+  std::string robot_urdf, scene_text;
+  /// False while the session is being written or after it was interrupted (no end_time_utc).
+  bool closed_cleanly = false;
   std::vector<RecordedArea> areas;  ///< by index, ascending
   std::optional<planning::Itm> itm; ///< the last ITM snapshot, if any
 };

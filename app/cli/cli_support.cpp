@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <set>
 
 #include <unistd.h>
@@ -14,9 +15,12 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <iostream>
 
 #include "robot/errors.hpp"
+#include "robot/resources.hpp"
 
 namespace flexirob::cli {
 
@@ -89,6 +93,57 @@ robot::Scene loadSceneNoting(const std::string& name_or_path) {
   if (noted.insert(name_or_path).second) {
     for (const std::string& note : robot::sceneNotes(scene)) std::fprintf(stderr, "note: %s\n", note.c_str());
   }
+  return scene;
+}
+
+namespace {
+
+// The whole file, or nullopt when it cannot be read (moved or deleted since teaching).
+std::optional<std::string> fileText(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+robot::RobotModel loadSessionRobot(const std::string& reference, const std::string& stored_urdf, const std::string& tip) {
+  if (stored_urdf.empty()) return robot::RobotModel::fromUrdfFile(resolveRobotPath(reference), tip);
+  const auto& builtins = builtinRobotNames();
+  const bool builtin = std::find(builtins.begin(), builtins.end(), reference) != builtins.end();
+  // A session stores a file robot by its absolute path (portableReference), so its folder is known
+  // even after the file has gone.
+  const std::filesystem::path file = builtin ? resolveRobotPath(reference) : std::filesystem::path(reference);
+  if (fileText(file) != stored_urdf) {
+    std::fprintf(stderr, "note: the robot '%s' is not the one the session was taught with (changed or missing); the session's stored copy is used\n",
+                 reference.c_str());
+  }
+  return robot::RobotModel::fromUrdfString(stored_urdf, file.parent_path(), tip);
+}
+
+robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text) {
+  if (stored_scene_text.empty()) return loadSceneNoting(reference);
+  const auto& builtins = robot::builtinSceneNames();
+  const bool empty = reference.empty() || reference == "empty";
+  const bool builtin = !empty && std::find(builtins.begin(), builtins.end(), reference) != builtins.end();
+  const std::filesystem::path file =
+      empty ? std::filesystem::path() : builtin ? resourceDir() / "scenes" / (reference + ".yaml") : std::filesystem::path(reference);
+  // The session stores the scene as sceneToYaml wrote it, so the file is compared in that form.
+  std::optional<std::string> on_disk;
+  try {
+    on_disk = robot::sceneToYaml(robot::loadScene(reference));
+  } catch (const InputError&) {
+    // Moved, deleted or no longer valid: the stored copy is all there is.
+  }
+  if (on_disk != stored_scene_text) {
+    std::fprintf(stderr, "note: the scene '%s' is not the one the session was taught with (changed or missing); the session's stored copy is used\n",
+                 reference.c_str());
+  }
+  const std::filesystem::path base_dir = file.empty() ? std::filesystem::current_path() : file.parent_path();
+  robot::Scene scene = robot::parseScene(stored_scene_text, base_dir, "scene stored in the session");
+  for (const std::string& note : robot::sceneNotes(scene)) std::fprintf(stderr, "note: %s\n", note.c_str());
   return scene;
 }
 

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "app/cli/number_list.hpp"
+#include "robot/robot_model.hpp"
 #include "robot/scene.hpp"
 
 namespace flexirob::app {
@@ -104,6 +105,14 @@ void checkOutputPath(const std::string& option, const std::string& path);
 
 /// robot::loadScene, and its sceneNotes on stderr ("note: ..."), once per scene and process.
 robot::Scene loadSceneNoting(const std::string& name_or_path);
+
+/// The robot and the scene a session was taught with, parsed from the copies the session stores
+/// (`stored_urdf`, `stored_scene_text`) so that editing or moving their files after teaching does
+/// not change what is evaluated or drawn. Relative mesh paths resolve against the original file's
+/// folder (the resources folder for built-in names). Without a stored copy (older sessions) the
+/// file is read as before; a file that now differs from the stored copy is said in a "note:" line.
+robot::RobotModel loadSessionRobot(const std::string& reference, const std::string& stored_urdf, const std::string& tip);
+robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text);
 
 /// Progress on stderr for long work ("what: 42%"); silent when stderr is not a terminal
 /// unless FLEXIROB_PROGRESS=1.

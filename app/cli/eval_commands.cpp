@@ -2,6 +2,7 @@
 // `teach` (DESIGN §6). The map q_c(x) is learned again from the session's samples with the
 // requested learner; the ITM graph is the session's. Sessions are SQLite recordings (the session
 // recorder) or the JSON files `teach --out F.json` writes.
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -100,10 +101,13 @@ Session loadRecordedSession(const std::string& file) {
   session.robot = teaching.robot;
   session.tip = teaching.tip;
   session.scene = teaching.scene;
-  session.model = std::make_unique<robot::RobotModel>(
-      robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
-  session.scene_data = loadSceneNoting(session.scene);
+  session.model = std::make_unique<robot::RobotModel>(loadSessionRobot(session.robot, teaching.robot_urdf, session.tip));
+  session.scene_data = loadSessionScene(session.scene, teaching.scene_text);
   robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
+  if (!teaching.closed_cleanly) {
+    std::fprintf(stderr, "note: the session '%s' was not closed cleanly (interrupted, or still being written); the evaluation covers what was recorded\n",
+                 file.c_str());
+  }
   const int n = session.model->dof();
   // The complete areas with samples, labelled by their position here: q_fixed[k] is area k's.
   std::vector<const app::RecordedArea*> taught;
@@ -119,7 +123,10 @@ Session loadRecordedSession(const std::string& file) {
     session.taught_names.push_back(std::to_string(area.index));
     count += area.X.cols();
   }
-  if (count == 0) throw InputError("session: no training samples");
+  if (count == 0) {
+    throw InputError(teaching.closed_cleanly ? "session: no training samples"
+                                             : "session: '" + file + "' was interrupted before any area was finished; nothing to evaluate");
+  }
   session.data.X.resize(3, count);
   session.data.Y.resize(n, count);
   Eigen::Index l = 0;
@@ -159,8 +166,8 @@ Session loadSession(const std::string& file) {
     session.tip = json.value("tip", "");
     session.scene = json.at("scene").get<std::string>();
     session.model = std::make_unique<robot::RobotModel>(
-        robot::RobotModel::fromUrdfFile(resolveRobotPath(session.robot), session.tip));
-    session.scene_data = loadSceneNoting(session.scene);
+        loadSessionRobot(session.robot, json.value("robot_urdf", ""), session.tip));
+    session.scene_data = loadSessionScene(session.scene, json.value("scene_text", ""));
     robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
     const int n = session.model->dof();
     std::vector<Eigen::VectorXd> xs, qs;

@@ -110,6 +110,7 @@ std::vector<Eigen::Vector3d> pointList(const Json& object, const char* key, cons
 // final ITM graph (positions of the nodes, the edges).
 struct SessionOverlay {
   std::string robot, tip, scene;
+  std::string robot_urdf, scene_text;  ///< the copies taught with (empty in older sessions)
   std::vector<render::AreaSamples> areas;
   std::vector<Eigen::VectorXd> q_fixed;
   std::vector<std::pair<int, Eigen::Vector3d>> nodes;
@@ -125,6 +126,8 @@ SessionOverlay sessionFromJson(const Json& json, const std::string& file) {
     session.robot = json.at("robot").get<std::string>();
     if (json.contains("tip")) session.tip = json.at("tip").get<std::string>();
     session.scene = json.at("scene").get<std::string>();
+    if (json.contains("robot_urdf")) session.robot_urdf = json.at("robot_urdf").get<std::string>();
+    if (json.contains("scene_text")) session.scene_text = json.at("scene_text").get<std::string>();
     int k = 0;
     for (const Json& area : json.at("areas")) {
       render::AreaSamples samples;
@@ -159,6 +162,8 @@ SessionOverlay sessionFromRecording(const std::string& file) {
   session.robot = teaching.robot;
   session.tip = teaching.tip;
   session.scene = teaching.scene;
+  session.robot_urdf = teaching.robot_urdf;
+  session.scene_text = teaching.scene_text;
   for (const app::RecordedArea& area : teaching.areas) {
     render::AreaSamples cloud;
     cloud.area = area.index;
@@ -221,7 +226,7 @@ Json renderPicture(const RenderOptions& options) {
   if (!options.session.empty()) session = loadSessionOverlay(options.session);
   // Scene and robot: the options', else the session's, else an empty scene and the scene's robot.
   const std::string scene_name = !options.scene.empty() ? options.scene : session ? session->scene : "";
-  robot::Scene scene = loadSceneNoting(scene_name);
+  robot::Scene scene = options.scene.empty() && session ? loadSessionScene(session->scene, session->scene_text) : loadSceneNoting(scene_name);
   const std::string robot_name = !options.robot.empty() ? options.robot : session ? session->robot : robot::robotFor("", scene);
   if (session && !options.robot.empty()) {
     // The session's postures and samples belong to its robot: drawn on another arm of the same
@@ -240,7 +245,8 @@ Json renderPicture(const RenderOptions& options) {
     }
   }
   const std::string tip = !options.tip.empty() ? options.tip : session && options.robot.empty() ? session->tip : "";
-  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), tip);
+  const robot::RobotModel model = options.robot.empty() && session ? loadSessionRobot(session->robot, session->robot_urdf, tip)
+                                                                   : robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), tip);
   robot::checkPosturesFit(scene, model, robot_name);
 
   // Posture: --q, else where teaching starts (the scene's home posture, else a free one).

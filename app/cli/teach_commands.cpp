@@ -16,6 +16,7 @@
 #include "app/evaluation.hpp"
 #include "app/cli/cli_support.hpp"
 #include "app/session_recorder.hpp"
+#include "app/session_write_lock.hpp"
 #include "planning/itm_file.hpp"
 #include "app/simulated_tutor.hpp"
 #include "app/workflow.hpp"
@@ -63,6 +64,8 @@ constexpr std::size_t kWarningsOnStderr = 20;
 
 Json runTeach(const TeachOptions& options) {
   checkOutputPath("--out", options.out);
+  // Held to the end of the run: a second teach into the same file is refused at its start.
+  const app::SessionWriteLock out_lock(options.out, "--out");
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);
   const robot::Scene scene = loadSceneNoting(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene);
@@ -233,6 +236,8 @@ Json runTeach(const TeachOptions& options) {
                         {"robot", robot_reference},
                         {"tip", options.tip},
                         {"scene", scene_reference},
+                        {"robot_urdf", readText(model.urdfPath())},
+                        {"scene_text", robot::sceneToYaml(scene)},
                         {"seed", options.seed},
                         {"learner", options.learner},
                         {"dof", model.dof()},

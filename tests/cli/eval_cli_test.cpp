@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "app/session_recorder.hpp"
 #include "cli_test_support.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
@@ -183,6 +184,70 @@ TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   EXPECT_EQ(json.at("scene_targets_reached"), 1);
   std::filesystem::remove(session);
   std::filesystem::remove(scene);
+}
+
+// teach stores the robot and scene it taught with in the session; a JSON session made by hand
+// gets the same copies here.
+void storeTaughtCopies(const std::filesystem::path& session_file, const std::filesystem::path& urdf,
+                       const std::string& scene_name) {
+  std::ifstream in(session_file);
+  nlohmann::json session = nlohmann::json::parse(in);
+  in.close();
+  std::ifstream urdf_in(urdf);
+  std::ostringstream urdf_text;
+  urdf_text << urdf_in.rdbuf();
+  session["robot"] = urdf.string();
+  session["robot_urdf"] = urdf_text.str();
+  session["scene_text"] = robot::sceneToYaml(robot::loadScene(scene_name));
+  writeText(session_file, session.dump());
+}
+
+TEST(EvalReachableCli, EvaluatesTheRobotAndSceneTheSessionStoresNotTheFilesChangedSinceTeaching) {
+  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
+  const Eigen::Vector3d taught = robot::tipPose(model, tinySessionPostures().front()).translation();
+  const auto scene = scratchDir() / "edited_after_teaching.yaml";
+  std::ostringstream text;
+  text << "name: edited_after_teaching\ntargets: [[" << taught.x() << ", " << taught.y() << ", " << taught.z() << "], [-3.0, 0.0, 0.3]]\n";
+  writeText(scene, text.str());
+  // The robot as a file of its own, with its meshes beside it as package://lwr4 expects.
+  const auto robot_dir = scratchDir() / "moved-robot" / "lwr4";
+  std::filesystem::remove_all(robot_dir.parent_path());
+  std::filesystem::create_directories(robot_dir.parent_path());
+  std::filesystem::copy(resolveRobotPath("lwr4").parent_path(), robot_dir, std::filesystem::copy_options::recursive);
+  const auto session = tinySession(scene.string(), "edited-after-teaching.json");
+  storeTaughtCopies(session, robot_dir / "lwr4.urdf", scene.string());
+
+  writeText(scene, "name: edited_after_teaching\ntargets: [[-3.0, 0.0, 0.3]]\n");  // the taught target is gone
+  std::filesystem::remove(robot_dir / "lwr4.urdf");                                 // and the URDF moved away
+  const auto result = runCliBinary("eval reachable --spacing 0.3 --session " + session.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json json = result.json();
+  const nlohmann::json& targets = json.at("scene_targets");
+  ASSERT_EQ(targets.size(), 2U);
+  EXPECT_TRUE(targets[0].at("reached").get<bool>()) << targets[0].dump();
+  EXPECT_NE(result.err.find("note: the scene '" + scene.string() + "' is not the one the session was taught with"), std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("note: the robot '"), std::string::npos) << result.err;
+  std::filesystem::remove(session);
+  std::filesystem::remove(scene);
+  std::filesystem::remove_all(robot_dir.parent_path());
+}
+
+TEST(EvalReachableCli, ASessionStillBeingWrittenIsNotedAndWithoutAFinishedAreaSaysItWasInterrupted) {
+  const auto file = scratchDir() / "interrupted.db";
+  std::filesystem::remove(file);
+  app::SessionMetadata metadata;
+  metadata.robot_name = "lwr4";
+  metadata.scene_name = "setup_I";
+  app::SessionRecorder recorder(file, metadata);  // open: as if teach were still running or was killed
+  recorder.recordSample({0.1, 0, Eigen::Vector3d(-0.5, 0.0, 0.4), Eigen::VectorXd::Zero(7)});
+  recorder.flush();
+  const auto result = runCliBinary("eval reachable --session " + file.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("note: the session '" + file.string() + "' was not closed cleanly"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("was interrupted before any area was finished"), std::string::npos) << result.err;
+  recorder.close();
+  std::filesystem::remove(file);
 }
 
 TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {

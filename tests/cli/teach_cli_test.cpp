@@ -11,6 +11,7 @@
 #include <fstream>
 #include <vector>
 
+#include "app/session_write_lock.hpp"
 #include "cli_test_support.hpp"
 #include "robot/scene.hpp"
 
@@ -22,6 +23,16 @@ using flexirob::testing::runCliBinary;
 
 fs::path scratch(const std::string& name) {
   return fs::temp_directory_path() / ("flexirob-teach-cli-" + std::to_string(::getpid()) + "-" + name);
+}
+
+TEST(TeachCli, RefusesAnOutputAnotherRunIsStillWriting) {
+  const fs::path out = scratch("being-written.db");
+  const app::SessionWriteLock other_run(out, "--out");
+  const auto result = runCliBinary("teach --backend sim --scene setup_A --areas 1 --seed 3 --out " + out.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("--out: '" + out.string() + "' is being written by another run"), std::string::npos) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(TeachCli, TeachesOneAreaOverTheFriLinkWithNothingLost) {
