@@ -86,7 +86,7 @@ TEST(RenderCommand, RejectsBadInputWithExitCodeTwo) {
   const Result unwritable = run({"render", "--robot", "lwr4", "--width", "16", "--height", "16", "--out",
                                  "/nonexistent-folder/x.png"});
   EXPECT_EQ(unwritable.exit_code, 2);
-  EXPECT_NE(unwritable.err.find("cannot write"), std::string::npos) << unwritable.err;
+  EXPECT_NE(unwritable.err.find("the folder '/nonexistent-folder' does not exist"), std::string::npos) << unwritable.err;
   EXPECT_FALSE(std::filesystem::exists(file));
 }
 
