@@ -345,7 +345,7 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planWay(const Eigen::VectorXd& from
 }
 
 std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested,
-                                                          int* reaching) {
+                                                          int* reaching, bool push_links_clear) {
   if (reaching != nullptr) *reaching = 0;
   const int dof = model_->dof();
   const Eigen::VectorXd lower = model_->softLowerLimits();
@@ -372,6 +372,13 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
       q_reference = area.q_fixed;
     }
   }
+  // Clearance up to a comfortable 8 cm counts; beyond it, the posture nearest the reference
+  // (joint-space distance, 0.2 per rad: 4 cm less clearance weigh as much as 2.5 rad) wins.
+  // Postures near a joint limit are penalized (they would warn).
+  const auto score = [&](const Eigen::VectorXd& q_candidate, double clearance) {
+    const double limit_margin = std::min((q_candidate - lower).minCoeff(), (upper - q_candidate).minCoeff());
+    return std::min(clearance, 0.08) / 0.08 - 0.2 * (q_candidate - q_reference).norm() - (limit_margin < 0.2 ? 0.5 : 0.0);
+  };
   for (int c = 0; c < options_.posture_candidates; ++c) {
     // Null-space targets: the scene's suggestion, the reference posture, the current posture,
     // then random postures drawn inside the limits (kept away from them by a fifth of the range).
@@ -401,12 +408,26 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
     world_->update(q);
     if (!world_->contacts().empty()) continue;
     const double clearance = world_->clearance(0.5).distance;
-    // Clearance up to a comfortable 8 cm counts; beyond it, the posture nearest the reference
-    // (joint-space distance, 0.2 per rad: 4 cm less clearance weigh as much as 2.5 rad) wins.
-    // Postures near a joint limit are penalized (they would warn).
-    const double limit_margin = std::min((q - lower).minCoeff(), (upper - q).minCoeff());
-    const double score = std::min(clearance, 0.08) / 0.08 - 0.2 * (q - q_reference).norm() - (limit_margin < 0.2 ? 0.5 : 0.0);
-    candidates.push_back({PostureChoice{clearance >= options_.min_clearance, q, clearance}, score});
+    candidates.push_back({PostureChoice{clearance >= options_.min_clearance, q, clearance}, score(q, clearance)});
+  }
+  // Where no candidate keeps the clearance, a person takes the best postures found and pushes
+  // the links away from what they come close to; they stay in the family the score chose.
+  const auto keeps_clearance = [](const Candidate& candidate) { return candidate.choice.found; };
+  if (push_links_clear && options_.clearing_candidates > 0 && !candidates.empty() &&
+      std::none_of(candidates.begin(), candidates.end(), keeps_clearance)) {
+    std::vector<Candidate> best = candidates;
+    std::stable_sort(best.begin(), best.end(), [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+    best.resize(std::min(best.size(), static_cast<std::size_t>(options_.clearing_candidates)));
+    for (const Candidate& start : best) {
+      q = postureClearOfObstacles(p_W, start.choice.q);
+      kinematics_.update(q);
+      if ((kinematics_.p_WT() - p_W).norm() > 1e-3) continue;
+      world_->update(q);
+      if (!world_->contacts().empty()) continue;
+      const double clearance = world_->clearance(0.5).distance;
+      if (clearance <= start.choice.clearance) continue;
+      candidates.push_back({PostureChoice{clearance >= options_.min_clearance, q, clearance}, score(q, clearance)});
+    }
   }
   // A posture with the clearance asked for beats every one without it, however near the
   // reference that one lies; otherwise the area would be given up with a usable posture found.
@@ -425,6 +446,43 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
     if (distinct) ranked.push_back(candidate.choice);
   }
   return ranked;
+}
+
+Eigen::VectorXd SimulatedTutor::postureClearOfObstacles(const Eigen::Vector3d& p_W, const Eigen::VectorXd& q_start) {
+  constexpr double kInfluence = 0.08;  // [m] obstacles farther away do not push
+  constexpr double kPush = 1.0;        // [rad per m of intrusion into kInfluence, per unit of the Jacobian]
+  constexpr double kMaxStep = 0.05;    // [rad] per iteration, and [m] of task error corrected per iteration
+  const int dof = model_->dof();
+  const Eigen::VectorXd lower = model_->softLowerLimits();
+  const Eigen::VectorXd upper = model_->softUpperLimits();
+  Eigen::VectorXd q = q_start.cwiseMax(lower).cwiseMin(upper);
+  robot::Matrix3Xd J(3, dof), J_point(3, dof);
+  for (int it = 0; it < 1500; ++it) {
+    kinematics_.update(q);
+    kinematics_.tipPositionJacobian(J);
+    Eigen::Vector3d error = p_W - kinematics_.p_WT();
+    if (error.norm() > kMaxStep) error *= kMaxStep / error.norm();
+    // Damped pseudo-inverse of the tip's Jacobian, and its null space (Eq. 2.11).
+    const Eigen::Matrix3d JJt = J * J.transpose() + 1e-4 * Eigen::Matrix3d::Identity();
+    const Eigen::MatrixXd J_pinv = J.transpose() * JJt.inverse();
+    Eigen::VectorXd dq = J_pinv * error;
+    world_->update(q);
+    const robot::Clearance nearest = world_->clearance(kInfluence);
+    if (nearest.body >= 1 && nearest.obstacle >= 0 && nearest.distance < kInfluence) {
+      // Apart, the witness points lead from the obstacle to the link; in contact, the other way.
+      Eigen::Vector3d away = nearest.p_body_W - nearest.p_obstacle_W;
+      if (nearest.distance < 0.0) away = -away;
+      if (away.norm() > 1e-9) {
+        kinematics_.pointJacobian(nearest.body, nearest.p_body_W, J_point);
+        const Eigen::VectorXd push = J_point.transpose() * away.normalized() * (kPush * (kInfluence - nearest.distance));
+        dq += push - J_pinv * (J * push);
+      }
+    }
+    if (dq.norm() > kMaxStep) dq *= kMaxStep / dq.norm();
+    q = (q + dq).cwiseMax(lower).cwiseMin(upper);
+    if (error.norm() < 1e-6 && dq.norm() < 1e-5) break;
+  }
+  return q;
 }
 
 bool SimulatedTutor::waitFor(SubStage sub_stage, double max_time) {
@@ -674,7 +732,7 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     return false;
   }
   int reaching = 0;
-  const std::vector<PostureChoice> postures = choosePostures(area.target, suggested, &reaching);
+  const std::vector<PostureChoice> postures = choosePostures(area.target, suggested, &reaching, !area.automatic);
   if (postures.empty()) {
     area.failure = reaching == 0 ? "no posture within the joint limits puts the tip there (" + std::to_string(options_.posture_candidates) +
                                        " IK searches)"

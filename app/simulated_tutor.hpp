@@ -43,6 +43,12 @@ struct TutorOptions {
   double max_phase_time = 30.0;    ///< [s] a phase may take beyond its planned duration before the tutor gives up
   int approach_iterations = 4000;  ///< RRT-Connect iterations for a way around obstacles
   int posture_attempts = 3;        ///< postures with enough clearance tried, best first, until a way to one is found
+  /// For an area of the scene's list where none of the posture_candidates keeps min_clearance:
+  /// the best of them (at most this many) pushed clear of the nearest obstacle while the tip
+  /// holds, as a person asked to teach a place between shelf boards moves the links away by
+  /// hand (postureClearOfObstacles); 0 gives the area up at once. A place the tutor chose
+  /// itself is given up instead: another place serves as well.
+  int clearing_candidates = 8;
   bool realtime = false;           ///< pace at wall-clock speed
   /// Areas chosen automatically (beyond the scene's list) are checked on this many points drawn
   /// over the scene's workspace: the tutor teaches where the learned map fails and takes an area
@@ -125,9 +131,15 @@ class SimulatedTutor {
   /// that clearance, TutorOptions::posture_attempts in all at most. Where the way to the first
   /// cannot be found, a person tries the next before giving the area up. Empty when no
   /// candidate reached p_W collision-free; `reaching` (if given) counts the candidates that put
-  /// the tip on p_W at all, with or without a contact.
+  /// the tip on p_W at all, with or without a contact. With `push_links_clear`, where no
+  /// candidate keeps the clearance, the best ones are pushed clear (TutorOptions::clearing_candidates).
   std::vector<PostureChoice> choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested,
-                                            int* reaching = nullptr);
+                                            int* reaching = nullptr, bool push_links_clear = false);
+
+  /// IK from q_start that holds the tip on p_W while the null space moves the link point
+  /// nearest an obstacle away from it (from 8 cm in), within the soft limits. The result need
+  /// not reach p_W or be free: the caller checks.
+  Eigen::VectorXd postureClearOfObstacles(const Eigen::Vector3d& p_W, const Eigen::VectorXd& q_start);
 
   /// The joint-space way a person leads the arm on from `from` to `to`: first out of any
   /// contact `from` rests in (small steps up the gradient of the signed clearance, to half

@@ -418,6 +418,42 @@ TEST(SimulatedTutor, OffersDistinctAlternativePosturesWithEnoughClearance) {
   }
 }
 
+// A listed place between two shelf boards: IK from random null-space targets puts a link within
+// a few centimetres of a board every time, and the area used to be given up. A person takes
+// the best posture found and moves the links away from the boards while holding the tip.
+TEST(SimulatedTutor, PushesTheLinksClearWhereNoPostureFoundKeepsTheClearanceAtAListedPlace) {
+  robot::Scene scene = robot::parseScene(R"(name: shelf
+obstacles:
+  - {name: board_low, shape: box, size: [0.3, 0.8, 0.02], position: [-0.55, 0, 0.3]}
+  - {name: board_high, shape: box, size: [0.3, 0.8, 0.02], position: [-0.55, 0, 0.6]}
+training_areas:
+  - {name: between_boards, centre: [-0.5, 0.1, 0.45], radius: 0.05}
+)",
+                                         ".", "shelf");
+  scene.home_posture = homePosture(lwr4(), scene);
+  const Eigen::Vector3d p_between = scene.training_areas.at(0).p_WA;
+  ShortTeaching teaching(scene);
+  // Two tutors of the same seed draw the same IK candidates; only the second pushes them.
+  SimulatedTutor random_only_tutor(teaching.sim, *teaching.workflow, scene, teaching.parameters, teaching.tutor_options);
+  const std::vector<PostureChoice> random_only = random_only_tutor.choosePostures(p_between, std::nullopt, nullptr, false);
+  ASSERT_FALSE(!random_only.empty() && random_only.front().found) << "the random IK alone keeps the clearance here";
+  SimulatedTutor tutor(teaching.sim, *teaching.workflow, scene, teaching.parameters, teaching.tutor_options);
+  const std::vector<PostureChoice> pushed = tutor.choosePostures(p_between, std::nullopt, nullptr, true);
+  ASSERT_FALSE(pushed.empty());
+  const PostureChoice& best = pushed.front();
+  EXPECT_TRUE(best.found);
+  EXPECT_GE(best.clearance, teaching.tutor_options.min_clearance);
+  EXPECT_LT((robot::tipPose(lwr4(), best.q).translation() - p_between).norm(), 1e-3);
+  robot::CollisionWorld world(lwr4(), scene);
+  world.update(best.q);
+  EXPECT_TRUE(world.contacts().empty());
+  EXPECT_NEAR(world.clearance(0.5).distance, best.clearance, 1e-9);
+  const TutorReport report = teaching.configure(1);
+  ASSERT_GE(report.areas.size(), 1U);
+  EXPECT_TRUE(report.areas[0].taught) << report.areas[0].failure;
+  EXPECT_EQ(report.collisions, 0U);
+}
+
 // With no way around obstacles searched (0 RRT iterations) only a straight joint-space way
 // counts: one posture tried is given up where several tried find one reachable.
 TEST(SimulatedTutor, TriesTheNextPostureWhenNoWayToTheBestOneIsFound) {
