@@ -433,6 +433,8 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     regions.push_back({name, {}});
     return regions.back().second;
   };
+  // A drawn region's area: the arm starts there first, its tip on a straight way to the start.
+  std::map<std::string, std::size_t> drawn_from;
   TrajectoryResult result;
   if (!scene.trajectories.empty()) {
     result.from_scene = true;
@@ -486,9 +488,14 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
       throw InputError("trajectories: no straight way in the " + name +
                        " region stays within reach and clear of the base, the table and the obstacles");
     };
-    // Each region: a chain of random points, every trajectory starting where the last ended.
-    const auto chain = [&](const std::string& name, const Box& box, int count) {
-      Eigen::Vector3d from = draw(name, box, nullptr);
+    // Each region: a chain of random points, every trajectory starting where the last ended,
+    // the first on a passable straight way from the centre of area k's samples (where that
+    // centre itself is passable): the arm is led there from k's posture, and a start behind
+    // an obstacle would make every trajectory of the region collide on the way to it.
+    const auto chain = [&](const std::string& name, const Box& box, int count, std::size_t k) {
+      const Eigen::Vector3d centre = areas[k].samples.rowwise().mean();
+      drawn_from[name] = k;
+      Eigen::Vector3d from = draw(name, box, passable(centre) ? &centre : nullptr);
       for (int t = 0; t < count; ++t) {
         const Eigen::Vector3d to = draw(name, box, &from);
         region(name).push_back({name + "_" + std::to_string(t + 1), {from, to}});
@@ -502,10 +509,10 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     for (std::size_t k = 0; k < areas.size(); ++k) {
       names.push_back(areas[k].name.empty() ? "area " + std::to_string(k + 1) : areas[k].name);
     }
-    for (std::size_t k = 0; k < areas.size(); ++k) chain(names[k], sampleBox(areas[k]), per_area);
+    for (std::size_t k = 0; k < areas.size(); ++k) chain(names[k], sampleBox(areas[k]), per_area, k);
     for (std::size_t k = 0; k + 1 < areas.size(); ++k) {
       chain("between " + names[k] + " and " + names[k + 1], boxBetween(sampleBox(areas[k]), sampleBox(areas[k + 1])),
-            2 * per_area);
+            2 * per_area, k);
     }
   }
   robot::CollisionWorld world(model, scene);
@@ -516,8 +523,8 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
   for (const auto& [name, trajectories] : regions) {
     TrajectoryRegionResult out;
     out.name = name;
-    // The arm starts in the taught posture of the area nearest the region's first point, is
-    // brought there kinematically, then follows each straight segment at `speed`. Where that
+    // The arm starts in the taught posture of the area a drawn region was drawn from, else of
+    // the area nearest the region's first point, is brought there kinematically, then follows each straight segment at `speed`. Where that
     // start touches something, the next nearest area's is taken: otherwise every trajectory
     // after a collision would restart in contact and count as collided at once. Where every
     // one does, the region starts in the nearest area's taught posture itself, and each
@@ -528,6 +535,9 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     std::stable_sort(by_distance.begin(), by_distance.end(), [&](std::size_t a, std::size_t b) {
       return (areas[a].samples.col(0) - first).norm() < (areas[b].samples.col(0) - first).norm();
     });
+    if (const auto drawn = drawn_from.find(name); drawn != drawn_from.end()) {
+      std::stable_partition(by_distance.begin(), by_distance.end(), [&](std::size_t k) { return k == drawn->second; });
+    }
     Eigen::VectorXd q_area;
     for (const std::size_t k : by_distance) {
       const Eigen::VectorXd q_start =

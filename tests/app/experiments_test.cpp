@@ -351,5 +351,42 @@ TEST(Experiments, ARegionWhoseStartTouchesSomethingStartsInTheAreaInstead) {
   for (const CollidedTrajectory& trajectory : between.collided) EXPECT_GT(trajectory.contact_time, 0.05) << trajectory.name;
 }
 
+// Two areas on either side of a board, as on the shelves of a cupboard: the region between them
+// holds free points on both sides, and no straight way crosses the board. The arm is led to a
+// region's start from the area it was drawn from, so the start lies on that area's side;
+// drawn anywhere, half the regions began behind the board and every trajectory of them
+// collided on the way to its start.
+TEST(Experiments, ARegionDrawnBetweenAreasOnEitherSideOfABoardStartsOnTheSideOfTheAreaItIsDrawnFrom) {
+  const Eigen::Vector3d board_centre = robot::tipPose(lwr4(), ready()).translation();
+  std::vector<EvaluatedArea> areas(2);
+  for (int k = 0; k < 2; ++k) {
+    EvaluatedArea& area = areas[static_cast<std::size_t>(k)];
+    area.q_fixed = ready();
+    const Eigen::Vector3d centre = board_centre + Eigen::Vector3d(0.0, 0.0, k == 0 ? 0.12 : -0.12);
+    area.samples.resize(3, 2);
+    area.samples.col(0) = centre - Eigen::Vector3d::Constant(0.025);
+    area.samples.col(1) = centre + Eigen::Vector3d::Constant(0.025);
+  }
+  robot::Scene scene;
+  robot::Obstacle board;
+  board.name = "board";
+  board.size = Eigen::Vector3d(0.3, 0.3, 0.02);
+  board.X_WO = Eigen::Isometry3d(Eigen::Translation3d(board_centre));
+  scene.obstacles.push_back(board);
+  const auto map = constantMap();
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 1, 0.1, seed);
+    ASSERT_EQ(result.regions.size(), 3u);
+    const TrajectoryRegionResult& between = result.regions[2];
+    ASSERT_EQ(between.name, "between area 1 and area 2");
+    ASSERT_FALSE(between.waypoints.empty());
+    for (const auto& trajectory : between.waypoints) {
+      for (const Eigen::Vector3d& point : trajectory) {
+        EXPECT_GT(point.z(), board_centre.z() + 0.05) << "seed " << seed << ": a point below the board, away from area 1";
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace flexirob::app
