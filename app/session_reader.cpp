@@ -228,8 +228,14 @@ std::vector<CollisionRecord> SessionReader::collisions(double t0, double t1) con
 
 std::vector<AreaRecord> SessionReader::areas() const {
   std::vector<AreaRecord> out;
-  SqliteStatement st(impl_->db, "SELECT area, t, x_init, q_fixed FROM area ORDER BY t, id");
-  while (st.step()) out.push_back({static_cast<int>(st.columnInt(0)), st.columnDouble(1), st.columnDoubles(2), st.columnDoubles(3)});
+  // Version 1 files have no area names.
+  const bool named = schema_version_ >= 2;
+  SqliteStatement st(impl_->db, named ? "SELECT area, t, x_init, q_fixed, name FROM area ORDER BY t, id"
+                                      : "SELECT area, t, x_init, q_fixed FROM area ORDER BY t, id");
+  while (st.step()) {
+    out.push_back({static_cast<int>(st.columnInt(0)), st.columnDouble(1), st.columnDoubles(2), st.columnDoubles(3),
+                   named ? st.columnText(4) : std::string()});
+  }
   return out;
 }
 

@@ -89,7 +89,7 @@ struct Inserts {
       : state(db, "INSERT INTO state(t,dof,q,q_cmd,tau_ext,p_WT,quat_WT) VALUES(?,?,?,?,?,?,?)"),
         stage(db, "INSERT INTO stage(t,stage,sub_stage) VALUES(?,?,?)"),
         signal(db, "INSERT INTO signal(t,kind,name) VALUES(?,?,?)"),
-        area(db, "INSERT INTO area(area,t,x_init,q_fixed) VALUES(?,?,?,?)"),
+        area(db, "INSERT INTO area(area,t,x_init,q_fixed,name) VALUES(?,?,?,?,?)"),
         sample(db, "INSERT INTO sample(t,area,x,q) VALUES(?,?,?,?)"),
         model(db, "INSERT INTO model(t,learner,samples,train_seconds,bytes) VALUES(?,?,?,?,?)"),
         itm(db, "INSERT INTO itm(t,nodes,edges,bytes) VALUES(?,?,?,?)"),
@@ -136,6 +136,7 @@ void writeEvent(Inserts& in, const Event& event) {
           in.area.bind(1, r.area).bind(2, r.time);
           bindVector(in.area, 3, r.x_init);
           bindVector(in.area, 4, r.q_fixed);
+          in.area.bind(5, r.name);
           in.area.run();
         } else if constexpr (std::is_same_v<R, SampleRecord>) {
           in.sample.bind(1, r.time).bind(2, r.area);

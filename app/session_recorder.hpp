@@ -80,6 +80,7 @@ struct AreaRecord {
   double time = 0.0;        ///< [s] when the area's RECORDING ended (the area was created)
   Eigen::VectorXd x_init;   ///< task-space position (M = 3) or pose the area is centred at
   Eigen::VectorXd q_fixed;  ///< the posture the tutor chose there [rad] (N)
+  std::string name;         ///< as the tutor or the scene named it (empty: unnamed, and in version 1 files)
 };
 
 /// One training sample (x, q) of an area (Sect. 3.2.1).

@@ -29,7 +29,7 @@ CREATE TABLE stage(id INTEGER PRIMARY KEY, t REAL NOT NULL, stage TEXT NOT NULL,
 CREATE TABLE signal(id INTEGER PRIMARY KEY, t REAL NOT NULL,
                     kind TEXT NOT NULL CHECK(kind IN ('trigger', 'button')), name TEXT NOT NULL);
 CREATE TABLE area(id INTEGER PRIMARY KEY, area INTEGER NOT NULL, t REAL NOT NULL,
-                  x_init BLOB NOT NULL, q_fixed BLOB NOT NULL);
+                  x_init BLOB NOT NULL, q_fixed BLOB NOT NULL, name TEXT NOT NULL DEFAULT '');
 CREATE TABLE sample(id INTEGER PRIMARY KEY, t REAL NOT NULL, area INTEGER NOT NULL,
                     x BLOB NOT NULL, q BLOB NOT NULL);
 CREATE INDEX sample_area ON sample(area);

@@ -1,5 +1,5 @@
 #pragma once
-// The session database's schema (version 1, documented in docs/SESSIONS.md) and a thin RAII
+// The session database's schema (version 2, documented in docs/SESSIONS.md) and a thin RAII
 // layer over the SQLite C API shared by the recorder and the reader.
 #include <Eigen/Core>
 #include <cstdint>
@@ -16,12 +16,13 @@ namespace flexirob::app {
 
 /// PRAGMA application_id of every session database: "FIRB" in ASCII.
 inline constexpr std::int32_t kSessionApplicationId = 0x46495242;
-/// PRAGMA user_version and meta.schema_version of the schema this build writes and reads.
-inline constexpr int kSessionSchemaVersion = 1;
+/// PRAGMA user_version and meta.schema_version of the schema this build writes, and the
+/// newest it reads (it reads every older one). Version 2 added area.name.
+inline constexpr int kSessionSchemaVersion = 2;
 /// meta.format of every session database.
 inline constexpr std::string_view kSessionFormatName = "flexirob-session";
 
-/// The CREATE statements of schema version 1 (tables and indices), as one SQL script.
+/// The CREATE statements of the schema kSessionSchemaVersion (tables and indices), as one SQL script.
 const char* sessionSchemaSql();
 /// Tables a readable session must have.
 const std::vector<std::string>& requiredSessionTables();

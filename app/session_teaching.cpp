@@ -18,6 +18,7 @@ struct Slot {
   bool complete = false;
   double time = 0.0;
   Eigen::VectorXd q_fixed;
+  std::string name;
   std::vector<const SampleRecord*> take, pending;
 };
 
@@ -86,6 +87,7 @@ std::vector<RecordedArea> replayTeaching(const std::vector<AreaRecord>& areas, c
       area.complete = true;
       area.time = record.time;
       area.q_fixed = record.q_fixed;
+      area.name = record.name;
       area.take = std::move(area.pending);  // the samples since its last record
       area.pending.clear();
     } else if (const int k = removed[item.index]; k >= 0 && static_cast<std::size_t>(k) < slots.size()) {
@@ -102,6 +104,7 @@ std::vector<RecordedArea> replayTeaching(const std::vector<AreaRecord>& areas, c
     recorded.complete = area.complete;
     recorded.time = area.time;
     recorded.q_fixed = area.q_fixed;
+    recorded.name = area.name;
     recorded.X = columns(area.take, false);
     recorded.Q = area.take.empty() ? Eigen::MatrixXd(dof > 0 ? dof : 0, 0) : columns(area.take, true);
     recorded.unfinished_X = columns(area.pending, false);

@@ -26,6 +26,7 @@ struct RecordedArea {
   bool complete = false;        ///< its RECORDING ended (an area record exists)
   double time = 0.0;            ///< [s] when its latest RECORDING ended (complete areas)
   Eigen::VectorXd q_fixed;      ///< [rad] (complete areas; empty otherwise)
+  std::string name;             ///< as its latest record names it (empty: unnamed)
   Eigen::MatrixXd X;            ///< 3 x L sample positions of the latest (complete) take [m, W]
   Eigen::MatrixXd Q;            ///< N x L sample postures [rad]
   Eigen::MatrixXd unfinished_X; ///< 3 x U samples of a RECORDING the session ended in (may be empty)

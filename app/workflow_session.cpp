@@ -194,7 +194,7 @@ std::uint64_t TrainingSampleStream::finishArea(const Workflow& workflow, Session
     const double t = time - static_cast<double>(created.X.cols() - 1 - l) * period;
     recorder.recordSample({t, area, created.X.col(l), created.Q.col(l)});
   }
-  recorder.recordArea({area, time, created.centre, created.q_fixed});
+  recorder.recordArea({area, time, created.centre, created.q_fixed, created.name});
   area_ = -1;
   written_ = 0;
   return static_cast<std::uint64_t>(created.X.cols() - first) + 1;
@@ -222,7 +222,7 @@ bool TrainingSampleStream::writeAreasBacklog(const Workflow& workflow, SessionRe
       recorder.recordSample({backlog_time_, index, area.X.col(backlog_sample_), area.Q.col(backlog_sample_)});
     }
     if (backlog_sample_ < area.X.cols()) return false;
-    recorder.recordArea({index, backlog_time_, area.centre, area.q_fixed});
+    recorder.recordArea({index, backlog_time_, area.centre, area.q_fixed, area.name});
     ++backlog_area_;
     backlog_sample_ = 0;
   }

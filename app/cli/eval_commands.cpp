@@ -51,7 +51,7 @@ struct Session {
   std::vector<Eigen::VectorXd> q_fixed;
   std::vector<std::string> area_names;  ///< how messages name area k: as the file counts it
   /// Area k's name as teach gave it ("I1", "auto_3"), which the drawn trajectories' regions
-  /// carry; as the file counts it where the file keeps no name (recordings).
+  /// carry; as the file counts it where the file keeps no name (version 1 sessions).
   std::vector<std::string> taught_names;
   std::unique_ptr<planning::Itm> itm;
 };
@@ -120,7 +120,7 @@ Session loadRecordedSession(const std::string& file) {
     taught.push_back(&area);
     session.q_fixed.push_back(area.q_fixed);
     session.area_names.push_back(std::to_string(area.index));
-    session.taught_names.push_back(std::to_string(area.index));
+    session.taught_names.push_back(area.name.empty() ? std::to_string(area.index) : area.name);
     count += area.X.cols();
   }
   if (count == 0) {

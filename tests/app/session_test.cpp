@@ -116,7 +116,7 @@ TEST_F(SessionTest, RoundTripsEveryRecordType) {
   target.postures.resize(0, 3);
   ModelRecord model{20.0, "elm", 321, 1.25, {0, 1, 2, 255, 7, 0}};
   ItmRecord itm{21.0, 12, 30, std::vector<std::uint8_t>(1000, 0xAB)};
-  AreaRecord area{1, 3.0, Eigen::Vector3d(-0.5, 0.2, 0.4), Eigen::VectorXd::LinSpaced(7, -1.0, 1.0)};
+  AreaRecord area{1, 3.0, Eigen::Vector3d(-0.5, 0.2, 0.4), Eigen::VectorXd::LinSpaced(7, -1.0, 1.0), "behind the box"};
   SampleRecord sample0{3.5, 1, Eigen::Vector3d(-0.51, 0.21, 0.39), Eigen::VectorXd::Constant(7, 0.25)};
   SampleRecord sample1{4.5, 2, Eigen::Vector3d(0.1, 0.2, 0.3), Eigen::VectorXd::Constant(7, -0.5)};
   CollisionRecord collision{7.5, "lwr_link_4", "box_left", 0.003, Eigen::Vector3d(0.1, -0.2, 0.5)};
@@ -195,6 +195,7 @@ TEST_F(SessionTest, RoundTripsEveryRecordType) {
   EXPECT_EQ(areas[0].area, 1);
   EXPECT_EQ(areas[0].x_init, area.x_init);
   EXPECT_EQ(areas[0].q_fixed, area.q_fixed);
+  EXPECT_EQ(areas[0].name, "behind the box");
   const auto samples = reader.samples(1);
   ASSERT_EQ(samples.size(), 1u);
   EXPECT_EQ(samples[0].x, sample0.x);
@@ -348,6 +349,29 @@ TEST_F(SessionTest, RefusesForeignSqliteDatabase) {
   const std::string reason = refusal(file);
   EXPECT_NE(reason.find("not a FlexIRob session"), std::string::npos) << reason;
   EXPECT_EQ(reason.find('\n'), std::string::npos);
+}
+
+// Version 1 had no area names: such a file is read as it was written, its areas unnamed.
+TEST_F(SessionTest, ReadsAVersionOneFileWithoutAreaNames) {
+  const auto file = path("version1.flexirob");
+  {
+    SessionRecorder recorder(file, exampleMetadata());
+    ASSERT_TRUE(recorder.recordArea({0, 1.0, Eigen::Vector3d(-0.5, 0.0, 0.4), Eigen::VectorXd::Zero(7), "front"}));
+    ASSERT_TRUE(recorder.recordSample({0.5, 0, Eigen::Vector3d(-0.5, 0.0, 0.4), Eigen::VectorXd::Zero(7)}));
+    recorder.close();
+  }
+  {
+    SqliteDatabase db(file.string(), 0x00000002);  // SQLITE_OPEN_READWRITE
+    db.exec("ALTER TABLE area DROP COLUMN name; PRAGMA user_version = 1; UPDATE meta SET value = '1' WHERE key = 'schema_version'");
+  }
+  SessionReader reader(file);
+  EXPECT_EQ(reader.schemaVersion(), 1);
+  const auto areas = reader.areas();
+  ASSERT_EQ(areas.size(), 1u);
+  EXPECT_EQ(areas[0].area, 0);
+  EXPECT_EQ(areas[0].x_init, Eigen::Vector3d(-0.5, 0.0, 0.4));
+  EXPECT_TRUE(areas[0].name.empty());
+  EXPECT_EQ(reader.samples(0).size(), 1u);
 }
 
 TEST_F(SessionTest, RefusesNewerSchemaAndMissingTables) {

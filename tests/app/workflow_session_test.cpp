@@ -104,6 +104,7 @@ TEST(WorkflowSession, AreasSamplesModelAndGraphAreInTheFileBeforeTheSessionEnds)
 
   // One area through the keyboard triggers; the arm rests, so the samples repeat one posture.
   ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  workflow.nameNextArea("shelf_top");
   ASSERT_TRUE(workflow.fire(Trigger::kOnAffected));
   run(0.2);
   ASSERT_TRUE(workflow.fire(Trigger::kOnConverged));
@@ -117,6 +118,7 @@ TEST(WorkflowSession, AreasSamplesModelAndGraphAreInTheFileBeforeTheSessionEnds)
     const SessionReader reader(file);
     ASSERT_EQ(reader.areas().size(), 1U);
     EXPECT_TRUE(reader.areas()[0].q_fixed.isApprox(workflow.areas()[0].q_fixed));
+    EXPECT_EQ(reader.areas()[0].name, "shelf_top");
     EXPECT_EQ(static_cast<Eigen::Index>(reader.samples(0).size()), workflow.areas()[0].X.cols());
     EXPECT_GE(reader.stages().size(), 4U);
     EXPECT_FALSE(reader.itmSnapshots().empty());  // the ITM after its first second
