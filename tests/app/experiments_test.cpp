@@ -38,6 +38,24 @@ std::unique_ptr<learning::Learner> constantMap() {
   return elm;
 }
 
+// An area taught in q_fixed whose samples span a cube of half-edge `half` about `centre`.
+EvaluatedArea cubeArea(const Eigen::VectorXd& q_fixed, const Eigen::Vector3d& centre, double half) {
+  EvaluatedArea area;
+  area.q_fixed = q_fixed;
+  area.samples.resize(3, 2);
+  area.samples.col(0) = centre - Eigen::Vector3d::Constant(half);
+  area.samples.col(1) = centre + Eigen::Vector3d::Constant(half);
+  return area;
+}
+
+robot::Obstacle boxObstacle(const std::string& name, const Eigen::Vector3d& size, const Eigen::Vector3d& centre) {
+  robot::Obstacle box;
+  box.name = name;
+  box.size = size;
+  box.X_WO = Eigen::Isometry3d(Eigen::Translation3d(centre));
+  return box;
+}
+
 TEST(Experiments, SubsamplingKeepsEverySthSampleOfEachAreaStartingWithItsFirst) {
   learning::TrainingSet data;
   data.X.resize(3, 12);
@@ -157,14 +175,10 @@ TEST(Experiments, DrawnTrajectoriesRunInEveryAreaNamedAfterItAndBetweenAreasTaug
   // name, and the two regions between them lie between the first and second, second and third.
   const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
   const std::vector<std::string> names = {"I1", "auto_2", "I3"};
-  std::vector<EvaluatedArea> areas(3);
+  std::vector<EvaluatedArea> areas;
   for (std::size_t k = 0; k < 3; ++k) {
-    areas[k].name = names[k];
-    areas[k].q_fixed = ready();
-    const Eigen::Vector3d centre = tip + Eigen::Vector3d(0.0, 0.15 - 0.15 * static_cast<double>(k), 0.0);
-    areas[k].samples.resize(3, 2);
-    areas[k].samples.col(0) = centre - Eigen::Vector3d::Constant(0.025);
-    areas[k].samples.col(1) = centre + Eigen::Vector3d::Constant(0.025);
+    areas.push_back(cubeArea(ready(), tip + Eigen::Vector3d(0.0, 0.15 - 0.15 * static_cast<double>(k), 0.0), 0.025));
+    areas.back().name = names[k];
   }
   robot::Scene empty;
   const auto map = constantMap();
@@ -242,20 +256,10 @@ TEST(Experiments, DrawnTrajectoriesThatMeetAnObstacleAreNamedAfterTheirRegion) {
   // Two 5 cm areas 0.3 m apart along y and a 10 cm plate across y half way, above the tip's way
   // (the trajectories keep 5 cm from obstacles) but where the wrist, 7.8 cm above the tip,
   // passes: only trajectories between the areas meet it.
-  std::vector<EvaluatedArea> areas(2);
-  for (int k = 0; k < 2; ++k) {
-    areas[static_cast<std::size_t>(k)].q_fixed = ready();
-    Eigen::MatrixXd& samples = areas[static_cast<std::size_t>(k)].samples;
-    samples.resize(3, 2);
-    samples.col(0) = tip + Eigen::Vector3d(-0.025, k == 0 ? 0.125 : -0.175, -0.025);
-    samples.col(1) = tip + Eigen::Vector3d(0.025, k == 0 ? 0.175 : -0.125, 0.025);
-  }
+  const std::vector<EvaluatedArea> areas{cubeArea(ready(), tip + Eigen::Vector3d(0.0, 0.15, 0.0), 0.025),
+                                         cubeArea(ready(), tip + Eigen::Vector3d(0.0, -0.15, 0.0), 0.025)};
   robot::Scene scene;
-  robot::Obstacle plate;
-  plate.name = "plate";
-  plate.size = Eigen::Vector3d(0.1, 0.02, 0.1);
-  plate.X_WO = Eigen::Isometry3d(Eigen::Translation3d(tip + Eigen::Vector3d(0.0, 0.0, 0.13)));
-  scene.obstacles.push_back(plate);
+  scene.obstacles.push_back(boxObstacle("plate", Eigen::Vector3d(0.1, 0.02, 0.1), tip + Eigen::Vector3d(0.0, 0.0, 0.13)));
   const auto map = constantMap();
   const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 3, 0.1, 1);
   ASSERT_EQ(result.regions.size(), 3u);
@@ -282,16 +286,8 @@ TEST(Experiments, DrawnTrajectoriesBetweenAreasOnEitherSideOfTheRobotKeepOffItsB
   left[0] = std::numbers::pi / 2;
   Eigen::VectorXd right = ready();
   right[0] = -std::numbers::pi / 2;
-  std::vector<EvaluatedArea> areas(2);
-  const Eigen::VectorXd postures[2] = {left, right};
-  for (int k = 0; k < 2; ++k) {
-    EvaluatedArea& area = areas[static_cast<std::size_t>(k)];
-    area.q_fixed = postures[k];
-    const Eigen::Vector3d tip = robot::tipPose(lwr4(), postures[k]).translation();
-    area.samples.resize(3, 2);
-    area.samples.col(0) = tip - Eigen::Vector3d(0.05, 0.05, 0.05);
-    area.samples.col(1) = tip + Eigen::Vector3d(0.05, 0.05, 0.05);
-  }
+  const std::vector<EvaluatedArea> areas{cubeArea(left, robot::tipPose(lwr4(), left).translation(), 0.05),
+                                         cubeArea(right, robot::tipPose(lwr4(), right).translation(), 0.05)};
   // A map that keeps the taught posture's side of the robot: q1 follows the target's azimuth.
   learning::TrainingSet data;
   data.X.resize(3, 16);
@@ -319,22 +315,14 @@ TEST(Experiments, ARegionWhoseStartTouchesSomethingStartsInTheAreaInstead) {
   // between them where the wrist (7.8 cm above the tip) passes: moved to any point between
   // the areas, the map's posture puts the wrist into the plate.
   const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
-  std::vector<EvaluatedArea> areas(2);
-  for (int k = 0; k < 2; ++k) {
-    EvaluatedArea& area = areas[static_cast<std::size_t>(k)];
-    area.q_fixed = ready();
-    area.q_fixed[0] = k == 0 ? 0.27 : -0.27;
-    const Eigen::Vector3d centre = robot::tipPose(lwr4(), area.q_fixed).translation();
-    area.samples.resize(3, 2);
-    area.samples.col(0) = centre - Eigen::Vector3d::Constant(0.025);
-    area.samples.col(1) = centre + Eigen::Vector3d::Constant(0.025);
+  std::vector<EvaluatedArea> areas;
+  for (const double q1 : {0.27, -0.27}) {
+    Eigen::VectorXd q_fixed = ready();
+    q_fixed[0] = q1;
+    areas.push_back(cubeArea(q_fixed, robot::tipPose(lwr4(), q_fixed).translation(), 0.025));
   }
   robot::Scene scene;
-  robot::Obstacle plate;
-  plate.name = "plate";
-  plate.size = Eigen::Vector3d(0.1, 0.12, 0.1);
-  plate.X_WO = Eigen::Isometry3d(Eigen::Translation3d(tip + Eigen::Vector3d(0.0, 0.0, 0.13)));
-  scene.obstacles.push_back(plate);
+  scene.obstacles.push_back(boxObstacle("plate", Eigen::Vector3d(0.1, 0.12, 0.1), tip + Eigen::Vector3d(0.0, 0.0, 0.13)));
   robot::CollisionWorld world(lwr4(), scene);
   for (const EvaluatedArea& area : areas) {
     world.update(area.q_fixed);
@@ -358,21 +346,10 @@ TEST(Experiments, ARegionWhoseStartTouchesSomethingStartsInTheAreaInstead) {
 // collided on the way to its start.
 TEST(Experiments, ARegionDrawnBetweenAreasOnEitherSideOfABoardStartsOnTheSideOfTheAreaItIsDrawnFrom) {
   const Eigen::Vector3d board_centre = robot::tipPose(lwr4(), ready()).translation();
-  std::vector<EvaluatedArea> areas(2);
-  for (int k = 0; k < 2; ++k) {
-    EvaluatedArea& area = areas[static_cast<std::size_t>(k)];
-    area.q_fixed = ready();
-    const Eigen::Vector3d centre = board_centre + Eigen::Vector3d(0.0, 0.0, k == 0 ? 0.12 : -0.12);
-    area.samples.resize(3, 2);
-    area.samples.col(0) = centre - Eigen::Vector3d::Constant(0.025);
-    area.samples.col(1) = centre + Eigen::Vector3d::Constant(0.025);
-  }
+  const std::vector<EvaluatedArea> areas{cubeArea(ready(), board_centre + Eigen::Vector3d(0.0, 0.0, 0.12), 0.025),
+                                         cubeArea(ready(), board_centre - Eigen::Vector3d(0.0, 0.0, 0.12), 0.025)};
   robot::Scene scene;
-  robot::Obstacle board;
-  board.name = "board";
-  board.size = Eigen::Vector3d(0.3, 0.3, 0.02);
-  board.X_WO = Eigen::Isometry3d(Eigen::Translation3d(board_centre));
-  scene.obstacles.push_back(board);
+  scene.obstacles.push_back(boxObstacle("board", Eigen::Vector3d(0.3, 0.3, 0.02), board_centre));
   const auto map = constantMap();
   for (std::uint64_t seed = 1; seed <= 6; ++seed) {
     const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 1, 0.1, seed);
