@@ -112,6 +112,7 @@ struct SessionOverlay {
   std::string robot, tip, scene;
   std::string robot_urdf, scene_text;  ///< the copies taught with (empty in older sessions)
   std::vector<render::AreaSamples> areas;
+  std::vector<std::string> area_names;  ///< areas[k]'s name as taught (empty where the file keeps none)
   std::vector<Eigen::VectorXd> q_fixed;
   std::vector<std::pair<int, Eigen::Vector3d>> nodes;
   std::vector<std::pair<int, int>> edges;
@@ -134,6 +135,8 @@ SessionOverlay sessionFromJson(const Json& json, const std::string& file) {
       samples.area = k++;
       samples.points_W = pointList(area, "x", "--session: area");
       session.areas.push_back(std::move(samples));
+      const auto name = area.find("name");
+      session.area_names.push_back(name != area.end() && name->is_string() ? name->get<std::string>() : std::string());
       // q_fixed is checked against the robot once it is known.
       const Json& q = area.at("q_fixed");
       if (!q.is_array()) throw InputError("--session: q_fixed: expected numbers");
@@ -170,6 +173,7 @@ SessionOverlay sessionFromRecording(const std::string& file) {
     for (Eigen::Index l = 0; l < area.X.cols(); ++l) cloud.points_W.emplace_back(area.X.col(l));
     for (Eigen::Index l = 0; l < area.unfinished_X.cols(); ++l) cloud.points_W.emplace_back(area.unfinished_X.col(l));
     session.areas.push_back(std::move(cloud));
+    session.area_names.push_back(area.name);
     if (area.complete) session.q_fixed.push_back(area.q_fixed);
   }
   if (teaching.itm) {
@@ -306,10 +310,13 @@ Json renderPicture(const RenderOptions& options) {
     if (shown(render::OverlayLayer::kTrainingSamples)) {
       overlays.setContent(render::OverlayLayer::kTrainingSamples, render::makeTrainingSamples(session->areas, size));
       int samples = 0;
-      for (const auto& area : session->areas) {
+      for (std::size_t k = 0; k < session->areas.size(); ++k) {
+        const render::AreaSamples& area = session->areas[k];
         samples += static_cast<int>(area.points_W.size());
         include(box, area.points_W);
-        legend.push_back({"Area " + std::to_string(area.area + 1) + " samples", render::OverlayPalette::area(area.area)});
+        const std::string& name = session->area_names[k];
+        legend.push_back({(name.empty() ? "Area " + std::to_string(area.area + 1) : name) + " samples",
+                          render::OverlayPalette::area(area.area)});
       }
       drawn["samples"] = samples;
     }

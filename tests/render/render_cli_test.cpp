@@ -162,8 +162,8 @@ std::array<int, 3> bytesOf(const Eigen::Vector4f& rgba) {
 
 void writeText(const std::filesystem::path& file, const std::string& text) { std::ofstream(file) << text; }
 
-// A hand-made session: one area of samples in front of the LWR IV (in a 4 cm cube centred at
-// (-0.5, 0, 0.4) m) and a three-node ITM graph (a chain) at another height.
+// A hand-made session: one area named "front" of samples in front of the LWR IV (in a 4 cm cube
+// centred at (-0.5, 0, 0.4) m) and a three-node ITM graph (a chain) at another height.
 std::string tinySession() {
   nlohmann::json x = nlohmann::json::array();
   for (int i = 0; i < 27; ++i) x.push_back({-0.5 + 0.02 * (i % 3 - 1), 0.02 * ((i / 3) % 3 - 1), 0.4 + 0.02 * (i / 9 - 1)});
@@ -171,7 +171,7 @@ std::string tinySession() {
       {"format", "flexirob-session-json"},
       {"robot", "lwr4"},
       {"scene", "empty"},
-      {"areas", {{{"q_fixed", {0.0, 0.5, 0.0, -1.5, 0.0, 0.8, 0.0}}, {"x", x}, {"q", nlohmann::json::array()}}}},
+      {"areas", {{{"name", "front"}, {"q_fixed", {0.0, 0.5, 0.0, -1.5, 0.0, 0.8, 0.0}}, {"x", x}, {"q", nlohmann::json::array()}}}},
       {"itm",
        {{"nodes", {{{"x", {-0.6, -0.3, 0.15}}}, {{"x", {-0.6, 0.0, 0.15}}}, {{"x", {-0.6, 0.3, 0.15}}}}},
         {"edges", {{0, 1}, {1, 2}}}}}};
@@ -212,6 +212,13 @@ TEST(RenderCommandOverlays, DrawsTheSessionsSamplesAndItmGraphWhereTheyProject) 
   EXPECT_TRUE(near(picture.at(*edge), bytesOf(render::OverlayPalette::itmEdge()), 40));
   // Away from everything: the background.
   EXPECT_TRUE(near(picture.at({5.5, 5.5}), bytesOf(render::Palette::background())));
+  // The legend names the area as it was taught.
+  const Result with_legend = run({"render", "--session", session.string(), "--out", file.string(), "--width", "320",
+                                  "--height", "240", "--supersample", "1", "--legend"});
+  ASSERT_EQ(with_legend.exit_code, 0) << with_legend.err;
+  const auto legend = nlohmann::json::parse(with_legend.out).at("legend");
+  ASSERT_FALSE(legend.empty());
+  EXPECT_EQ(legend.at(0), "front samples");
   std::filesystem::remove(session);
   std::filesystem::remove(file);
 }
