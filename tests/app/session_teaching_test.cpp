@@ -38,7 +38,7 @@ class SessionTeaching : public ::testing::Test {
     ASSERT_TRUE(recorder_->recordSample({t, area, Eigen::Vector3d(area, number, t), Eigen::VectorXd::Constant(dof, 0.1 * number)}));
   }
   void area(double t, int index, double posture) {
-    ASSERT_TRUE(recorder_->recordArea({index, t, Eigen::Vector3d(index, 0, 0), Eigen::VectorXd::Constant(3, posture)}));
+    ASSERT_TRUE(recorder_->recordArea({index, t, Eigen::Vector3d(index, 0, 0), Eigen::VectorXd::Constant(3, posture), ""}));
   }
   RecordedTeaching read() {
     recorder_->flush();

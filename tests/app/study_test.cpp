@@ -292,7 +292,7 @@ void recordPostures(const std::filesystem::path& file, const robot::Scene& scene
       time += 1e-3;
     }
   }
-  recorder.recordArea({0, 0.0, robot::tipPose(lwr4(), postures.front()).translation(), postures.front()});
+  recorder.recordArea({0, 0.0, robot::tipPose(lwr4(), postures.front()).translation(), postures.front(), "front"});
   recorder.close();
 }
 

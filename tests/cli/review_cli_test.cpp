@@ -55,11 +55,11 @@ class ReviewCli : public ::testing::Test {
     };
     const Eigen::VectorXd q_fixed = q + Eigen::VectorXd::Constant(7, posture_shift);
     for (int l = 0; l < 5; ++l) sample(0.1 + 0.01 * l, 0);
-    recorder.recordArea({0, 0.2, Eigen::Vector3d(-0.5, 0.0, 0.4), q_fixed});
+    recorder.recordArea({0, 0.2, Eigen::Vector3d(-0.5, 0.0, 0.4), q_fixed, "front"});
     for (int l = 0; l < 3; ++l) sample(0.3 + 0.01 * l, 1);
-    recorder.recordArea({1, 0.4, Eigen::Vector3d(-0.5, 0.1, 0.4), q_fixed});
+    recorder.recordArea({1, 0.4, Eigen::Vector3d(-0.5, 0.1, 0.4), q_fixed, "left"});
     for (int l = 0; l < 7; ++l) sample(0.5 + 0.01 * l, 0);
-    recorder.recordArea({0, 0.6, Eigen::Vector3d(-0.5, 0.0, 0.4), q_fixed});
+    recorder.recordArea({0, 0.6, Eigen::Vector3d(-0.5, 0.0, 0.4), q_fixed, "front"});
     for (int l = 0; l < 4; ++l) sample(1.9 + 0.01 * l, 2);
 
     TrajectoryRecord target;
