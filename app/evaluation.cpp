@@ -524,8 +524,8 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     TrajectoryRegionResult out;
     out.name = name;
     // The arm starts in the taught posture of the area a drawn region was drawn from, else of
-    // the area nearest the region's first point, is brought there kinematically, then follows each straight segment at `speed`. Where that
-    // start touches something, the next nearest area's is taken: otherwise every trajectory
+    // the area nearest the region's first point, is brought there kinematically, then follows
+    // each straight segment at `speed`. Where that start touches something, the next nearest area's is taken: otherwise every trajectory
     // after a collision would restart in contact and count as collided at once. Where every
     // one does, the region starts in the nearest area's taught posture itself, and each
     // trajectory first leads the tip from there to its start.
