@@ -527,8 +527,9 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     // the area nearest the region's first point, is brought there kinematically, then follows
     // each straight segment at `speed`. Where that start touches something, the next nearest
     // area's is taken: otherwise every trajectory after a collision would restart in contact
-    // and count as collided at once. Where every one does, the region starts in the nearest area's taught posture itself, and each
-    // trajectory first leads the tip from there to its start.
+    // and count as collided at once. Where every one does, the region starts in the first
+    // area's taught posture itself, and each trajectory first leads the tip from there to its
+    // start.
     const Eigen::Vector3d first = trajectories.front().waypoints.front();
     std::vector<std::size_t> by_distance(areas.size());
     for (std::size_t k = 0; k < areas.size(); ++k) by_distance[k] = k;
