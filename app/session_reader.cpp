@@ -128,7 +128,23 @@ SessionReader::SessionReader(const std::filesystem::path& file) : file_(file), i
     SqliteStatement meta(db, "SELECT key, value FROM meta");
     while (meta.step()) meta_[meta.columnText(0)] = meta.columnText(1);
     if (this->meta("format") != kSessionFormatName) {
-      throw InputError("session file " + name + " is not a FlexIRob session (meta.format is '" + this->meta("format") + "')");
+      throw InputError("session file " + name + " is not a FlexIRob session (meta.format is '" + printable(this->meta("format")) + "')");
+    }
+    // The two records of the version are written together; where they differ, the file was
+    // altered by hand or by another tool, and which of its tables' layouts holds is unknown.
+    const std::string meta_version = this->meta("schema_version", std::to_string(schema_version_));
+    if (meta_version != std::to_string(schema_version_)) {
+      throw InputError("session file " + name + " is inconsistent: its schema version is " +
+                       std::to_string(schema_version_) + " but meta.schema_version says '" + printable(meta_version) + "'");
+    }
+    if (schema_version_ >= 2) {
+      bool area_names = false;
+      SqliteStatement columns(db, "SELECT name FROM pragma_table_info('area')");
+      while (columns.step()) area_names = area_names || columns.columnText(0) == "name";
+      if (!area_names) {
+        throw InputError("session file " + name + " has schema version " + std::to_string(schema_version_) +
+                         " but its area table lacks the column 'name'");
+      }
     }
     metadata_.robot_name = this->meta("robot_name");
     metadata_.robot_urdf = this->meta("robot_urdf");

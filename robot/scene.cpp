@@ -49,20 +49,6 @@ constexpr std::size_t kMaxVisitedNodes = 20000000;
 constexpr std::size_t kMaxYamlValues = 3000000;
 constexpr double kPi = 3.14159265358979323846;
 
-// A single printable line for messages: control characters replaced, long text cut.
-std::string printable(const std::string& text, std::size_t max_length = 60) {
-  std::string out;
-  for (const char c : text) {
-    if (out.size() >= max_length) {
-      out += "...";
-      break;
-    }
-    const auto byte = static_cast<unsigned char>(c);
-    out += (byte < 0x20 || byte == 0x7F) ? '?' : c;
-  }
-  return out;
-}
-
 bool isValidUtf8(const std::string& text) {
   std::size_t i = 0;
   while (i < text.size()) {

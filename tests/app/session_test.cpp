@@ -374,6 +374,28 @@ TEST_F(SessionTest, ReadsAVersionOneFileWithoutAreaNames) {
   EXPECT_EQ(reader.samples(0).size(), 1u);
 }
 
+TEST_F(SessionTest, RefusesAFileWhoseTwoVersionRecordsDisagree) {
+  const auto file = path("disagreeing.flexirob");
+  writeStates(file, 10);
+  {
+    SqliteDatabase db(file.string(), 0x00000002);  // SQLITE_OPEN_READWRITE
+    db.exec("UPDATE meta SET value = '1\n2' WHERE key = 'schema_version'");
+  }
+  const std::string message = refusal(file);
+  EXPECT_NE(message.find("meta.schema_version says '1?2'"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+}
+
+TEST_F(SessionTest, RefusesAVersionTwoFileWithoutAreaNames) {
+  const auto file = path("unnamed_v2.flexirob");
+  writeStates(file, 10);
+  {
+    SqliteDatabase db(file.string(), 0x00000002);
+    db.exec("ALTER TABLE area DROP COLUMN name");
+  }
+  EXPECT_NE(refusal(file).find("lacks the column 'name'"), std::string::npos);
+}
+
 TEST_F(SessionTest, RefusesNewerSchemaAndMissingTables) {
   const auto newer = path("newer.flexirob");
   writeStates(newer, 10);
