@@ -28,6 +28,7 @@ struct MotionOutcome {
   double final_error_m = 0.0;
   double mean_error_m = 0.0;  ///< E_task: mean |x_des(t) − x(t)| over the motion, sampled every 10 ms
   double max_error_m = 0.0;
+  double max_error_time = 0.0;  ///< [s] into the motion when the error was largest
   bool collided = false;  ///< a contact with an obstacle or the robot itself at a checked sample
   std::string contact;    ///< the first contact, "body/other" (empty without one)
   double contact_time = 0.0;        ///< [s] when it happened
@@ -210,8 +211,9 @@ SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot:
 struct CollidedTrajectory {
   std::string name;          ///< the scene's name, or "<region>_<k>" (k from 1) for a drawn one
   std::string contact;       ///< first contact "body/other"
-  double contact_time = 0.0; ///< [s] from the trajectory's start
+  double contact_time = 0.0; ///< [s] from the trajectory's start (from the way's start if on_way_to_start)
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  ///< [m, W] the desired tip position then
+  bool on_way_to_start = false;  ///< on the straight way that leads the tip to the trajectory's start
 };
 /// Tab. 3.2: E_task and E_coll along straight trajectories per region. With the scene's
 /// evaluation trajectories (grouped left / right / interpolation) those are run; otherwise
@@ -221,9 +223,12 @@ struct CollidedTrajectory {
 struct TrajectoryRegionResult {
   std::string name;
   int trajectories = 0;
+  int e_task_trajectories = 0;  ///< trajectories E_task is taken over: those whose start the arm reached without a contact
   double e_task_mean_mm = 0.0;  ///< mean over trajectories of their mean tracking error
   double e_task_std_mm = 0.0;
   double e_task_max_mm = 0.0;   ///< largest error at any sample
+  std::string e_task_max_trajectory;  ///< the trajectory it occurred on
+  double e_task_max_time = 0.0;       ///< [s] from that trajectory's start
   int collisions = 0;           ///< E_coll: trajectories with a contact
   std::map<std::string, int> contacts;  ///< collided trajectories per first contact "body/other"
   std::vector<CollidedTrajectory> collided;  ///< in the order they ran

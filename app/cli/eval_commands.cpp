@@ -377,18 +377,24 @@ Json runSceneModel(const EvalOptions& options) {
 }  // namespace
 
 Json trajectoryRegionJson(const app::TrajectoryRegionResult& region) {
+  // Null where no trajectory's start was reached: no error was measured, which 0 would hide.
+  const auto measured = [&](double value) { return region.e_task_trajectories > 0 ? Json(value) : Json(nullptr); };
   Json collided = Json::array();
   for (const auto& trajectory : region.collided) {
     collided.push_back({{"name", trajectory.name},
                         {"contact", trajectory.contact},
                         {"contact_time_s", trajectory.contact_time},
-                        {"target_m", toJson(trajectory.target)}});
+                        {"target_m", toJson(trajectory.target)},
+                        {"on_way_to_start", trajectory.on_way_to_start}});
   }
   return {{"region", region.name},
           {"trajectories", region.trajectories},
-          {"e_task_mean_mm", region.e_task_mean_mm},
-          {"e_task_std_mm", region.e_task_std_mm},
-          {"e_task_max_mm", region.e_task_max_mm},
+          {"e_task_trajectories", region.e_task_trajectories},
+          {"e_task_mean_mm", measured(region.e_task_mean_mm)},
+          {"e_task_std_mm", measured(region.e_task_std_mm)},
+          {"e_task_max_mm", measured(region.e_task_max_mm)},
+          {"e_task_max_trajectory", region.e_task_max_trajectory},
+          {"e_task_max_time_s", region.e_task_max_time},
           {"e_coll", region.collisions},
           {"contacts", region.contacts},
           {"collided_trajectories", collided},

@@ -93,8 +93,10 @@ Json table32(std::ostream& md) {
     std::string errors, collisions;
     Json regions = Json::array();
     for (const auto& region : result.regions) {
-      errors += (errors.empty() ? "" : " / ") + fixed(region.e_task_mean_mm, 1) + " ± " + fixed(region.e_task_std_mm, 1) +
-                " (" + fixed(region.e_task_max_mm, 1) + ")";
+      errors += (errors.empty() ? "" : " / ") +
+                (region.e_task_trajectories == 0 ? std::string("n/a (no start reached)")
+                                                 : fixed(region.e_task_mean_mm, 1) + " ± " + fixed(region.e_task_std_mm, 1) +
+                                                       " (" + fixed(region.e_task_max_mm, 1) + ")");
       collisions += (collisions.empty() ? "" : " / ") + std::to_string(region.collisions) + "/" + std::to_string(region.trajectories);
       regions.push_back(trajectoryRegionJson(region));
       for (const auto& trajectory : region.collided) {

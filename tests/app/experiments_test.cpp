@@ -251,6 +251,54 @@ TEST(Experiments, TrajectoriesThatMeetAnObstacleAreNamedWithTheirContactAndWhere
   EXPECT_EQ(left.contacts.at(collided.contact), 1);
 }
 
+TEST(Experiments, ETaskIsMeasuredAlongTheTrajectoryFromRestAtItsStartNotOnTheWayThere) {
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  robot::Scene scene;
+  // The second trajectory starts 0.1 m beyond where the first ended and runs back: the way to
+  // its start and the trajectory point in opposite directions. Reversing at 0.1 m/s within the
+  // limiter's acceleration bound leaves the tip millimetres behind a target that turns at once;
+  // at rest at the start, only the start from rest to 0.1 m/s remains, a fraction of that.
+  scene.trajectories.push_back({"out", "left", {tip, tip + Eigen::Vector3d(0.0, 0.1, 0.0)}});
+  scene.trajectories.push_back({"back", "left", {tip + Eigen::Vector3d(0.0, 0.2, 0.0), tip + Eigen::Vector3d(0.0, 0.05, 0.0)}});
+  const auto map = constantMap();
+  const std::vector<EvaluatedArea> areas{cubeArea(ready(), tip, 0.0)};
+  const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 1, 0.1, 1);
+  ASSERT_EQ(result.regions.size(), 1u);
+  const TrajectoryRegionResult& left = result.regions[0];
+  EXPECT_EQ(left.collisions, 0);
+  EXPECT_EQ(left.e_task_trajectories, 2);
+  EXPECT_LT(left.e_task_max_mm, 2.5) << "on " << left.e_task_max_trajectory << " at " << left.e_task_max_time << " s";
+  // The largest error, where there is one, is in the first tenths of a second of a trajectory.
+  EXPECT_LT(left.e_task_max_time, 0.3);
+}
+
+TEST(Experiments, AContactOnTheWayToATrajectorysStartCountsAndIsReportedAsSuch) {
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  robot::Scene scene;
+  // A thin wall across +y, 0.13-0.17 m beside the tip; "beyond" lies behind it, and only the
+  // way to its start crosses it.
+  scene.obstacles.push_back(boxObstacle("wall", Eigen::Vector3d(0.6, 0.04, 0.6), tip + Eigen::Vector3d(0.0, 0.15, 0.0)));
+  scene.trajectories.push_back({"near", "left", {tip, tip + Eigen::Vector3d(0.0, 0.05, 0.0)}});
+  scene.trajectories.push_back({"beyond", "left", {tip + Eigen::Vector3d(0.0, 0.3, 0.0), tip + Eigen::Vector3d(0.0, 0.35, 0.0)}});
+  scene.trajectories.push_back({"near_again", "left", {tip, tip + Eigen::Vector3d(0.0, -0.05, 0.0)}});
+  const auto map = constantMap();
+  const std::vector<EvaluatedArea> areas{cubeArea(ready(), tip, 0.0)};
+  const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 1, 0.1, 1);
+  ASSERT_EQ(result.regions.size(), 1u);
+  const TrajectoryRegionResult& left = result.regions[0];
+  EXPECT_EQ(left.collisions, 1);
+  ASSERT_EQ(left.collided.size(), 1u);
+  EXPECT_EQ(left.collided[0].name, "beyond");
+  EXPECT_TRUE(left.collided[0].on_way_to_start);
+  EXPECT_TRUE(left.collided[0].contact.ends_with("/wall")) << left.collided[0].contact;
+  // The tip was headed for a point between the first's end and the wall's far face.
+  EXPECT_GT(left.collided[0].target.y() - tip.y(), 0.05);
+  EXPECT_LT(left.collided[0].target.y() - tip.y(), 0.17);
+  // E_task is over the two trajectories that ran; the third started again in the area.
+  EXPECT_EQ(left.e_task_trajectories, 2);
+  EXPECT_LT(left.e_task_mean_mm, 2.0);
+}
+
 TEST(Experiments, DrawnTrajectoriesThatMeetAnObstacleAreNamedAfterTheirRegion) {
   const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
   // Two 5 cm areas 0.3 m apart along y and a 10 cm plate across y half way, above the tip's way

@@ -274,6 +274,12 @@ TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
     EXPECT_GE(region.at("e_task_std_mm").get<double>(), 0.0);
     EXPECT_GE(region.at("e_coll").get<int>(), 0);
     EXPECT_LE(region.at("e_coll").get<int>(), region.at("trajectories").get<int>());
+    // E_task is over the trajectories whose start the arm reached without a contact; the
+    // largest error names the trajectory it occurred on.
+    EXPECT_GE(region.at("e_task_trajectories").get<int>(), region.at("trajectories").get<int>() - region.at("e_coll").get<int>());
+    EXPECT_LE(region.at("e_task_trajectories").get<int>(), region.at("trajectories").get<int>());
+    EXPECT_TRUE(region.at("e_task_max_trajectory").get<std::string>().starts_with(region.at("region").get<std::string>() + "_"));
+    EXPECT_GE(region.at("e_task_max_time_s").get<double>(), 0.0);
     // Each collided trajectory is named after its region and counted under its first contact.
     const nlohmann::json& collided = region.at("collided_trajectories");
     EXPECT_EQ(collided.size(), region.at("e_coll").get<std::size_t>());
@@ -284,6 +290,7 @@ TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
       EXPECT_TRUE(trajectory.at("name").get<std::string>().starts_with(region.at("region").get<std::string>() + "_"));
       EXPECT_EQ(trajectory.at("target_m").size(), 3U);
       EXPECT_GE(trajectory.at("contact_time_s").get<double>(), 0.0);
+      EXPECT_TRUE(trajectory.at("on_way_to_start").is_boolean());
     }
   }
   // Deterministic for a seed.
