@@ -56,6 +56,17 @@ robot::Obstacle boxObstacle(const std::string& name, const Eigen::Vector3d& size
   return box;
 }
 
+// The scene's trajectories at 0.1 m/s with the constant map, one area taught in ready() at its
+// tip; the one region they form.
+TrajectoryRegionResult onlyRegion(const robot::Scene& scene) {
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  const auto map = constantMap();
+  const TrajectoryResult result =
+      evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, {cubeArea(ready(), tip, 0.0)}, 1, 0.1, 1);
+  EXPECT_EQ(result.regions.size(), 1u);
+  return result.regions.at(0);
+}
+
 TEST(Experiments, SubsamplingKeepsEverySthSampleOfEachAreaStartingWithItsFirst) {
   learning::TrainingSet data;
   data.X.resize(3, 12);
@@ -260,11 +271,7 @@ TEST(Experiments, ETaskIsMeasuredAlongTheTrajectoryFromRestAtItsStartNotOnTheWay
   // at rest at the start, only the start from rest to 0.1 m/s remains, a fraction of that.
   scene.trajectories.push_back({"out", "left", {tip, tip + Eigen::Vector3d(0.0, 0.1, 0.0)}});
   scene.trajectories.push_back({"back", "left", {tip + Eigen::Vector3d(0.0, 0.2, 0.0), tip + Eigen::Vector3d(0.0, 0.05, 0.0)}});
-  const auto map = constantMap();
-  const std::vector<EvaluatedArea> areas{cubeArea(ready(), tip, 0.0)};
-  const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 1, 0.1, 1);
-  ASSERT_EQ(result.regions.size(), 1u);
-  const TrajectoryRegionResult& left = result.regions[0];
+  const TrajectoryRegionResult left = onlyRegion(scene);
   EXPECT_EQ(left.collisions, 0);
   EXPECT_EQ(left.e_task_trajectories, 2);
   EXPECT_LT(left.e_task_max_mm, 2.5) << "on " << left.e_task_max_trajectory << " at " << left.e_task_max_time << " s";
@@ -281,11 +288,7 @@ TEST(Experiments, AContactOnTheWayToATrajectorysStartCountsAndIsReportedAsSuch) 
   scene.trajectories.push_back({"near", "left", {tip, tip + Eigen::Vector3d(0.0, 0.05, 0.0)}});
   scene.trajectories.push_back({"beyond", "left", {tip + Eigen::Vector3d(0.0, 0.3, 0.0), tip + Eigen::Vector3d(0.0, 0.35, 0.0)}});
   scene.trajectories.push_back({"near_again", "left", {tip, tip + Eigen::Vector3d(0.0, -0.05, 0.0)}});
-  const auto map = constantMap();
-  const std::vector<EvaluatedArea> areas{cubeArea(ready(), tip, 0.0)};
-  const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 1, 0.1, 1);
-  ASSERT_EQ(result.regions.size(), 1u);
-  const TrajectoryRegionResult& left = result.regions[0];
+  const TrajectoryRegionResult left = onlyRegion(scene);
   EXPECT_EQ(left.collisions, 1);
   ASSERT_EQ(left.collided.size(), 1u);
   EXPECT_EQ(left.collided[0].name, "beyond");
