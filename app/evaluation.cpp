@@ -226,6 +226,13 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
   return false;
 }
 
+TrajectorySource parseTrajectorySource(const std::string& name) {
+  if (name == "auto") return TrajectorySource::kAuto;
+  if (name == "scene") return TrajectorySource::kScene;
+  if (name == "training-data") return TrajectorySource::kTrainingData;
+  throw InputError("trajectories: expected the source auto, scene or training-data, got '" + printable(name) + "'");
+}
+
 ApproachFrom parseApproach(const std::string& name) {
   if (name == "learned") return ApproachFrom::kLearnedPosture;
   if (name == "start") return ApproachFrom::kStartPosture;
@@ -415,8 +422,11 @@ SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot:
 TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robot::Scene& scene,
                                       const robot::ParameterSet& parameters, const learning::Learner& map,
                                       const std::vector<EvaluatedArea>& areas, int per_area, double speed,
-                                      std::uint64_t seed, const ProgressCallback& progress) {
+                                      std::uint64_t seed, const ProgressCallback& progress, TrajectorySource source) {
   if (areas.empty()) throw InputError("trajectories: no taught area");
+  if (source == TrajectorySource::kScene && scene.trajectories.empty()) {
+    throw InputError("trajectories: the scene lists no trajectories (use the regions around the training data)");
+  }
   if (!(speed > 0.0)) throw InputError("trajectories: speed must be positive");
   for (const auto& area : areas) {
     model.checkPosture(area.q_fixed);
@@ -439,7 +449,9 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
   // A drawn region's area: the arm starts there first, its tip on a straight way to the start.
   std::map<std::string, std::size_t> drawn_from;
   TrajectoryResult result;
-  if (!scene.trajectories.empty()) {
+  const bool from_scene = source == TrajectorySource::kScene ||
+                          (source == TrajectorySource::kAuto && !scene.trajectories.empty());
+  if (from_scene) {
     result.from_scene = true;
     for (const auto& trajectory : scene.trajectories) {
       region(trajectory.group.empty() ? "ungrouped" : trajectory.group).push_back({trajectory.name, trajectory.waypoints});

@@ -242,6 +242,15 @@ struct TrajectoryResult {
   std::vector<TrajectoryRegionResult> regions;
   bool from_scene = false;  ///< the scene's trajectories (true) or drawn around the samples
 };
+/// Where the trajectories of `evaluateTrajectories` come from.
+enum class TrajectorySource {
+  kAuto,          ///< the scene's, where it lists any; else drawn around the training data
+  kScene,         ///< the scene's (an InputError where it lists none)
+  kTrainingData,  ///< drawn in the boxes around the areas' samples and between them, as the thesis
+                  ///< defines its regions (Sect. 3.3.1, Fig. 3.7), whatever the scene lists
+};
+/// "auto", "scene" or "training-data"; InputError otherwise.
+TrajectorySource parseTrajectorySource(const std::string& name);
 /// A taught area as the trajectory evaluation needs it.
 struct EvaluatedArea {
   Eigen::MatrixXd samples;  ///< 3 x L [m, W]
@@ -251,7 +260,8 @@ struct EvaluatedArea {
 TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robot::Scene& scene,
                                       const robot::ParameterSet& parameters, const learning::Learner& map,
                                       const std::vector<EvaluatedArea>& areas, int per_area, double speed,
-                                      std::uint64_t seed, const ProgressCallback& progress = {});
+                                      std::uint64_t seed, const ProgressCallback& progress = {},
+                                      TrajectorySource source = TrajectorySource::kAuto);
 
 /// Sect. 8.3: `goals` random graph nodes (seeded) visited one after another from q_start; each
 /// planned with A* + spline and executed with the hierarchical controller, through contacts

@@ -244,6 +244,7 @@ struct EvalOptions {
   int per_area = 25;
   double speed = 0.1;
   std::string approach = "nearest";  ///< reachable / scene-model: where each target is approached from
+  std::string trajectories = "auto";  ///< trajectories: the scene's, or drawn around the training data
 };
 
 // A grid without targets has no reachability to report (0 of 0 is not 0 %): `command` fails
@@ -416,7 +417,8 @@ Json runTrajectories(const EvalOptions& options) {
   const app::TrajectoryResult result =
       app::evaluateTrajectories(*session.model, session.scene_data, parameters, *learner, sessionAreas(session),
                                 options.per_area, options.speed, options.seed,
-                                [](double f) { reportProgress("eval trajectories", f); });
+                                [](double f) { reportProgress("eval trajectories", f); },
+                                app::parseTrajectorySource(options.trajectories));
   Json out = trajectoryJson(result);
   out["learner"] = options.learner;
   out["speed_m_s"] = options.speed;
@@ -484,7 +486,12 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
   trajectories->add_option("--session", options->session, "session file written by teach")->required();
   trajectories->add_option("--learner", options->learner, "elm, oselm or llm");
-  trajectories->add_option("--per-area", options->per_area, "trajectories per training area without scene trajectories (between areas taught one after the other: twice)")->check(finiteRange(1, 10000));
+  trajectories->add_option("--trajectories", options->trajectories,
+                           "the scene's trajectories (scene), trajectories drawn in the boxes around each area's "
+                           "training data and between them, as the thesis defines its regions (training-data), or "
+                           "the scene's where it lists any (auto, the default)")
+      ->check(CLI::IsMember({"auto", "scene", "training-data"}));
+  trajectories->add_option("--per-area", options->per_area, "trajectories per training area where they are drawn (between areas taught one after the other: twice)")->check(finiteRange(1, 10000));
   trajectories->add_option("--speed", options->speed, "tip speed [m/s]")->check(finiteRange(0.01, 1.0));
   trajectories->add_option("--seed", options->seed, "random seed for drawn trajectories")->check(seedValidator());
   trajectories->callback([&runner, options] { runner.select([options] { return runTrajectories(*options); }); });

@@ -68,9 +68,22 @@ app::TeachSpec teachSpec(int areas) {
   return spec;
 }
 
-// Tab. 3.2: two areas (three for D*), the regions' E_task and E_coll.
+// A region's E_task "mean ± sd (max)" in mm, or why there is none.
+std::string regionError(const app::TrajectoryRegionResult& region) {
+  if (region.e_task_trajectories == 0) return "n/a (no start reached)";
+  return fixed(region.e_task_mean_mm, 1) + " ± " + fixed(region.e_task_std_mm, 1) + " (" + fixed(region.e_task_max_mm, 1) + ")";
+}
+
+std::string regionCollisions(const app::TrajectoryRegionResult& region) {
+  return std::to_string(region.collisions) + "/" + std::to_string(region.trajectories);
+}
+
+// Tab. 3.2: two areas (three for D*), the regions' E_task and E_coll, twice: along the scene's
+// stored trajectories (0.2 m boxes around the areas' centres), and along trajectories drawn in
+// the boxes around the training data the tutor recorded, which is how the thesis defines its
+// regions (Sect. 3.3.1: "axis-aligned bounding boxes around each of the two training data
+// trajectories", the interpolation area between them).
 Json table32(std::ostream& md) {
-  std::map<std::string, int> all_contacts;
   const std::vector<std::tuple<std::string, std::string, int>> rows{
       {"A", "setup_A", 2}, {"B", "setup_B", 2}, {"C", "setup_C", 2}, {"D", "setup_D", 2}, {"D*", "setup_D", 3}};
   // Thesis Tab. 3.2 (left / right / interp.): E_task mm, E_coll.
@@ -78,37 +91,66 @@ Json table32(std::ostream& md) {
                                                   {"B", "1.8 / 2.0 / 1.9 mm; 0 / 0 / 0"},
                                                   {"C", "2.0 / 1.6 / 1.7 mm; 0 / 0 / 0"},
                                                   {"D", "1.9 / 1.6 / 1.6 mm; 0 / 0 / 16"},
-                                                  {"D*", "(Sect. 3.3.1: collisions gone with the third area)"}};
-  md << "\n## Tab. 3.2 — E_task and E_coll per region (ELM, tutor seed 1)\n\n"
-     << "| setup | areas | samples | E_task left / right / interp. [mm] (mean ± sd, max) | E_coll left / right / interp. | thesis |\n|---|---|---|---|---|---|\n";
+                                                  {"D*", "E_coll interp. 3 (Sect. 3.3.1: 16 → 3 with the third area)"}};
+  std::ostringstream scene_md, drawn_md;
+  scene_md << "\n## Tab. 3.2 — E_task and E_coll per region, the scene's trajectories (ELM, tutor seed 1)\n\n"
+           << "| setup | areas | samples | E_task left / right / interp. [mm] (mean ± sd, max) | E_coll left / right / interp. | thesis |\n|---|---|---|---|---|---|\n";
+  drawn_md << "\n## Tab. 3.2 — the same sessions, trajectories drawn around the training data (the thesis' regions)\n\n"
+           << "| setup | E_task left / right / interp. [mm] (mean ± sd, max) | E_coll left / right / interp. | further regions | thesis |\n|---|---|---|---|---|\n";
   Json out = Json::array();
   for (const auto& [label, scene_name, areas] : rows) {
     log("Tab. 3.2 setup " + label);
     const Loaded loaded = load(scene_name);
     const app::TaughtSystem taught = app::teachInSimulation(loaded.model, loaded.scene, teachSpec(areas));
     const auto map = app::fitMap(taught.data, loaded.model.dof(), app::LearnerKind::kElm, {}, {});
-    const app::TrajectoryResult result = app::evaluateTrajectories(
-        loaded.model, loaded.scene, app::sceneParameters(loaded.scene), *map, app::evaluatedAreas(taught), 25, 0.1, 1,
-        [&, row = label](double f) { reportProgress("Tab. 3.2 " + row, f); });
+    const auto evaluate = [&, row = label](app::TrajectorySource source, const std::string& what) {
+      const app::TrajectoryResult result = app::evaluateTrajectories(
+          loaded.model, loaded.scene, app::sceneParameters(loaded.scene), *map, app::evaluatedAreas(taught), 25, 0.1, 1,
+          [&](double f) { reportProgress("Tab. 3.2 " + row + " (" + what + ")", f); }, source);
+      for (const auto& region : result.regions) {
+        for (const auto& trajectory : region.collided) {
+          log("Tab. 3.2 " + row + " (" + what + ") " + region.name + ": " + trajectory.name + " " + trajectory.contact + " at " +
+              fixed(trajectory.contact_time, 2) + " s" + (trajectory.on_way_to_start ? " on the way to its start" : ""));
+        }
+      }
+      return result;
+    };
+    const app::TrajectoryResult scene_result = evaluate(app::TrajectorySource::kScene, "scene");
+    const app::TrajectoryResult drawn_result = evaluate(app::TrajectorySource::kTrainingData, "training data");
     std::string errors, collisions;
-    Json regions = Json::array();
-    for (const auto& region : result.regions) {
-      errors += (errors.empty() ? "" : " / ") +
-                (region.e_task_trajectories == 0 ? std::string("n/a (no start reached)")
-                                                 : fixed(region.e_task_mean_mm, 1) + " ± " + fixed(region.e_task_std_mm, 1) +
-                                                       " (" + fixed(region.e_task_max_mm, 1) + ")");
-      collisions += (collisions.empty() ? "" : " / ") + std::to_string(region.collisions) + "/" + std::to_string(region.trajectories);
-      regions.push_back(trajectoryRegionJson(region));
-      for (const auto& trajectory : region.collided) {
-        log("Tab. 3.2 " + label + " " + region.name + ": " + trajectory.name + " " + trajectory.contact + " at " +
-            fixed(trajectory.contact_time, 2) + " s");
+    Json scene_regions = Json::array(), drawn_regions = Json::array();
+    for (const auto& region : scene_result.regions) {
+      errors += (errors.empty() ? "" : " / ") + regionError(region);
+      collisions += (collisions.empty() ? "" : " / ") + regionCollisions(region);
+      scene_regions.push_back(trajectoryRegionJson(region));
+    }
+    scene_md << "| " << label << " | " << taught.areas.size() << " | " << taught.data.size() << " | " << errors << " | "
+             << collisions << " | " << thesis.at(label) << " |\n";
+    // The thesis' three columns are the areas left and right and the box between them; D*'s
+    // third area and the box between it and the area taught before it are listed beside them.
+    std::string further;
+    std::map<std::string, const app::TrajectoryRegionResult*> by_name;
+    for (const auto& region : drawn_result.regions) {
+      drawn_regions.push_back(trajectoryRegionJson(region));
+      by_name[region.name] = &region;
+      if (region.name != "left" && region.name != "right" && region.name != "between left and right") {
+        further += (further.empty() ? "" : "; ") + region.name + ": " + regionError(region) + ", " + regionCollisions(region);
       }
     }
-    md << "| " << label << " | " << taught.areas.size() << " | " << taught.data.size() << " | " << errors << " | " << collisions
-       << " | " << thesis.at(label) << " |\n";
+    errors.clear();
+    collisions.clear();
+    for (const std::string name : {"left", "right", "between left and right"}) {
+      const auto it = by_name.find(name);
+      errors += (errors.empty() ? "" : " / ") + (it == by_name.end() ? std::string("n/a") : regionError(*it->second));
+      collisions += (collisions.empty() ? "" : " / ") + (it == by_name.end() ? std::string("n/a") : regionCollisions(*it->second));
+    }
+    drawn_md << "| " << label << " | " << errors << " | " << collisions << " | " << (further.empty() ? "—" : further) << " | "
+             << thesis.at(label) << " |\n";
     out.push_back({{"setup", label}, {"scene", scene_name}, {"areas", taught.areas.size()}, {"samples", taught.data.size()},
-                   {"teaching_contacts", taught.tutor.collisions}, {"regions", regions}});
+                   {"teaching_contacts", taught.tutor.collisions}, {"regions", scene_regions},
+                   {"regions_around_training_data", drawn_regions}});
   }
+  md << scene_md.str() << drawn_md.str();
   return out;
 }
 

@@ -224,6 +224,46 @@ TEST(Experiments, DrawnTrajectoriesRunInEveryAreaNamedAfterItAndBetweenAreasTaug
   }
 }
 
+TEST(Experiments, TrajectoriesCanBeDrawnAroundTheTrainingDataWhereTheSceneListsItsOwn) {
+  // The thesis' regions are the boxes around the samples (Sect. 3.3.1); the scene's one
+  // trajectory runs 0.3 m away from both areas. Drawn, every point lies in an area's box or
+  // between them; from the scene, the one trajectory runs; a scene without any has none to run.
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  std::vector<EvaluatedArea> areas{cubeArea(ready(), tip + Eigen::Vector3d(0.0, 0.05, 0.0), 0.02),
+                                   cubeArea(ready(), tip - Eigen::Vector3d(0.0, 0.05, 0.0), 0.02)};
+  areas[0].name = "left";
+  areas[1].name = "right";
+  robot::Scene scene;
+  scene.trajectories.push_back({"far", "left", {tip + Eigen::Vector3d(0.3, 0.0, 0.0), tip + Eigen::Vector3d(0.3, 0.1, 0.0)}});
+  const auto map = constantMap();
+  const auto run = [&](const robot::Scene& s, TrajectorySource source) {
+    return evaluateTrajectories(lwr4(), s, sceneParameters(s), *map, areas, 2, 0.1, 1, {}, source);
+  };
+  const TrajectoryResult drawn = run(scene, TrajectorySource::kTrainingData);
+  EXPECT_FALSE(drawn.from_scene);
+  ASSERT_EQ(drawn.regions.size(), 3u);
+  EXPECT_EQ(drawn.regions[2].name, "between left and right");
+  const Eigen::Vector3d lower = tip - Eigen::Vector3d(0.02, 0.07, 0.02), upper = tip + Eigen::Vector3d(0.02, 0.07, 0.02);
+  for (const auto& region : drawn.regions) {
+    EXPECT_EQ(region.trajectories, region.name == "between left and right" ? 4 : 2);
+    for (const auto& waypoints : region.waypoints) {
+      for (const Eigen::Vector3d& p : waypoints) {
+        EXPECT_TRUE((p.array() >= lower.array() - 1e-9).all() && (p.array() <= upper.array() + 1e-9).all())
+            << region.name << ": " << p.transpose();
+      }
+    }
+  }
+  for (const TrajectorySource source : {TrajectorySource::kScene, TrajectorySource::kAuto}) {
+    const TrajectoryResult listed = run(scene, source);
+    EXPECT_TRUE(listed.from_scene);
+    ASSERT_EQ(listed.regions.size(), 1u);
+    EXPECT_EQ(listed.regions[0].trajectories, 1);
+  }
+  EXPECT_THROW(run(robot::Scene{}, TrajectorySource::kScene), InputError);
+  EXPECT_EQ(parseTrajectorySource("training-data"), TrajectorySource::kTrainingData);
+  EXPECT_THROW(parseTrajectorySource("samples"), InputError);
+}
+
 TEST(Experiments, TrajectoriesThatMeetAnObstacleAreNamedWithTheirContactAndWhereTheTipWasHeaded) {
   const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
   robot::Scene scene;
