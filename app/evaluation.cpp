@@ -166,6 +166,43 @@ ArmReach armReach(const robot::RobotModel& model) {
     result.reach = std::max(result.reach, result.fromShoulder(kinematics.X_WB(b).translation()));
   }
   result.reach = std::max(result.reach, result.fromShoulder(kinematics.p_WT()));
+  // The posture nearest zero need not be the stretched one (an arm with elbow offsets stands
+  // folded at zero, and its reach would read 0.15 m short): the farthest the tip gets from the
+  // shoulder within the limits, over seeded random postures, the best of them climbed joint by
+  // joint. Seeded, so every caller gets the same reach.
+  const Eigen::VectorXd lower = model.sampleLowerLimits(), upper = model.sampleUpperLimits();
+  const auto tipDistance = [&](const Eigen::VectorXd& posture) {
+    kinematics.update(posture);
+    return result.fromShoulder(kinematics.p_WT());
+  };
+  learning::UniformRandom random(1);
+  Eigen::VectorXd best = q;
+  double best_distance = tipDistance(q);
+  for (int sample = 0; sample < 2000; ++sample) {
+    Eigen::VectorXd candidate(model.dof());
+    for (int j = 0; j < model.dof(); ++j) candidate[j] = random.uniform(lower[j], upper[j]);
+    if (const double distance = tipDistance(candidate); distance > best_distance) {
+      best_distance = distance;
+      best = candidate;
+    }
+  }
+  for (double step = 0.2; step > 1e-3; step *= 0.5) {
+    for (bool improved = true; improved;) {
+      improved = false;
+      for (int j = 0; j < model.dof(); ++j) {
+        for (const double sign : {-1.0, 1.0}) {
+          Eigen::VectorXd candidate = best;
+          candidate[j] = std::clamp(candidate[j] + sign * step, lower[j], upper[j]);
+          if (const double distance = tipDistance(candidate); distance > best_distance + 1e-9) {
+            best_distance = distance;
+            best = candidate;
+            improved = true;
+          }
+        }
+      }
+    }
+  }
+  result.reach = std::max(result.reach, best_distance);
   // Without a joint turning the rest about another axis there is no base column around an axis
   // of the first joint; the arm sweeps through it.
   result.base_radius = shoulder == 1 ? 0.0 : std::min(0.2, 0.25 * result.reach);

@@ -65,7 +65,7 @@ struct ArmReach {
   /// Origin of the first joint whose axis is not parallel to the first joint's (the LWR IV's A2),
   /// of the first joint if there is none; in the posture nearest zero [m, W]
   Eigen::Vector3d shoulder = Eigen::Vector3d::Zero();
-  double reach = 0.0;  ///< the largest distance of a body origin or the tip from the shoulder [m]
+  double reach = 0.0;  ///< the largest distance of a body origin (posture nearest zero) or the tip (any posture within the limits) from the shoulder [m]
   Eigen::Vector3d base_point = Eigen::Vector3d::Zero();  ///< a point of the first joint's axis [m, W]
   Eigen::Vector3d base_axis = Eigen::Vector3d::UnitZ();  ///< its direction (unit) [W]
   /// The column's radius: 0.2 m (the LWR IV's base and first links), a quarter of the reach on

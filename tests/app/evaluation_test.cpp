@@ -139,6 +139,24 @@ TEST(Evaluation, TheArmsRoomIsWithinReachAndOffTheColumnAroundItsFirstAxis) {
   EXPECT_NEAR(planar.reach, 0.9, 1e-12);
   EXPECT_DOUBLE_EQ(planar.base_radius, 0.0);
   EXPECT_TRUE(planar.roomFor(Eigen::Vector3d(0.0, 0.0, 1.34), 0.05)) << "0.84 m out along its first link";
+
+  // The lying arm with its forearm folded back 2.5 rad at zero, 0.45 m from the shoulder to the
+  // tip: the elbow's limit (-2) undoes all but 0.5 rad of the fold, the tighter limit -1 all but
+  // 1.5 rad; the reach is the law of cosines' distance of the two links' ends then.
+  std::string folded_urdf = urdf;
+  const std::string elbow = R"(<origin xyz="0 0 0.5"/>)";
+  folded_urdf.replace(folded_urdf.find(elbow), elbow.size(), R"(<origin xyz="0 0 0.5" rpy="0 2.5 0"/>)");
+  const ArmReach folded = armReach(robot::RobotModel::fromUrdfString(folded_urdf, "."));
+  const auto stretched = [](double fold) { return std::sqrt(0.5 * 0.5 + 0.3 * 0.3 + 2.0 * 0.5 * 0.3 * std::cos(fold)); };
+  EXPECT_NEAR(folded.reach, stretched(0.5), 1e-4);
+  std::string stiff_urdf = folded_urdf;
+  const std::string elbow_limits = R"(<axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="1" effort="1"/></joint>
+  <link name="l3"/>)";
+  stiff_urdf.replace(stiff_urdf.find(elbow_limits), elbow_limits.size(),
+                     R"(<axis xyz="0 1 0"/><limit lower="-1" upper="1" velocity="1" effort="1"/></joint>
+  <link name="l3"/>)");
+  const ArmReach stiff = armReach(robot::RobotModel::fromUrdfString(stiff_urdf, "."));
+  EXPECT_NEAR(stiff.reach, stretched(1.5), 1e-4);
 }
 
 TEST(Evaluation, MotionReachesAFreeTargetWithoutCollision) {
