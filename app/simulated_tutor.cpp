@@ -502,11 +502,22 @@ bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) 
   // 15 N for up to 3 s; if the robot has not noticed (a tip near the base, a small arm: the
   // torques stay under the trigger's threshold), a person presses harder, up to 60 N, enough
   // for twice the threshold at some joint, for 3 s more.
-  const Eigen::Vector3d push = direction.normalized();
+  Eigen::Vector3d push = direction.normalized();
   kinematics_.update(state_.q);
   robot::Matrix3Xd Jp(3, model_->dof());
   kinematics_.tipPositionJacobian(Jp);
-  const double torque_per_newton = (Jp.transpose() * push).cwiseAbs().maxCoeff();
+  double torque_per_newton = (Jp.transpose() * push).cwiseAbs().maxCoeff();
+  // A push no joint feels (an arm standing straight up, pushed in a vertical plane through its
+  // base: every joint axis meets or parallels the line of the force) cannot be noticed at any
+  // force; a person pushes where the arm gives instead, the direction the tip moves most
+  // easily, on the side of the way to go.
+  if (60.0 * torque_per_newton < 2.0 * workflow_->options().affected_torque) {
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Jp, Eigen::ComputeThinU);
+    Eigen::Vector3d gives = svd.matrixU().col(0);
+    if (gives.dot(push) < 0.0) gives = -gives;
+    push = gives;
+    torque_per_newton = (Jp.transpose() * push).cwiseAbs().maxCoeff();
+  }
   const double firmer = std::clamp(2.0 * workflow_->options().affected_torque / std::max(torque_per_newton, 1e-6), 15.0, 60.0);
   for (int attempt = 0; attempt < 2; ++attempt) {
     if (attempt == 1 && firmer <= 15.0) break;

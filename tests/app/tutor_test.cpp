@@ -374,6 +374,22 @@ TEST(SimulatedTutor, SaysWhyAnAreaInsideAnObstacleOrOutOfReachIsNotTaught) {
   EXPECT_EQ(teaching.workflow->areas().size(), 1U);
 }
 
+// The LWR IV standing straight up, an area beside it at x = 0: the tip pushed towards it (in the
+// plane x = 0, through every joint axis) turns no joint, and on_affected never fired at any force
+// (the area was given up). The tutor pushes where the arm gives instead.
+TEST(SimulatedTutor, NoticesThatAnArmStandingStraightUpCannotFeelAPushThroughItsAxesAndPushesWhereItGives) {
+  robot::Scene scene;
+  scene.home_posture = Eigen::VectorXd::Zero(7);
+  scene.training_areas.push_back({"beside", Eigen::Vector3d(0.0, 0.6, 0.2), 0.05, std::nullopt, std::nullopt});
+  ShortTeaching teaching(scene);
+  teaching.tutor_options.check_points = 0;
+  const TutorReport report = teaching.configure(1);
+  ASSERT_GE(report.areas.size(), 1U);
+  EXPECT_TRUE(report.areas[0].taught) << report.areas[0].failure;
+  ASSERT_EQ(teaching.workflow->areas().size(), 1U);
+  EXPECT_LT((teaching.workflow->areas()[0].centre - Eigen::Vector3d(0.0, 0.6, 0.2)).norm(), 0.05);
+}
+
 // Setup I's area I3 lies under the board, on the far side of it from the home posture: the
 // straight joint-space way there runs into the board, so the tutor has to lead the arm around
 // it (the approach planner) and does so without a contact.
