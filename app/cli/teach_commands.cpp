@@ -302,9 +302,16 @@ Json runTeach(const TeachOptions& options) {
   if (said.size() > kWarningsOnStderr) {
     std::fprintf(stderr, "warning: ... and %zu more (\"warning_lines\" in the JSON)\n", said.size() - kWarningsOnStderr);
   }
+  // A place the scene lists and the tutor gave up is the scene's author's to know about (a
+  // place inside an obstacle, out of reach, a scene in the wrong units), even where the tutor
+  // made the count up with places of its own.
+  for (const auto& area : report.areas) {
+    if (area.automatic || area.taught) continue;
+    std::fprintf(stderr, "warning: the scene's area '%s' was not taught: %s\n", printable(area.name).c_str(), area.failure.c_str());
+  }
   if (static_cast<int>(workflow.areas().size()) < options.areas && !workflow.areas().empty()) {
-    std::fprintf(stderr, "note: %zu of the %d areas asked for were taught; \"tutor\" in the JSON says why the others were not\n",
-                 workflow.areas().size(), options.areas);
+    std::fprintf(stderr, "note: %zu of the %d areas asked for %s taught; \"tutor\" in the JSON says why the others were not\n",
+                 workflow.areas().size(), options.areas, workflow.areas().size() == 1 ? "was" : "were");
   }
   Json link = nullptr;
   if (connection) {
