@@ -5,6 +5,7 @@
 #include <chrono>
 #include <numbers>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 #include "app/evaluation.hpp"
@@ -497,14 +498,21 @@ void Workflow::checkJointLimits(const Eigen::VectorXd& q_fixed, int area) {
     const robot::Joint& joint = model_robot_->joints()[static_cast<std::size_t>(j)];
     const bool sliding = joint.type == robot::JointType::kPrismatic;
     const double margin = std::min(q_fixed[j] - lower[j], upper[j] - q_fixed[j]);
-    // A slide's travel may be a few centimetres: near means within a tenth of it.
-    const double near = sliding ? std::min(options_.limit_warning_margin_m, 0.1 * (upper[j] - lower[j]))
-                                : options_.limit_warning_margin;
+    // A joint's range may be narrow (a slide's travel of a few centimetres, a wrist of ±0.1 rad):
+    // near means within a tenth of it, or the margin if that is less.
+    const double near = std::min(sliding ? options_.limit_warning_margin_m : options_.limit_warning_margin,
+                                 0.1 * (upper[j] - lower[j]));
     if (margin < near) {
+      // To a tenth of a degree or millimetre: what a person reads; closer than that is at it.
+      const double shown = std::round(std::abs(margin) * (sliding ? 1000.0 : 180.0 / std::numbers::pi) * 10.0) / 10.0;
       std::ostringstream detail;
-      detail << "posture near the joint limit: joint " << (j + 1) << " (" << joint.name << ") is "
-             << (sliding ? std::abs(margin) * 1000.0 : std::abs(margin) * 180.0 / std::numbers::pi)
-             << (sliding ? " mm" : " deg") << (margin < 0.0 ? " beyond its software limit" : " from its limit");
+      detail << "posture near the joint limit: joint " << (j + 1) << " (" << joint.name << ") is ";
+      if (shown == 0.0) {
+        detail << "at its limit";
+      } else {
+        detail << std::fixed << std::setprecision(1) << shown << (sliding ? " mm" : " deg")
+               << (margin < 0.0 ? " beyond its software limit" : " from its limit");
+      }
       emit(WorkflowEvent::Kind::kWarning, "joint_limit", detail.str(), area);
     }
   }

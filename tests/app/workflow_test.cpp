@@ -306,10 +306,24 @@ TEST(Workflow, WarnsWhenThePostureIsNearAJointLimit) {
   EXPECT_EQ(warnings, 1);
 }
 
-TEST(Workflow, APrismaticJointIsNearItsLimitInMillimetresOfItsOwnTravel) {
-  // Joint 3 slides 0.2 m: the radian margin of the rotary joints would call every position of
-  // it near a limit, and in degrees.
-  const robot::RobotModel slider = robot::RobotModel::fromUrdfString(R"(<robot name="slider">
+// The joint-limit warnings of an area taught in posture q.
+std::vector<std::string> jointLimitWarnings(const robot::RobotModel& model, const Eigen::VectorXd& q) {
+  ScriptedBackend backend(model);
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  robot::ParameterSet parameters(declarations);
+  Workflow workflow(backend, parameters, syncOptions());
+  EXPECT_TRUE(workflow.press(Button::kStartConfiguration));
+  teachArea(workflow, backend, q);
+  std::vector<std::string> details;
+  for (const auto& event : workflow.events()) {
+    if (event.kind == WorkflowEvent::Kind::kWarning && event.name == "joint_limit") details.push_back(event.detail);
+  }
+  return details;
+}
+
+// A 4-joint arm whose third joint is `third` (a joint element's type, axis and limit).
+robot::RobotModel armWithThirdJoint(const std::string& third) {
+  return robot::RobotModel::fromUrdfString(R"(<robot name="arm">
     <link name="base"/>
     <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.3"/>
       <axis xyz="0 0 1"/><limit lower="-2.9" upper="2.9" velocity="2" effort="100"/></joint>
@@ -317,8 +331,7 @@ TEST(Workflow, APrismaticJointIsNearItsLimitInMillimetresOfItsOwnTravel) {
     <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.1"/>
       <axis xyz="0 1 0"/><limit lower="-2.9" upper="2.9" velocity="2" effort="100"/></joint>
     <link name="l2"/>
-    <joint name="slide" type="prismatic"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.3"/>
-      <axis xyz="0 0 1"/><limit lower="0" upper="0.2" velocity="0.5" effort="100"/></joint>
+    )" + third + R"(
     <link name="l3"/>
     <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/><origin xyz="0 0 0.1"/>
       <axis xyz="0 1 0"/><limit lower="-2.9" upper="2.9" velocity="2" effort="100"/></joint>
@@ -326,27 +339,34 @@ TEST(Workflow, APrismaticJointIsNearItsLimitInMillimetresOfItsOwnTravel) {
     <joint name="tool" type="fixed"><parent link="l4"/><child link="tip"/><origin xyz="0 0 0.2"/></joint>
     <link name="tip"/>
   </robot>)",
-                                                                    std::filesystem::temp_directory_path());
-  const auto warningsFor = [&](double slide) {
-    ScriptedBackend backend(slider);
-    const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-    robot::ParameterSet parameters(declarations);
-    Workflow workflow(backend, parameters, syncOptions());
-    EXPECT_TRUE(workflow.press(Button::kStartConfiguration));
-    Eigen::VectorXd q(4);
-    q << 0.3, 0.5, slide, -1.0;
-    teachArea(workflow, backend, q);
-    std::vector<std::string> details;
-    for (const auto& event : workflow.events()) {
-      if (event.kind == WorkflowEvent::Kind::kWarning && event.name == "joint_limit") details.push_back(event.detail);
-    }
-    return details;
-  };
+                                           std::filesystem::temp_directory_path());
+}
+
+TEST(Workflow, APrismaticJointIsNearItsLimitInMillimetresOfItsOwnTravel) {
+  // Joint 3 slides 0.2 m: the radian margin of the rotary joints would call every position of
+  // it near a limit, and in degrees.
+  const robot::RobotModel slider = armWithThirdJoint(R"(<joint name="slide" type="prismatic"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.3"/>
+      <axis xyz="0 0 1"/><limit lower="0" upper="0.2" velocity="0.5" effort="100"/></joint>)");
+  const auto warningsFor = [&](double slide) { return jointLimitWarnings(slider, Eigen::Vector4d(0.3, 0.5, slide, -1.0)); };
   EXPECT_TRUE(warningsFor(0.1).empty()) << "mid-travel, 0.1 m from either end";
   const std::vector<std::string> near_end = warningsFor(0.19);
   ASSERT_EQ(near_end.size(), 1U);
   EXPECT_NE(near_end[0].find("joint 3 (slide)"), std::string::npos) << near_end[0];
   EXPECT_NE(near_end[0].find(" mm from its limit"), std::string::npos) << near_end[0];
+}
+
+TEST(Workflow, ANarrowRotaryJointIsNearItsLimitWithinATenthOfItsRangeAndSaysWhereItIs) {
+  // Joint 3 turns ±0.1 rad: every position of it is within the 0.17 rad of the wide joints.
+  const robot::RobotModel narrow = armWithThirdJoint(R"(<joint name="wrist" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.3"/>
+      <axis xyz="0 1 0"/><limit lower="-0.1" upper="0.1" velocity="1" effort="100"/></joint>)");
+  const auto warningsFor = [&](double wrist) { return jointLimitWarnings(narrow, Eigen::Vector4d(0.3, 0.5, wrist, -1.0)); };
+  EXPECT_TRUE(warningsFor(0.0).empty()) << "in the middle, 0.1 rad from either end";
+  const std::vector<std::string> near_end = warningsFor(0.095);
+  ASSERT_EQ(near_end.size(), 1U);
+  EXPECT_NE(near_end[0].find("joint 3 (wrist) is 0.3 deg from its limit"), std::string::npos) << near_end[0];
+  const std::vector<std::string> at_end = warningsFor(0.1);
+  ASSERT_EQ(at_end.size(), 1U);
+  EXPECT_NE(at_end[0].find("joint 3 (wrist) is at its limit"), std::string::npos) << at_end[0];
 }
 
 TEST(Workflow, OnlineOsElmLearnsDuringRecording) {
