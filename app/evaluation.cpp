@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <map>
 #include <optional>
 #include <random>
 #include <set>
+#include <sstream>
 #include <tuple>
 
 #include "planning/path_planner.hpp"
@@ -456,6 +458,36 @@ SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot:
   return result;
 }
 
+namespace {
+
+// The first point of a chain of straight segments (every 2 cm) that no posture can put the tip
+// at: beyond the arm's reach or inside an obstacle; empty if there is none.
+std::string impossiblePoint(const ArmReach& reach, const robot::Scene& scene, const std::vector<Eigen::Vector3d>& waypoints) {
+  const auto describe = [](const Eigen::Vector3d& p) {
+    std::ostringstream text;
+    text << std::fixed << std::setprecision(2) << "(" << p.x() << ", " << p.y() << ", " << p.z() << ") m";
+    return text.str();
+  };
+  for (std::size_t i = 0; i < waypoints.size(); ++i) {
+    const Eigen::Vector3d from = waypoints[i];
+    const Eigen::Vector3d to = i + 1 < waypoints.size() ? waypoints[i + 1] : waypoints[i];
+    const int steps = std::max(1, static_cast<int>(std::ceil((to - from).norm() / 0.02)));
+    for (int k = 0; k <= steps; ++k) {
+      const Eigen::Vector3d p = from + (to - from) * (static_cast<double>(k) / steps);
+      if (reach.fromShoulder(p) > reach.reach) {
+        std::ostringstream text;
+        text << describe(p) << std::fixed << std::setprecision(2) << " is " << reach.fromShoulder(p)
+             << " m from the shoulder, reach " << reach.reach << " m";
+        return text.str();
+      }
+      if (const robot::Obstacle* obstacle = robot::obstacleAt(scene, p)) return describe(p) + " lies inside " + obstacle->name;
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
 TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robot::Scene& scene,
                                       const robot::ParameterSet& parameters, const learning::Learner& map,
                                       const std::vector<EvaluatedArea>& areas, int per_area, double speed,
@@ -569,6 +601,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
   }
   robot::CollisionWorld world(model, scene);
   robot::Kinematics kinematics(model);
+  const ArmReach model_reach = armReach(model);
   int total = 0;
   for (const auto& r : regions) total += static_cast<int>(r.second.size());
   int done = 0;
@@ -630,6 +663,9 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     };
     for (const auto& [trajectory_name, waypoints] : trajectories) {
       out.waypoints.push_back(waypoints);
+      if (const std::string why = impossiblePoint(model_reach, scene, waypoints); !why.empty()) {
+        out.impossible.push_back(trajectory_name + ": " + why);
+      }
       // The tip is first led on a straight way to the trajectory's start and comes to rest there;
       // E_task is measured along the trajectory alone. Chained into it, the lead-in's end
       // reversed the tip's direction at full speed wherever the trajectory started back

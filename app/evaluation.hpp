@@ -237,6 +237,10 @@ struct TrajectoryRegionResult {
   /// "body/other" where every area's taught posture, moved to the region's first point, touches
   /// something (the region then starts in the nearest area's posture); empty otherwise.
   std::string start_contact;
+  /// Trajectories no posture can follow, with why: "name: (x, y, z) m is d m from the shoulder,
+  /// reach r m" or "name: (x, y, z) m lies inside obstacle" (the first such point, looked at
+  /// every 2 cm). They run and count as the others do; a scene's author should know.
+  std::vector<std::string> impossible;
 };
 struct TrajectoryResult {
   std::vector<TrajectoryRegionResult> regions;

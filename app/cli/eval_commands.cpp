@@ -399,7 +399,8 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region) {
           {"e_coll", region.collisions},
           {"contacts", region.contacts},
           {"collided_trajectories", collided},
-          {"start_contact", region.start_contact}};
+          {"start_contact", region.start_contact},
+          {"impossible_trajectories", region.impossible}};
 }
 
 namespace {
@@ -419,6 +420,11 @@ Json runTrajectories(const EvalOptions& options) {
                                 options.per_area, options.speed, options.seed,
                                 [](double f) { reportProgress("eval trajectories", f); },
                                 app::parseTrajectorySource(options.trajectories));
+  for (const auto& region : result.regions) {
+    for (const auto& why : region.impossible) {
+      std::cerr << "note: trajectory " << printable(why, 200) << " (no posture reaches it; it counts as the others do)\n";
+    }
+  }
   Json out = trajectoryJson(result);
   out["learner"] = options.learner;
   out["speed_m_s"] = options.speed;

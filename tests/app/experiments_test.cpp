@@ -264,6 +264,22 @@ TEST(Experiments, TrajectoriesCanBeDrawnAroundTheTrainingDataWhereTheSceneListsI
   EXPECT_THROW(parseTrajectorySource("samples"), InputError);
 }
 
+TEST(Experiments, SaysWhichScenesTrajectoriesLeaveTheArmsReachOrPassInsideAnObstacle) {
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  robot::Scene scene;
+  scene.obstacles.push_back(boxObstacle("crate", Eigen::Vector3d(0.1, 0.1, 0.1), tip + Eigen::Vector3d(0.0, 0.2, 0.0)));
+  scene.trajectories.push_back({"free", "g", {tip, tip + Eigen::Vector3d(0.0, -0.1, 0.0)}});
+  scene.trajectories.push_back({"through", "g", {tip, tip + Eigen::Vector3d(0.0, 0.3, 0.0)}});
+  scene.trajectories.push_back({"far", "g", {tip, Eigen::Vector3d(-2.0, 0.0, 0.4)}});
+  const TrajectoryRegionResult region = onlyRegion(scene);
+  ASSERT_EQ(region.impossible.size(), 2U);
+  EXPECT_EQ(region.impossible[0].rfind("through: (", 0), 0U) << region.impossible[0];
+  EXPECT_NE(region.impossible[0].find(" lies inside crate"), std::string::npos) << region.impossible[0];
+  EXPECT_EQ(region.impossible[1].rfind("far: (", 0), 0U) << region.impossible[1];
+  EXPECT_NE(region.impossible[1].find(" m from the shoulder, reach "), std::string::npos) << region.impossible[1];
+  EXPECT_EQ(region.trajectories, 3);
+}
+
 TEST(Experiments, TrajectoriesThatMeetAnObstacleAreNamedWithTheirContactAndWhereTheTipWasHeaded) {
   const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
   robot::Scene scene;

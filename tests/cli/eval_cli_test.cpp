@@ -289,6 +289,7 @@ TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
     EXPECT_GE(region.at("e_task_std_mm").get<double>(), 0.0);
     EXPECT_GE(region.at("e_coll").get<int>(), 0);
     EXPECT_LE(region.at("e_coll").get<int>(), region.at("trajectories").get<int>());
+    EXPECT_TRUE(region.at("impossible_trajectories").empty()) << "drawn within reach and clear of the obstacles";
     // E_task is over the trajectories whose start the arm reached without a contact; the
     // largest error names the trajectory it occurred on.
     EXPECT_GE(region.at("e_task_trajectories").get<int>(), region.at("trajectories").get<int>() - region.at("e_coll").get<int>());
