@@ -1017,6 +1017,32 @@ std::vector<std::string> sceneNotes(const Scene& scene) {
          << 1000.0 * solid->deviation() << " mm";
     notes.push_back(note.str());
   }
+  // No arm this tool drives reaches 20 m: places that far are most likely lengths written in
+  // millimetres, which the parser cannot tell from metres.
+  constexpr double kFar = 20.0;
+  double farthest = 0.0;
+  std::string where;
+  const auto consider = [&](const Eigen::Vector3d& p, const std::string& what) {
+    if (p.norm() > farthest) {
+      farthest = p.norm();
+      where = what;
+    }
+  };
+  for (const Area& area : scene.training_areas) consider(area.p_WA, "training area '" + area.name + "'");
+  for (const Area& area : scene.working_areas) consider(area.p_WA, "working area '" + area.name + "'");
+  for (const Trajectory& trajectory : scene.trajectories) {
+    for (const Eigen::Vector3d& p : trajectory.waypoints) consider(p, "trajectory '" + trajectory.name + "'");
+  }
+  if (scene.grid) {
+    consider(scene.grid->lower, "the grid");
+    consider(scene.grid->upper, "the grid");
+  }
+  if (farthest > kFar) {
+    std::ostringstream note;
+    note << std::fixed << std::setprecision(0) << where << " lies " << farthest
+         << " m from the robot's base; lengths are read in metres (was the scene written in millimetres?)";
+    notes.push_back(note.str());
+  }
   return notes;
 }
 

@@ -346,6 +346,15 @@ TEST_F(SceneFileTest, ResolvesRelativeMeshAndRobotPathsAgainstTheSceneFolder) {
   EXPECT_EQ(loadScene(file.string()).obstacles.size(), 1U);
 }
 
+TEST(SceneNotes, AScenePlacedTensOfMetresAwayIsNotedAsPerhapsWrittenInMillimetres) {
+  const Scene metres = parseScene("training_areas:\n  - {name: a, centre: [-0.5, 0.3, 0.4]}\n", ".", "metres");
+  EXPECT_TRUE(sceneNotes(metres).empty());
+  const Scene millimetres = parseScene("training_areas:\n  - {name: a, centre: [-500, 300, 400]}\n", ".", "mm");
+  ASSERT_EQ(sceneNotes(millimetres).size(), 1U);
+  EXPECT_EQ(sceneNotes(millimetres)[0],
+            "training area 'a' lies 707 m from the robot's base; lengths are read in metres (was the scene written in millimetres?)");
+}
+
 TEST(EvaluationGrid, SpansTheThesisGridWithItsUpperBoundsIncluded) {
   EvaluationGrid grid;  // the defaults are G of Sect. 3.3.2
   grid.spacing = 0.05;
