@@ -983,10 +983,23 @@ TutorReport SimulatedTutor::configure(int area_count) {
   // No way out of an obstacle can be planned; without this every area would fail the same way.
   world_->update(state_.q);
   if (!world_->contacts().empty()) {
-    const robot::Contact& contact = world_->contacts().front();
-    throw InputError("tutor: the start posture (the scene's home_posture, else the freest posture found around the middle of the joint limits) puts " +
-                     world_->bodyName(contact.body) + " into " + world_->otherName(contact) +
-                     "; give the scene a collision-free home_posture");
+    const robot::Contact contact = world_->contacts().front();
+    const std::string body = world_->bodyName(contact.body), other = world_->otherName(contact);
+    const std::string start = scene_->home_posture ? "the scene's home_posture" : "the freest posture found around the middle of the joint limits";
+    // An obstacle over the robot's base holds a link in every posture: no home_posture helps.
+    const Eigen::VectorXd lower = model_->sampleLowerLimits(), upper = model_->sampleUpperLimits();
+    bool in_every_posture = true;
+    for (int sample = 0; sample < 16 && in_every_posture; ++sample) {
+      Eigen::VectorXd q(model_->dof());
+      for (int j = 0; j < model_->dof(); ++j) q[j] = random_.uniform(lower[j], upper[j]);
+      world_->update(q);
+      in_every_posture = std::any_of(world_->contacts().begin(), world_->contacts().end(), [&](const robot::Contact& c) {
+        return world_->bodyName(c.body) == body && world_->otherName(c) == other;
+      });
+    }
+    throw InputError("tutor: the start posture (" + start + ") puts " + body + " into " + other +
+                     (in_every_posture ? ", as every posture tried does; move " + other + " off the robot"
+                                       : "; give the scene a collision-free home_posture"));
   }
   const RequestResult started = workflow_->press(Button::kStartConfiguration);
   if (!started) throw InputError("tutor: " + started.reason);

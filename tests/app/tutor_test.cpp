@@ -290,10 +290,27 @@ TEST(SimulatedTutor, RefusesToStartFromAPostureInsideAnObstacle) {
     teaching.configure(2);
     FAIL() << "configured from inside an obstacle";
   } catch (const flexirob::InputError& error) {
-    EXPECT_NE(std::string(error.what()).find("block_at_the_wrist"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("block_at_the_wrist; give the scene a collision-free home_posture"), std::string::npos)
+        << error.what();
   }
   EXPECT_TRUE(teaching.workflow->areas().empty());
   EXPECT_EQ(teaching.workflow->stage(), Stage::kIdle) << "nothing was started";
+
+  // A clamp around the base holds the first link in every posture: no home_posture helps.
+  robot::Scene clamped = robot::loadScene("setup_A");
+  robot::Obstacle clamp;
+  clamp.name = "clamp";
+  clamp.size = Eigen::Vector3d(0.3, 0.3, 0.3);
+  clamp.X_WO.translation() = Eigen::Vector3d(0.0, 0.0, 0.2);
+  clamped.obstacles.push_back(clamp);
+  ShortTeaching clamped_teaching(clamped);
+  try {
+    clamped_teaching.configure(2);
+    FAIL() << "configured inside a clamp";
+  } catch (const flexirob::InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("into clamp, as every posture tried does; move clamp off the robot"), std::string::npos)
+        << error.what();
+  }
 }
 
 // An approach given up can leave the arm resting in an obstacle (a let-go under assistance
