@@ -158,7 +158,13 @@ fs::path resolveMeshUri(const std::string& uri, const fs::path& base_dir, const 
     std::error_code error;
     if (fs::is_regular_file(candidate, error)) return fs::weakly_canonical(candidate);
   }
-  throw InputError("link '" + link + "': mesh file '" + uri + "' not found");
+  std::string looked;
+  if (uri.rfind(package_prefix, 0) == 0) {
+    looked = " (looked for its package folder among the URDF's parent folders and in $ROS_PACKAGE_PATH)";
+  } else if (uri.rfind(file_prefix, 0) != 0 && !fs::path(uri).is_absolute()) {
+    looked = " (relative to the URDF's folder " + fs::absolute(base_dir).lexically_normal().string() + ")";
+  }
+  throw InputError("link '" + link + "': mesh file '" + uri + "' not found" + looked);
 }
 
 Geometry toGeometry(const urdf::GeometrySharedPtr& geometry, const urdf::Pose& origin,
