@@ -20,6 +20,39 @@ namespace {
 
 constexpr int kAutomaticSamples = -2;
 
+// --keys: types the comma-separated Qt key names into `window`, one every 800 ms from start-up
+// (a scripted operator). False, with the reason printed, for an unknown key name.
+bool scheduleKeys(QWidget* window, const QString& keys) {
+  int delay_ms = 800;
+  for (const QString& name : keys.split(QLatin1Char(','), Qt::SkipEmptyParts)) {
+    const QKeySequence sequence = QKeySequence::fromString(name.trimmed());
+    if (sequence.isEmpty()) {
+      std::fprintf(stderr, "error: --keys: unknown key '%s'\n", qPrintable(name));
+      return false;
+    }
+    const int key = sequence[0].key();
+    const Qt::KeyboardModifiers modifiers = sequence[0].keyboardModifiers();
+    QTimer::singleShot(delay_ms, window, [window, key, modifiers] {
+      QKeyEvent press(QEvent::KeyPress, key, modifiers);
+      QApplication::sendEvent(window, &press);
+      QKeyEvent release(QEvent::KeyRelease, key, modifiers);
+      QApplication::sendEvent(window, &release);
+    });
+    delay_ms += 800;
+  }
+  return true;
+}
+
+// --screenshot: the window as it is now into `file`; false with the reason printed.
+bool saveScreenshot(QWidget* window, const QString& file) {
+  if (!window->grab().save(file)) {
+    std::fprintf(stderr, "error: cannot write screenshot '%s'\n", qPrintable(file));
+    return false;
+  }
+  std::fprintf(stderr, "screenshot written to %s\n", qPrintable(file));
+  return true;
+}
+
 // --msaa N is read before QApplication exists: the GL surface format must be set before the
 // view's context is made. Returns the samples, kAutomaticSamples when not given, or -1 with the
 // reason printed.
@@ -149,6 +182,7 @@ int main(int argc, char** argv) {
     quit_ms = 1500;
   }
 
+  int exit_code = 0;
   if (parser.isSet(review)) {
     flexirob::ui::ReviewWindow review_window;
     if (!review_window.open(parser.value(review).toStdString())) {
@@ -156,15 +190,15 @@ int main(int argc, char** argv) {
       return 2;
     }
     review_window.show();
+    if (parser.isSet(keys) && !scheduleKeys(&review_window, parser.value(keys))) return 2;
     if (quit_ms >= 0) {
       QTimer::singleShot(quit_ms, &review_window, [&] {
-        if (parser.isSet(screenshot) && !review_window.grab().save(parser.value(screenshot))) {
-          std::fprintf(stderr, "error: cannot write screenshot '%s'\n", qPrintable(parser.value(screenshot)));
-        }
+        if (parser.isSet(screenshot) && !saveScreenshot(&review_window, parser.value(screenshot))) exit_code = 2;
         QApplication::quit();
       });
     }
-    return QApplication::exec();
+    const int code = QApplication::exec();
+    return exit_code != 0 ? exit_code : code;
   }
 
   flexirob::ui::MainWindow::Options window_options;
@@ -177,37 +211,11 @@ int main(int argc, char** argv) {
     QTimer::singleShot(0, &window, [&] { window.toggleKeyMap(true); });
   }
 
-  if (parser.isSet(keys)) {
-    int delay_ms = 800;
-    for (const QString& name : parser.value(keys).split(QLatin1Char(','), Qt::SkipEmptyParts)) {
-      const QKeySequence sequence = QKeySequence::fromString(name.trimmed());
-      if (sequence.isEmpty()) {
-        std::fprintf(stderr, "error: --keys: unknown key '%s'\n", qPrintable(name));
-        return 2;
-      }
-      const int key = sequence[0].key();
-      QTimer::singleShot(delay_ms, &window, [&window, key] {
-        QKeyEvent press(QEvent::KeyPress, key, Qt::NoModifier);
-        QApplication::sendEvent(&window, &press);
-        QKeyEvent release(QEvent::KeyRelease, key, Qt::NoModifier);
-        QApplication::sendEvent(&window, &release);
-      });
-      delay_ms += 800;
-    }
-  }
+  if (parser.isSet(keys) && !scheduleKeys(&window, parser.value(keys))) return 2;
 
-  int exit_code = 0;
   if (quit_ms >= 0) {
     QTimer::singleShot(quit_ms, &window, [&] {
-      if (parser.isSet(screenshot)) {
-        const QString file = parser.value(screenshot);
-        if (window.grab().save(file)) {
-          std::fprintf(stderr, "screenshot written to %s\n", qPrintable(file));
-        } else {
-          std::fprintf(stderr, "error: cannot write screenshot '%s'\n", qPrintable(file));
-          exit_code = 2;
-        }
-      }
+      if (parser.isSet(screenshot) && !saveScreenshot(&window, parser.value(screenshot))) exit_code = 2;
       // Figures for the operator's record: display rate and the control worker's punctuality.
       if (window.live() != nullptr) {
         const flexirob::app::CycleStatistics stats = window.live()->statistics();

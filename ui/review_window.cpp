@@ -3,7 +3,9 @@
 #include <QComboBox>
 #include <QDateTime>
 #include <QDockWidget>
+#include <QFontMetrics>
 #include <QHBoxLayout>
+#include <QKeyEvent>
 #include <QLabel>
 #include <QMenuBar>
 #include <QMouseEvent>
@@ -123,10 +125,18 @@ void Timeline::paintEvent(QPaintEvent* /*event*/) {
     const double x1 = xOf(band.t1);
     const QRectF area(x0, band_top, std::max(1.0, x1 - x0), band_height);
     painter.fillRect(area, stageColor(band.label));
-    if (x1 - x0 > 60.0) {
+    // The whole "STAGE / SUB-STAGE" where it fits, else the sub-stage, which tells neighbouring
+    // bands apart, elided as far as needed; a cut-off word reads as another label.
+    const QRectF text_area = area.adjusted(3, 0, -3, 0);
+    const QString label = QString::fromStdString(band.label);
+    const QFontMetrics metrics = painter.fontMetrics();
+    QString shown = label;
+    if (metrics.horizontalAdvance(shown) > text_area.width()) {
+      shown = metrics.elidedText(label.section(QStringLiteral(" / "), -1), Qt::ElideRight, static_cast<int>(text_area.width()));
+    }
+    if (text_area.width() > 20.0 && shown != QStringLiteral("…")) {
       painter.setPen(QColor(30, 30, 35));
-      painter.drawText(area.adjusted(3, 0, -3, 0), Qt::AlignVCenter | Qt::AlignLeft,
-                       QString::fromStdString(band.label));
+      painter.drawText(text_area, Qt::AlignVCenter | Qt::AlignLeft, shown);
     }
   }
   // Triggers as ticks above the bands, buttons as triangles below.
@@ -201,6 +211,9 @@ ReviewWindow::ReviewWindow(QWidget* parent)
   QFont big = stage_label_->font();
   big.setBold(true);
   stage_label_->setFont(big);
+  // The buttons take no keyboard focus: Space and the arrow keys belong to the window (playback,
+  // frame stepping), not to whichever button was clicked last.
+  for (QPushButton* button : {back, play_button_, forward}) button->setFocusPolicy(Qt::NoFocus);
   for (QWidget* widget : std::initializer_list<QWidget*>{back, play_button_, forward, speed_box_, time_label_}) {
     controls->addWidget(widget);
   }
@@ -554,6 +567,24 @@ void ReviewWindow::setSpeed(double speed) {
 void ReviewWindow::stepFrames(int frames) {
   pause();
   setTime(time_ + frames * kFrameSeconds);
+}
+
+void ReviewWindow::keyPressEvent(QKeyEvent* event) {
+  if (!reader_) {
+    QMainWindow::keyPressEvent(event);
+    return;
+  }
+  const bool second = event->modifiers().testFlag(Qt::ShiftModifier);
+  const int frames_per_second = static_cast<int>(std::lround(1.0 / kFrameSeconds));
+  switch (event->key()) {
+    case Qt::Key_Space: playing() ? pause() : play(); break;
+    case Qt::Key_Left: stepFrames(second ? -frames_per_second : -1); break;
+    case Qt::Key_Right: stepFrames(second ? frames_per_second : 1); break;
+    case Qt::Key_Home: pause(); setTime(reader_->startTime()); break;
+    case Qt::Key_End: pause(); setTime(reader_->endTime()); break;
+    default: QMainWindow::keyPressEvent(event); return;
+  }
+  event->accept();
 }
 
 void ReviewWindow::advance() {

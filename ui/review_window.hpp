@@ -12,6 +12,7 @@
 // scrubbing reads one state per displayed frame.
 //
 // Started by `flexirob --review FILE` (ui/main.cpp) or from the main window's File menu.
+#include <QKeyEvent>
 #include <QMainWindow>
 #include <QWidget>
 
@@ -140,6 +141,11 @@ class ReviewWindow : public QMainWindow {
   int confidenceSlicesShown() const { return confidence_slices_; }
 
   static constexpr int kMaxItmSnapshots = 240;
+
+ protected:
+  /// Space plays and pauses, Left / Right step a frame (with Shift a second), Home / End go to
+  /// the recording's start and end.
+  void keyPressEvent(QKeyEvent* event) override;
 
  private:
   void advance();

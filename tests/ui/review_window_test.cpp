@@ -175,6 +175,26 @@ class ReviewWindowTest : public QObject {
     QVERIFY(window.time() < reached - 0.4);
   }
 
+  void keysPlayStepAndJumpToTheEnds() {
+    ui::ReviewWindow window;
+    QVERIFY(window.open(file_));
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    window.setTime(2.0);
+    QTest::keyClick(&window, Qt::Key_Right);
+    QVERIFY(std::abs(window.time() - (2.0 + ui::ReviewWindow::kFrameSeconds)) < 1e-9);
+    QTest::keyClick(&window, Qt::Key_Left, Qt::ShiftModifier);  // a second back
+    QVERIFY(std::abs(window.time() - (1.0 + ui::ReviewWindow::kFrameSeconds)) < 1e-9);
+    QTest::keyClick(&window, Qt::Key_End);
+    QCOMPARE(window.time(), kDuration);
+    QTest::keyClick(&window, Qt::Key_Home);
+    QCOMPARE(window.time(), 0.0);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QVERIFY(window.playing());
+    QTest::keyClick(&window, Qt::Key_Space);
+    QVERIFY(!window.playing());
+  }
+
   void refusesAFileThatIsNoRecordingAndKeepsTheOpenOne() {
     ui::ReviewWindow window;
     QVERIFY(window.open(file_));
