@@ -39,7 +39,7 @@ struct Obstacle {
 struct Area {
   std::string name;
   Eigen::Vector3d p_WA = Eigen::Vector3d::Zero();  ///< centre [m]
-  double radius = 0.05;                            ///< extent of the demonstrated motion [m]
+  double radius = 0.05;                            ///< extent of the area as drawn and framed [m] (the tutor sizes its helix itself)
   std::optional<Eigen::VectorXd> posture;          ///< suggested q_fixed [rad], if the scene gives one
   /// Edge lengths [m] of the axis-aligned box around p_WA that bounds the area (where
   /// evaluations draw their points); unset: the ball of `radius` around p_WA.
