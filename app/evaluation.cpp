@@ -177,12 +177,15 @@ ArmReach armReach(const robot::RobotModel& model) {
     kinematics.update(posture);
     return result.fromShoulder(kinematics.p_WT());
   };
+  // The joints before the shoulder stay as they are: they move the shoulder itself (off the
+  // first axis on an arm with a shoulder offset), and the reach is measured from where it is.
+  const int first_free = shoulder - 1;
   learning::UniformRandom random(1);
   Eigen::VectorXd best = q;
   double best_distance = tipDistance(q);
   for (int sample = 0; sample < 2000; ++sample) {
-    Eigen::VectorXd candidate(model.dof());
-    for (int j = 0; j < model.dof(); ++j) candidate[j] = random.uniform(lower[j], upper[j]);
+    Eigen::VectorXd candidate = q;
+    for (int j = first_free; j < model.dof(); ++j) candidate[j] = random.uniform(lower[j], upper[j]);
     if (const double distance = tipDistance(candidate); distance > best_distance) {
       best_distance = distance;
       best = candidate;
@@ -191,7 +194,7 @@ ArmReach armReach(const robot::RobotModel& model) {
   for (double step = 0.2; step > 1e-3; step *= 0.5) {
     for (bool improved = true; improved;) {
       improved = false;
-      for (int j = 0; j < model.dof(); ++j) {
+      for (int j = first_free; j < model.dof(); ++j) {
         for (const double sign : {-1.0, 1.0}) {
           Eigen::VectorXd candidate = best;
           candidate[j] = std::clamp(candidate[j] + sign * step, lower[j], upper[j]);
@@ -517,6 +520,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
   };
   // A drawn region's area: the arm starts there first, its tip on a straight way to the start.
   std::map<std::string, std::size_t> drawn_from;
+  const ArmReach arm_reach = armReach(model);
   TrajectoryResult result;
   const bool from_scene = source == TrajectorySource::kScene ||
                           (source == TrajectorySource::kAuto && !scene.trajectories.empty());
@@ -526,12 +530,15 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
       region(trajectory.group.empty() ? "ungrouped" : trajectory.group).push_back({trajectory.name, trajectory.waypoints});
     }
   } else {
-    if (areas.size() < 2) throw InputError("trajectories: the scene lists none and fewer than two areas were taught");
+    if (areas.size() < 2) {
+      throw InputError(source == TrajectorySource::kTrainingData
+                           ? "trajectories: drawing them around the training data needs at least two taught areas"
+                           : "trajectories: the scene lists none and fewer than two areas were taught");
+    }
     if (per_area < 1) throw InputError("trajectories: expected at least one trajectory per area");
     learning::UniformRandom random(seed);
     // Points a trajectory may pass: within the arm's reach, off its base and the table, 5 cm
     // clear of every obstacle; a box around two areas can hold the robot itself or a wall.
-    const ArmReach arm_reach = armReach(model);
     const auto passable = [&](const Eigen::Vector3d& p) {
       return arm_reach.roomFor(p, 0.05) && (!scene.table || p.z() >= 0.05) && robot::obstacleAt(scene, p, 0.05) == nullptr;
     };
@@ -601,7 +608,6 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
   }
   robot::CollisionWorld world(model, scene);
   robot::Kinematics kinematics(model);
-  const ArmReach model_reach = armReach(model);
   int total = 0;
   for (const auto& r : regions) total += static_cast<int>(r.second.size());
   int done = 0;
@@ -663,7 +669,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     };
     for (const auto& [trajectory_name, waypoints] : trajectories) {
       out.waypoints.push_back(waypoints);
-      if (const std::string why = impossiblePoint(model_reach, scene, waypoints); !why.empty()) {
+      if (const std::string why = impossiblePoint(arm_reach, scene, waypoints); !why.empty()) {
         out.impossible.push_back(trajectory_name + ": " + why);
       }
       // The tip is first led on a straight way to the trajectory's start and comes to rest there;

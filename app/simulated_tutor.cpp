@@ -50,6 +50,10 @@ constexpr double kMaxHelixPace = 8.0;
 // A recording spanning less than this fraction of the helix drawn is a spot, not an area: the arm
 // did not follow the hands (held at its joint limits, or by its own links).
 constexpr double kMinSpanOfTheHelix = 0.25;
+// [N] of a hand's touch at the tip that starts an approach or a recording; where the robot does
+// not notice it (a tip near the base, a small arm), a person presses harder, up to the firmest.
+constexpr double kFirmPush = 15.0;
+constexpr double kFirmestPush = 60.0;
 
 // Twice the largest distance of a column of X from the columns' mean [m].
 double spanOf(const Eigen::MatrixXd& X) {
@@ -510,18 +514,19 @@ bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) 
   // A push no joint feels (an arm standing straight up, pushed in a vertical plane through its
   // base: every joint axis meets or parallels the line of the force) cannot be noticed at any
   // force; a person pushes where the arm gives instead, the direction the tip moves most
-  // easily, on the side of the way to go.
-  if (60.0 * torque_per_newton < 2.0 * workflow_->options().affected_torque) {
+  // easily (towards the way to go where that has a part along it; either way where not).
+  if (kFirmestPush * torque_per_newton < workflow_->options().affected_torque) {
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Jp, Eigen::ComputeThinU);
     Eigen::Vector3d gives = svd.matrixU().col(0);
     if (gives.dot(push) < 0.0) gives = -gives;
     push = gives;
     torque_per_newton = (Jp.transpose() * push).cwiseAbs().maxCoeff();
   }
-  const double firmer = std::clamp(2.0 * workflow_->options().affected_torque / std::max(torque_per_newton, 1e-6), 15.0, 60.0);
+  const double firmer =
+      std::clamp(2.0 * workflow_->options().affected_torque / std::max(torque_per_newton, 1e-6), kFirmPush, kFirmestPush);
   for (int attempt = 0; attempt < 2; ++attempt) {
-    if (attempt == 1 && firmer <= 15.0) break;
-    const double force = attempt == 0 ? 15.0 : firmer;
+    if (attempt == 1 && firmer <= kFirmPush) break;
+    const double force = attempt == 0 ? kFirmPush : firmer;
     const double until = arm()->time() + 3.0;
     while (workflow_->subStage() == sub_stage && arm()->time() <= until) {
       arm()->setHandForce(model_->dof(), state_.p_WT(), force * push);

@@ -127,6 +127,7 @@ fs::path resolveMeshUri(const std::string& uri, const fs::path& base_dir, const 
   const std::string package_prefix = "package://";
   const std::string file_prefix = "file://";
   std::vector<fs::path> candidates;
+  std::string looked;  // where the candidates came from, for the message when none exists
   if (uri.rfind(package_prefix, 0) == 0) {
     const std::string rest = uri.substr(package_prefix.size());
     const auto slash = rest.find('/');
@@ -135,17 +136,21 @@ fs::path resolveMeshUri(const std::string& uri, const fs::path& base_dir, const 
     }
     const std::string package = rest.substr(0, slash);
     const fs::path relative = rest.substr(slash + 1);
-    for (fs::path dir = fs::absolute(base_dir); !dir.empty(); dir = dir.parent_path()) {
+    std::error_code error;
+    for (fs::path dir = fs::absolute(base_dir, error); !error && !dir.empty(); dir = dir.parent_path()) {
       if (dir.filename() == package) candidates.push_back(dir / relative);
       candidates.push_back(dir / package / relative);
       if (dir == dir.parent_path()) break;
     }
-    if (const char* ros_path = std::getenv("ROS_PACKAGE_PATH"); ros_path != nullptr) {
+    const char* ros_path = std::getenv("ROS_PACKAGE_PATH");
+    if (ros_path != nullptr) {
       std::stringstream entries(ros_path);
       for (std::string entry; std::getline(entries, entry, ':');) {
         if (!entry.empty()) candidates.push_back(fs::path(entry) / package / relative);
       }
     }
+    looked = std::string(" (looked for its package folder among the URDF's parent folders and in $ROS_PACKAGE_PATH") +
+             (ros_path == nullptr ? ", which is not set)" : ")");
   } else if (uri.rfind(file_prefix, 0) == 0) {
     candidates.emplace_back(uri.substr(file_prefix.size()));
   } else if (uri.find("://") != std::string::npos) {
@@ -153,16 +158,11 @@ fs::path resolveMeshUri(const std::string& uri, const fs::path& base_dir, const 
   } else {
     const fs::path path(uri);
     candidates.push_back(path.is_absolute() ? path : base_dir / path);
+    if (!path.is_absolute()) looked = " (relative to the URDF's folder " + base_dir.lexically_normal().string() + ")";
   }
   for (const auto& candidate : candidates) {
     std::error_code error;
     if (fs::is_regular_file(candidate, error)) return fs::weakly_canonical(candidate);
-  }
-  std::string looked;
-  if (uri.rfind(package_prefix, 0) == 0) {
-    looked = " (looked for its package folder among the URDF's parent folders and in $ROS_PACKAGE_PATH)";
-  } else if (uri.rfind(file_prefix, 0) != 0 && !fs::path(uri).is_absolute()) {
-    looked = " (relative to the URDF's folder " + fs::absolute(base_dir).lexically_normal().string() + ")";
   }
   throw InputError("link '" + link + "': mesh file '" + uri + "' not found" + looked);
 }

@@ -1028,6 +1028,7 @@ std::vector<std::string> sceneNotes(const Scene& scene) {
       where = what;
     }
   };
+  for (const Obstacle& obstacle : scene.obstacles) consider(obstacle.X_WO.translation(), "obstacle '" + obstacle.name + "'");
   for (const Area& area : scene.training_areas) consider(area.p_WA, "training area '" + area.name + "'");
   for (const Area& area : scene.working_areas) consider(area.p_WA, "working area '" + area.name + "'");
   for (const Trajectory& trajectory : scene.trajectories) {

@@ -211,9 +211,12 @@ ReviewWindow::ReviewWindow(QWidget* parent)
   QFont big = stage_label_->font();
   big.setBold(true);
   stage_label_->setFont(big);
-  // The buttons take no keyboard focus: Space and the arrow keys belong to the window (playback,
-  // frame stepping), not to whichever button was clicked last.
-  for (QPushButton* button : {back, play_button_, forward}) button->setFocusPolicy(Qt::NoFocus);
+  // The controls take no keyboard focus: Space, the arrows, Home and End belong to the window
+  // (playback, stepping), not to whichever control was clicked last (a focused speed box would
+  // open on Space and change the speed on Home).
+  for (QWidget* control : std::initializer_list<QWidget*>{back, play_button_, forward, speed_box_}) {
+    control->setFocusPolicy(Qt::NoFocus);
+  }
   for (QWidget* widget : std::initializer_list<QWidget*>{back, play_button_, forward, speed_box_, time_label_}) {
     controls->addWidget(widget);
   }
@@ -574,12 +577,17 @@ void ReviewWindow::keyPressEvent(QKeyEvent* event) {
     QMainWindow::keyPressEvent(event);
     return;
   }
-  const bool second = event->modifiers().testFlag(Qt::ShiftModifier);
+  const bool by_second = event->modifiers().testFlag(Qt::ShiftModifier);
   const int frames_per_second = static_cast<int>(std::lround(1.0 / kFrameSeconds));
+  // A held Space would toggle playback on and off with the key's repeat; held arrows step on.
+  if (event->isAutoRepeat() && event->key() != Qt::Key_Left && event->key() != Qt::Key_Right) {
+    event->accept();
+    return;
+  }
   switch (event->key()) {
     case Qt::Key_Space: playing() ? pause() : play(); break;
-    case Qt::Key_Left: stepFrames(second ? -frames_per_second : -1); break;
-    case Qt::Key_Right: stepFrames(second ? frames_per_second : 1); break;
+    case Qt::Key_Left: stepFrames(by_second ? -frames_per_second : -1); break;
+    case Qt::Key_Right: stepFrames(by_second ? frames_per_second : 1); break;
     case Qt::Key_Home: pause(); setTime(reader_->startTime()); break;
     case Qt::Key_End: pause(); setTime(reader_->endTime()); break;
     default: QMainWindow::keyPressEvent(event); return;

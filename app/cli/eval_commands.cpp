@@ -244,7 +244,7 @@ struct EvalOptions {
   int per_area = 25;
   double speed = 0.1;
   std::string approach = "nearest";  ///< reachable / scene-model: where each target is approached from
-  std::string trajectories = "auto";  ///< trajectories: the scene's, or drawn around the training data
+  std::string source = "auto";  ///< trajectories: the scene's, or drawn around the training data
 };
 
 // A grid without targets has no reachability to report (0 of 0 is not 0 %): `command` fails
@@ -419,11 +419,19 @@ Json runTrajectories(const EvalOptions& options) {
       app::evaluateTrajectories(*session.model, session.scene_data, parameters, *learner, sessionAreas(session),
                                 options.per_area, options.speed, options.seed,
                                 [](double f) { reportProgress("eval trajectories", f); },
-                                app::parseTrajectorySource(options.trajectories));
+                                app::parseTrajectorySource(options.source));
+  // A scene in the wrong units would name every trajectory: the first few, then how many more.
+  constexpr std::size_t kNotesOnStderr = 10;
+  std::size_t impossible = 0;
   for (const auto& region : result.regions) {
     for (const auto& why : region.impossible) {
-      std::cerr << "note: trajectory " << printable(why, 200) << " (no posture reaches it; it counts as the others do)\n";
+      if (++impossible <= kNotesOnStderr) {
+        std::cerr << "note: trajectory " << printable(why, 200) << " (the tip cannot follow it there; counted with the others)\n";
+      }
     }
+  }
+  if (impossible > kNotesOnStderr) {
+    std::cerr << "note: ... and " << impossible - kNotesOnStderr << " more (\"impossible_trajectories\" in the JSON)\n";
   }
   Json out = trajectoryJson(result);
   out["learner"] = options.learner;
@@ -492,7 +500,7 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
   trajectories->add_option("--session", options->session, "session file written by teach")->required();
   trajectories->add_option("--learner", options->learner, "elm, oselm or llm");
-  trajectories->add_option("--trajectories", options->trajectories,
+  trajectories->add_option("--source", options->source,
                            "the scene's trajectories (scene), trajectories drawn in the boxes around each area's "
                            "training data and between them, as the thesis defines its regions (training-data), or "
                            "the scene's where it lists any (auto, the default)")

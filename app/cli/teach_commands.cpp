@@ -305,9 +305,15 @@ Json runTeach(const TeachOptions& options) {
   // A place the scene lists and the tutor gave up is the scene's author's to know about (a
   // place inside an obstacle, out of reach, a scene in the wrong units), even where the tutor
   // made the count up with places of its own.
+  std::size_t given_up = 0;
   for (const auto& area : report.areas) {
     if (area.automatic || area.taught) continue;
-    std::fprintf(stderr, "warning: the scene's area '%s' was not taught: %s\n", printable(area.name).c_str(), area.failure.c_str());
+    if (++given_up <= kWarningsOnStderr) {
+      std::fprintf(stderr, "warning: the scene's area '%s' was not taught: %s\n", printable(area.name).c_str(), area.failure.c_str());
+    }
+  }
+  if (given_up > kWarningsOnStderr) {
+    std::fprintf(stderr, "warning: ... and %zu more of the scene's areas not taught (\"tutor\" in the JSON)\n", given_up - kWarningsOnStderr);
   }
   if (static_cast<int>(workflow.areas().size()) < options.areas && !workflow.areas().empty()) {
     std::fprintf(stderr, "note: %zu of the %d areas asked for %s taught; \"tutor\" in the JSON says why the others were not\n",

@@ -157,6 +157,15 @@ TEST(Evaluation, TheArmsRoomIsWithinReachAndOffTheColumnAroundItsFirstAxis) {
   <link name="l3"/>)");
   const ArmReach stiff = armReach(robot::RobotModel::fromUrdfString(stiff_urdf, "."));
   EXPECT_NEAR(stiff.reach, stretched(1.5), 1e-4);
+
+  // The lying arm with its shoulder 0.2 m off the first joint's axis: turning that joint moves
+  // the shoulder with the arm, so the reach stays the 0.8 m of the links beyond it (measured
+  // from the shoulder kept in place, the tip would seem up to 0.4 m farther).
+  std::string offset_urdf = urdf;
+  const std::string shoulder_origin = R"(<origin xyz="0 0 0.1"/><axis xyz="0 1 0"/>)";
+  offset_urdf.replace(offset_urdf.find(shoulder_origin), shoulder_origin.size(), R"(<origin xyz="0.2 0 0.1"/><axis xyz="0 1 0"/>)");
+  const ArmReach offset = armReach(robot::RobotModel::fromUrdfString(offset_urdf, "."));
+  EXPECT_NEAR(offset.reach, 0.8, 1e-9);
 }
 
 TEST(Evaluation, MotionReachesAFreeTargetWithoutCollision) {

@@ -253,13 +253,13 @@ TEST(EvalReachableCli, ASessionStillBeingWrittenIsNotedAndWithoutAFinishedAreaSa
 
 TEST(EvalTrajectoriesCli, RefusesTheScenesTrajectoriesWhereItListsNoneAndAnUnknownSource) {
   const auto session = tinySession("empty", "trajectories-source.json");
-  const auto scene = runCliBinary("eval trajectories --session " + session.string() + " --trajectories scene");
+  const auto scene = runCliBinary("eval trajectories --session " + session.string() + " --source scene");
   EXPECT_EQ(scene.exit_code, 2) << scene.err;
   EXPECT_NE(scene.err.find("the scene lists no trajectories"), std::string::npos) << scene.err;
   EXPECT_EQ(std::count(scene.err.begin(), scene.err.end(), '\n'), 1) << scene.err;
-  const auto unknown = runCliBinary("eval trajectories --session " + session.string() + " --trajectories samples");
+  const auto unknown = runCliBinary("eval trajectories --session " + session.string() + " --source samples");
   EXPECT_EQ(unknown.exit_code, 2) << unknown.err;
-  const auto drawn = runCliBinary("eval trajectories --session " + session.string() + " --trajectories training-data --per-area 1");
+  const auto drawn = runCliBinary("eval trajectories --session " + session.string() + " --source training-data --per-area 1");
   ASSERT_EQ(drawn.exit_code, 0) << drawn.err;
   EXPECT_EQ(drawn.json().at("source"), "drawn around the samples");
   std::filesystem::remove(session);

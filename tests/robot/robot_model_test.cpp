@@ -293,7 +293,11 @@ INSTANTIATE_TEST_SUITE_P(
         BrokenUrdf{"missing mesh file",
                    twoJointArm("<link name='deco'><visual><geometry><mesh filename='package://nowhere/m.stl'/></geometry></visual></link>"
                                "<joint name='d' type='fixed'><parent link='tool'/><child link='deco'/></joint>"),
-                   "", "mesh file 'package://nowhere/m.stl' not found (looked for its package folder among the URDF's parent folders and in $ROS_PACKAGE_PATH)"},
+                   "", "mesh file 'package://nowhere/m.stl' not found (looked for its package folder among the URDF's parent folders and in $ROS_PACKAGE_PATH"},
+        BrokenUrdf{"missing mesh file beside the URDF",
+                   twoJointArm("<link name='deco'><visual><geometry><mesh filename='meshes/m.stl'/></geometry></visual></link>"
+                               "<joint name='d' type='fixed'><parent link='tool'/><child link='deco'/></joint>"),
+                   "", "mesh file 'meshes/m.stl' not found (relative to the URDF's folder /"},
         BrokenUrdf{"no movable joint",
                    "<robot name='x'><link name='a'/><joint name='f' type='fixed'><parent link='a'/><child link='b'/></joint><link name='b'/></robot>",
                    "", "no movable joint"},
