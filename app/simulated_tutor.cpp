@@ -844,13 +844,25 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
                            scale * 0.5 * options_.helix_height * options_.circle_diameter * std::sin(2.0 * std::numbers::pi * s) * axis);
   };
   const double smallest = std::min(1.0, 0.02 / options_.circle_diameter);
-  for (; scale > smallest; scale *= 0.7) {
+  bool room = false;
+  for (;; scale = std::max(smallest, scale * 0.7)) {
     std::vector<Eigen::Vector3d> points;
     for (double t = 0.0; t <= duration; t += 0.05 * options_.circle_period) points.push_back(helix(t));
-    if (helixFree(q_fixed, points, 0.5 * options_.min_clearance)) break;
+    room = helixFree(q_fixed, points, 0.5 * options_.min_clearance);
+    if (room || scale <= smallest) break;
   }
-  scale = std::max(scale, smallest);
   area.helix_diameter = scale * options_.circle_diameter;
+  // At a listed place the scene's author asked for an area, and the smallest helix is drawn; a
+  // place the tutor picked itself it leaves for a roomier one, as a person would (a two-armed
+  // robot's own torso 5 cm from the tip: the wrist touched it while recording).
+  if (!room && area.automatic) {
+    std::ostringstream failure;
+    failure << std::fixed << std::setprecision(1) << "no room there for even a " << 100.0 * area.helix_diameter
+            << " cm helix (a posture on it comes within " << 50.0 * options_.min_clearance
+            << " cm of an obstacle or of the arm itself)";
+    area.failure = failure.str();
+    return false;
+  }
   // The workflow counts the arm as still while no joint moves faster than its still speed; a
   // helix shrunk near obstacles and drawn at the usual pace moved the tip so slowly that the
   // joints stayed below it, and on_converged ended the recording after 2 s (setup_II's II10: 114

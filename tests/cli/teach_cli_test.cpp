@@ -196,6 +196,30 @@ TEST(TeachCli, SaysWhetherAnAreaIsBeyondTheJointsOrOnlyReachedWithAContact) {
   fs::remove(scene);
 }
 
+// A place of the tutor's own 5 cm in front of the robot's torso (two arms on a torso, the right
+// one taught): every π_rec posture of even a 2 cm helix there came within 1.5 cm of the torso,
+// and the wrist touched it while recording (2 contacts). The tutor now leaves such a place for
+// a roomier one, as a person picking a place would.
+TEST(TeachCli, LeavesAPlaceOfItsOwnWithoutRoomForAHelixBesideTheRobotsTorso) {
+  const fs::path urdf = fs::path(FLEXIROB_TEST_DATA_DIR) / "robots" / "two_arms_on_a_torso.urdf";
+  const fs::path out = scratch("torso.json");
+  const auto result = runCliBinary("teach --robot " + urdf.string() + " --tip R_iiwa_link_ee --scene empty --areas 2 --seed 1 --out " +
+                                   out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = result.json();
+  EXPECT_EQ(json.at("collisions").get<int>(), 0) << json.at("collision_events").dump();
+  EXPECT_EQ(json.at("areas").get<int>(), 2);
+  bool left = false;
+  for (const auto& area : json.at("tutor")) {
+    if (area.at("automatic").get<bool>() && !area.at("taught").get<bool>() &&
+        area.at("failure").get<std::string>().rfind("no room there for even a 2.0 cm helix", 0) == 0) {
+      left = true;
+    }
+  }
+  EXPECT_TRUE(left) << json.at("tutor").dump();
+  fs::remove(out);
+}
+
 // A 6-joint arm of 0.3 m reach (joints about z, y, y, z, y, z), light links and capsules of 1.5 cm.
 std::string smallArmUrdf() {
   const std::array<const char*, 6> axes{"0 0 1", "0 1 0", "0 1 0", "0 0 1", "0 1 0", "0 0 1"};
