@@ -304,10 +304,11 @@ Json runTeach(const TeachOptions& options) {
   }
   // A place the scene lists and the tutor gave up is the scene's author's to know about (a
   // place inside an obstacle, out of reach, a scene in the wrong units), even where the tutor
-  // made the count up with places of its own.
+  // made the count up with places of its own. Where nothing was taught, the one-line error
+  // below says why the first place failed.
   std::size_t given_up = 0;
   for (const auto& area : report.areas) {
-    if (area.automatic || area.taught) continue;
+    if (area.automatic || area.taught || workflow.areas().empty()) continue;
     if (++given_up <= kWarningsOnStderr) {
       std::fprintf(stderr, "warning: the scene's area '%s' was not taught: %s\n", printable(area.name).c_str(), area.failure.c_str());
     }
