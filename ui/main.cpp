@@ -10,7 +10,9 @@
 #include <QTimer>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "ui/live_teaching.hpp"
 #include "ui/main_window.hpp"
@@ -20,27 +22,33 @@ namespace {
 
 constexpr int kAutomaticSamples = -2;
 
-// --keys: types the comma-separated Qt key names into `window`, one every 800 ms from start-up
-// (a scripted operator). False, with the reason printed, for an unknown key name.
-bool scheduleKeys(QWidget* window, const QString& keys) {
-  int delay_ms = 800;
+// --keys: the comma-separated Qt key names (e.g. F5,Space,Shift+Right); nullopt, with the reason
+// printed, for a name Qt does not know. Read before any window opens.
+std::optional<std::vector<QKeyCombination>> parseKeys(const QString& keys) {
+  std::vector<QKeyCombination> parsed;
   for (const QString& name : keys.split(QLatin1Char(','), Qt::SkipEmptyParts)) {
     const QKeySequence sequence = QKeySequence::fromString(name.trimmed());
-    if (sequence.isEmpty()) {
+    if (sequence.isEmpty() || sequence[0].key() == Qt::Key_unknown) {
       std::fprintf(stderr, "error: --keys: unknown key '%s'\n", qPrintable(name));
-      return false;
+      return std::nullopt;
     }
-    const int key = sequence[0].key();
-    const Qt::KeyboardModifiers modifiers = sequence[0].keyboardModifiers();
-    QTimer::singleShot(delay_ms, window, [window, key, modifiers] {
-      QKeyEvent press(QEvent::KeyPress, key, modifiers);
+    parsed.push_back(sequence[0]);
+  }
+  return parsed;
+}
+
+// Types `keys` into `window`, one every 800 ms from start-up (a scripted operator).
+void scheduleKeys(QWidget* window, const std::vector<QKeyCombination>& keys) {
+  int delay_ms = 800;
+  for (const QKeyCombination combination : keys) {
+    QTimer::singleShot(delay_ms, window, [window, combination] {
+      QKeyEvent press(QEvent::KeyPress, combination.key(), combination.keyboardModifiers());
       QApplication::sendEvent(window, &press);
-      QKeyEvent release(QEvent::KeyRelease, key, modifiers);
+      QKeyEvent release(QEvent::KeyRelease, combination.key(), combination.keyboardModifiers());
       QApplication::sendEvent(window, &release);
     });
     delay_ms += 800;
   }
-  return true;
 }
 
 // --screenshot: the window as it is now into `file`; false with the reason printed.
@@ -182,6 +190,13 @@ int main(int argc, char** argv) {
     quit_ms = 1500;
   }
 
+  std::vector<QKeyCombination> scripted_keys;
+  if (parser.isSet(keys)) {
+    const auto parsed = parseKeys(parser.value(keys));
+    if (!parsed) return 2;
+    scripted_keys = *parsed;
+  }
+
   int exit_code = 0;
   if (parser.isSet(review)) {
     flexirob::ui::ReviewWindow review_window;
@@ -190,7 +205,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     review_window.show();
-    if (parser.isSet(keys) && !scheduleKeys(&review_window, parser.value(keys))) return 2;
+    scheduleKeys(&review_window, scripted_keys);
     if (quit_ms >= 0) {
       QTimer::singleShot(quit_ms, &review_window, [&] {
         if (parser.isSet(screenshot) && !saveScreenshot(&review_window, parser.value(screenshot))) exit_code = 2;
@@ -211,7 +226,7 @@ int main(int argc, char** argv) {
     QTimer::singleShot(0, &window, [&] { window.toggleKeyMap(true); });
   }
 
-  if (parser.isSet(keys) && !scheduleKeys(&window, parser.value(keys))) return 2;
+  scheduleKeys(&window, scripted_keys);
 
   if (quit_ms >= 0) {
     QTimer::singleShot(quit_ms, &window, [&] {
