@@ -580,7 +580,8 @@ void ReviewWindow::keyPressEvent(QKeyEvent* event) {
   const bool by_second = event->modifiers().testFlag(Qt::ShiftModifier);
   const int frames_per_second = static_cast<int>(std::lround(1.0 / kFrameSeconds));
   // A held Space would toggle playback on and off with the key's repeat; held arrows step on.
-  if (event->isAutoRepeat() && event->key() != Qt::Key_Left && event->key() != Qt::Key_Right) {
+  const bool own_key = event->key() == Qt::Key_Space || event->key() == Qt::Key_Home || event->key() == Qt::Key_End;
+  if (event->isAutoRepeat() && own_key) {
     event->accept();
     return;
   }

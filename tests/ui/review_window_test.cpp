@@ -1,7 +1,9 @@
 // The review window replays a session recording: stepping frames moves the arm to the recorded
 // posture, the timeline shows the stage bands, playback runs forwards and backwards, and a file
 // that is no recording is refused with its reason.
+#include <QApplication>
 #include <QImage>
+#include <QKeyEvent>
 #include <QLineSeries>
 #include <QTemporaryDir>
 #include <QtTest>
@@ -193,6 +195,27 @@ class ReviewWindowTest : public QObject {
     QVERIFY(window.playing());
     QTest::keyClick(&window, Qt::Key_Space);
     QVERIFY(!window.playing());
+  }
+
+  void aHeldKeyRepeatsOnlyWhereRepeatingMeansSomethingAndOtherKeysPassOn() {
+    ui::ReviewWindow window;
+    QVERIFY(window.open(file_));
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    window.setTime(2.0);
+    const auto sendRepeated = [&window](Qt::Key key) {
+      QKeyEvent press(QEvent::KeyPress, key, Qt::NoModifier, QString(), /*autorep=*/true);
+      QApplication::sendEvent(&window, &press);
+      return press.isAccepted();
+    };
+    QVERIFY(sendRepeated(Qt::Key_Space));  // held Space: taken, but playback does not flicker on
+    QVERIFY(!window.playing());
+    QVERIFY(sendRepeated(Qt::Key_End));
+    QCOMPARE(window.time(), 2.0);
+    QVERIFY(sendRepeated(Qt::Key_Right));  // a held arrow steps on
+    QVERIFY(std::abs(window.time() - (2.0 + ui::ReviewWindow::kFrameSeconds)) < 1e-9);
+    QVERIFY(!sendRepeated(Qt::Key_A));  // not the window's: left to whoever handles it
+    QVERIFY(!sendRepeated(Qt::Key_F5));
   }
 
   void refusesAFileThatIsNoRecordingAndKeepsTheOpenOne() {
