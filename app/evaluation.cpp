@@ -185,7 +185,8 @@ ArmReach armReach(const robot::RobotModel& model) {
   double best_distance = tipDistance(q);
   for (int sample = 0; sample < 2000; ++sample) {
     Eigen::VectorXd candidate = q;
-    for (int j = first_free; j < model.dof(); ++j) candidate[j] = random.uniform(lower[j], upper[j]);
+    const int free_joints = model.dof() - first_free;
+    candidate.tail(free_joints) = random.uniform(lower.tail(free_joints), upper.tail(free_joints));
     if (const double distance = tipDistance(candidate); distance > best_distance) {
       best_distance = distance;
       best = candidate;
@@ -252,7 +253,7 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
     if (seed == 0) {
       q_null = q_start;
     } else {
-      for (int j = 0; j < dof; ++j) q_null[j] = random.uniform(sample_lower[j], sample_upper[j]);
+      q_null = random.uniform(sample_lower, sample_upper);
     }
     q = q_null.cwiseMax(lower).cwiseMin(upper);
     for (int it = 0; it < 300; ++it) {
@@ -572,8 +573,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
     // there is no `from` yet).
     const auto draw = [&](const std::string& name, const Box& box, const Eigen::Vector3d* from) {
       for (int attempt = 0; attempt < 2000; ++attempt) {
-        Eigen::Vector3d p;
-        for (int a = 0; a < 3; ++a) p[a] = random.uniform(box.lower[a], box.upper[a]);
+        const Eigen::Vector3d p = random.uniform(box.lower, box.upper);
         if (from != nullptr ? segment_passable(*from, p) : passable(p)) return p;
       }
       throw InputError("trajectories: no straight way in the " + name +

@@ -235,7 +235,7 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planApproach(const Eigen::VectorXd&
   Tree* b = &goal_tree;
   Eigen::VectorXd q_rand(dof);
   for (int it = 0; it < options_.approach_iterations; ++it) {
-    for (int j = 0; j < dof; ++j) q_rand[j] = random_.uniform(sample_lower[j], sample_upper[j]);
+    q_rand = random_.uniform(sample_lower, sample_upper);
     bool arrived = false;
     const int added = extend(*a, q_rand, arrived);
     if (added >= 0) {
@@ -394,10 +394,8 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
     } else if (c == 2) {
       q_null = state_.q.size() == dof ? state_.q : model_->midPosture();
     } else {
-      for (int j = 0; j < dof; ++j) {
-        const double margin = 0.2 * (sample_upper[j] - sample_lower[j]);
-        q_null[j] = random_.uniform(sample_lower[j] + margin, sample_upper[j] - margin);
-      }
+      const Eigen::VectorXd margin = 0.2 * (sample_upper - sample_lower);
+      q_null = random_.uniform(sample_lower + margin, sample_upper - margin);
     }
     // Kinematic IK with the hierarchical controller (Eq. 2.11), started at the null target.
     q = q_null.cwiseMax(lower).cwiseMin(upper);
@@ -907,8 +905,7 @@ void SimulatedTutor::drawCheckPoints() {
   const Eigen::VectorXd& q_start = home_;
   check_points_.clear();
   for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < 100 * options_.check_points; ++k) {
-    Eigen::Vector3d x;
-    for (int a = 0; a < 3; ++a) x[a] = draw.uniform(grid.lower[a], grid.upper[a]);
+    const Eigen::Vector3d x = draw.uniform(grid.lower, grid.upper);
     if (arm_reach_.fromShoulder(x) > arm_reach_.reach || grid.excludes(x)) continue;
     // Only where some posture reaches without a contact (a person sees the arm cannot get there).
     if (robot::obstacleAt(*scene_, x, 0.05) == nullptr && accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw)) {
@@ -973,9 +970,7 @@ Eigen::Vector3d SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid&
   const bool box_reaches = (within_lower.array() <= within_upper.array()).all();
   for (int tries = 0; tries < 200; ++tries) {
     const bool within = tries >= 100 && box_reaches;
-    for (int a = 0; a < 3; ++a) {
-      target[a] = within ? random_.uniform(within_lower[a], within_upper[a]) : random_.uniform(grid.lower[a], grid.upper[a]);
-    }
+    target = within ? random_.uniform(within_lower, within_upper) : random_.uniform(grid.lower, grid.upper);
     if (roomyForAnArea(target) && !near_tried(target) &&
         accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds)) {
       break;
@@ -1007,9 +1002,7 @@ TutorReport SimulatedTutor::configure(int area_count) {
     const Eigen::VectorXd lower = model_->sampleLowerLimits(), upper = model_->sampleUpperLimits();
     bool in_every_posture = true;
     for (int sample = 0; sample < 16 && in_every_posture; ++sample) {
-      Eigen::VectorXd q(model_->dof());
-      for (int j = 0; j < model_->dof(); ++j) q[j] = random_.uniform(lower[j], upper[j]);
-      world_->update(q);
+      world_->update(random_.uniform(lower, upper));
       in_every_posture = std::any_of(world_->contacts().begin(), world_->contacts().end(), [&](const robot::Contact& c) {
         return world_->bodyName(c.body) == body && world_->otherName(c) == other;
       });

@@ -148,6 +148,12 @@ class UniformRandom {
   /// U[0, 1) with 53 random bits.
   double unit();
   double uniform(double low, double high) { return low + (high - low) * unit(); }
+  /// A point of the box [low, high], one draw per coordinate in order.
+  Eigen::VectorXd uniform(const Eigen::VectorXd& low, const Eigen::VectorXd& high) {
+    Eigen::VectorXd point(low.size());
+    for (Eigen::Index i = 0; i < point.size(); ++i) point[i] = uniform(low[i], high[i]);
+    return point;
+  }
   /// An index in [0, n).
   std::size_t index(std::size_t n);
 

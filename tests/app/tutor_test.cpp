@@ -5,7 +5,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <memory>
 #include <numbers>
 #include <sstream>
@@ -534,8 +533,9 @@ TEST(SimulatedTutor, TeachesTheFrontAreaOfTheNineJointArm) {
 
 TEST(SimulatedTutor, TeachesAnArmWithAnUnboundedJointAroundTheBoard) {
   const std::filesystem::path urdf_file = resolveRobotPath("lwr4");
-  std::ifstream file(urdf_file);
-  std::string urdf((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  std::ostringstream text;
+  text << std::ifstream(urdf_file).rdbuf();
+  std::string urdf = text.str();
   const std::string bounded_a1 = "<joint name=\"A1\" type=\"revolute\">";
   ASSERT_NE(urdf.find(bounded_a1), std::string::npos);
   urdf.replace(urdf.find(bounded_a1), bounded_a1.size(), "<joint name=\"A1\" type=\"continuous\">");
