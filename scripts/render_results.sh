@@ -67,7 +67,7 @@ teach() {
   local name="$1"
   shift
   local file="$data_dir/$name.session.json"
-  produce "$file" "teach $name" to_file "$work/teach_$name.json" "$cli" teach "$@" --seed 1 --out "$file"
+  produce "$file" "teach $name" to_file "$work/teach_$name.json" "$cli" teach "$@" --seed 1 --overwrite --out "$file"
 }
 teach setup_I_1areas --robot lwr4 --scene setup_I --areas 1
 teach setup_I_4areas --robot lwr4 --scene setup_I --areas 4

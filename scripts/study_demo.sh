@@ -22,7 +22,7 @@ for seed in 1 2 3 4; do
     participant=$((participant + 1))
     name=$(printf 'p%02d' "$participant")
     echo "teach $name: seed $seed, circle diameter $diameter m" >&2
-    "$cli" teach --scene setup_A --areas 2 --seed "$seed" --diameter "$diameter" --candidates 8 \
+    "$cli" teach --scene setup_A --areas 2 --seed "$seed" --diameter "$diameter" --candidates 8 --overwrite \
       --out "$out/$name.db" > "$out/$name.teach.json"
   done
 done

@@ -1,6 +1,8 @@
 // `teach`: the simulated tutor teaches a robot in a scene through the workflow (DESIGN §6) and
 // writes the session through the SQLite session recorder (states at control rate, stages, triggers,
 // buttons, areas, samples, model, ITM), or as JSON when the path ends in .json.
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -40,6 +42,7 @@ struct TeachOptions {
   std::uint64_t seed = 1;
   std::string out;
   bool realtime = false;
+  bool overwrite = false;
   std::string learner = "elm";
   double diameter = app::TutorOptions{}.circle_diameter;  // the tutor's default
   int candidates = 24;
@@ -56,14 +59,34 @@ std::string readText(const std::filesystem::path& file) {
   return text.str();
 }
 
+// Case-insensitive: `S.JSON` is as much a JSON file as `s.json`.
 bool endsWith(const std::string& text, const std::string& suffix) {
-  return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+  if (text.size() < suffix.size()) return false;
+  return std::equal(suffix.begin(), suffix.end(), text.end() - static_cast<std::ptrdiff_t>(suffix.size()),
+                    [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b)); });
+}
+
+// A recording, a scene or anything else already at --out is data a run must not destroy.
+void checkNothingIsOverwritten(const TeachOptions& options) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (!fs::exists(options.out, error)) return;
+  for (const std::string& input : {options.scene, options.robot}) {
+    if (!input.empty() && fs::exists(input, error) && fs::equivalent(input, options.out, error)) {
+      throw InputError("--out: '" + options.out + "' is the file the run reads (" + (input == options.scene ? "--scene" : "--robot") +
+                       "); give another file");
+    }
+  }
+  if (!options.overwrite) {
+    throw InputError("--out: '" + options.out + "' exists; teach does not write over a file (give --overwrite to replace it)");
+  }
 }
 
 constexpr std::size_t kWarningsOnStderr = 20;
 
 Json runTeach(const TeachOptions& options) {
   checkOutputPath("--out", options.out);
+  checkNothingIsOverwritten(options);
   // Held to the end of the run: a second teach into the same file is refused at its start.
   const app::SessionWriteLock out_lock(options.out, "--out");
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);
@@ -385,6 +408,7 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   teach->add_option("--seed", options->seed, "random seed")->check(seedValidator());
   teach->add_option("--out", options->out, "session file (SQLite; JSON if it ends in .json)")->required();
   teach->add_flag("--realtime", options->realtime, "pace the simulation at wall-clock speed");
+  teach->add_flag("--overwrite", options->overwrite, "replace an existing --out file (without it, an existing file is refused)");
   teach->add_option("--learner", options->learner, "elm, oselm or llm");
   teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m]")->check(finiteRange(0.005, 0.5));
   teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(finiteRange(1, 1000));

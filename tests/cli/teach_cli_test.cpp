@@ -35,6 +35,39 @@ TEST(TeachCli, RefusesAnOutputAnotherRunIsStillWriting) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST(TeachCli, NeverWritesOverAnExistingFileUnlessToldToAndNeverOverItsOwnScene) {
+  const fs::path notes = scratch("notes.db");
+  std::ofstream(notes) << "a recording of last week";
+  const auto refused = runCliBinary("teach --scene setup_A --areas 1 --seed 3 --out " + notes.string());
+  EXPECT_EQ(refused.exit_code, 2) << refused.err;
+  EXPECT_NE(refused.err.find("exists; teach does not write over a file (give --overwrite"), std::string::npos) << refused.err;
+  EXPECT_EQ(std::count(refused.err.begin(), refused.err.end(), '\n'), 1) << refused.err;
+  EXPECT_TRUE(refused.out.empty()) << refused.out;
+  std::stringstream kept;
+  kept << std::ifstream(notes).rdbuf();
+  EXPECT_EQ(kept.str(), "a recording of last week");
+
+  // The scene the run reads is refused as its output even with --overwrite.
+  const fs::path scene = scratch("own_scene.yaml");
+  std::ofstream(scene) << robot::sceneToYaml(robot::loadScene("setup_A"));
+  const auto own = runCliBinary("teach --scene " + scene.string() + " --areas 1 --seed 3 --overwrite --out " + scene.string());
+  EXPECT_EQ(own.exit_code, 2) << own.err;
+  EXPECT_NE(own.err.find("is the file the run reads (--scene)"), std::string::npos) << own.err;
+  EXPECT_NO_THROW(robot::loadScene(scene.string()));
+
+  // With --overwrite the old file gives way to the session; an upper-case .JSON is JSON.
+  const fs::path upper = scratch("S.JSON");
+  std::ofstream(upper) << "old";
+  const auto replaced = runCliBinary("teach --scene setup_A --areas 1 --seed 3 --check-points 0 --overwrite --out " + upper.string());
+  ASSERT_EQ(replaced.exit_code, 0) << replaced.err;
+  std::stringstream written;
+  written << std::ifstream(upper).rdbuf();
+  EXPECT_NE(written.str().find("flexirob-session-json"), std::string::npos);
+  fs::remove(notes);
+  fs::remove(scene);
+  fs::remove(upper);
+}
+
 TEST(TeachCli, TeachesOneAreaOverTheFriLinkWithNothingLost) {
   const fs::path out = scratch("fri.json");
   const auto result = runCliBinary("teach --backend fri-sim --scene setup_A --areas 1 --seed 3 --out " + out.string());
