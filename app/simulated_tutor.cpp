@@ -102,6 +102,7 @@ void SimulatedTutor::tick() {
   const LockedArm held = arm();
   held->readState(state_);
   if (options_.on_cycle) options_.on_cycle(state_);
+  if (options_.stop_requested && options_.stop_requested()) throw StopRequested{};
 }
 
 void SimulatedTutor::updateReport() {
@@ -990,6 +991,17 @@ bool SimulatedTutor::roomyForAnArea(const Eigen::Vector3d& p_W) const {
 }
 
 TutorReport SimulatedTutor::configure(int area_count) {
+  try {
+    return configureAreas(area_count);
+  } catch (const StopRequested&) {
+    arm()->clearHandForce();
+    updateReport();
+    report_.interrupted = true;
+    return report_;
+  }
+}
+
+TutorReport SimulatedTutor::configureAreas(int area_count) {
   if (area_count < 1 || area_count > 200) throw InputError("areas: expected 1..200, got " + std::to_string(area_count));
   arm()->readState(state_);
   // No way out of an obstacle can be planned; without this every area would fail the same way.
@@ -1120,6 +1132,15 @@ void SimulatedTutor::discardPose() {
 }
 
 bool SimulatedTutor::program(const std::vector<Eigen::Vector3d>& waypoints) {
+  try {
+    return programWaypoints(waypoints);
+  } catch (const StopRequested&) {
+    arm()->clearHandForce();
+    return false;
+  }
+}
+
+bool SimulatedTutor::programWaypoints(const std::vector<Eigen::Vector3d>& waypoints) {
   if (waypoints.empty()) throw InputError("tutor: a trajectory needs at least one waypoint");
   arm()->readState(state_);
   if (!workflow_->press(Button::kStartProgramming)) return false;

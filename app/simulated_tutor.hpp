@@ -63,6 +63,9 @@ struct TutorOptions {
   std::mutex* arm_mutex = nullptr;
   /// Progress callback (what, fraction in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
+  /// Asked after every control cycle; true ends configure() where it is (a person stopped the
+  /// run): the hands let go and the report says `interrupted`. May be empty.
+  std::function<bool()> stop_requested;
   /// Where the map's checks start (homePosture of the scene); computed when empty. A caller
   /// that has it already passes it in, as the search behind it is not free.
   std::optional<Eigen::VectorXd> home;
@@ -101,6 +104,7 @@ struct TutorReport {
   /// link at a time can still fall further behind while it waits.
   double max_approach_lead = 0.0;
   double simulated_time = 0.0;        ///< [s]
+  bool interrupted = false;           ///< TutorOptions::stop_requested ended the run
 };
 
 /// A posture choice for one task-space point.
@@ -123,7 +127,7 @@ class SimulatedTutor {
   TutorReport configure(int area_count);
   /// PROGRAMMING: start_programming, guide the tip to the first waypoint (APPROACHING), then
   /// along the waypoints (TEACH-IN), let go; finished_programming. Returns false if a phase
-  /// did not complete.
+  /// did not complete or TutorOptions::stop_requested ended it.
   bool program(const std::vector<Eigen::Vector3d>& waypoints);
 
   /// Collision-free IK postures for p_W (the suggested posture tried first), best first: the best
@@ -150,6 +154,10 @@ class SimulatedTutor {
   const TutorReport& report() const { return report_; }
 
  private:
+  /// Thrown by tick() when TutorOptions::stop_requested says so; caught by configure().
+  struct StopRequested {};
+  TutorReport configureAreas(int area_count);
+  bool programWaypoints(const std::vector<Eigen::Vector3d>& waypoints);
   bool teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested);
   /// Pushes the links so that the posture follows a joint-space path with the reference
   /// moving at `speed` [rad/s, largest joint]; false on timeout or when the arm runs off the

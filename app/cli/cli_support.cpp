@@ -180,7 +180,7 @@ int runCli(int argc, const char* const* argv) {
   } catch (const CommandFailed& e) {
     std::cout << e.result().dump(2) << std::endl;
     std::cerr << "error: " << e.what() << std::endl;
-    return 1;
+    return e.exitCode();
   } catch (const CLI::Success& e) {
     // --help and --version: CLI11 prints them itself.
     return app.exit(e);

@@ -28,11 +28,14 @@ using Json = nlohmann::ordered_json;
 /// one line, and the exit code is 1.
 class CommandFailed : public std::runtime_error {
  public:
-  CommandFailed(const std::string& message, Json result) : std::runtime_error(message), result_(std::move(result)) {}
+  CommandFailed(const std::string& message, Json result, int exit_code = 1)
+      : std::runtime_error(message), result_(std::move(result)), exit_code_(exit_code) {}
   const Json& result() const { return result_; }
+  int exitCode() const { return exit_code_; }
 
  private:
   Json result_;
+  int exit_code_;
 };
 
 /// What a parsed command will do; it returns the JSON object printed on stdout.

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <csignal>
+#include <iomanip>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -84,7 +86,39 @@ void checkNothingIsOverwritten(const TeachOptions& options) {
 
 constexpr std::size_t kWarningsOnStderr = 20;
 
+// SIGINT or SIGTERM during a run: the tutor stops at its next control cycle and what was recorded
+// is written as usual. The handler gives the signal back its default, so a second one ends the
+// process at once.
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" void stopOnSignal(int signal_number) {
+  g_stop_signal = signal_number;
+  std::signal(signal_number, SIG_DFL);
+}
+
+// Installs the handler for one run and puts the previous handlers back afterwards.
+class StopOnSignal {
+ public:
+  StopOnSignal() {
+    g_stop_signal = 0;
+    previous_int_ = std::signal(SIGINT, stopOnSignal);
+    previous_term_ = std::signal(SIGTERM, stopOnSignal);
+  }
+  ~StopOnSignal() {
+    std::signal(SIGINT, previous_int_);
+    std::signal(SIGTERM, previous_term_);
+  }
+  StopOnSignal(const StopOnSignal&) = delete;
+  StopOnSignal& operator=(const StopOnSignal&) = delete;
+
+ private:
+  void (*previous_int_)(int) = SIG_DFL;
+  void (*previous_term_)(int) = SIG_DFL;
+};
+
 Json runTeach(const TeachOptions& options) {
+  // From the start: a signal before the tutor's first cycle stops it there.
+  const StopOnSignal stop_on_signal;
   checkOutputPath("--out", options.out);
   checkNothingIsOverwritten(options);
   // Held to the end of the run: a second teach into the same file is refused at its start.
@@ -152,6 +186,7 @@ Json runTeach(const TeachOptions& options) {
   tutor_options.posture_candidates = options.candidates;
   tutor_options.check_points = options.check_points;
   tutor_options.progress = [](const std::string& what, double fraction) { reportProgress(what, fraction); };
+  tutor_options.stop_requested = [] { return g_stop_signal != 0; };
   if (controller) tutor_options.arm_mutex = &controller->armMutex();  // the stand-in's thread steps the arm
 
   // The session: SQLite through the session recorder, or JSON for a path ending in .json.
@@ -339,7 +374,7 @@ Json runTeach(const TeachOptions& options) {
   if (given_up > kWarningsOnStderr) {
     std::fprintf(stderr, "warning: ... and %zu more of the scene's areas not taught (\"tutor\" in the JSON)\n", given_up - kWarningsOnStderr);
   }
-  if (static_cast<int>(workflow.areas().size()) < options.areas && !workflow.areas().empty()) {
+  if (static_cast<int>(workflow.areas().size()) < options.areas && !workflow.areas().empty() && !report.interrupted) {
     std::fprintf(stderr, "note: %zu of the %d areas asked for %s taught; \"tutor\" in the JSON says why the others were not\n",
                  workflow.areas().size(), options.areas, workflow.areas().size() == 1 ? "was" : "were");
   }
@@ -380,7 +415,16 @@ Json runTeach(const TeachOptions& options) {
                  {"warning_lines", warning_lines},
                  {"tutor", tutor_areas},
                  {"simulated_time_s", report.simulated_time},
-                 {"wall_time_s", wall_seconds}};
+                 {"wall_time_s", wall_seconds},
+                 {"interrupted", report.interrupted}};
+  if (report.interrupted) {
+    const int signal_number = static_cast<int>(g_stop_signal);
+    std::ostringstream message;
+    message << "teach: stopped by " << (signal_number == SIGTERM ? "SIGTERM" : "SIGINT") << " after " << std::fixed
+            << std::setprecision(1) << report.simulated_time << " s of teaching; what was recorded (" << workflow.areas().size()
+            << " of " << options.areas << " areas, " << samples << " samples) was written to " << options.out;
+    throw CommandFailed(message.str(), std::move(result), 128 + signal_number);
+  }
   if (!session_error.empty()) {
     throw CommandFailed("teach: the session file failed: " + session_error +
                             (session_copy.empty() ? std::string() : "; the whole session was saved to " + session_copy),

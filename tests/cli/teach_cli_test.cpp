@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <vector>
@@ -66,6 +67,30 @@ TEST(TeachCli, NeverWritesOverAnExistingFileUnlessToldToAndNeverOverItsOwnScene)
   fs::remove(notes);
   fs::remove(scene);
   fs::remove(upper);
+}
+
+TEST(TeachCli, StoppedBySigintWritesWhatWasRecordedAndSaysSo) {
+  const fs::path out = scratch("interrupted.db");
+  const fs::path json = scratch("interrupted.json"), err = scratch("interrupted.err"), code = scratch("interrupted.code");
+  // The run would take tens of seconds; SIGINT after 2 s, as a person pressing Ctrl-C.
+  const std::string script = std::string(FLEXIROB_CLI_EXECUTABLE) + " teach --scene setup_I --areas 12 --seed 1 --out " + out.string() +
+                             " > " + json.string() + " 2> " + err.string() + " & p=$!; sleep 2; kill -INT $p; wait $p; echo $? > " + code.string();
+  ASSERT_EQ(std::system(("sh -c '" + script + "'").c_str()), 0);
+  const auto text = [](const fs::path& file) {
+    std::stringstream content;
+    content << std::ifstream(file).rdbuf();
+    return content.str();
+  };
+  EXPECT_EQ(text(code), "130\n") << text(err);
+  EXPECT_NE(text(err).find("error: teach: stopped by SIGINT after"), std::string::npos) << text(err);
+  EXPECT_NE(text(err).find("was written to " + out.string()), std::string::npos) << text(err);
+  EXPECT_NE(text(json).find("\"interrupted\": true"), std::string::npos) << text(json);
+  // The session was closed as at the end of a run: one file, readable, closed cleanly.
+  EXPECT_FALSE(fs::exists(out.string() + "-wal"));
+  const auto review = runCliBinary("review --session " + out.string());
+  ASSERT_EQ(review.exit_code, 0) << review.err;
+  EXPECT_NE(review.out.find("\"closed_cleanly\": true"), std::string::npos) << review.out;
+  for (const fs::path& file : {out, json, err, code}) fs::remove(file);
 }
 
 TEST(TeachCli, TeachesOneAreaOverTheFriLinkWithNothingLost) {
