@@ -104,6 +104,7 @@ struct CollisionWorld::Impl {
   std::vector<std::string> shape_source;
   std::vector<char> checked_pairs;  // bodies × bodies
   std::vector<char> table_exempt;   // per body: the base, and links on the table at the reference posture
+  std::vector<char> fixed_gap;      // obstacles a gap no joint can change parts from the first link
   int table = -1;                   // obstacle index of the table top, -1 without one
   int bodies = 0;
   PairFilter filter;
@@ -307,6 +308,33 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
       }
     }
   }
+  // A gap between the first link and an obstacle that its joint cannot change (a link round
+  // about its own axis beside a fixture flush with the base, a tilted mount's first link over
+  // the table) is no clearance a posture could win or lose: looked at over the joint's range.
+  impl.fixed_gap.assign(static_cast<std::size_t>(obstacleCount()), 0);
+  if (impl.bodies > 1 && model.joints().front().type != JointType::kPrismatic) {
+    const double low = model.sampleLowerLimits()[0], high = model.sampleUpperLimits()[0];  // one turn if unbounded
+    constexpr int kAngles = 24;
+    constexpr double kNear = 0.1;  // [m] farther gaps never count against a clearance
+    constexpr double kUnchanged = 0.005;  // [m] a link not quite round about its axis
+    Eigen::VectorXd q = model.midPosture();
+    std::vector<double> least(static_cast<std::size_t>(obstacleCount()), std::numeric_limits<double>::infinity());
+    std::vector<double> most(least.size(), -std::numeric_limits<double>::infinity());
+    for (int i = 0; i <= kAngles; ++i) {
+      q[0] = low + (high - low) * i / kAngles;
+      update(q);
+      for (int k = 0; k < obstacleCount(); ++k) {
+        if (k == impl.table && impl.table_exempt[1] != 0) continue;
+        const double gap = distance(1, k, kNear);
+        least[static_cast<std::size_t>(k)] = std::min(least[static_cast<std::size_t>(k)], gap);
+        most[static_cast<std::size_t>(k)] = std::max(most[static_cast<std::size_t>(k)], gap);
+      }
+    }
+    for (std::size_t k = 0; k < least.size(); ++k) {
+      if (least[k] > 0.0 && least[k] < kNear && most[k] - least[k] < kUnchanged) impl.fixed_gap[k] = 1;
+    }
+    update(model.midPosture());
+  }
   if (dropped) {
     // Re-adding the links rebuilds their broadphase pairs through the filter.
     for (int b = 0; b < impl.bodies; ++b) {
@@ -448,6 +476,7 @@ Clearance CollisionWorld::clearance(double max_distance) {
   for (int b = 1; b < impl_->bodies; ++b) {
     for (int k = 0; k < obstacleCount(); ++k) {
       if (k == impl_->table && impl_->table_exempt[static_cast<std::size_t>(b)] != 0) continue;
+      if (b == 1 && impl_->fixed_gap[static_cast<std::size_t>(k)] != 0) continue;
       ClosestCollector collector;
       collector.m_closestDistanceThreshold = btScalar(max_distance);
       collector.first = impl_->body_objects[static_cast<std::size_t>(b)].get();

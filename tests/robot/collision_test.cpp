@@ -262,6 +262,36 @@ TEST(CollisionWorld, ALinkNoJointCanLowerIsNoClearanceProblemButOneTheReferenceP
   EXPECT_LT(bent_world.distance(3, 0), 0.0);
 }
 
+TEST(CollisionWorld, AGapToTheFirstLinkItsJointCannotChangeIsNoClearanceProblemButStillMeasured) {
+  // A fixture flush against the LWR IV's base, as high as the base: link1 turns about its own
+  // axis beside it, 1.7-1.8 cm away whatever A1 does. The clearance a posture keeps is the
+  // rest of the arm's; the gap itself is still measured (and a contact would still count).
+  const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  Scene scene;
+  Obstacle fixture;
+  fixture.name = "fixture";
+  fixture.shape = Obstacle::Shape::kBox;
+  fixture.size = Eigen::Vector3d(0.2, 0.3, 0.11);
+  fixture.X_WO.translation() = Eigen::Vector3d(-0.186, 0.0, 0.055);
+  scene.obstacles.push_back(fixture);
+  CollisionWorld world(model, scene);
+  for (const double a1 : {-2.0, 0.0, 1.0}) {
+    Eigen::VectorXd q = Eigen::VectorXd::Zero(7);
+    q[0] = a1;
+    world.update(q);
+    EXPECT_NEAR(world.distance(1, 0), 0.0175, 0.002) << "A1 = " << a1;
+    const Clearance clearance = world.clearance(0.05);
+    EXPECT_FALSE(clearance.body == 1 && clearance.obstacle == 0) << "A1 = " << a1 << ": " << clearance.distance;
+  }
+  // Without the table, the nearest the upright arm comes to the fixture is link1 no longer.
+  scene.table = false;
+  CollisionWorld without_table(model, scene);
+  without_table.update(Eigen::VectorXd::Zero(7));
+  const Clearance upright = without_table.clearance(0.5);
+  EXPECT_GT(upright.body, 1);
+  EXPECT_EQ(upright.obstacle, 0);
+}
+
 TEST(CollisionWorld, TheLwr4LowersItsFlangeIntoTheTableAndNotBefore) {
   const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
   CollisionWorld world(model, Scene{});
