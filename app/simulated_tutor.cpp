@@ -935,8 +935,8 @@ int SimulatedTutor::mapFailures() {
   return failures;
 }
 
-Eigen::Vector3d SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid& grid, const std::vector<Eigen::Vector3d>& tried,
-                                                    bool where_it_fails) {
+std::optional<Eigen::Vector3d> SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid& grid,
+                                                                   const std::vector<Eigen::Vector3d>& tried, bool where_it_fails) {
   const auto near_tried = [&tried](const Eigen::Vector3d& x) {
     return std::any_of(tried.begin(), tried.end(), [&x](const Eigen::Vector3d& t) { return (t - x).norm() < 0.1; });
   };
@@ -974,10 +974,10 @@ Eigen::Vector3d SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid&
     target = within ? random_.uniform(within_lower, within_upper) : random_.uniform(grid.lower, grid.upper);
     if (roomyForAnArea(target) && !near_tried(target) &&
         accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds)) {
-      break;
+      return target;
     }
   }
-  return target;
+  return std::nullopt;
 }
 
 bool SimulatedTutor::roomyForAnArea(const Eigen::Vector3d& p_W) const {
@@ -1059,7 +1059,16 @@ TutorReport SimulatedTutor::configureAreas(int area_count) {
       area.automatic = true;
       // Where the map fails may be where no posture can be taught (cramped, or out of the
       // hands' reach): after a place that could not be taught, a random one.
-      area.target = nextAutomaticTarget(grid, tried, last_automatic_taught);
+      const std::optional<Eigen::Vector3d> place = nextAutomaticTarget(grid, tried, last_automatic_taught);
+      if (!place) {
+        // Every place drawn was near an obstacle, excluded, beyond the arm or without a free
+        // posture: a person would not teach the arm just anywhere.
+        area.failure = "no place of its own found: 200 random points of the evaluation grid were all within 0.1 m of an "
+                       "obstacle, in an excluded box, beyond the arm's reach or without a collision-free posture";
+        report_.areas.push_back(area);
+        break;
+      }
+      area.target = *place;
       tried.push_back(area.target);
     }
     const std::size_t areas_before = workflow_->areas().size();

@@ -223,8 +223,8 @@ class SimulatedTutor {
   /// Where to teach next automatically: with `where_it_fails`, the failing check point with the
   /// most failing neighbours within 0.2 m that is roomy and 0.1 m from earlier attempts;
   /// otherwise, or before any map, or when none is left, a random roomy point of the workspace box
-  /// that some collision-free IK posture reaches.
-  Eigen::Vector3d nextAutomaticTarget(const robot::EvaluationGrid& grid, const std::vector<Eigen::Vector3d>& tried,
+  /// that some collision-free IK posture reaches; none when 200 random points were not.
+  std::optional<Eigen::Vector3d> nextAutomaticTarget(const robot::EvaluationGrid& grid, const std::vector<Eigen::Vector3d>& tried,
                                       bool where_it_fails);
 
   /// The arm held under TutorOptions::arm_mutex (if set) for one full expression,

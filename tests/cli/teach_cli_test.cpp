@@ -157,6 +157,26 @@ TEST(TeachCli, RefusesAnUnknownBackendAndFriForTheNineJointArmWithOneLine) {
   }
 }
 
+// The grid's exclude box covers the whole workspace: the tutor teaches the listed area and finds
+// no place of its own to add, and says so instead of teaching inside the excluded box.
+TEST(TeachCli, TeachesNoPlaceOfItsOwnInsideTheGridsExcludedBoxes) {
+  const fs::path scene = scratch("excluded.yaml");
+  const fs::path out = scratch("excluded.json");
+  std::ofstream(scene) << "name: excluded\n"
+                          "training_areas:\n  - {name: L, centre: [-0.5, 0.3, 0.3]}\n"
+                          "grid: {lower: [-0.8, -0.5, 0.05], upper: [0, 0.5, 0.7], spacing: 0.15,"
+                          " exclude: [{lower: [-1, -1, 0], upper: [1, 1, 1]}]}\n";
+  const auto result = runCliBinary("teach --scene " + scene.string() + " --areas 2 --seed 1 --check-points 0 --out " + out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = result.json();
+  EXPECT_EQ(json.at("areas").get<int>(), 1);
+  ASSERT_EQ(json.at("tutor").size(), 2U);
+  EXPECT_FALSE(json.at("tutor").at(1).at("taught").get<bool>());
+  EXPECT_NE(json.at("tutor").at(1).at("failure").get<std::string>().find("no place of its own found"), std::string::npos);
+  fs::remove(scene);
+  fs::remove(out);
+}
+
 // A scene where no posture keeps its distance (walls 0.2 m around the robot's axis): teach ends
 // with exit code 1 and one line saying why, and still writes the session and its JSON report,
 // so a script sees the failure and nothing of the attempt is lost.
