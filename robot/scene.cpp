@@ -40,6 +40,7 @@ constexpr std::size_t kMaxJoints = 64;
 constexpr std::size_t kMaxNameLength = 200;
 constexpr std::size_t kMaxTextLength = 20000;
 constexpr std::size_t kMaxExcludedBoxes = 1000;
+constexpr double kMaxGridTolerance = 0.05;  // [m]
 constexpr double kMaxLength = 1000.0;  // [m]: any coordinate or size beyond this is a mistake
 // Every scalar the reader visits costs one unit; YAML aliases can make a small file name the
 // same large list many times, and this budget bounds the work regardless.
@@ -591,7 +592,16 @@ class SceneReader {
     if (const auto n = node["lower"]) grid.lower = placeAboveTable(n, join(path, "lower"));
     if (const auto n = node["upper"]) grid.upper = position(n, join(path, "upper"));
     if (const auto n = node["spacing"]) grid.spacing = length(n, join(path, "spacing"), false);
-    if (const auto n = node["tolerance"]) grid.tolerance = length(n, join(path, "tolerance"), false);
+    if (const auto n = node["tolerance"]) {
+      grid.tolerance = length(n, join(path, "tolerance"), false);
+      // Beyond a few centimetres "reached" stops meaning reached (Sect. 3.3.2: 0.01 m).
+      if (grid.tolerance > kMaxGridTolerance) {
+        std::ostringstream problem;
+        problem << "'tolerance' (how near the tip must come for a target to count as reached) must be at most " << kMaxGridTolerance
+                << " m, got " << grid.tolerance << " m";
+        fail(n, join(path, "tolerance"), problem.str());
+      }
+    }
     if ((grid.upper.array() < grid.lower.array()).any()) fail(node, path, "'upper' must not lie below 'lower' on any axis");
     if (const std::string problem = grid.sizeProblem(); !problem.empty()) fail(node, path, problem + "; increase 'spacing'");
     if (const auto n = node["exclude"]) {

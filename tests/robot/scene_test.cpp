@@ -555,6 +555,7 @@ TEST_F(SceneFileTest, RefusesValuesOfTheWrongType) {
            "grid: {exclude: [{lower: [0, 0, 0], upper: [1, 1, 1], margin: 0.1}]}\n",
            "grid: {exclude: [{lower: [0, 0], upper: [1, 1, 1]}]}\n",
            "grid: {exclude: [{lower: [0, 0, .nan], upper: [1, 1, 1]}]}\n",
+           "grid: {tolerance: 0.3}\n",
        }) {
     SCOPED_TRACE(text);
     expectOneLineNamingFile(refusal(text), "broken.yaml");
