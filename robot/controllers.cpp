@@ -184,6 +184,32 @@ HierarchicalController::HierarchicalController(const RobotModel& model, const Pa
       qd_null_(model.dof()) {
   const double scale = parameters.has("limits.velocity_scale") ? parameters.get("limits.velocity_scale") : 1.0;
   v_max_ *= scale;
+  task_rank_ = structuralTaskRank();
+}
+
+int HierarchicalController::structuralTaskRank() {
+  // A planar arm (every axis parallel) moves its tip in a plane whatever its posture: J has a
+  // zero singular value everywhere. Damping meant for singularities would then act all the
+  // time and hold the tip short of targets in its plane; that direction is left out instead.
+  // Looked at in a few postures spread over the ranges (a singular one may be among them).
+  const int n = model_->dof();
+  const Eigen::VectorXd lower = model_->sampleLowerLimits(), upper = model_->sampleUpperLimits();
+  int rank = 0;
+  for (int sample = 0; sample < 5; ++sample) {
+    Eigen::VectorXd q(n);
+    for (int j = 0; j < n; ++j) {
+      const double fraction = std::fmod(0.5 + 0.618034 * sample + 0.414214 * j * sample, 1.0);
+      q[j] = lower[j] + fraction * (upper[j] - lower[j]);
+    }
+    kinematics_.update(q);
+    kinematics_.tipPositionJacobian(J_full_);
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(J_full_ * J_full_.transpose(), Eigen::EigenvaluesOnly);
+    const double largest = eigen.eigenvalues()[2];
+    int independent = 0;
+    for (int k = 0; k < 3; ++k) independent += eigen.eigenvalues()[k] > std::max(1e-9 * largest, 1e-14) ? 1 : 0;
+    rank = std::max(rank, independent);
+  }
+  return rank == 0 ? 3 : rank;
 }
 
 HierarchicalController::Status HierarchicalController::velocity(const Eigen::VectorXd& q, const Eigen::Vector3d& p_des,
@@ -223,11 +249,21 @@ HierarchicalController::Status HierarchicalController::velocity(const Eigen::Vec
     // J of the joints still free to move.
     J_ = J_full_ * free_.asDiagonal();
     const Eigen::Matrix3d JJt = J_ * J_.transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(JJt, Eigen::EigenvaluesOnly);
-    sigma_min_ = std::sqrt(std::max(0.0, eigen.eigenvalues()[0]));
+    Eigen::Matrix3d A = JJt;
+    if (task_rank_ == 3) {
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(JJt, Eigen::EigenvaluesOnly);
+      sigma_min_ = std::sqrt(std::max(0.0, eigen.eigenvalues()[0]));
+    } else {
+      // The directions the tip never moves in: J⁺ has nothing to map them to (Jᵀv = 0), and
+      // the one added to A only keeps it invertible; σ_min is that of the directions it has.
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(JJt);
+      const int missing = 3 - task_rank_;
+      sigma_min_ = std::sqrt(std::max(0.0, eigen.eigenvalues()[missing]));
+      for (int k = 0; k < missing; ++k) A += eigen.eigenvectors().col(k) * eigen.eigenvectors().col(k).transpose();
+    }
     // Damped least squares only near singularities (Sect. 2.1).
     mu_squared_ = sigma_min_ < sigma_0_ ? mu_max_squared_ * (1.0 - std::pow(sigma_min_ / sigma_0_, 2)) : 0.0;
-    const Eigen::Matrix3d A = JJt + Eigen::Matrix3d::Identity() * std::max(mu_squared_, 1e-12);
+    A += Eigen::Matrix3d::Identity() * std::max(mu_squared_, 1e-12);
     J_pinv_.noalias() = J_.transpose() * A.inverse();
     // Null-space projector I − J⁺J, restricted to the free joints.
     N_.noalias() = -J_pinv_ * J_;

@@ -147,9 +147,13 @@ class HierarchicalController {
   const Kinematics& kinematics() const { return kinematics_; }
 
  private:
+  /// How many independent directions the tip can move in at all (3; 2 for a planar arm).
+  int structuralTaskRank();
+
   const RobotModel* model_;
   Kinematics kinematics_;
   double kappa_x_, kappa_q_, sigma_0_, mu_max_squared_;
+  int task_rank_ = 3;
   Eigen::VectorXd lower_, upper_, v_max_;
   Matrix3Xd J_full_, J_;
   Eigen::MatrixXd J_pinv_, N_;
