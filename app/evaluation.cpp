@@ -772,8 +772,12 @@ PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Sce
   result.disconnected_nodes = static_cast<int>(all_nodes.size() - nodes.size());
   Eigen::VectorXd q = q_start;
   double plan_ms = 0.0;
+  int previous_goal = start_node;
   for (int g = 0; g < goals; ++g) {
-    const int goal = nodes[random.index(nodes.size())];
+    // A goal where the arm already stands would be a move of no length, counted as a success.
+    int goal = nodes[random.index(nodes.size())];
+    while (goal == previous_goal) goal = nodes[random.index(nodes.size())];
+    previous_goal = goal;
     const Eigen::Vector3d p_goal = graph.prototype(goal).head<3>();
     const Eigen::Vector3d p_start = robot::tipPose(model, q).translation();
     const auto t0 = std::chrono::steady_clock::now();

@@ -221,7 +221,11 @@ TEST(Evaluation, PlanningGoalsAreNodesTheGraphConnectsToTheStart) {
   const PlanningResult result = evaluatePlanning(lwr4(), empty, s.parameters, *map, graph, ready(), 20, 5);
   EXPECT_EQ(result.disconnected_nodes, 2);
   EXPECT_EQ(result.found, 20);
-  for (const PlannedMotion& motion : result.motions) EXPECT_LT(motion.goal_W.z(), start.z() + 0.01);
+  for (const PlannedMotion& motion : result.motions) {
+    EXPECT_LT(motion.goal_W.z(), start.z() + 0.01);
+    // Never the node the arm stands at: every goal is a move of at least one node (0.1 m).
+    EXPECT_GT((motion.goal_W - motion.start_W).norm(), 0.05);
+  }
 
   // Nothing joined to the start: refused with a reason, not 20 unfound paths.
   planning::Itm scattered(planning::ItmParameters{}, 7);
