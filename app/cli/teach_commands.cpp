@@ -264,9 +264,17 @@ Json runTeach(const TeachOptions& options) {
     }
   }
   Json checks = Json::array();
+  // `from` and `to` index the taught areas ("areas" of the session), not the tutor's list of
+  // attempts; the names say which they are.
+  const auto areaName = [&workflow](int index) {
+    return index >= 0 && index < static_cast<int>(workflow.areas().size()) ? workflow.areas()[static_cast<std::size_t>(index)].name
+                                                                           : std::string();
+  };
   for (const auto& check : workflow.transitionChecks()) {
     checks.push_back({{"from", check.from},
                       {"to", check.to},
+                      {"from_name", areaName(check.from)},
+                      {"to_name", areaName(check.to)},
                       {"mean_error_m", check.mean_error_m},
                       {"max_error_m", check.max_error_m},
                       {"final_error_m", check.final_error_m},

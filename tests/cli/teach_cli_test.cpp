@@ -331,8 +331,16 @@ TEST(TeachCli, TeachesASmallArmInAWorkspaceBoxMostlyBeyondItsReach) {
   const auto json = result.json();
   EXPECT_EQ(json.at("areas"), 2);
   // Every place the tutor tried lies within the arm's reach, and the arm took every touch.
+  std::vector<std::string> taught;
   for (const auto& area : json.at("tutor")) {
     EXPECT_TRUE(area.at("taught").get<bool>()) << area.dump();
+    if (area.at("taught").get<bool>()) taught.push_back(area.at("name").get<std::string>());
+  }
+  // The transition checks name the areas they index (the taught ones, not the tutor's attempts).
+  ASSERT_FALSE(json.at("transition_checks").empty());
+  for (const auto& check : json.at("transition_checks")) {
+    EXPECT_EQ(check.at("from_name").get<std::string>(), taught.at(check.at("from").get<std::size_t>()));
+    EXPECT_EQ(check.at("to_name").get<std::string>(), taught.at(check.at("to").get<std::size_t>()));
   }
   fs::remove(robot);
   fs::remove(out);
