@@ -81,7 +81,10 @@ void checkOutputPath(const std::string& option, const std::string& path) {
   std::error_code error;
   if (fs::is_directory(path, error)) throw InputError(option + ": '" + path + "' is a directory; expected a file path");
   const fs::path folder = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
-  if (!fs::is_directory(folder, error)) throw InputError(option + ": the folder '" + folder.string() + "' does not exist");
+  if (!fs::is_directory(folder, error)) {
+    throw InputError(option + (fs::exists(folder, error) ? ": '" + folder.string() + "' is a file, not a folder"
+                                                          : ": the folder '" + folder.string() + "' does not exist"));
+  }
   if (::access(folder.c_str(), W_OK) != 0) {
     throw InputError(option + ": cannot write in '" + folder.string() + "': " + std::strerror(errno));
   }

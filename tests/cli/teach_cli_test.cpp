@@ -378,6 +378,13 @@ TEST(TeachCli, RefusesASessionFileInAMissingFolderBeforeTeaching) {
   const auto render = runCliBinary("render --robot lwr4 --width 64 --height 48 --out " + (out.parent_path() / "x.png").string());
   EXPECT_EQ(render.exit_code, 2) << render.err;
   EXPECT_NE(render.err.find("does not exist"), std::string::npos) << render.err;
+  // A file where the folder should be is named as such.
+  const fs::path file = scratch("a_file.txt");
+  std::ofstream(file) << "notes";
+  const auto under_file = runCliBinary("teach --scene setup_A --areas 1 --out " + (file / "s.db").string());
+  EXPECT_EQ(under_file.exit_code, 2) << under_file.err;
+  EXPECT_NE(under_file.err.find("'" + file.string() + "' is a file, not a folder"), std::string::npos) << under_file.err;
+  fs::remove(file);
 }
 
 }  // namespace
