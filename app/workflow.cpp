@@ -711,7 +711,7 @@ TransitionCheck checkTransition(const robot::RobotModel& model, const robot::Par
   check.mean_error_m = motion.mean_error_m;
   check.max_error_m = motion.max_error_m;
   check.final_error_m = motion.final_error_m;
-  check.posture_error_rad = (motion.q - to.q_fixed).norm();
+  check.posture_error_rad = model.postureDifference(motion.q, to.q_fixed).norm();
   check.colliding_samples = world != nullptr ? motion.colliding_checks : -1;
   check.ok = check.colliding_samples <= 0 && check.final_error_m <= tolerance && check.max_error_m <= 5.0 * tolerance;
   return check;

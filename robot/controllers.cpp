@@ -38,8 +38,6 @@ double brakingSpeed(double distance, double a, double dt) {
   return a * dt * k + remainder / ((k + 1.0) * dt);
 }
 
-bool isContinuous(const Joint& joint) { return joint.type == JointType::kContinuous; }
-
 }  // namespace
 
 std::span<const ParameterDeclaration> limiterParameters() { return kLimiterParameters; }
@@ -236,13 +234,7 @@ HierarchicalController::Status HierarchicalController::velocity(const Eigen::Vec
   task_error_ = error.norm();
 
   // The null-space target as the shortest way round for continuous joints.
-  for (int i = 0; i < n; ++i) {
-    double delta = q_c[i] - q[i];
-    if (isContinuous(model_->joints()[static_cast<std::size_t>(i)])) {
-      delta = std::remainder(delta, 2.0 * std::numbers::pi);
-    }
-    dq_null_[i] = delta;
-  }
+  model_->postureDifference(q_c, q, dq_null_);
 
   free_.setOnes();
   for (int pass = 0; pass <= n; ++pass) {

@@ -561,6 +561,20 @@ Eigen::VectorXd RobotModel::sampleUpperLimits() const {
 
 Eigen::VectorXd RobotModel::midPosture() const { return 0.5 * (sampleLowerLimits() + sampleUpperLimits()); }
 
+void RobotModel::postureDifference(const Eigen::VectorXd& to, const Eigen::VectorXd& from, Eigen::VectorXd& difference) const {
+  for (std::size_t j = 0; j < joints_.size(); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    const double delta = to[i] - from[i];
+    difference[i] = joints_[j].type == JointType::kContinuous ? std::remainder(delta, 2.0 * std::numbers::pi) : delta;
+  }
+}
+
+Eigen::VectorXd RobotModel::postureDifference(const Eigen::VectorXd& to, const Eigen::VectorXd& from) const {
+  Eigen::VectorXd difference(dof());
+  postureDifference(to, from, difference);
+  return difference;
+}
+
 void RobotModel::checkWithinLimits(const Eigen::VectorXd& q, const std::string& what, double overshoot_rad,
                                    double overshoot_m) const {
   for (std::size_t j = 0; j < joints_.size(); ++j) {

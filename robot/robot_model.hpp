@@ -102,6 +102,10 @@ class RobotModel {
   Eigen::VectorXd velocityLimits() const;
   /// Centre of the sample limits below (0 for an unbounded joint): a safe default posture.
   Eigen::VectorXd midPosture() const;
+  /// to − from per joint, the shorter way round for a continuous joint (a turn is no difference).
+  /// `difference` must have dof() entries; does not allocate.
+  void postureDifference(const Eigen::VectorXd& to, const Eigen::VectorXd& from, Eigen::VectorXd& difference) const;
+  Eigen::VectorXd postureDifference(const Eigen::VectorXd& to, const Eigen::VectorXd& from) const;
   /// The software limits with an unbounded (continuous) joint given one turn, [−π, π]: the
   /// range to draw random postures from, which ±inf cannot be.
   Eigen::VectorXd sampleLowerLimits() const;

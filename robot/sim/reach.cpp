@@ -84,7 +84,7 @@ ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSe
   result.q = state.q;
   result.position = state.p_WT();
   result.error_m = (state.p_WT() - request.target).norm();
-  result.posture_error_rad = (state.q - posture).norm();
+  result.posture_error_rad = model.postureDifference(state.q, posture).norm();
   result.collisions = sim.collisions().events();
   result.colliding_steps = sim.collisions().collidingSteps();
   const CollisionWorld& world = *sim.collisionWorld();

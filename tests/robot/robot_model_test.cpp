@@ -152,6 +152,18 @@ TEST(RobotModel, GivesAnUnboundedJointOneTurnToDrawPosturesFrom) {
   EXPECT_DOUBLE_EQ(model.midPosture()[1], 0.0) << "the default posture of an unbounded joint";
 }
 
+TEST(RobotModel, PosturesDifferByTheShorterWayRoundOnAnUnboundedJointOnly) {
+  TempDir dir;
+  const auto model = RobotModel::fromUrdfFile(dir.write("c.urdf", twoJointArm("", "continuous")));
+  const Eigen::Vector2d to(0.5, 0.3 + 4.0 * std::numbers::pi), from(0.2, 0.1);
+  const Eigen::VectorXd difference = model.postureDifference(to, from);
+  EXPECT_NEAR(difference[0], 0.3, 1e-12) << "a bounded joint: the plain difference";
+  EXPECT_NEAR(difference[1], 0.2, 1e-9) << "two turns are no difference";
+  // Past half a turn the other way round is shorter.
+  EXPECT_NEAR(model.postureDifference(Eigen::Vector2d(0.0, 3.0), Eigen::Vector2d(0.0, -3.0))[1], 6.0 - 2.0 * std::numbers::pi, 1e-12);
+  EXPECT_NEAR(model.postureDifference(Eigen::Vector2d(3.0, 0.0), Eigen::Vector2d(-3.0, 0.0))[0], 6.0, 1e-12);
+}
+
 TEST(RobotModel, AJointWithoutAVelocityLimitGetsTheDocumentedOneInsteadOfStandingStill) {
   TempDir dir;
   std::string urdf = twoJointArm();
