@@ -29,8 +29,8 @@ struct ReachOptions {
 };
 
 Json runReach(const ReachOptions& options) {
-  std::optional<robot::Scene> scene;
-  if (!options.scene.empty()) scene = loadSceneNoting(options.scene);
+  // Without --scene the empty scene, as documented: the same table and the same free start.
+  std::optional<robot::Scene> scene = loadSceneNoting(options.scene.empty() ? std::string("empty") : options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene ? *scene : robot::Scene{});
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
   if (scene) robot::checkPosturesFit(*scene, model, robot_name);

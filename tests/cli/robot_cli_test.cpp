@@ -4,6 +4,8 @@
 
 #include <Eigen/Geometry>
 #include <numbers>
+#include <unistd.h>
+#include <filesystem>
 
 #include "cli_test_support.hpp"
 #include "robot/kinematics.hpp"
@@ -58,6 +60,31 @@ TEST(RobotCli, AcceptsNegativeFirstJointValue) {
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_TRUE(result.json()["beyond_limits"].empty());
   EXPECT_TRUE(result.err.empty()) << result.err;
+}
+
+// An arm whose mid-range posture hangs its forearm into the table: without --scene, reach starts
+// where it starts in the empty scene (the nearest free posture), not in the table.
+TEST(RobotCli, ReachWithoutASceneIsReachInTheEmptyScene) {
+  const std::filesystem::path urdf = std::filesystem::temp_directory_path() / ("flexirob-reach-hanging-" + std::to_string(::getpid()) + ".urdf");
+  testing::writeText(urdf, R"(<robot name="hanging"><link name="base"/>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="upper"/><origin xyz="0 0 0.3"/><axis xyz="0 1 0"/>
+      <limit lower="1.0" upper="3.0" velocity="2" effort="100"/></joint>
+    <link name="upper"><collision><origin xyz="0 0 0.2"/><geometry><cylinder radius="0.03" length="0.4"/></geometry></collision></link>
+    <joint name="j2" type="revolute"><parent link="upper"/><child link="fore"/><origin xyz="0 0 0.4"/><axis xyz="0 1 0"/>
+      <limit lower="-0.5" upper="0.5" velocity="2" effort="100"/></joint>
+    <link name="fore"><collision><origin xyz="0 0 0.15"/><geometry><cylinder radius="0.03" length="0.3"/></geometry></collision></link>
+    <joint name="j3" type="revolute"><parent link="fore"/><child link="hand"/><origin xyz="0 0 0.3"/><axis xyz="1 0 0"/>
+      <limit lower="-1" upper="1" velocity="2" effort="100"/></joint>
+    <link name="hand"/></robot>)");
+  const std::string target = " --target 0.6,0,0.45";
+  const auto without = runCliBinary("reach --robot " + urdf.string() + target);
+  const auto empty = runCliBinary("reach --robot " + urdf.string() + " --scene empty" + target);
+  ASSERT_EQ(without.exit_code, empty.exit_code) << without.err << empty.err;
+  const auto a = without.json(), b = empty.json();
+  EXPECT_EQ(a.at("collisions"), b.at("collisions"));
+  EXPECT_EQ(a.at("collisions"), 0) << without.out;
+  EXPECT_EQ(a.at("q"), b.at("q"));
+  std::filesystem::remove(urdf);
 }
 
 TEST(RobotCli, FkNamesJointsBeyondTheirLimitsAndStillGivesThePose) {
