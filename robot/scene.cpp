@@ -1027,6 +1027,25 @@ std::vector<std::string> sceneNotes(const Scene& scene) {
          << 1000.0 * solid->deviation() << " mm";
     notes.push_back(note.str());
   }
+  // An obstacle wholly under the table top is one no link can touch: most likely a sign slip.
+  if (scene.table) {
+    for (const Obstacle& obstacle : scene.obstacles) {
+      Eigen::Vector3d half = Eigen::Vector3d::Zero();
+      switch (obstacle.shape) {
+        case Obstacle::Shape::kBox: half = 0.5 * obstacle.size; break;
+        case Obstacle::Shape::kCylinder: half = Eigen::Vector3d(obstacle.size.x(), obstacle.size.x(), 0.5 * obstacle.size.y()); break;
+        case Obstacle::Shape::kSphere: half = Eigen::Vector3d::Constant(obstacle.size.x()); break;
+        case Obstacle::Shape::kMesh: continue;
+      }
+      // The highest corner of the box around the shape, turned as the obstacle is.
+      const double top = obstacle.X_WO.translation().z() + (obstacle.X_WO.linear().row(2).cwiseAbs() * half)(0);
+      if (top >= 0.0) continue;
+      std::ostringstream note;
+      note << std::fixed << std::setprecision(3) << "obstacle '" << obstacle.name << "' lies wholly under the table top (its top at z = "
+           << top << " m), where no link reaches: was z meant to be positive?";
+      notes.push_back(note.str());
+    }
+  }
   // No arm this tool drives reaches 20 m: places that far are most likely lengths written in
   // millimetres, which the parser cannot tell from metres.
   constexpr double kFar = 20.0;

@@ -355,6 +355,20 @@ TEST(SceneNotes, AScenePlacedTensOfMetresAwayIsNotedAsPerhapsWrittenInMillimetre
             "training area 'a' lies 707 m from the robot's base; lengths are read in metres (was the scene written in millimetres?)");
 }
 
+TEST(SceneNotes, AnObstacleWhollyUnderTheTableTopIsNotedUnlessThereIsNoTable) {
+  const std::string obstacles =
+      "obstacles:\n"
+      "  - {name: buried, shape: box, size: [0.2, 0.2, 0.1], position: [-0.5, 0, -0.1]}\n"
+      "  - {name: half_sunk, shape: box, size: [0.2, 0.2, 0.4], position: [-0.5, 0.4, -0.1]}\n"
+      "  - {name: tilted, shape: box, size: [0.2, 0.2, 0.1], position: [-0.5, -0.4, -0.1], rotation: {rpy: [0, 90, 0], unit: deg}}\n"
+      "  - {name: ball, shape: sphere, radius: 0.05, position: [0, -0.5, -0.06]}\n";
+  const std::vector<std::string> notes = sceneNotes(parseScene(obstacles, ".", "sunk"));
+  ASSERT_EQ(notes.size(), 2U);
+  EXPECT_EQ(notes[0], "obstacle 'buried' lies wholly under the table top (its top at z = -0.050 m), where no link reaches: was z meant to be positive?");
+  EXPECT_NE(notes[1].find("obstacle 'ball'"), std::string::npos) << notes[1];  // 'tilted' stands 0.2 m tall: its top at z = 0
+  EXPECT_TRUE(sceneNotes(parseScene("table: false\n" + obstacles, ".", "no_table")).empty());
+}
+
 TEST(EvaluationGrid, SpansTheThesisGridWithItsUpperBoundsIncluded) {
   EvaluationGrid grid;  // the defaults are G of Sect. 3.3.2
   grid.spacing = 0.05;
