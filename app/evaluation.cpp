@@ -772,14 +772,15 @@ PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Sce
   result.disconnected_nodes = static_cast<int>(all_nodes.size() - nodes.size());
   Eigen::VectorXd q = q_start;
   double plan_ms = 0.0;
-  int previous_goal = start_node;
   for (int g = 0; g < goals; ++g) {
-    // A goal where the arm already stands would be a move of no length, counted as a success.
-    int goal = nodes[random.index(nodes.size())];
-    while (goal == previous_goal) goal = nodes[random.index(nodes.size())];
-    previous_goal = goal;
-    const Eigen::Vector3d p_goal = graph.prototype(goal).head<3>();
     const Eigen::Vector3d p_start = robot::tipPose(model, q).translation();
+    // A goal where the tip already is (the last goal, or where a failed motion left it) would be
+    // a move of no length, counted as a success. Nodes lie e_max apart: at most one is that near.
+    int goal = nodes[random.index(nodes.size())];
+    for (int redraw = 0; redraw < 1000 && (graph.prototype(goal).head<3>() - p_start).norm() < 0.01; ++redraw) {
+      goal = nodes[random.index(nodes.size())];
+    }
+    const Eigen::Vector3d p_goal = graph.prototype(goal).head<3>();
     const auto t0 = std::chrono::steady_clock::now();
     const planning::PlannedPath path = planning::planPath(graph, p_start, p_goal);
     plan_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -995,6 +995,8 @@ TutorReport SimulatedTutor::configure(int area_count) {
     return configureAreas(area_count);
   } catch (const StopRequested&) {
     arm()->clearHandForce();
+    // A fit under way is part of what was taught: the session keeps its model.
+    workflow_->waitForLearning();
     updateReport();
     report_.interrupted = true;
     return report_;
@@ -1064,7 +1066,8 @@ TutorReport SimulatedTutor::configureAreas(int area_count) {
         // Every place drawn was near an obstacle, excluded, beyond the arm or without a free
         // posture: a person would not teach the arm just anywhere.
         area.failure = "no place of its own found: 200 random points of the evaluation grid were all within 0.1 m of an "
-                       "obstacle, in an excluded box, beyond the arm's reach or without a collision-free posture";
+                       "obstacle or of a place tried before, lower than 8 cm, in an excluded box, beyond the arm's reach or "
+                       "without a collision-free posture";
         report_.areas.push_back(area);
         break;
       }

@@ -63,8 +63,9 @@ struct TutorOptions {
   std::mutex* arm_mutex = nullptr;
   /// Progress callback (what, fraction in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
-  /// Asked after every control cycle; true ends configure() where it is (a person stopped the
-  /// run): the hands let go and the report says `interrupted`. May be empty.
+  /// Asked after every control cycle; true ends configure() or program() where it is (a person
+  /// stopped the run): the hands let go, configure()'s report says `interrupted`, program()
+  /// returns false. May be empty.
   std::function<bool()> stop_requested;
   /// Where the map's checks start (homePosture of the scene); computed when empty. A caller
   /// that has it already passes it in, as the search behind it is not free.
@@ -154,7 +155,7 @@ class SimulatedTutor {
   const TutorReport& report() const { return report_; }
 
  private:
-  /// Thrown by tick() when TutorOptions::stop_requested says so; caught by configure().
+  /// Thrown by tick() when TutorOptions::stop_requested says so; caught by configure() and program().
   struct StopRequested {};
   TutorReport configureAreas(int area_count);
   bool programWaypoints(const std::vector<Eigen::Vector3d>& waypoints);

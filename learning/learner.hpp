@@ -148,8 +148,9 @@ class UniformRandom {
   /// U[0, 1) with 53 random bits.
   double unit();
   double uniform(double low, double high) { return low + (high - low) * unit(); }
-  /// A point of the box [low, high], one draw per coordinate in order.
+  /// A point of the box [low, high) (same sizes), one draw per coordinate in order.
   Eigen::VectorXd uniform(const Eigen::VectorXd& low, const Eigen::VectorXd& high) {
+    if (high.size() != low.size()) throw std::invalid_argument("UniformRandom::uniform: bounds of different sizes");
     Eigen::VectorXd point(low.size());
     for (Eigen::Index i = 0; i < point.size(); ++i) point[i] = uniform(low[i], high[i]);
     return point;

@@ -579,9 +579,10 @@ void ReviewWindow::keyPressEvent(QKeyEvent* event) {
   }
   const bool by_second = event->modifiers().testFlag(Qt::ShiftModifier);
   const int frames_per_second = static_cast<int>(std::lround(1.0 / kFrameSeconds));
-  // A held Space would toggle playback on and off with the key's repeat; held arrows step on.
-  const bool own_key = event->key() == Qt::Key_Space || event->key() == Qt::Key_Home || event->key() == Qt::Key_End;
-  if (event->isAutoRepeat() && own_key) {
+  // A held Space would toggle playback on and off with the key's repeat, a held Home or End jump
+  // again; held arrows step on, and keys that are not the window's pass on.
+  const bool toggle_or_jump = event->key() == Qt::Key_Space || event->key() == Qt::Key_Home || event->key() == Qt::Key_End;
+  if (event->isAutoRepeat() && toggle_or_jump) {
     event->accept();
     return;
   }

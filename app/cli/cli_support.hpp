@@ -25,7 +25,7 @@ using Json = nlohmann::ordered_json;
 
 /// A command that ran but did not achieve what it is for (e.g. teach taught no area): its JSON
 /// result still goes to stdout (what happened, where the data went), the message to stderr as
-/// one line, and the exit code is 1.
+/// one line, and the exit code is 1 (128 + the signal for a run a signal stopped).
 class CommandFailed : public std::runtime_error {
  public:
   CommandFailed(const std::string& message, Json result, int exit_code = 1)

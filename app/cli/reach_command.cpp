@@ -29,11 +29,12 @@ struct ReachOptions {
 };
 
 Json runReach(const ReachOptions& options) {
-  // Without --scene the empty scene, as documented: the same table and the same free start.
-  std::optional<robot::Scene> scene = loadSceneNoting(options.scene.empty() ? std::string("empty") : options.scene);
-  const std::string robot_name = robot::robotFor(options.robot, scene ? *scene : robot::Scene{});
+  // Without --scene the empty scene (loadScene("")), as documented: the same table and the same
+  // free start as `--scene empty`.
+  const robot::Scene scene = loadSceneNoting(options.scene);
+  const std::string robot_name = robot::robotFor(options.robot, scene);
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
-  if (scene) robot::checkPosturesFit(*scene, model, robot_name);
+  robot::checkPosturesFit(scene, model, robot_name);
   const Eigen::Vector3d target = parseNumberList(options.target, "--target", 3);
   // The robot stands on the table top z = 0 (as in scene files, docs/SCENES.md): a target under
   // it could only be reached through it.
@@ -44,15 +45,15 @@ Json runReach(const ReachOptions& options) {
   }
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);
-  if (scene) parameters.applyOverrides(scene->parameters);
+  parameters.applyOverrides(scene.parameters);
 
   robot::ReachRequest request;
   request.target = target;
   if (!options.from.empty()) {
     request.start = parseNumberList(options.from, "--from", model.dof());
     model.checkWithinLimits(request.start, "--from");
-  } else if (scene) {
-    request.start = app::homePosture(model, *scene);
+  } else {
+    request.start = app::homePosture(model, scene);
   }
   if (!options.posture.empty()) {
     request.posture = parseNumberList(options.posture, "--posture", model.dof());
@@ -63,13 +64,13 @@ Json runReach(const ReachOptions& options) {
   request.tolerance = options.tolerance;
   request.max_time = options.max_time;
 
-  const robot::ReachResult result = robot::reach(model, scene ? &*scene : nullptr, parameters, request);
+  const robot::ReachResult result = robot::reach(model, &scene, parameters, request);
   Json events = Json::array();
   for (const auto& event : result.collision_events) {
     events.push_back({{"time_s", event.time}, {"link", event.link}, {"other", event.other}, {"self", event.self_collision}});
   }
   return {{"robot", model.name()},
-          {"scene", scene ? scene->name : std::string("empty")},
+          {"scene", scene.name},
           {"status", result.status},
           {"reached", result.status == "reached"},
           {"error_m", result.error_m},

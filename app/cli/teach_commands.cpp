@@ -2,6 +2,7 @@
 // writes the session through the SQLite session recorder (states at control rate, stages, triggers,
 // buttons, areas, samples, model, ITM), or as JSON when the path ends in .json.
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <chrono>
 #include <csignal>
@@ -68,15 +69,16 @@ bool endsWith(const std::string& text, const std::string& suffix) {
                     [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b)); });
 }
 
-// A recording, a scene or anything else already at --out is data a run must not destroy.
-void checkNothingIsOverwritten(const TeachOptions& options) {
+// A recording, a scene or anything else already at --out is data a run must not destroy; the
+// scene and URDF the run reads (as resolved: a built-in name, the scene's own robot) never.
+void checkNothingIsOverwritten(const TeachOptions& options, const robot::Scene& scene, const robot::RobotModel& model) {
   namespace fs = std::filesystem;
   std::error_code error;
   if (!fs::exists(options.out, error)) return;
-  for (const std::string& input : {options.scene, options.robot}) {
-    if (!input.empty() && fs::exists(input, error) && fs::equivalent(input, options.out, error)) {
-      throw InputError("--out: '" + options.out + "' is the file the run reads (" + (input == options.scene ? "--scene" : "--robot") +
-                       "); give another file");
+  const std::pair<fs::path, const char*> inputs[] = {{scene.source, "the scene"}, {model.urdfPath(), "the robot's URDF"}};
+  for (const auto& [input, what] : inputs) {
+    if (!input.empty() && fs::equivalent(input, options.out, error)) {
+      throw InputError("--out: '" + options.out + "' is " + what + " the run reads; give another file");
     }
   }
   if (!options.overwrite) {
@@ -86,23 +88,29 @@ void checkNothingIsOverwritten(const TeachOptions& options) {
 
 constexpr std::size_t kWarningsOnStderr = 20;
 
-// SIGINT or SIGTERM during a run: the tutor stops at its next control cycle and what was recorded
-// is written as usual. The handler gives the signal back its default, so a second one ends the
-// process at once.
-volatile std::sig_atomic_t g_stop_signal = 0;
+// SIGINT or SIGTERM during a run: the tutor stops at its next control cycle (after the
+// computation in hand: a fit or a posture search can take seconds) and what was recorded is
+// written as usual. The handler gives both signals back their defaults, so a second one ends the
+// process at once. Lock-free atomic: the signal may land on any of the run's threads.
+std::atomic<int> g_stop_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free);
 
 extern "C" void stopOnSignal(int signal_number) {
-  g_stop_signal = signal_number;
-  std::signal(signal_number, SIG_DFL);
+  g_stop_signal.store(signal_number);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
 }
 
-// Installs the handler for one run and puts the previous handlers back afterwards.
+// Installs the handler for one run and puts the previous handlers back afterwards. A signal the
+// caller ignores (SIGINT for a job a script started in the background) stays ignored.
 class StopOnSignal {
  public:
   StopOnSignal() {
-    g_stop_signal = 0;
+    g_stop_signal.store(0);
     previous_int_ = std::signal(SIGINT, stopOnSignal);
+    if (previous_int_ == SIG_IGN) std::signal(SIGINT, SIG_IGN);
     previous_term_ = std::signal(SIGTERM, stopOnSignal);
+    if (previous_term_ == SIG_IGN) std::signal(SIGTERM, SIG_IGN);
   }
   ~StopOnSignal() {
     std::signal(SIGINT, previous_int_);
@@ -120,13 +128,13 @@ Json runTeach(const TeachOptions& options) {
   // From the start: a signal before the tutor's first cycle stops it there.
   const StopOnSignal stop_on_signal;
   checkOutputPath("--out", options.out);
-  checkNothingIsOverwritten(options);
   // Held to the end of the run: a second teach into the same file is refused at its start.
   const app::SessionWriteLock out_lock(options.out, "--out");
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);
   const robot::Scene scene = loadSceneNoting(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene);
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
+  checkNothingIsOverwritten(options, scene, model);
   robot::checkPosturesFit(scene, model, robot_name);
   // The session names robot and scene so that they resolve from any working directory.
   const std::string robot_reference = portableReference(robot_name, builtinRobotNames());
@@ -186,7 +194,7 @@ Json runTeach(const TeachOptions& options) {
   tutor_options.posture_candidates = options.candidates;
   tutor_options.check_points = options.check_points;
   tutor_options.progress = [](const std::string& what, double fraction) { reportProgress(what, fraction); };
-  tutor_options.stop_requested = [] { return g_stop_signal != 0; };
+  tutor_options.stop_requested = [] { return g_stop_signal.load() != 0; };
   if (controller) tutor_options.arm_mutex = &controller->armMutex();  // the stand-in's thread steps the arm
 
   // The session: SQLite through the session recorder, or JSON for a path ending in .json.
@@ -426,11 +434,15 @@ Json runTeach(const TeachOptions& options) {
                  {"wall_time_s", wall_seconds},
                  {"interrupted", report.interrupted}};
   if (report.interrupted) {
-    const int signal_number = static_cast<int>(g_stop_signal);
+    const int signal_number = g_stop_signal.load();
     std::ostringstream message;
     message << "teach: stopped by " << (signal_number == SIGTERM ? "SIGTERM" : "SIGINT") << " after " << std::fixed
             << std::setprecision(1) << report.simulated_time << " s of teaching; what was recorded (" << workflow.areas().size()
             << " of " << options.areas << " areas, " << samples << " samples) was written to " << options.out;
+    if (!session_error.empty()) {
+      message << "; but the session file failed: " << session_error
+              << (session_copy.empty() ? std::string() : "; the whole session was saved to " + session_copy);
+    }
     throw CommandFailed(message.str(), std::move(result), 128 + signal_number);
   }
   if (!session_error.empty()) {
