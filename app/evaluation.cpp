@@ -281,7 +281,8 @@ ApproachFrom parseApproach(const std::string& name) {
   if (name == "start") return ApproachFrom::kStartPosture;
   if (name == "previous") return ApproachFrom::kPreviousTarget;
   if (name == "nearest") return ApproachFrom::kNearestReached;
-  throw InputError("approach: expected learned, start, previous or nearest, got '" + name + "'");
+  if (name == "visited") return ApproachFrom::kNearestVisited;
+  throw InputError("approach: expected learned, start, previous, nearest or visited, got '" + name + "'");
 }
 
 std::string approachName(ApproachFrom approach) {
@@ -289,6 +290,7 @@ std::string approachName(ApproachFrom approach) {
     case ApproachFrom::kLearnedPosture: return "learned";
     case ApproachFrom::kStartPosture: return "start";
     case ApproachFrom::kPreviousTarget: return "previous";
+    case ApproachFrom::kNearestVisited: return "visited";
     case ApproachFrom::kNearestReached: return "nearest";
   }
   return "learned";
@@ -297,7 +299,7 @@ std::string approachName(ApproachFrom approach) {
 ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::Scene& scene,
                                   const robot::ParameterSet& parameters, const learning::Learner& map,
                                   const Eigen::VectorXd& q_start, const robot::EvaluationGrid& grid,
-                                  const Eigen::MatrixXd& training_X, const ProgressCallback& progress,
+                                  const learning::TrainingSet& training, const ProgressCallback& progress,
                                   ApproachFrom approach) {
   model.checkPosture(q_start);
   robot::CollisionWorld world(model, scene);
@@ -305,8 +307,8 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   const std::vector<Eigen::Vector3d> points = grid.points();
   // Grid cells holding a training sample (explored space, Tab. 3.3).
   std::set<std::tuple<long, long, long>> explored_cells;
-  for (Eigen::Index l = 0; l < training_X.cols(); ++l) {
-    const Eigen::Vector3d cell = ((training_X.col(l) - grid.lower) / grid.spacing).array().round();
+  for (Eigen::Index l = 0; l < training.X.cols(); ++l) {
+    const Eigen::Vector3d cell = ((training.X.col(l).head<3>() - grid.lower) / grid.spacing).array().round();
     explored_cells.insert({std::lround(cell.x()), std::lround(cell.y()), std::lround(cell.z())});
   }
   ReachableResult result;
@@ -343,7 +345,8 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     targets.push_back(p);
   }
   result.targets = static_cast<int>(targets.size());
-  const bool tour = approach == ApproachFrom::kPreviousTarget || approach == ApproachFrom::kNearestReached;
+  const bool from_nearest = approach == ApproachFrom::kNearestReached || approach == ApproachFrom::kNearestVisited;
+  const bool tour = approach == ApproachFrom::kPreviousTarget || from_nearest;
   if (tour && !targets.empty()) {
     // Nearest-neighbour tour from the start posture's tip: consecutive targets one grid step
     // apart wherever the grid allows, as a person would command them.
@@ -358,7 +361,12 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     }
   }
   Eigen::VectorXd q_previous = q_start;  // kPreviousTarget: last posture reached without contact
-  std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> reached_postures;  // kNearestReached
+  // kNearestReached, kNearestVisited: tip positions with the postures the arm stood in there.
+  std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> reached_postures;
+  if (approach == ApproachFrom::kNearestVisited && training.Y.cols() == training.X.cols() &&
+      training.Y.rows() == model.dof() && training.X.rows() >= 3) {
+    for (Eigen::Index l = 0; l < training.X.cols(); ++l) reached_postures.emplace_back(training.X.col(l).head<3>(), training.Y.col(l));
+  }
   const auto nearestReachedPosture = [&](const Eigen::Vector3d& p) -> const Eigen::VectorXd& {
     const Eigen::VectorXd* best = &q_start;
     double best_distance = std::numeric_limits<double>::infinity();
@@ -377,7 +385,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     if (explored_cells.count({std::lround(cell.x()), std::lround(cell.y()), std::lround(cell.z())}) != 0) ++explored;
     const Eigen::VectorXd q_from = approach == ApproachFrom::kLearnedPosture   ? learnedPosture(model, map, p)
                                    : approach == ApproachFrom::kPreviousTarget ? q_previous
-                                   : approach == ApproachFrom::kNearestReached ? nearestReachedPosture(p)
+                                   : from_nearest                              ? nearestReachedPosture(p)
                                                                                : q_start;
     const MotionOutcome outcome = approachTarget(model, parameters, map, q_from, p, &world);
     if (outcome.collided) {
@@ -388,7 +396,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     }
     const bool reached = !outcome.collided && outcome.final_error_m <= grid.tolerance;
     if (reached) ++result.reached;
-    if (reached && approach == ApproachFrom::kNearestReached) reached_postures.emplace_back(p, outcome.q);
+    if (reached && from_nearest) reached_postures.emplace_back(p, outcome.q);
     // The resolved posture: the run above where it started at q_c(x) and met no contact (the
     // world only watches), otherwise the same run without stopping at contacts.
     if (approach == ApproachFrom::kLearnedPosture && !outcome.collided) {

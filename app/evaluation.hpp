@@ -132,8 +132,8 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
 /// Where the arm starts when the reachability evaluation commands it to a target. Sect. 3.3.2
 /// evaluates the learned map as "the inverse kinematic mapping from 3-D task-space to 7-D
 /// joint-space" and Sect. 4.2.2 stores "for each target the resulting posture"; it does not say
-/// from where each target is approached. The default, kNearestReached, starts every target from
-/// a posture the arm has stood in with its tip on a target next to it.
+/// from where each target is approached. The default, kNearestVisited, starts every target from
+/// the posture the arm has stood in with its tip nearest to it.
 enum class ApproachFrom {
   /// From the posture the learned map gives for the target, q_c(x_target) (clamped to the soft
   /// limits): the learned IK mapping evaluated at each target, independent of the order of the
@@ -151,19 +151,27 @@ enum class ApproachFrom {
   /// reached (within the tolerance, without a contact); from q_start until it has reached one.
   /// A contact costs only its own target: the arm goes on from a place next to it.
   kNearestReached,
+  /// The same tour, each target from the posture the arm stood in with its tip nearest to the
+  /// target: at a target it has reached, or at a sample of the demonstration (the tutor led the
+  /// arm there). A region that only a posture of another redundancy family reaches (setup I
+  /// behind the box, where the tutor taught the arm leaning back) is then entered from where the
+  /// tutor showed it, not swung into from the neighbouring family across the obstacle.
+  kNearestVisited,
 };
 
-/// Parses "learned", "start", "previous" or "nearest"; throws InputError otherwise.
+/// Parses "learned", "start", "previous", "nearest" or "visited"; throws InputError otherwise.
 ApproachFrom parseApproach(const std::string& name);
 std::string approachName(ApproachFrom approach);
 
 /// Sect. 3.3.2: each target of the grid is approached as `approach` says (settle time 3 s).
-/// training_X: 3 x L training inputs (for the explored fraction).
+/// training: the demonstration, tip positions X (3 x L, for the explored fraction) and postures
+/// Y (N x L, the postures kNearestVisited may start from; without them it starts only from
+/// targets reached).
 ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::Scene& scene,
                                   const robot::ParameterSet& parameters, const learning::Learner& map,
                                   const Eigen::VectorXd& q_start, const robot::EvaluationGrid& grid,
-                                  const Eigen::MatrixXd& training_X, const ProgressCallback& progress = {},
-                                  ApproachFrom approach = ApproachFrom::kNearestReached);
+                                  const learning::TrainingSet& training, const ProgressCallback& progress = {},
+                                  ApproachFrom approach = ApproachFrom::kNearestVisited);
 
 /// One goal of the planning evaluation, for pictures (Fig. 7.7, 8.4).
 struct PlannedMotion {

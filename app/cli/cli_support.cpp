@@ -203,4 +203,14 @@ int runCli(int argc, const char* const* argv) {
   }
 }
 
+CLI::Option* addApproachOption(CLI::App& command, std::string& approach) {
+  return command
+      .add_option("--approach", approach,
+                  "where the arm starts for each target: the posture it stood in with its tip nearest the target, "
+                  "at a target reached or a sample of the demonstration (visited, the default); the same without "
+                  "the demonstration (nearest); the previous target's end (previous); the home posture (start); "
+                  "the learned posture at the target (learned)")
+      ->check(CLI::IsMember({"visited", "nearest", "previous", "start", "learned"}));
+}
+
 }  // namespace flexirob::cli

@@ -117,6 +117,10 @@ robot::Scene loadSceneNoting(const std::string& name_or_path);
 robot::RobotModel loadSessionRobot(const std::string& reference, const std::string& stored_urdf, const std::string& tip);
 robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text);
 
+/// The --approach option of eval reachable, eval scene-model and sweep (app::ApproachFrom),
+/// default "visited".
+CLI::Option* addApproachOption(CLI::App& command, std::string& approach);
+
 /// Progress on stderr for long work ("what: 42%"); silent when stderr is not a terminal
 /// unless FLEXIROB_PROGRESS=1.
 void reportProgress(const std::string& what, double fraction);

@@ -243,7 +243,7 @@ struct EvalOptions {
   std::uint64_t seed = 1;
   int per_area = 25;
   double speed = 0.1;
-  std::string approach = "nearest";  ///< reachable / scene-model: where each target is approached from
+  std::string approach = "visited";  ///< reachable / scene-model: where each target is approached from
   std::string source = "auto";  ///< trajectories: the scene's, or drawn around the training data
 };
 
@@ -265,7 +265,7 @@ Json runReachable(const EvalOptions& options) {
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
   const app::ReachableResult result =
       app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
-                             session.data.X, [](double f) { reportProgress("eval reachable", f); },
+                             session.data, [](double f) { reportProgress("eval reachable", f); },
                              app::parseApproach(options.approach));
   // Without targets there is no fraction (0 of 0 is not 0 %).
   const auto fraction = [&result](double value) { return result.targets > 0 ? Json(value) : Json(nullptr); };
@@ -345,7 +345,7 @@ Json runSceneModel(const EvalOptions& options) {
   // Eq. 4.1 uses the postures the reachability evaluation ends in (Sect. 4.2.2).
   const app::ReachableResult reachable =
       app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
-                             session.data.X, [](double f) { reportProgress("eval scene-model", f); },
+                             session.data, [](double f) { reportProgress("eval scene-model", f); },
                              app::parseApproach(options.approach));
   // Without targets the reachability run ended in no posture, M is empty and every point of T
   // would count as model: the same failure as `eval reachable` on this session.
@@ -485,17 +485,13 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   reachable->add_option("--session", options->session, "session file written by teach")->required();
   reachable->add_option("--learner", options->learner, "elm, oselm or llm");
   reachable->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
-  reachable->add_option("--approach", options->approach,
-                  "targets approached from the learned posture at the target (learned), the start posture (start), the previous target (previous) or the posture at the nearest target reached (nearest, the default)")
-      ->check(CLI::IsMember({"learned", "start", "previous", "nearest"}));
+  addApproachOption(*reachable, options->approach);
   reachable->callback([&runner, options] { runner.select([options] { return runReachable(*options); }); });
   CLI::App* scene_model = eval->add_subcommand("scene-model", "implicit scene model S of Eq. 4.1 and how much of the obstacles it encloses");
   scene_model->add_option("--session", options->session, "session file written by teach")->required();
   scene_model->add_option("--learner", options->learner, "elm, oselm or llm");
   scene_model->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
-  scene_model->add_option("--approach", options->approach,
-                  "targets approached from the learned posture at the target (learned), the start posture (start), the previous target (previous) or the posture at the nearest target reached (nearest, the default)")
-      ->check(CLI::IsMember({"learned", "start", "previous", "nearest"}));
+  addApproachOption(*scene_model, options->approach);
   scene_model->callback([&runner, options] { runner.select([options] { return runSceneModel(*options); }); });
   CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
   trajectories->add_option("--session", options->session, "session file written by teach")->required();

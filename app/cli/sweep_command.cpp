@@ -33,7 +33,7 @@ struct SweepOptions {
   int seeds = 10;              ///< Tab. 3.4 network initializations
   int goals = 100;             ///< Sect. 8.3
   int max_areas = 1000;        ///< Tab. 3.3 rows with more areas are skipped
-  std::string approach = "nearest";  ///< Tab. 3.3 / 3.4: where each target is approached from
+  std::string approach = "visited";  ///< Tab. 3.3 / 3.4: where each target is approached from
   std::vector<std::string> only;     ///< Tab. 3.3 rows to run ("setup_I:4"), empty: all
   std::string markdown;        ///< markdown table file, or empty
   std::string json_out;        ///< JSON file, or empty
@@ -181,7 +181,7 @@ Json table33(const SweepOptions& options, std::ostream& md) {
     const robot::EvaluationGrid grid = app::sceneGrid(loaded.scene, options.spacing);
     const app::ReachableResult reachable =
         app::evaluateReachable(loaded.model, loaded.scene, app::sceneParameters(loaded.scene), *map, taught.home, grid,
-                               taught.data.X, [&, row = scene_name](double f) { reportProgress("Tab. 3.3 " + row, f); }, approach);
+                               taught.data, [&, row = scene_name](double f) { reportProgress("Tab. 3.3 " + row, f); }, approach);
     const app::SceneModelResult model = app::evaluateSceneModel(loaded.model, loaded.scene, grid, reachable.final_postures);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     md << "| " << scene_name << " | " << taught.areas.size() << " / " << taught.areas_given_up << " | " << taught.data.size() << " | "
@@ -236,7 +236,7 @@ Json table34(const SweepOptions& options, std::ostream& md) {
             if (elm) elm_params.epsilon = value; else llm_params.eta = value;
             const auto map = app::fitMap(data, loaded.model.dof(), kind, elm_params, llm_params);
             const app::ReachableResult result =
-                app::evaluateReachable(loaded.model, loaded.scene, parameters, *map, taught.home, grid, data.X, {},
+                app::evaluateReachable(loaded.model, loaded.scene, parameters, *map, taught.home, grid, taught.data, {},
                                        app::parseApproach(options.approach));
             collided += result.collided;
             reachable += result.reachable_fraction;
@@ -354,8 +354,7 @@ void registerSweepCommand(CLI::App& app, CommandRunner& runner) {
   sweep->add_option("--seeds", options->seeds, "Tab. 3.4 network initializations")->check(finiteRange(1, 100));
   sweep->add_option("--goals", options->goals, "Sect. 8.3 goals")->check(finiteRange(1, 10000));
   sweep->add_option("--max-areas", options->max_areas, "skip Tab. 3.3 rows with more areas")->check(finiteRange(1, 1000));
-  sweep->add_option("--approach", options->approach, "Tab. 3.3/3.4: targets approached from the learned posture at the target (learned), the home posture (start), the previous target (previous) or the posture at the nearest target reached (nearest, the default)")
-      ->check(CLI::IsMember({"learned", "start", "previous", "nearest"}));
+  addApproachOption(*sweep, options->approach);  // Tab. 3.3 and 3.4
   sweep->add_option("--only", options->only, "Tab. 3.3 rows to run, e.g. setup_I:4,setup_II:1")->delimiter(',');
   sweep->add_option("--markdown", options->markdown, "write the tables as markdown to this file");
   sweep->add_option("--json", options->json_out, "write the JSON result to this file as well");

@@ -274,9 +274,9 @@ Json runTeach(const TeachOptions& options) {
   Json checks = Json::array();
   // `from` and `to` index the taught areas ("areas" of the session), not the tutor's list of
   // attempts; the names say which they are.
-  const auto areaName = [&workflow](int index) {
-    return index >= 0 && index < static_cast<int>(workflow.areas().size()) ? workflow.areas()[static_cast<std::size_t>(index)].name
-                                                                           : std::string();
+  const auto areaName = [&workflow](int area) {
+    return area >= 0 && area < static_cast<int>(workflow.areas().size()) ? workflow.areas()[static_cast<std::size_t>(area)].name
+                                                                         : std::string();
   };
   for (const auto& check : workflow.transitionChecks()) {
     checks.push_back({{"from", check.from},

@@ -295,7 +295,9 @@ TEST(Evaluation, ExploredFractionCountsCellsHoldingSamples) {
   // Samples near (within a third of a cell of) the first three points.
   Eigen::MatrixXd X(3, 3);
   for (int i = 0; i < 3; ++i) X.col(i) = points[static_cast<std::size_t>(i)] + Eigen::Vector3d::Constant(0.03);
-  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, X);
+  learning::TrainingSet samples;
+  samples.X = X;
+  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, samples);
   EXPECT_EQ(result.grid_points, 6);
   EXPECT_EQ(result.targets, 6);  // all within reach, no obstacles
   EXPECT_DOUBLE_EQ(result.explored_fraction, 0.5);
@@ -310,7 +312,7 @@ TEST(Evaluation, ExcludedBoxesOfTheGridHoldNoTargets) {
   robot::EvaluationGrid grid = gridInFront(0.2);
   // Holds the two points with y = 0.2 (on its boundary) and none other.
   grid.excluded.emplace_back(Eigen::Vector3d(-0.7, 0.2, 0.2), Eigen::Vector3d(-0.3, 0.5, 0.4));
-  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
+  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, learning::TrainingSet{});
   EXPECT_EQ(result.grid_points, 6);
   EXPECT_EQ(result.excluded, 2);
   EXPECT_EQ(result.targets, 4);
@@ -342,8 +344,8 @@ TEST(Evaluation, GridPointsInsideAMeshObstacleAreNoTargetsAsInItsBoxTwin) {
   robot::Scene box_scene, mesh_scene;
   box_scene.obstacles = {box};
   mesh_scene.obstacles = {mesh};
-  const ReachableResult with_box = evaluateReachable(lwr4(), box_scene, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
-  const ReachableResult with_mesh = evaluateReachable(lwr4(), mesh_scene, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
+  const ReachableResult with_box = evaluateReachable(lwr4(), box_scene, s.parameters, *map, ready(), grid, learning::TrainingSet{});
+  const ReachableResult with_mesh = evaluateReachable(lwr4(), mesh_scene, s.parameters, *map, ready(), grid, learning::TrainingSet{});
   std::filesystem::remove(cube_file);
   EXPECT_EQ(with_box.in_obstacles, 2);
   EXPECT_EQ(with_mesh.in_obstacles, 2);
@@ -362,7 +364,7 @@ TEST(Evaluation, PointsNoPostureReachesAreNoTargetsInAnEmptySceneEither) {
   grid.upper = Eigen::Vector3d(-0.1, 0.0, 0.1);
   grid.spacing = 0.4;
   ASSERT_EQ(grid.points().size(), 2U);
-  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
+  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, learning::TrainingSet{});
   EXPECT_EQ(result.inaccessible, 1);  // (-0.1, 0, 0.1): the base's own housing
   ASSERT_EQ(result.target_points.size(), 1U);
   EXPECT_TRUE(result.target_points[0].isApprox(Eigen::Vector3d(-0.5, 0.0, 0.1)));
@@ -418,7 +420,7 @@ TEST(Evaluation, ReachabilityStartsEachTargetInTheLearnedPostureUnlessAskedForTh
   grid.lower = grid.upper = target;
   grid.spacing = 0.1;
   // From the learned posture q_c(target) the arm is already there: reached, no contact.
-  const ReachableResult learned = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0), {},
+  const ReachableResult learned = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, learning::TrainingSet{}, {},
                                                     ApproachFrom::kLearnedPosture);
   ASSERT_EQ(learned.targets, 1);
   EXPECT_EQ(learned.reached, 1);
@@ -426,7 +428,7 @@ TEST(Evaluation, ReachabilityStartsEachTargetInTheLearnedPostureUnlessAskedForTh
   ASSERT_EQ(learned.final_postures.size(), 1U);
   EXPECT_LT((learned.final_postures[0] - q_target).norm(), 0.05);
   // From the start posture the tip runs into the box on its way: a collision on the way counts.
-  const ReachableResult from_start = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0),
+  const ReachableResult from_start = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, learning::TrainingSet{},
                                                        {}, ApproachFrom::kStartPosture);
   ASSERT_EQ(from_start.targets, 1);
   EXPECT_EQ(from_start.collided, 1);
@@ -461,7 +463,7 @@ TEST(Evaluation, ResolvedPostureIsJudgedWhereTheArmEndsNotOnTheWayThere) {
   robot::EvaluationGrid grid;
   grid.lower = grid.upper = target;
   grid.spacing = 0.1;
-  const ReachableResult result = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0), {},
+  const ReachableResult result = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, learning::TrainingSet{}, {},
                                                    ApproachFrom::kLearnedPosture);
   ASSERT_EQ(result.targets, 1);
   EXPECT_EQ(result.collided, 1);
@@ -479,7 +481,7 @@ TEST(Evaluation, ReachabilityFromThePreviousTargetVisitsNeighboursInTurn) {
   const auto map = constantMap();
   robot::Scene empty;
   const robot::EvaluationGrid grid = gridInFront(0.1);
-  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0), {},
+  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, learning::TrainingSet{}, {},
                                                    ApproachFrom::kPreviousTarget);
   ASSERT_EQ(result.targets, 15);
   EXPECT_EQ(result.reached, 15);
@@ -499,10 +501,11 @@ TEST(Evaluation, ReachabilityFromTheNearestReachedTargetStartsWhereTheArmStoodNe
   const auto map = constantMap();
   robot::Scene empty;
   const robot::EvaluationGrid grid = gridInFront(0.1);
-  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, Eigen::MatrixXd(3, 0));
+  const ReachableResult result = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, learning::TrainingSet{},
+                                                   {}, ApproachFrom::kNearestReached);
   ASSERT_EQ(result.targets, 15);
   ASSERT_EQ(result.reached, 15);
-  // The default protocol: the first target from the start posture, every later one from the
+  // The first target from the start posture, every later one from the
   // final posture at the nearest target reached before it; at the tour's jumps that is not the
   // target visited last.
   const auto& points = result.target_points;
@@ -520,7 +523,57 @@ TEST(Evaluation, ReachabilityFromTheNearestReachedTargetStartsWhereTheArmStoodNe
   EXPECT_GE(jumps, 1);
 }
 
+// The default protocol also starts from the demonstration: the posture of the sample whose tip
+// lies nearest the target. Here the start posture touches a box, so a target approached from it
+// fails at the first check, and one approached from the posture the tutor showed next to it
+// does not.
+TEST(Evaluation, ReachabilityStartsFromTheNearestPostureOfTheDemonstration) {
+  Parameters s;
+  robot::Scene scene;
+  robot::Obstacle box;
+  box.name = "box";
+  box.size = Eigen::Vector3d(0.05, 0.05, 0.05);
+  box.X_WO.translation() = robot::tipPose(lwr4(), ready()).translation();
+  scene.obstacles.push_back(box);
+  Eigen::VectorXd shown = ready();
+  shown[0] += 0.6;
+  Eigen::VectorXd elsewhere = ready();
+  elsewhere[0] -= 0.6;
+  learning::TrainingSet demonstration;
+  demonstration.X.resize(3, 2);
+  demonstration.Y.resize(7, 2);
+  demonstration.X.col(0) = robot::tipPose(lwr4(), elsewhere).translation();
+  demonstration.Y.col(0) = elsewhere;
+  demonstration.X.col(1) = robot::tipPose(lwr4(), shown).translation();
+  demonstration.Y.col(1) = shown;
+  robot::EvaluationGrid grid;
+  grid.lower = grid.upper = demonstration.X.col(1) + Eigen::Vector3d(0.0, 0.0, 0.03);
+  grid.spacing = 0.1;
+  const auto map = mapOf(shown, grid.lower);
+  robot::CollisionWorld world(lwr4(), scene);
+  world.update(shown);
+  ASSERT_TRUE(world.contacts().empty()) << "the shown posture must be free for this test";
+
+  const ReachableResult visited = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, demonstration);
+  ASSERT_EQ(visited.targets, 1);
+  EXPECT_EQ(visited.reached, 1);
+  EXPECT_EQ(visited.final_postures[0], approachTarget(lwr4(), s.parameters, *map, shown, grid.lower, nullptr).q);
+  // Without the demonstration's postures, or with `nearest`, the target starts at the start
+  // posture, in the box.
+  learning::TrainingSet positions_only;
+  positions_only.X = demonstration.X;
+  const ReachableResult without_postures = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, positions_only);
+  EXPECT_EQ(without_postures.reached, 0);
+  EXPECT_EQ(without_postures.collided, 1);
+  const ReachableResult nearest =
+      evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, demonstration, {}, ApproachFrom::kNearestReached);
+  EXPECT_EQ(nearest.reached, 0);
+  EXPECT_EQ(nearest.collided, 1);
+}
+
 TEST(Evaluation, ApproachNamesParseAndUnknownOnesAreRefused) {
+  EXPECT_EQ(parseApproach("visited"), ApproachFrom::kNearestVisited);
+  EXPECT_EQ(approachName(ApproachFrom::kNearestVisited), "visited");
   EXPECT_EQ(parseApproach("nearest"), ApproachFrom::kNearestReached);
   EXPECT_EQ(approachName(ApproachFrom::kNearestReached), "nearest");
   EXPECT_EQ(parseApproach("learned"), ApproachFrom::kLearnedPosture);

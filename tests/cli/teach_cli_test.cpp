@@ -226,8 +226,8 @@ TEST(TeachCli, TeachesTheScenesRobotAndTheSessionResolvesFromAnyFolder) {
   EXPECT_EQ(fs::path(session.at("scene").get<std::string>()), fs::absolute(scene).lexically_normal());
   const auto reachable = runCliBinary("eval reachable --spacing 0.3 --session " + out.string());
   EXPECT_EQ(reachable.exit_code, 0) << reachable.err;
-  // Each target from the posture at the nearest target reached, unless told otherwise.
-  EXPECT_EQ(nlohmann::json::parse(reachable.out).at("approach"), "nearest");
+  // Each target from the nearest posture the arm stood in (a target reached, a sample), unless told otherwise.
+  EXPECT_EQ(nlohmann::json::parse(reachable.out).at("approach"), "visited");
   fs::remove(out);
   fs::remove(scene);
 }

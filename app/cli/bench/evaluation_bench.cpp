@@ -48,7 +48,7 @@ void reachableWorkspaceSetupI(benchmark::State& state, double spacing) {
   double seconds = 0.0;
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
-    result = app::evaluateReachable(model, scene, parameters, elm, home, grid, data.X);
+    result = app::evaluateReachable(model, scene, parameters, elm, home, grid, data);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     benchmark::DoNotOptimize(result.reached);
   }
