@@ -399,13 +399,16 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     if (reached && from_nearest) reached_postures.emplace_back(p, outcome.q);
     // The resolved posture: the run above where it started at q_c(x) and met no contact (the
     // world only watches), otherwise the same run without stopping at contacts.
+    bool resolved_free = false;
     if (approach == ApproachFrom::kLearnedPosture && !outcome.collided) {
-      if (reached) ++result.resolved_free;
+      resolved_free = reached;
     } else {
       const MotionOutcome resolved = approachTarget(model, parameters, map, learnedPosture(model, map, p), p, nullptr);
       world.update(resolved.q);
-      if (world.contacts().empty() && resolved.final_error_m <= grid.tolerance) ++result.resolved_free;
+      resolved_free = world.contacts().empty() && resolved.final_error_m <= grid.tolerance;
     }
+    if (resolved_free) ++result.resolved_free;
+    result.target_resolved_free.push_back(resolved_free);
     result.target_points.push_back(p);
     result.target_reached.push_back(reached);
     result.final_postures.push_back(outcome.q);

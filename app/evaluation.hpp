@@ -118,6 +118,7 @@ struct ReachableResult {
   std::map<std::string, int> contacts;         ///< collided targets per first contact "body/other"
   std::vector<Eigen::Vector3d> target_points;  ///< T
   std::vector<bool> target_reached;           ///< per target of T
+  std::vector<bool> target_resolved_free;     ///< per target of T: counted in resolved_free
   std::vector<Eigen::VectorXd> final_postures; ///< per target of T: where the arm ended [rad]
 };
 

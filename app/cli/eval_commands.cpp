@@ -289,7 +289,8 @@ Json runReachable(const EvalOptions& options) {
                {"contacts", result.contacts},
                {"approach", options.approach},
                {"target_points", pointsJson(result.target_points)},
-               {"target_reached", result.target_reached}};
+               {"target_reached", result.target_reached},
+               {"target_resolved_free", result.target_resolved_free}};
   // The scene's single targets, each from the taught posture of the area whose sample lies
   // nearest it (the start posture without samples): reached within the grid's tolerance without
   // a contact on the way.

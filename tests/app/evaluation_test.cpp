@@ -469,6 +469,8 @@ TEST(Evaluation, ResolvedPostureIsJudgedWhereTheArmEndsNotOnTheWayThere) {
   EXPECT_EQ(result.collided, 1);
   EXPECT_EQ(result.reached, 0);
   EXPECT_EQ(result.resolved_free, 1);
+  EXPECT_EQ(result.target_resolved_free, std::vector<bool>{true});
+  EXPECT_EQ(result.target_reached, std::vector<bool>{false});
   // Where the arm ends: tip on the target, no contact.
   const MotionOutcome resolved = approachTarget(lwr4(), s.parameters, *map, ready(), target, nullptr);
   EXPECT_LT(resolved.final_error_m, 0.01);
