@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #include "robot/errors.hpp"
 #include "robot/mesh.hpp"
@@ -398,10 +399,14 @@ struct ClosestCollector : btCollisionWorld::ContactResultCallback {
 }  // namespace
 
 const std::vector<Contact>& CollisionWorld::contacts() {
-  // Cached pair algorithms and manifolds make repeated queries cheap.
+  // Cached pair algorithms make repeated queries cheap. Their persistent manifolds would carry
+  // contact points of earlier postures into this one (Bullet refreshes a kept point by its old
+  // normal), so a marginal contact would depend on what was asked before: each query starts
+  // from empty manifolds.
+  btDispatcher& dispatcher = *impl_->world.getDispatcher();
+  for (int m = 0; m < dispatcher.getNumManifolds(); ++m) dispatcher.getManifoldByIndexInternal(m)->clearManifold();
   impl_->world.performDiscreteCollisionDetection();
   impl_->contacts.clear();
-  btDispatcher& dispatcher = *impl_->world.getDispatcher();
   for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
     const btPersistentManifold* manifold = dispatcher.getManifoldByIndexInternal(m);
     int deepest = -1;
@@ -438,6 +443,11 @@ const std::vector<Contact>& CollisionWorld::contacts() {
     }
     if (!merged) impl_->contacts.push_back(contact);
   }
+  // The manifolds' order is that in which the broadphase met the pairs, i.e. history; the
+  // deepest contact first is the one worth naming (a tie: the lower link, then the obstacle).
+  std::sort(impl_->contacts.begin(), impl_->contacts.end(), [](const Contact& a, const Contact& b) {
+    return std::tie(b.depth, a.body, a.obstacle, a.other_body) < std::tie(a.depth, b.body, b.obstacle, b.other_body);
+  });
   return impl_->contacts;
 }
 

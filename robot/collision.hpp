@@ -72,7 +72,8 @@ class CollisionWorld {
 
   /// Places the links at posture q (radians). Does not allocate after the first call.
   void update(const Eigen::VectorXd& q);
-  /// Every touching pair at the current posture (reuses its storage; a pair appears once).
+  /// Every touching pair at the current posture, the deepest first (reuses its storage; a pair
+  /// appears once). Depends on the posture alone, not on the postures queried before.
   const std::vector<Contact>& contacts();
   /// Closest robot–obstacle distance, searched up to max_distance [m].
   Clearance clearance(double max_distance = 1.0);

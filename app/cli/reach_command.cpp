@@ -3,7 +3,6 @@
 // clamps (DESIGN §6).
 #include <cmath>
 #include <memory>
-#include <optional>
 #include <sstream>
 
 #include "app/cli/cli_support.hpp"

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -12,6 +13,7 @@
 #include "robot/controllers.hpp"
 #include "robot/mesh_solid.hpp"
 #include "robot/resources.hpp"
+#include "robot/scene.hpp"
 #include "robot/sim/simulation.hpp"
 #include "test_urdf.hpp"
 
@@ -321,6 +323,49 @@ TEST(CollisionWorld, TheLwr4LowersItsFlangeIntoTheTableAndNotBefore) {
     }
     EXPECT_EQ(flange_on_table, flange_below);
   }
+}
+
+// A query answers for the posture given, whatever the world was asked before: postures near
+// setup II's boxes, queried one after another, get the contacts a fresh world finds for each.
+TEST(CollisionWorld, ContactsDependOnThePostureAloneNotOnThePosturesQueriedBefore) {
+  const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  const Scene scene = loadScene("setup_II");
+  CollisionWorld queried_in_turn(model, scene);
+  Eigen::VectorXd between_the_boxes(7);
+  between_the_boxes << 0.0, 0.6, 0.0, -1.6, 0.0, 0.9, 0.0;
+  std::mt19937_64 bits(3);
+  std::normal_distribution<double> step(0.0, 0.25);
+  const auto expectSameContacts = [&](const Eigen::VectorXd& q) {
+    queried_in_turn.update(q);
+    const std::vector<Contact> in_turn = queried_in_turn.contacts();
+    CollisionWorld fresh(model, scene);
+    fresh.update(q);
+    const std::vector<Contact>& alone = fresh.contacts();
+    ASSERT_EQ(in_turn.size(), alone.size());
+    for (std::size_t c = 0; c < alone.size(); ++c) {
+      EXPECT_EQ(in_turn[c].body, alone[c].body);
+      EXPECT_EQ(in_turn[c].obstacle, alone[c].obstacle);
+      EXPECT_NEAR(in_turn[c].depth, alone[c].depth, 1e-9);
+      if (c > 0) EXPECT_GE(alone[c - 1].depth, alone[c].depth) << "the deepest contact first";
+    }
+  };
+  int in_contact = 0;
+  for (int k = 0; k < 60; ++k) {
+    SCOPED_TRACE(k);
+    Eigen::VectorXd q = between_the_boxes;
+    for (int j = 0; j < 7; ++j) q[j] += step(bits);
+    q = q.cwiseMax(model.softLowerLimits()).cwiseMin(model.softUpperLimits());
+    expectSameContacts(q);
+    // Again after a move of a few millimetres, where contact points of the posture before
+    // would still lie within Bullet's breaking distance.
+    expectSameContacts(q + Eigen::VectorXd::Constant(7, 0.01));
+    CollisionWorld fresh(model, scene);
+    fresh.update(q);
+    in_contact += fresh.contacts().empty() ? 0 : 1;
+  }
+  // Both kinds of posture were asked.
+  EXPECT_GT(in_contact, 5);
+  EXPECT_LT(in_contact, 55);
 }
 
 TEST(CollisionWorld, ReportsSelfCollisionButNeverAdjacentLinks) {
