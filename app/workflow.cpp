@@ -674,9 +674,13 @@ void Workflow::collectLearning() {
   checks_ = std::move(result->checks);
   for (const auto& check : checks_) {
     std::ostringstream line;
-    line << areas_[static_cast<std::size_t>(check.from)].name << " -> " << areas_[static_cast<std::size_t>(check.to)].name
+    const std::string& from_name = areas_[static_cast<std::size_t>(check.from)].name;
+    line << std::fixed << std::setprecision(1) << from_name << " -> " << areas_[static_cast<std::size_t>(check.to)].name
          << ": mean error " << check.mean_error_m * 1e3 << " mm, max " << check.max_error_m * 1e3 << " mm, posture error "
-         << check.posture_error_rad << " rad, colliding samples " << check.colliding_samples;
+         << std::setprecision(2) << check.posture_error_rad << " rad, colliding samples " << check.colliding_samples;
+    if (!check.first_contact.empty()) {
+      line << " (first " << check.first_contact << ", " << check.first_contact_along_m << " m from " << from_name << ")";
+    }
     emit(check.ok ? WorkflowEvent::Kind::kCheck : WorkflowEvent::Kind::kWarning,
          check.ok ? "transition_ok" : "transition_inconsistent", line.str(), check.to);
   }
@@ -713,6 +717,8 @@ TransitionCheck checkTransition(const robot::RobotModel& model, const robot::Par
   check.final_error_m = motion.final_error_m;
   check.posture_error_rad = model.postureDifference(motion.q, to.q_fixed).norm();
   check.colliding_samples = world != nullptr ? motion.colliding_checks : -1;
+  check.first_contact = motion.contact;
+  if (motion.collided) check.first_contact_along_m = std::min(motion.contact_time, duration) * speed;
   check.ok = check.colliding_samples <= 0 && check.final_error_m <= tolerance && check.max_error_m <= 5.0 * tolerance;
   return check;
 }

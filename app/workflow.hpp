@@ -108,6 +108,8 @@ struct TransitionCheck {
   double final_error_m = 0.0;
   double posture_error_rad = 0.0;  ///< |q_end − q_fixed(to)| at the goal
   int colliding_samples = 0;   ///< samples (every 10 ms) in contact; -1 without a scene
+  std::string first_contact;   ///< "link/obstacle" of the first contact (empty without one)
+  double first_contact_along_m = 0.0;  ///< how far along the line from `from` it happened [m]
   bool ok = false;
 };
 

@@ -288,6 +288,8 @@ Json runTeach(const TeachOptions& options) {
                       {"final_error_m", check.final_error_m},
                       {"posture_error_rad", check.posture_error_rad},
                       {"colliding_samples", check.colliding_samples},
+                      {"first_contact", check.first_contact},
+                      {"first_contact_along_m", check.first_contact_along_m},
                       {"ok", check.ok}});
   }
   Json tutor_areas = Json::array();

@@ -6,6 +6,8 @@
 #include <filesystem>
 
 #include "app/workflow.hpp"
+#include "robot/collision.hpp"
+#include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/sim/reach.hpp"
@@ -367,6 +369,49 @@ TEST(Workflow, ANarrowRotaryJointIsNearItsLimitWithinATenthOfItsRangeAndSaysWher
   const std::vector<std::string> at_end = warningsFor(0.1);
   ASSERT_EQ(at_end.size(), 1U);
   EXPECT_NE(at_end[0].find("joint 3 (wrist) is at its limit"), std::string::npos) << at_end[0];
+}
+
+// The tutor's feedback on a transition names what the arm hit and where along the line: a box
+// on the line between two areas, the map giving each area's posture.
+TEST(Workflow, ATransitionCheckNamesItsFirstContactAndWhereAlongTheLine) {
+  Fixture f;
+  TrainingArea from, to;
+  from.name = "A";
+  from.q_fixed = posture(-0.5);
+  to.name = "B";
+  to.q_fixed = posture(0.5);
+  const Eigen::Vector3d start = robot::tipPose(lwr4(), from.q_fixed).translation();
+  to.centre = robot::tipPose(lwr4(), to.q_fixed).translation();
+  learning::TrainingSet data;
+  data.X.resize(3, 2);
+  data.Y.resize(7, 2);
+  data.X << start, to.centre;
+  data.Y << from.q_fixed, to.q_fixed;
+  WorkflowOptions options;
+  const auto map = makeLearner(options, 7);
+  map->fit(data);
+  robot::Scene scene;
+  robot::Obstacle box;
+  box.name = "box";
+  box.size = Eigen::Vector3d::Constant(0.1);
+  box.X_WO.translation() = 0.5 * (start + to.centre);
+  scene.obstacles.push_back(box);
+  robot::CollisionWorld world(lwr4(), scene);
+  const double speed = 0.1;
+  const TransitionCheck blocked = checkTransition(lwr4(), f.parameters, *map, from, to, 0, 1, &world, speed, 0.01);
+  EXPECT_FALSE(blocked.ok);
+  EXPECT_GT(blocked.colliding_samples, 0);
+  ASSERT_FALSE(blocked.first_contact.empty());
+  EXPECT_EQ(blocked.first_contact.substr(blocked.first_contact.find('/')), "/box") << blocked.first_contact;
+  // At the latest where the tip enters the box (0.05 m before its centre), 10 ms of motion late.
+  EXPECT_GT(blocked.first_contact_along_m, 0.0);
+  EXPECT_LE(blocked.first_contact_along_m, 0.5 * (to.centre - start).norm() - 0.05 + 0.01 * speed + 1e-9);
+
+  robot::CollisionWorld empty(lwr4(), robot::Scene{});
+  const TransitionCheck free = checkTransition(lwr4(), f.parameters, *map, from, to, 0, 1, &empty, speed, 0.01);
+  EXPECT_EQ(free.colliding_samples, 0);
+  EXPECT_TRUE(free.first_contact.empty());
+  EXPECT_EQ(free.first_contact_along_m, 0.0);
 }
 
 TEST(Workflow, OnlineOsElmLearnsDuringRecording) {
