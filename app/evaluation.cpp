@@ -302,6 +302,17 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
                                   const learning::TrainingSet& training, const ProgressCallback& progress,
                                   ApproachFrom approach) {
   model.checkPosture(q_start);
+  if (training.size() > 0 && training.X.rows() < 3) {
+    throw InputError("reachability: the demonstration's inputs have " + std::to_string(training.X.rows()) +
+                     " rows, not a tip position");
+  }
+  // The postures kNearestVisited starts from; a demonstration without postures has none.
+  const bool start_from_samples = approach == ApproachFrom::kNearestVisited && training.Y.size() > 0;
+  if (start_from_samples && (training.Y.cols() != training.X.cols() || training.Y.rows() != model.dof())) {
+    throw InputError("reachability: the demonstration has " + std::to_string(training.Y.rows()) + " x " +
+                     std::to_string(training.Y.cols()) + " postures for " + std::to_string(training.X.cols()) +
+                     " positions of a robot with " + std::to_string(model.dof()) + " joints");
+  }
   robot::CollisionWorld world(model, scene);
   const ArmReach arm_reach = armReach(model);
   const std::vector<Eigen::Vector3d> points = grid.points();
@@ -363,9 +374,12 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   Eigen::VectorXd q_previous = q_start;  // kPreviousTarget: last posture reached without contact
   // kNearestReached, kNearestVisited: tip positions with the postures the arm stood in there.
   std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> reached_postures;
-  if (approach == ApproachFrom::kNearestVisited && training.Y.cols() == training.X.cols() &&
-      training.Y.rows() == model.dof() && training.X.rows() >= 3) {
-    for (Eigen::Index l = 0; l < training.X.cols(); ++l) reached_postures.emplace_back(training.X.col(l).head<3>(), training.Y.col(l));
+  if (start_from_samples) {
+    for (Eigen::Index l = 0; l < training.X.cols(); ++l) {
+      // Clamped as the learned posture is: a recorded posture may sit a hair beyond a soft limit.
+      const Eigen::VectorXd q = training.Y.col(l).cwiseMax(model.softLowerLimits()).cwiseMin(model.softUpperLimits());
+      if (training.X.col(l).head<3>().allFinite() && q.allFinite()) reached_postures.emplace_back(training.X.col(l).head<3>(), q);
+    }
   }
   const auto nearestReachedPosture = [&](const Eigen::Vector3d& p) -> const Eigen::VectorXd& {
     const Eigen::VectorXd* best = &q_start;

@@ -539,15 +539,20 @@ TEST(Evaluation, ReachabilityStartsFromTheNearestPostureOfTheDemonstration) {
   scene.obstacles.push_back(box);
   Eigen::VectorXd shown = ready();
   shown[0] += 0.6;
+  // The shown posture between two farther ones, so that neither the first nor the last sample
+  // is the nearest.
   Eigen::VectorXd elsewhere = ready();
   elsewhere[0] -= 0.6;
+  Eigen::VectorXd farther = shown;
+  farther[0] += 0.5;
   learning::TrainingSet demonstration;
-  demonstration.X.resize(3, 2);
-  demonstration.Y.resize(7, 2);
-  demonstration.X.col(0) = robot::tipPose(lwr4(), elsewhere).translation();
-  demonstration.Y.col(0) = elsewhere;
-  demonstration.X.col(1) = robot::tipPose(lwr4(), shown).translation();
-  demonstration.Y.col(1) = shown;
+  demonstration.X.resize(3, 3);
+  demonstration.Y.resize(7, 3);
+  const std::vector<Eigen::VectorXd> postures{elsewhere, shown, farther};
+  for (Eigen::Index l = 0; l < 3; ++l) {
+    demonstration.X.col(l) = robot::tipPose(lwr4(), postures[static_cast<std::size_t>(l)]).translation();
+    demonstration.Y.col(l) = postures[static_cast<std::size_t>(l)];
+  }
   robot::EvaluationGrid grid;
   grid.lower = grid.upper = demonstration.X.col(1) + Eigen::Vector3d(0.0, 0.0, 0.03);
   grid.spacing = 0.1;
@@ -571,6 +576,13 @@ TEST(Evaluation, ReachabilityStartsFromTheNearestPostureOfTheDemonstration) {
       evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, demonstration, {}, ApproachFrom::kNearestReached);
   EXPECT_EQ(nearest.reached, 0);
   EXPECT_EQ(nearest.collided, 1);
+  // Postures that do not fit the positions or the robot are refused, not silently ignored.
+  learning::TrainingSet mismatched = demonstration;
+  mismatched.Y.conservativeResize(6, Eigen::NoChange);
+  EXPECT_THROW(evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, mismatched), InputError);
+  mismatched = demonstration;
+  mismatched.Y.conservativeResize(Eigen::NoChange, 2);
+  EXPECT_THROW(evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, mismatched), InputError);
 }
 
 TEST(Evaluation, ApproachNamesParseAndUnknownOnesAreRefused) {
