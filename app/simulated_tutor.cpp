@@ -300,6 +300,13 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planRetreat(const Eigen::VectorXd& 
   Eigen::VectorXd q = from.cwiseMax(lower).cwiseMin(upper);
   double clearance = signedClearance(q);
   Eigen::VectorXd gradient(dof), probe(dof);
+  // Where the climb stalls short of the margin (the nearest pair changes, and every step along
+  // the gradient ends lower), an arm already out of every contact is free: the way on may leave
+  // a start nearer than its margin (planApproach).
+  const auto outOrNothing = [&]() -> std::vector<Eigen::VectorXd> {
+    if (clearance > 0.0 && path.size() > 1 && postureFree(q, 0.0)) return path;
+    return {};
+  };
   for (int it = 0; it < 150; ++it) {
     if (clearance >= margin && postureFree(q, margin)) return path;
     for (int j = 0; j < dof; ++j) {
@@ -310,7 +317,7 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planRetreat(const Eigen::VectorXd& 
       const double down = signedClearance(probe);
       gradient[j] = (up - down) / std::max(1e-9, std::min(q[j] + kProbe, upper[j]) - std::max(q[j] - kProbe, lower[j]));
     }
-    if (gradient.cwiseAbs().maxCoeff() < 1e-6) return {};
+    if (gradient.cwiseAbs().maxCoeff() < 1e-6) return outOrNothing();
     // The step shrinks until the clearance grows at its end and nowhere on it falls (looked at
     // every quarter): the nearest pairs may change on the way.
     bool improved = false;
@@ -325,10 +332,10 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planRetreat(const Eigen::VectorXd& 
         clearance = next;
       }
     }
-    if (!improved) return {};
+    if (!improved) return outOrNothing();
     path.push_back(q);
   }
-  return {};
+  return outOrNothing();
 }
 
 std::vector<Eigen::VectorXd> SimulatedTutor::planWay(const Eigen::VectorXd& from, const Eigen::VectorXd& to) {

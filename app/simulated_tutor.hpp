@@ -196,7 +196,8 @@ class SimulatedTutor {
   /// than straight through it; empty if none was found.
   std::vector<Eigen::VectorXd> planApproach(const Eigen::VectorXd& from, const Eigen::VectorXd& to, double margin);
   /// Small joint steps from a posture in contact up the gradient of signedClearance until it
-  /// keeps `margin` [m]; empty if it cannot get out (a stationary point, or the joint limits).
+  /// keeps `margin` [m], or, where the climb stalls short of it, until it is out of every
+  /// contact; empty if it cannot get out (a stationary point in contact, or the joint limits).
   std::vector<Eigen::VectorXd> planRetreat(const Eigen::VectorXd& from, double margin);
   /// Out of contact, the smaller of the obstacle and the link-to-link clearance at q (links at
   /// least 3 apart, as postureFree), at most 0.2 m; in contact, minus the summed penetration
