@@ -1046,6 +1046,17 @@ std::vector<std::string> sceneNotes(const Scene& scene) {
       notes.push_back(note.str());
     }
   }
+  // A single evaluation target inside an obstacle can never be reached: say so once here
+  // rather than let `eval reachable` report it as a failed target of the learned map.
+  for (std::size_t i = 0; i < scene.targets.size(); ++i) {
+    const Obstacle* inside = obstacleAt(scene, scene.targets[i]);
+    if (inside == nullptr) continue;
+    std::ostringstream note;
+    const Eigen::Vector3d& p = scene.targets[i];
+    note << std::fixed << std::setprecision(3) << "targets[" << i << "] (" << p.x() << ", " << p.y() << ", " << p.z()
+         << ") m lies inside obstacle '" << inside->name << "': no posture reaches it";
+    notes.push_back(note.str());
+  }
   // No arm this tool drives reaches 20 m: places that far are most likely lengths written in
   // millimetres, which the parser cannot tell from metres.
   constexpr double kFar = 20.0;

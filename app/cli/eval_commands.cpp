@@ -308,10 +308,12 @@ Json runReachable(const EvalOptions& options) {
     const app::MotionOutcome outcome = app::approachTarget(*session.model, parameters, *learner, q_start, target, &world);
     const bool reached = !outcome.collided && outcome.final_error_m <= grid.tolerance;
     scene_targets_reached += reached ? 1 : 0;
+    const robot::Obstacle* inside = robot::obstacleAt(session.scene_data, target);
     scene_targets.push_back({{"target_m", {target.x(), target.y(), target.z()}},
                              {"reached", reached},
                              {"error_m", outcome.final_error_m},
-                             {"contact", outcome.contact}});
+                             {"contact", outcome.contact},
+                             {"inside_obstacle", inside != nullptr ? Json(inside->name) : Json(nullptr)}});
   }
   json["scene_targets"] = scene_targets;
   json["scene_targets_reached"] = scene_targets_reached;

@@ -170,7 +170,8 @@ TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   const Eigen::Vector3d taught = robot::tipPose(model, tinySessionPostures().front()).translation();
   const auto scene = scratchDir() / "single_targets.yaml";
   std::ostringstream text;
-  text << "name: single_targets\ntargets: [[" << taught.x() << ", " << taught.y() << ", " << taught.z() << "], [-3.0, 0.0, 0.3]]\n";
+  text << "name: single_targets\ntargets: [[" << taught.x() << ", " << taught.y() << ", " << taught.z() << "], [-3.0, 0.0, 0.3]]\n"
+       << "obstacles:\n  - {name: far_box, shape: box, size: [0.2, 0.2, 0.2], position: [-3.0, 0.0, 0.3]}\n";
   writeText(scene, text.str());
   const auto session = tinySession(scene.string(), "single-targets.json");
   const auto result = runCliBinary("eval reachable --spacing 0.3 --session " + session.string());
@@ -183,6 +184,11 @@ TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   EXPECT_FALSE(targets[1].at("reached").get<bool>());
   EXPECT_GT(targets[1].at("error_m").get<double>(), 1.0);
   EXPECT_EQ(json.at("scene_targets_reached"), 1);
+  // A target inside an obstacle is named as such, in the JSON and in a note when the scene loads.
+  EXPECT_TRUE(targets[0].at("inside_obstacle").is_null()) << targets[0].dump();
+  EXPECT_EQ(targets[1].at("inside_obstacle"), "far_box");
+  EXPECT_NE(result.err.find("note: targets[1] (-3.000, 0.000, 0.300) m lies inside obstacle 'far_box'"), std::string::npos)
+      << result.err;
   std::filesystem::remove(session);
   std::filesystem::remove(scene);
 }

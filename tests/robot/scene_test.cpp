@@ -369,6 +369,16 @@ TEST(SceneNotes, AnObstacleWhollyUnderTheTableTopIsNotedUnlessThereIsNoTable) {
   EXPECT_TRUE(sceneNotes(parseScene("table: false\n" + obstacles, ".", "no_table")).empty());
 }
 
+TEST(SceneNotes, ATargetInsideAnObstacleIsNamedWithTheObstacle) {
+  const std::string obstacles = "obstacles:\n  - {name: box, shape: box, size: [0.2, 0.2, 0.4], position: [-0.5, 0, 0.2]}\n";
+  const Scene outside = parseScene(obstacles + "targets:\n  - [-0.5, 0.3, 0.2]\n", ".", "outside");
+  EXPECT_TRUE(sceneNotes(outside).empty());
+  const Scene inside = parseScene(obstacles + "targets:\n  - [-0.5, 0.3, 0.2]\n  - [-0.45, 0.05, 0.3]\n", ".", "inside");
+  const std::vector<std::string> notes = sceneNotes(inside);
+  ASSERT_EQ(notes.size(), 1U);
+  EXPECT_EQ(notes[0], "targets[1] (-0.450, 0.050, 0.300) m lies inside obstacle 'box': no posture reaches it");
+}
+
 TEST(EvaluationGrid, SpansTheThesisGridWithItsUpperBoundsIncluded) {
   EvaluationGrid grid;  // the defaults are G of Sect. 3.3.2
   grid.spacing = 0.05;
