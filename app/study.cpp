@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <numbers>
 #include <set>
 #include <sstream>
@@ -332,6 +333,23 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
   study.clusterings.clear();
   study.combinations.clear();
   for (auto& participant : study.participants) participant.cluster.clear();
+  // One robot's postures only: the robot most participants used, ties to the first in file order.
+  study.not_clustered.clear();
+  std::map<std::string, int> per_robot;
+  for (const auto& participant : study.participants) ++per_robot[participant.robot];
+  std::string robot;
+  int most = 0;
+  for (const auto& participant : study.participants) {
+    if (per_robot[participant.robot] > most) {
+      most = per_robot[participant.robot];
+      robot = participant.robot;
+    }
+  }
+  for (const auto& participant : study.participants) {
+    if (participant.robot != robot) {
+      study.not_clustered.push_back(participant.file + ": robot '" + participant.robot + "', the study's postures are of '" + robot + "'");
+    }
+  }
   for (const auto& seeds : options.seeds) {
     if (seeds.centres.empty()) continue;
     const Eigen::Index joints = seeds.centres.front().size();
@@ -341,7 +359,9 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
     std::vector<std::size_t> members;
     for (std::size_t i = 0; i < study.participants.size(); ++i) {
       const auto found = study.participants[i].q_fixed.find(seeds.area);
-      if (found != study.participants[i].q_fixed.end() && found->second.size() >= joints) members.push_back(i);
+      if (study.participants[i].robot == robot && found != study.participants[i].q_fixed.end() && found->second.size() >= joints) {
+        members.push_back(i);
+      }
     }
     if (members.empty()) continue;
     clustering.postures.resize(joints, static_cast<Eigen::Index>(members.size()));

@@ -124,6 +124,9 @@ struct Combination {
 struct StudyResult {
   std::vector<ParticipantResult> participants;
   std::vector<std::string> skipped;  ///< "file: reason" for files that are no readable session
+  /// "file: reason" for readable sessions left out of the clustering: postures of a robot other
+  /// than the one most participants used (the first such in file order) are not comparable.
+  std::vector<std::string> not_clustered;
   std::vector<AreaClustering> clusterings;
   std::vector<Combination> combinations;
 };

@@ -224,6 +224,8 @@ Json reviewStudy(const StudyArguments& arguments) {
   }
   out["participants"] = participants;
   out["skipped"] = study.skipped;
+  out["not_clustered"] = study.not_clustered;
+  for (const std::string& line : study.not_clustered) std::cerr << "note: not clustered: " << line << "\n";
   Json clusterings = Json::array();
   for (const auto& c : study.clusterings) {
     Json clusters = Json::array();

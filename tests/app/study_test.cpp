@@ -296,6 +296,36 @@ void recordPostures(const std::filesystem::path& file, const robot::Scene& scene
   recorder.close();
 }
 
+// Postures of another robot are not comparable: a study folder holding one arm9 session among
+// LWR IV sessions clusters the LWR IV's and names the other, whatever its postures.
+TEST(StudyClusters, ClustersTheRobotMostParticipantsUsedAndNamesTheOthers) {
+  const auto seeds = thesisClusterSeeds();
+  const auto& L = seeds[0].centres;
+  const auto& R = seeds[1].centres;
+  StudyResult study;
+  study.participants = {participant("p1", near(L[0], 0.05), near(R[5], -0.04), 0.004, 0),
+                        participant("p2", near(L[0], -0.1), near(R[5], 0.02), 0.006, 0),
+                        participant("other", near(L[2], 0.0), near(R[0], 0.0), 0.004, 0),
+                        participant("p3", near(L[0], 0.0), near(R[5], 0.0), 0.009, 0)};
+  for (auto& p : study.participants) p.robot = "lwr4";
+  study.participants[2].robot = "arm9";
+  StudyOptions options;
+  clusterStudy(study, options);
+  ASSERT_EQ(study.clusterings.size(), 2U);
+  EXPECT_EQ(study.clusterings[0].participants, (std::vector<std::string>{"p1", "p2", "p3"}));
+  EXPECT_EQ(study.clusterings[0].kmeans.sizes, (std::vector<int>{3, 0, 0}));
+  EXPECT_TRUE(study.participants[2].cluster.empty());
+  ASSERT_EQ(study.not_clustered.size(), 1U);
+  EXPECT_EQ(study.not_clustered[0], "other.db: robot 'arm9', the study's postures are of 'lwr4'");
+  // Two against two: the robot of the first file.
+  study.participants[0].robot = "arm9";
+  clusterStudy(study, options);
+  ASSERT_EQ(study.not_clustered.size(), 2U);
+  EXPECT_EQ(study.not_clustered[0], "p2.db: robot 'lwr4', the study's postures are of 'arm9'");
+  EXPECT_EQ(study.not_clustered[1], "p3.db: robot 'lwr4', the study's postures are of 'arm9'");
+  EXPECT_EQ(study.clusterings[0].participants, (std::vector<std::string>{"p1", "other"}));
+}
+
 TEST(StudyReplay, CountsContactsOfTheRecordedPosturesInTheRecordedScene) {
   const auto dir = scratchDir("replay");
   Eigen::VectorXd free_q(7), touching_q(7);
