@@ -1,9 +1,11 @@
 #pragma once
 // Runs the real flexirob-cli binary and captures what a calling program would see.
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -43,9 +45,22 @@ inline CliResult runCliBinary(const std::string& arguments) {
   return result;
 }
 
-/// A scratch folder of this test process for `suite` (created; left for the OS to clean).
+/// A scratch folder of this test process for `suite`, created on first use and removed with
+/// everything in it when the process ends (ctest runs every test in a process of its own, and
+/// hundreds of folders were left in /tmp per run).
 inline std::filesystem::path scratchDir(const std::string& suite) {
+  struct RemovedAtExit {
+    std::filesystem::path path;
+    ~RemovedAtExit() {
+      std::error_code ignored;
+      std::filesystem::remove_all(path, ignored);
+    }
+  };
+  static std::vector<RemovedAtExit> folders;
   const auto dir = std::filesystem::temp_directory_path() / ("flexirob-" + suite + "-" + std::to_string(::getpid()));
+  if (std::none_of(folders.begin(), folders.end(), [&](const RemovedAtExit& folder) { return folder.path == dir; })) {
+    folders.push_back({dir});
+  }
   std::filesystem::create_directories(dir);
   return dir;
 }

@@ -12,10 +12,19 @@
 namespace flexirob::planning {
 namespace {
 
+// The folder of this test process, removed with its files when the process ends.
 std::filesystem::path scratchFile(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("flexirob-planning-test-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return dir / name;
+  struct RemovedAtExit {
+    std::filesystem::path path;
+    ~RemovedAtExit() {
+      std::error_code ignored;
+      std::filesystem::remove_all(path, ignored);
+    }
+  };
+  static const RemovedAtExit folder{std::filesystem::temp_directory_path() /
+                                    ("flexirob-planning-test-" + std::to_string(::getpid()))};
+  std::filesystem::create_directories(folder.path);
+  return folder.path / name;
 }
 
 std::vector<char> readBytes(const std::filesystem::path& path) {
