@@ -87,6 +87,7 @@ Json runReach(const ReachOptions& options) {
             {"rejected", result.clamps.rejected}}},
           {"null_space_scaled", result.null_space_scaled},
           {"torque_saturations", result.torque_saturations},
+          {"max_substeps", result.max_substeps},
           {"rejected_commands", result.rejected_commands},
           {"target", toJson(target)},
           {"position", toJson(result.position)},

@@ -392,6 +392,15 @@ Json runTeach(const TeachOptions& options) {
   if (given_up > kWarningsOnStderr) {
     std::fprintf(stderr, "warning: ... and %zu more of the scene's areas not taught (\"tutor\" in the JSON)\n", given_up - kWarningsOnStderr);
   }
+  // An arm so light that even the most physics steps per cycle do not keep its impedance law
+  // stable shakes in the simulation: what was taught with it is not what a robot would do.
+  const int max_substeps = sim.maxSubsteps();
+  if (max_substeps >= robot::Simulation::kSubstepCap) {
+    std::fprintf(stderr,
+                 "warning: the arm's links are too light for the simulation: even %d physics steps per 1 ms cycle did not keep "
+                 "its joint impedance stable, so it may have shaken; its masses and inertias are worth a check\n",
+                 max_substeps);
+  }
   if (static_cast<int>(workflow.areas().size()) < options.areas && !workflow.areas().empty() && !report.interrupted) {
     std::fprintf(stderr, "note: %zu of the %d areas asked for %s taught; \"tutor\" in the JSON says why the others were not\n",
                  workflow.areas().size(), options.areas, workflow.areas().size() == 1 ? "was" : "were");
@@ -433,6 +442,7 @@ Json runTeach(const TeachOptions& options) {
                  {"warning_lines", warning_lines},
                  {"tutor", tutor_areas},
                  {"simulated_time_s", report.simulated_time},
+                 {"max_substeps", max_substeps},
                  {"wall_time_s", wall_seconds},
                  {"interrupted", report.interrupted}};
   if (report.interrupted) {

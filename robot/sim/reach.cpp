@@ -97,6 +97,7 @@ ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSe
   result.clamps += limiter.counters();
   result.null_space_scaled = controller.nullSpaceScaled();
   result.torque_saturations = sim.torqueSaturations();
+  result.max_substeps = sim.maxSubsteps();
   return result;
 }
 

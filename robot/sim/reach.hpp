@@ -48,6 +48,7 @@ struct ReachResult {
   LimitCounters clamps;                      ///< controller and limiter together
   std::uint64_t null_space_scaled = 0;
   std::uint64_t torque_saturations = 0;
+  int max_substeps = 0;                 ///< the most physics steps one control cycle took
   std::uint64_t rejected_commands = 0;  ///< commands the simulated robot refused (should be 0)
 };
 

@@ -7,7 +7,9 @@
 #include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
 #include <btBulletDynamicsCommon.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <iomanip>
@@ -29,6 +31,14 @@ constexpr std::array kSimulationParameters{
     ParameterDeclaration{"sim.damping", 0.95, 0.0, 1.0, "",
                          "normalized joint damping until the first command (Tab. A.1)"},
 };
+
+// See stableSubsteps().
+constexpr double kStableStepBound = 3.0;
+// The drift damping acts at most at this rate [1/s] on a joint (d ≤ rate · M_jj): 0.5 Nms/rad on
+// a link lighter than the LWR IV's flange would be a time constant far under a physics step
+// (0.5 µs on 1e-6 kg m²), which no step count integrates. The LWR IV's and arm9's joints all
+// have M_jj ≥ 2e-4 kg m², so theirs is the configured damping.
+constexpr double kMaxDriftRate = 4000.0;
 
 // Bullet needs positive masses and inertias; links the URDF leaves without inertia get a token one.
 constexpr double kMinMass = 1e-3;      // [kg]
@@ -67,6 +77,21 @@ struct Simulation::Impl {
   // scene's contacts are CollisionWorld's business.
   btSphereShape collider_shape{btScalar(1e-3)};
   std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
+  // Scratch of stableSubsteps(), sized once: the joint-space inertia matrix M(q) and what is
+  // derived from it (the control thread steps the simulation and must not allocate).
+  Eigen::MatrixXd mass_matrix, com_velocities, whitened, whitened_gram;
+  Eigen::VectorXd damping;
+  Eigen::LLT<Eigen::MatrixXd> mass_cholesky;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> whitened_eigen;
+
+  explicit Impl(int dof)
+      : mass_matrix(dof, dof),
+        com_velocities(3, dof),
+        whitened(dof, dof),
+        whitened_gram(dof, dof),
+        damping(dof),
+        mass_cholesky(dof),
+        whitened_eigen(dof) {}
 
   ~Impl() {
     for (auto& limit : limits) world.removeMultiBodyConstraint(limit.get());
@@ -81,7 +106,7 @@ Simulation::Simulation(const RobotModel& model, const Scene* scene, const Parame
       substeps_(static_cast<int>(parameters.get("sim.substeps"))),
       gravity_(parameters.get("sim.gravity")),
       drift_damping_(parameters.get("sim.drift_damping")),
-      impl_(std::make_unique<Impl>()),
+      impl_(std::make_unique<Impl>(model.dof())),
       kinematics_(model),
       jacobian_(3, model.dof()) {
   const int n = model.dof();
@@ -187,6 +212,10 @@ void Simulation::reset(const Eigen::VectorXd& q) {
   time_ = 0.0;
   steps_ = 0;
   torque_saturations_ = 0;
+  last_substeps_ = stableSubsteps();
+  checked_stiffness_ = command_.stiffness;
+  checked_damping_ = command_.damping;
+  max_substeps_ = 0;
   monitor_.reset();
   collision_->update(q_);
   contacts_ = collision_->contacts();
@@ -224,6 +253,60 @@ void Simulation::computeModelTerms() {
   }
 }
 
+double Simulation::driftDamping(double joint_inertia) const { return std::min(drift_damping_, kMaxDriftRate * joint_inertia); }
+
+int Simulation::stableSubsteps() {
+  // Bullet integrates semi-implicitly (velocity first, then position with the new velocity). For
+  // M q̈ = −K q − D q̇ that is stable while 2 h c + h² ω² < 4 in every mode, with ω² and c the
+  // largest eigenvalues of M⁻¹K and M⁻¹D. The step keeps a margin of a quarter below that
+  // bound, 2 h c + h² ω² ≤ B = 3 (the LWR IV's flange alone needs 2.6 at the default 4 substeps;
+  // arm9's wrist, where two of its axes come close to parallel, needed more than 4, and its
+  // torques saturated there).
+  const int n = model_->dof();
+  Impl& scratch = *impl_;
+  Eigen::MatrixXd& M = scratch.mass_matrix;
+  M.setZero();
+  for (int b = 1; b <= n; ++b) {
+    const Eigen::Isometry3d& X_WB = kinematics_.X_WB(b);
+    const Eigen::Vector3d c_W = X_WB * coms_[static_cast<std::size_t>(b)];
+    const Eigen::Matrix3d I_W = X_WB.linear() * inertias_[static_cast<std::size_t>(b)] * X_WB.linear().transpose();
+    const double m = masses_[static_cast<std::size_t>(b)];
+    // Joints 0..b-1 move body b; column j is ∂c_b/∂q_j.
+    for (int j = 0; j < b; ++j) {
+      const Eigen::Vector3d axis = kinematics_.axis_W(j);
+      scratch.com_velocities.col(j) = isPrismatic(j) ? axis : Eigen::Vector3d(axis.cross(c_W - kinematics_.X_WB(j + 1).translation()));
+    }
+    for (int i = 0; i < b; ++i) {
+      for (int j = 0; j <= i; ++j) {
+        double m_ij = m * scratch.com_velocities.col(i).dot(scratch.com_velocities.col(j));
+        if (!isPrismatic(i) && !isPrismatic(j)) m_ij += kinematics_.axis_W(i).dot(I_W * kinematics_.axis_W(j));
+        M(i, j) += m_ij;
+      }
+    }
+  }
+  const int configured = substeps_;
+  scratch.mass_cholesky.compute(M);  // reads the lower triangle only
+  if (scratch.mass_cholesky.info() != Eigen::Success) return configured;
+  // λ_max(M⁻¹A) for a diagonal A ≥ 0 is λ_max(Wᵀ W) with W = L⁻¹ A^½, M = L Lᵀ.
+  const auto largestEigenvalue = [&scratch](const Eigen::VectorXd& diagonal) {
+    scratch.whitened.setZero();
+    scratch.whitened.diagonal() = diagonal.cwiseMax(0.0).cwiseSqrt();
+    scratch.mass_cholesky.matrixL().solveInPlace(scratch.whitened);
+    scratch.whitened_gram.noalias() = scratch.whitened.transpose() * scratch.whitened;
+    scratch.whitened_eigen.compute(scratch.whitened_gram, Eigen::EigenvaluesOnly);
+    return scratch.whitened_eigen.eigenvalues().maxCoeff();
+  };
+  for (int j = 0; j < n; ++j) {
+    scratch.damping[j] = 2.0 * command_.damping[j] * std::sqrt(command_.stiffness[j] * M(j, j)) + driftDamping(M(j, j));
+  }
+  const double omega_squared = largestEigenvalue(command_.stiffness);
+  const double c = largestEigenvalue(scratch.damping);
+  // The positive root of h² ω² + 2 h c = B, written so that ω = 0 needs no special case.
+  const double step_bound = kStableStepBound / (c + std::sqrt(c * c + kStableStepBound * omega_squared));
+  if (!std::isfinite(step_bound) || step_bound >= cycle_time_ / configured) return configured;
+  return static_cast<int>(std::min<double>(kSubstepCap, std::ceil(cycle_time_ / step_bound)));
+}
+
 CommandStatus Simulation::writeCommand(const JointImpedanceCommand& command) {
   const int n = model_->dof();
   if (command.q_cmd.size() != n || command.stiffness.size() != n || command.damping.size() != n ||
@@ -258,9 +341,18 @@ void Simulation::clearHandForce() {
 
 void Simulation::step() {
   const int n = model_->dof();
-  const double h = cycle_time_ / substeps_;
+  // The posture moves little in 10 ms; a new command's gains take effect at once.
+  if (steps_ % kSubstepCheckCycles == 0 || (command_.stiffness.array() != checked_stiffness_.array()).any() ||
+      (command_.damping.array() != checked_damping_.array()).any()) {
+    checked_stiffness_ = command_.stiffness;
+    checked_damping_ = command_.damping;
+    last_substeps_ = stableSubsteps();
+  }
+  const int substeps = last_substeps_;
+  max_substeps_ = std::max(max_substeps_, substeps);
+  const double h = cycle_time_ / substeps;
   btMultiBody& mb = *impl_->body;
-  for (int s = 0; s < substeps_; ++s) {
+  for (int s = 0; s < substeps; ++s) {
     if (s > 0) {
       readJoints();
       computeModelTerms();
@@ -269,7 +361,7 @@ void Simulation::step() {
     // The joint impedance law, gravity compensated (App. A.3).
     for (int j = 0; j < n; ++j) {
       const double k = command_.stiffness[j];
-      const double d = 2.0 * command_.damping[j] * std::sqrt(k * inertia_diagonal_[j]) + drift_damping_;
+      const double d = 2.0 * command_.damping[j] * std::sqrt(k * inertia_diagonal_[j]) + driftDamping(inertia_diagonal_[j]);
       double tau = gravity_torque_[j] + k * (command_.q_cmd[j] - q_[j]) - d * qd_[j];
       if (effort_[j] > 0.0 && std::abs(tau) > effort_[j]) {
         tau = std::copysign(effort_[j], tau);

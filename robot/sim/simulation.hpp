@@ -5,13 +5,15 @@
 //   τ = g(q) + K (q_cmd − q) − D q̇ − d_drift q̇,   D_jj = 2 ζ_j sqrt(K_jj M_jj(q)),
 // where g(q) compensates gravity as the robot's own controller does, ζ is the command's
 // normalized damping, M_jj the joint-space inertia and d_drift an added viscous damping so that
-// the arm does not drift once released (DESIGN §3). The torque is clipped to the URDF's effort
+// the arm does not drift once released (DESIGN §3; on very light links at most 4000 M_jj /s). The torque is clipped to the URDF's effort
 // limits. A *hand* applies an external force at a point on any link (the GUI's mouse, the
 // simulated tutor); τ_ext is reported as the robot would estimate it: J_pᵀ F at the contact.
 //
-// Stepping is deterministic: every step() advances exactly cycleTime() (1 ms) in `substeps`
-// equal physics steps, with the impedance law re-evaluated in each (the LWR's inner loop runs
-// faster than FRI's cycle). Headless it runs faster than real time.
+// Stepping is deterministic: every step() advances exactly cycleTime() (1 ms) in equal physics
+// steps, with the impedance law re-evaluated in each (the LWR's inner loop runs faster than
+// FRI's cycle). Their number is `sim.substeps` or, where the arm is too light for that, as
+// many as the explicitly applied impedance needs to stay stable (stableSubsteps()). Headless
+// it runs faster than real time.
 //
 // With a scene, a collision world reports contacts of links with obstacles and with each
 // other after every step (E_coll). The links pass through obstacles (no contact forces): what
@@ -67,6 +69,14 @@ class Simulation final : public RobotBackend {
   std::uint64_t steps() const { return steps_; }
   /// Substeps in which a joint torque hit its effort limit.
   std::uint64_t torqueSaturations() const { return torque_saturations_; }
+  /// Physics steps of the last step(), and the most any step() took since reset().
+  int lastSubsteps() const { return last_substeps_; }
+  int maxSubsteps() const { return max_substeps_; }
+  /// The physics steps per cycle the current posture and command need: `sim.substeps`, or
+  /// more where the impedance law, applied explicitly, would make the arm oscillate or diverge
+  /// (light links under a stiff command), at most kSubstepCap.
+  int stableSubsteps();
+  static constexpr int kSubstepCap = 1024;
   /// Joint-space inertia diagonal M_jj(q) [kg m²] at the current posture.
   const Eigen::VectorXd& inertiaDiagonal() const { return inertia_diagonal_; }
   /// Gravity compensation torque g(q) [Nm] at the current posture.
@@ -76,6 +86,8 @@ class Simulation final : public RobotBackend {
   struct Impl;
   void readJoints();
   void computeModelTerms();  // kinematics, g(q), M_jj(q) at q_
+  double driftDamping(double joint_inertia) const;  // sim.drift_damping, bounded for light links
+  bool isPrismatic(int joint) const { return model_->joints()[static_cast<std::size_t>(joint)].type == JointType::kPrismatic; }
 
   const RobotModel* model_;
   double cycle_time_;
@@ -93,6 +105,10 @@ class Simulation final : public RobotBackend {
   std::vector<double> masses_;                 // as given to Bullet, per body
   std::vector<Eigen::Vector3d> coms_;          // p_BCom per body
   std::vector<Eigen::Matrix3d> inertias_;      // I_BCom per body (as given to Bullet)
+  static constexpr std::uint64_t kSubstepCheckCycles = 10;
+  Eigen::VectorXd checked_stiffness_, checked_damping_;  // the gains stableSubsteps() last saw
+  int last_substeps_ = 0;
+  int max_substeps_ = 0;
   int hand_body_ = -1;
   Eigen::Vector3d hand_p_B_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d hand_F_W_ = Eigen::Vector3d::Zero();

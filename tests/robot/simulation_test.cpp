@@ -4,6 +4,10 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <utility>
 
 #include "robot/controllers.hpp"
 #include "robot/errors.hpp"
@@ -256,6 +260,73 @@ TEST(Simulation, ReleasedArmComesToRestUnderLowStiffness) {
   EXPECT_LT((state.q - bentPosture()).norm(), 1e-3);
 }
 
+// The LWR IV with every mass and inertia scaled: the same kinematics, a lighter arm.
+RobotModel scaledLwr4(double factor) {
+  const std::filesystem::path file = resolveRobotPath("lwr4");
+  std::ifstream in(file);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::regex number(R"re(((?:mass value|ixx|iyy|izz|ixy|ixz|iyz)=")([-0-9.eE+]+)")re");
+  std::string scaled;
+  auto begin = std::sregex_iterator(text.begin(), text.end(), number);
+  std::size_t last = 0;
+  for (auto match = begin; match != std::sregex_iterator(); ++match) {
+    scaled += text.substr(last, static_cast<std::size_t>(match->position()) - last);
+    scaled += (*match)[1].str() + std::to_string(std::stod((*match)[2].str()) * factor) + "\"";
+    last = static_cast<std::size_t>(match->position() + match->length());
+  }
+  scaled += text.substr(last);
+  return RobotModel::fromUrdfString(scaled, file.parent_path());
+}
+
+TEST(Simulation, AnArmOfAHundredthOfTheLwrsMassesSettlesOnItsCommandInsteadOfShaking) {
+  // 0.16 kg in all. The impedance law is applied explicitly: at 4 physics steps per cycle its
+  // damping on links this light overshot each step, the torques saturated and the arm shook
+  // far from its command. The step count now follows what the arm and the gains need.
+  const RobotModel light = scaledLwr4(0.01);
+  Simulation sim(light, nullptr, simParameters());
+  sim.reset(bentPosture() + Eigen::VectorXd::Constant(7, 0.05));  // within every effort limit
+  ASSERT_EQ(sim.writeCommand(holdCommand(bentPosture(), 300.0, 0.95)), CommandStatus::kAccepted);
+  for (int k = 0; k < 2000; ++k) sim.step();
+  RobotState state;
+  sim.readState(state);
+  EXPECT_LT((state.q - bentPosture()).cwiseAbs().maxCoeff(), 1e-4);
+  // Bullet steps in single precision: at 20-odd steps per cycle a joint moving at 1e-3 rad/s
+  // no longer changes its angle, and a velocity of that size stays with the arm at rest.
+  EXPECT_LT(state.qd.cwiseAbs().maxCoeff(), 5e-3);
+  EXPECT_EQ(sim.torqueSaturations(), 0U);
+  EXPECT_GT(sim.maxSubsteps(), static_cast<int>(simParameters().get("sim.substeps")));
+  EXPECT_LE(sim.maxSubsteps(), Simulation::kSubstepCap);
+}
+
+TEST(Simulation, TheLwrKeepsTheConfiguredPhysicsStepsWhereverItStands) {
+  // Its joints are heavy enough for sim.substeps under every gain of Tab. A.1, so what it does
+  // does not depend on the step-count rule.
+  std::mt19937 engine(7);
+  const Eigen::VectorXd lower = lwr4().lowerLimits(), upper = lwr4().upperLimits();
+  Simulation sim(lwr4(), nullptr, simParameters());
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::VectorXd q(7);
+    for (int j = 0; j < 7; ++j) q[j] = std::uniform_real_distribution<double>(lower[j], upper[j])(engine);
+    sim.reset(q);
+    for (const auto& [stiffness, damping] : {std::pair{300.0, 0.95}, std::pair{80.0, 0.7}, std::pair{20.0, 0.7}}) {
+      ASSERT_EQ(sim.writeCommand(holdCommand(q, stiffness, damping)), CommandStatus::kAccepted);
+      EXPECT_EQ(sim.stableSubsteps(), 4) << "posture " << q.transpose() << ", stiffness " << stiffness;
+    }
+  }
+}
+
+TEST(Simulation, AStifferCommandTakesMorePhysicsStepsAtOnce) {
+  const RobotModel light = scaledLwr4(0.01);
+  Simulation sim(light, nullptr, simParameters());
+  sim.reset(bentPosture());
+  ASSERT_EQ(sim.writeCommand(holdCommand(bentPosture(), 20.0, 0.7)), CommandStatus::kAccepted);
+  sim.step();
+  const int soft = sim.lastSubsteps();
+  ASSERT_EQ(sim.writeCommand(holdCommand(bentPosture(), 300.0, 0.95)), CommandStatus::kAccepted);
+  sim.step();  // not a multiple of the 10-cycle check: the new gains alone must trigger it
+  EXPECT_GT(sim.lastSubsteps(), soft);
+}
+
 }  // namespace
 }  // namespace flexirob::robot
 
@@ -284,6 +355,23 @@ TEST(Reach, ConvergesToReachableTargetsWhateverThePosture) {
     EXPECT_EQ(result.rejected_commands, 0U);
     EXPECT_EQ(result.collisions, 0U);
   }
+}
+
+TEST(Reach, TheNineJointArmReachesFromMidRangeWithoutItsWristShaking) {
+  // Where two of arm9's wrist axes come close to parallel, a mode of little inertia and the sum
+  // of both joints' damping made 4 physics steps per cycle unstable: the torques saturated for
+  // 30 s and the tip stayed 14 cm short.
+  const RobotModel arm9 = RobotModel::fromUrdfFile(resolveRobotPath("arm9"));
+  const std::vector<ParameterDeclaration> declarations = reachParameters();
+  const ParameterSet parameters(declarations);
+  ReachRequest request;
+  request.start = arm9.midPosture();
+  request.target = Eigen::Vector3d(-0.6, 0.3, 0.5);
+  const ReachResult result = reach(arm9, nullptr, parameters, request);
+  EXPECT_EQ(result.status, "reached");
+  EXPECT_LE((tipPose(arm9, result.q).translation() - request.target).norm(), 1e-4);
+  EXPECT_EQ(result.torque_saturations, 0U);
+  EXPECT_GT(result.max_substeps, 4);
 }
 
 TEST(Reach, ReportsATargetOutOfTheWorkspaceWithTheBestError) {
