@@ -296,6 +296,27 @@ std::string approachName(ApproachFrom approach) {
   return "learned";
 }
 
+Eigen::VectorXd demonstratedPosture(const robot::RobotModel& model, const learning::TrainingSet& training, Eigen::Index l) {
+  return training.Y.col(l).cwiseMax(model.softLowerLimits()).cwiseMin(model.softUpperLimits());
+}
+
+Eigen::VectorXd nearestDemonstratedPosture(const robot::RobotModel& model, const learning::TrainingSet& training,
+                                           const Eigen::Vector3d& p_W, const Eigen::VectorXd& fallback) {
+  if (training.size() == 0 || training.X.rows() < 3 || training.Y.rows() != model.dof() || training.Y.cols() != training.X.cols()) {
+    return fallback;
+  }
+  Eigen::Index nearest = -1;
+  double nearest_distance = std::numeric_limits<double>::infinity();
+  for (Eigen::Index l = 0; l < training.X.cols(); ++l) {
+    const double distance = (training.X.col(l).head<3>() - p_W).squaredNorm();
+    if (distance < nearest_distance && training.Y.col(l).allFinite()) {
+      nearest_distance = distance;
+      nearest = l;
+    }
+  }
+  return nearest < 0 ? fallback : demonstratedPosture(model, training, nearest);
+}
+
 ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::Scene& scene,
                                   const robot::ParameterSet& parameters, const learning::Learner& map,
                                   const Eigen::VectorXd& q_start, const robot::EvaluationGrid& grid,
@@ -376,8 +397,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> reached_postures;
   if (start_from_samples) {
     for (Eigen::Index l = 0; l < training.X.cols(); ++l) {
-      // Clamped as the learned posture is: a recorded posture may sit a hair beyond a soft limit.
-      const Eigen::VectorXd q = training.Y.col(l).cwiseMax(model.softLowerLimits()).cwiseMin(model.softUpperLimits());
+      const Eigen::VectorXd q = demonstratedPosture(model, training, l);
       if (training.X.col(l).head<3>().allFinite() && q.allFinite()) reached_postures.emplace_back(training.X.col(l).head<3>(), q);
     }
   }

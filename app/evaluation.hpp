@@ -46,6 +46,15 @@ enum class AtContact { kStop, kContinue };
 /// starts the arm for a target (ApproachFrom::kLearnedPosture).
 Eigen::VectorXd learnedPosture(const robot::RobotModel& model, const learning::Learner& map, const Eigen::Vector3d& p_W);
 
+/// The demonstration's posture of sample `l`, clamped to the soft limits as the learned posture
+/// is (a recorded posture may sit a hair beyond one).
+Eigen::VectorXd demonstratedPosture(const robot::RobotModel& model, const learning::TrainingSet& training, Eigen::Index l);
+
+/// Where ApproachFrom::kNearestVisited starts a single target p_W: the demonstrated posture whose
+/// tip lay nearest it; `fallback` where the demonstration holds no posture that fits the robot.
+Eigen::VectorXd nearestDemonstratedPosture(const robot::RobotModel& model, const learning::TrainingSet& training,
+                                           const Eigen::Vector3d& p_W, const Eigen::VectorXd& fallback);
+
 /// One target of the reachability evaluation (Sect. 3.3.2): from q_start to the fixed target p_W,
 /// settle time 3 s.
 MotionOutcome approachTarget(const robot::RobotModel& model, const robot::ParameterSet& parameters,

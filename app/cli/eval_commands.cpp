@@ -263,10 +263,10 @@ Json runReachable(const EvalOptions& options) {
   const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
   const auto learner = learnMap(session, options.learner);
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
+  const app::ApproachFrom approach = app::parseApproach(options.approach);
   const app::ReachableResult result =
       app::evaluateReachable(*session.model, session.scene_data, parameters, *learner, startPosture(session), grid,
-                             session.data, [](double f) { reportProgress("eval reachable", f); },
-                             app::parseApproach(options.approach));
+                             session.data, [](double f) { reportProgress("eval reachable", f); }, approach);
   // Without targets there is no fraction (0 of 0 is not 0 %).
   const auto fraction = [&result](double value) { return result.targets > 0 ? Json(value) : Json(nullptr); };
   Json json = {{"targets", result.targets},
@@ -291,15 +291,21 @@ Json runReachable(const EvalOptions& options) {
                {"target_points", pointsJson(result.target_points)},
                {"target_reached", result.target_reached},
                {"target_resolved_free", result.target_resolved_free}};
-  // The scene's single targets, each from the taught posture of the area whose sample lies
-  // nearest it (the start posture without samples): reached within the grid's tolerance without
-  // a contact on the way.
+  // The scene's single targets, reached within the grid's tolerance without a contact on the
+  // way, each started as the grid's targets are: `visited` from the demonstrated posture nearest
+  // it, `learned` from q_c(x), `start` from the start posture; `nearest` and `previous`, whose
+  // starts depend on the grid's tour, from the taught posture of the area whose sample lies
+  // nearest. The start posture where there is no demonstration.
   Json scene_targets = Json::array();
   int scene_targets_reached = 0;
   robot::CollisionWorld world(*session.model, session.scene_data);
   for (const Eigen::Vector3d& target : session.scene_data.targets) {
     Eigen::VectorXd q_start = startPosture(session);
-    if (session.data.size() > 0) {
+    if (approach == app::ApproachFrom::kNearestVisited) {
+      q_start = app::nearestDemonstratedPosture(*session.model, session.data, target, q_start);
+    } else if (approach == app::ApproachFrom::kLearnedPosture) {
+      q_start = app::learnedPosture(*session.model, *learner, target);
+    } else if (approach != app::ApproachFrom::kStartPosture && session.data.size() > 0) {
       Eigen::Index nearest = 0;
       (session.data.X.colwise() - target).colwise().squaredNorm().minCoeff(&nearest);
       const int area = session.data.areaOf(nearest);

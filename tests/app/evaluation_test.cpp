@@ -585,6 +585,40 @@ TEST(Evaluation, ReachabilityStartsFromTheNearestPostureOfTheDemonstration) {
   EXPECT_THROW(evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, mismatched), InputError);
 }
 
+TEST(Evaluation, ASingleTargetStartsFromTheDemonstratedPostureNearestItClampedToTheSoftLimits) {
+  Eigen::VectorXd beyond = ready();
+  beyond[1] = lwr4().softUpperLimits()[1] + 0.01;  // recorded a hair beyond the soft limit
+  Eigen::VectorXd shown = ready();
+  shown[0] += 0.6;
+  Eigen::VectorXd broken = ready();
+  broken[0] += 0.3;
+  broken[2] = std::nan("");
+  learning::TrainingSet demonstration;
+  demonstration.X.resize(3, 4);
+  demonstration.Y.resize(7, 4);
+  const std::vector<Eigen::VectorXd> postures{shown, beyond, ready(), broken};
+  for (Eigen::Index l = 0; l < 4; ++l) {
+    const Eigen::VectorXd q = postures[static_cast<std::size_t>(l)].cwiseMin(lwr4().upperLimits());
+    demonstration.X.col(l) = robot::tipPose(lwr4(), q.allFinite() ? q : ready()).translation();
+    demonstration.Y.col(l) = postures[static_cast<std::size_t>(l)];
+  }
+  demonstration.X.col(3) += Eigen::Vector3d(0.0, 0.0, 0.05);  // the broken sample 5 cm above ready()'s tip
+  const Eigen::VectorXd fallback = lwr4().midPosture();
+  const Eigen::Vector3d near_shown = demonstration.X.col(0) + Eigen::Vector3d(0.01, 0.0, 0.0);
+  EXPECT_EQ(nearestDemonstratedPosture(lwr4(), demonstration, near_shown, fallback), shown);
+  const Eigen::VectorXd clamped = nearestDemonstratedPosture(lwr4(), demonstration, demonstration.X.col(1), fallback);
+  EXPECT_DOUBLE_EQ(clamped[1], lwr4().softUpperLimits()[1]);
+  // The sample without a finite posture is passed over for the next nearest.
+  EXPECT_EQ(nearestDemonstratedPosture(lwr4(), demonstration, demonstration.X.col(3), fallback), ready());
+  // Nothing that fits the robot: the fallback.
+  learning::TrainingSet positions_only;
+  positions_only.X = demonstration.X;
+  EXPECT_EQ(nearestDemonstratedPosture(lwr4(), positions_only, near_shown, fallback), fallback);
+  learning::TrainingSet other_robot = demonstration;
+  other_robot.Y.conservativeResize(6, Eigen::NoChange);
+  EXPECT_EQ(nearestDemonstratedPosture(lwr4(), other_robot, near_shown, fallback), fallback);
+}
+
 TEST(Evaluation, ApproachNamesParseAndUnknownOnesAreRefused) {
   EXPECT_EQ(parseApproach("visited"), ApproachFrom::kNearestVisited);
   EXPECT_EQ(approachName(ApproachFrom::kNearestVisited), "visited");
