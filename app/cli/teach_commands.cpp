@@ -395,7 +395,7 @@ Json runTeach(const TeachOptions& options) {
   // An arm so light that even the most physics steps per cycle do not keep its impedance law
   // stable shakes in the simulation: what was taught with it is not what a robot would do.
   const int max_substeps = sim.maxSubsteps();
-  if (max_substeps >= robot::Simulation::kSubstepCap) {
+  if (sim.substepCapReached()) {
     std::fprintf(stderr,
                  "warning: the arm's links are too light for the simulation: even %d physics steps per 1 ms cycle did not keep "
                  "its joint impedance stable, so it may have shaken; its masses and inertias are worth a check\n",

@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 #include "robot/errors.hpp"
@@ -35,9 +36,10 @@ constexpr std::array kSimulationParameters{
 // See stableSubsteps().
 constexpr double kStableStepBound = 3.0;
 // The drift damping acts at most at this rate [1/s] on a joint (d ≤ rate · M_jj): 0.5 Nms/rad on
-// a link lighter than the LWR IV's flange would be a time constant far under a physics step
-// (0.5 µs on 1e-6 kg m²), which no step count integrates. The LWR IV's and arm9's joints all
-// have M_jj ≥ 2e-4 kg m², so theirs is the configured damping.
+// a link far lighter than the LWR IV's flange would be a time constant far under a physics step
+// (2 µs on 1e-6 kg m²), which no affordable step count integrates. The LWR IV's and arm9's
+// joints all have M_jj ≥ 2e-4 kg m², so theirs is the configured damping up to 0.8 Nms/rad
+// (the default is 0.5).
 constexpr double kMaxDriftRate = 4000.0;
 
 // Bullet needs positive masses and inertias; links the URDF leaves without inertia get a token one.
@@ -212,7 +214,8 @@ void Simulation::reset(const Eigen::VectorXd& q) {
   time_ = 0.0;
   steps_ = 0;
   torque_saturations_ = 0;
-  last_substeps_ = stableSubsteps();
+  last_substeps_ = std::min(stableSubsteps(), kSubstepCap);
+  substep_cap_reached_ = false;
   checked_stiffness_ = command_.stiffness;
   checked_damping_ = command_.damping;
   max_substeps_ = 0;
@@ -257,8 +260,10 @@ double Simulation::driftDamping(double joint_inertia) const { return std::min(dr
 
 int Simulation::stableSubsteps() {
   // Bullet integrates semi-implicitly (velocity first, then position with the new velocity). For
-  // M q̈ = −K q − D q̇ that is stable while 2 h c + h² ω² < 4 in every mode, with ω² and c the
-  // largest eigenvalues of M⁻¹K and M⁻¹D. The step keeps a margin of a quarter below that
+  // M q̈ = −K q − D q̇ with damping proportional to stiffness that is stable while
+  // 2 h c + h² ω² < 4 in every mode, with ω² and c the largest eigenvalues of M⁻¹K and M⁻¹D;
+  // D_jj = 2ζ sqrt(K_jj M_jj) is not exactly proportional, so the bound taken from the two
+  // largest eigenvalues is an estimate, and the step keeps a margin of a quarter below that
   // bound, 2 h c + h² ω² ≤ B = 3 (the LWR IV's flange alone needs 2.6 at the default 4 substeps;
   // arm9's wrist, where two of its axes come close to parallel, needed more than 4, and its
   // torques saturated there).
@@ -281,12 +286,15 @@ int Simulation::stableSubsteps() {
         double m_ij = m * scratch.com_velocities.col(i).dot(scratch.com_velocities.col(j));
         if (!isPrismatic(i) && !isPrismatic(j)) m_ij += kinematics_.axis_W(i).dot(I_W * kinematics_.axis_W(j));
         M(i, j) += m_ij;
+        if (i != j) M(j, i) += m_ij;
       }
     }
   }
   const int configured = substeps_;
-  scratch.mass_cholesky.compute(M);  // reads the lower triangle only
-  if (scratch.mass_cholesky.info() != Eigen::Success) return configured;
+  // Not positive definite (a NaN posture, or inertias too small to tell apart): no count can be
+  // justified, so the most.
+  scratch.mass_cholesky.compute(M);
+  if (scratch.mass_cholesky.info() != Eigen::Success) return kSubstepCap + 1;
   // λ_max(M⁻¹A) for a diagonal A ≥ 0 is λ_max(Wᵀ W) with W = L⁻¹ A^½, M = L Lᵀ.
   const auto largestEigenvalue = [&scratch](const Eigen::VectorXd& diagonal) {
     scratch.whitened.setZero();
@@ -294,7 +302,8 @@ int Simulation::stableSubsteps() {
     scratch.mass_cholesky.matrixL().solveInPlace(scratch.whitened);
     scratch.whitened_gram.noalias() = scratch.whitened.transpose() * scratch.whitened;
     scratch.whitened_eigen.compute(scratch.whitened_gram, Eigen::EigenvaluesOnly);
-    return scratch.whitened_eigen.eigenvalues().maxCoeff();
+    return scratch.whitened_eigen.info() == Eigen::Success ? scratch.whitened_eigen.eigenvalues().maxCoeff()
+                                                           : std::numeric_limits<double>::infinity();
   };
   for (int j = 0; j < n; ++j) {
     scratch.damping[j] = 2.0 * command_.damping[j] * std::sqrt(command_.stiffness[j] * M(j, j)) + driftDamping(M(j, j));
@@ -303,9 +312,12 @@ int Simulation::stableSubsteps() {
   const double c = largestEigenvalue(scratch.damping);
   // The positive root of h² ω² + 2 h c = B, written so that ω = 0 needs no special case.
   const double step_bound = kStableStepBound / (c + std::sqrt(c * c + kStableStepBound * omega_squared));
-  if (!std::isfinite(step_bound) || step_bound >= cycle_time_ / configured) return configured;
-  return static_cast<int>(std::min<double>(kSubstepCap, std::ceil(cycle_time_ / step_bound)));
+  if (std::isnan(step_bound)) return kSubstepCap + 1;
+  if (step_bound >= cycle_time_ / configured) return configured;  // also an infinite bound: ω = c = 0
+  return static_cast<int>(std::min<double>(kSubstepCap + 1, std::ceil(cycle_time_ / step_bound)));
 }
+
+const Eigen::MatrixXd& Simulation::jointSpaceInertia() const { return impl_->mass_matrix; }
 
 CommandStatus Simulation::writeCommand(const JointImpedanceCommand& command) {
   const int n = model_->dof();
@@ -347,6 +359,10 @@ void Simulation::step() {
     checked_stiffness_ = command_.stiffness;
     checked_damping_ = command_.damping;
     last_substeps_ = stableSubsteps();
+    if (last_substeps_ > kSubstepCap) {
+      substep_cap_reached_ = true;
+      last_substeps_ = kSubstepCap;
+    }
   }
   const int substeps = last_substeps_;
   max_substeps_ = std::max(max_substeps_, substeps);

@@ -69,14 +69,21 @@ class Simulation final : public RobotBackend {
   std::uint64_t steps() const { return steps_; }
   /// Substeps in which a joint torque hit its effort limit.
   std::uint64_t torqueSaturations() const { return torque_saturations_; }
-  /// Physics steps of the last step(), and the most any step() took since reset().
+  /// Physics steps the next step() takes (what the last one took, or what reset() planned),
+  /// and the most any step() took since reset().
   int lastSubsteps() const { return last_substeps_; }
   int maxSubsteps() const { return max_substeps_; }
+  /// Whether a step since reset() needed more than kSubstepCap physics steps (and took the cap):
+  /// the arm may have shaken in the simulation.
+  bool substepCapReached() const { return substep_cap_reached_; }
   /// The physics steps per cycle the current posture and command need: `sim.substeps`, or
   /// more where the impedance law, applied explicitly, would make the arm oscillate or diverge
-  /// (light links under a stiff command), at most kSubstepCap.
+  /// (light links under a stiff command); kSubstepCap + 1 where more than kSubstepCap are needed
+  /// or the inertia cannot be judged. For the thread that steps the simulation (shared scratch).
   int stableSubsteps();
   static constexpr int kSubstepCap = 1024;
+  /// M(q) at the posture stableSubsteps() last judged [kg m², kg m, kg] (both triangles).
+  const Eigen::MatrixXd& jointSpaceInertia() const;
   /// Joint-space inertia diagonal M_jj(q) [kg m²] at the current posture.
   const Eigen::VectorXd& inertiaDiagonal() const { return inertia_diagonal_; }
   /// Gravity compensation torque g(q) [Nm] at the current posture.
@@ -108,6 +115,7 @@ class Simulation final : public RobotBackend {
   static constexpr std::uint64_t kSubstepCheckCycles = 10;
   Eigen::VectorXd checked_stiffness_, checked_damping_;  // the gains stableSubsteps() last saw
   int last_substeps_ = 0;
+  bool substep_cap_reached_ = false;
   int max_substeps_ = 0;
   int hand_body_ = -1;
   Eigen::Vector3d hand_p_B_ = Eigen::Vector3d::Zero();

@@ -300,7 +300,15 @@ TEST(Simulation, AnArmOfAHundredthOfTheLwrsMassesSettlesOnItsCommandInsteadOfSha
 
 TEST(Simulation, TheLwrKeepsTheConfiguredPhysicsStepsWhereverItStands) {
   // Its joints are heavy enough for sim.substeps under every gain of Tab. A.1, so what it does
-  // does not depend on the step-count rule.
+  // does not depend on the step-count rule. The rule is not idle: allowed a single step, the
+  // stiffest gains need more (its flange: 2hc + h²ω² = 2.6 at 4 steps, 11.6 at 1).
+  ParameterSet one_step = simParameters();
+  one_step.set("sim.substeps", 1.0);
+  Simulation single(lwr4(), nullptr, one_step);
+  single.reset(bentPosture());
+  ASSERT_EQ(single.writeCommand(holdCommand(bentPosture(), 300.0, 0.95)), CommandStatus::kAccepted);
+  EXPECT_GE(single.stableSubsteps(), 3);
+  EXPECT_LE(single.stableSubsteps(), 4);
   std::mt19937 engine(7);
   const Eigen::VectorXd lower = lwr4().lowerLimits(), upper = lwr4().upperLimits();
   Simulation sim(lwr4(), nullptr, simParameters());
@@ -313,6 +321,56 @@ TEST(Simulation, TheLwrKeepsTheConfiguredPhysicsStepsWhereverItStands) {
       EXPECT_EQ(sim.stableSubsteps(), 4) << "posture " << q.transpose() << ", stiffness " << stiffness;
     }
   }
+}
+
+TEST(Simulation, TheJointSpaceInertiaIsTheSumOverTheBodiesOfTheirJacobiansWeighted) {
+  // M = Σ_b m_b J_v,bᵀ J_v,b + J_ω,bᵀ I_b,W J_ω,b, with J_v,b the Jacobian of body b's centre of
+  // mass from Kinematics::pointJacobian and J_ω,b the axes of the joints before it.
+  const RobotModel arm9 = RobotModel::fromUrdfFile(resolveRobotPath("arm9"));
+  Simulation sim(arm9, nullptr, simParameters());
+  std::mt19937 engine(3);
+  const int n = arm9.dof();
+  for (int trial = 0; trial < 5; ++trial) {
+    Eigen::VectorXd q(n);
+    for (int j = 0; j < n; ++j) {
+      q[j] = std::uniform_real_distribution<double>(arm9.softLowerLimits()[j], arm9.softUpperLimits()[j])(engine);
+    }
+    sim.reset(q);
+    sim.stableSubsteps();
+    Kinematics kinematics(arm9);
+    kinematics.update(q);
+    Eigen::MatrixXd expected = Eigen::MatrixXd::Zero(n, n);
+    Matrix3Xd J_v(3, n);
+    for (int b = 1; b <= n; ++b) {
+      const Body& body = arm9.bodies()[static_cast<std::size_t>(b)];
+      const Eigen::Isometry3d& X_WB = kinematics.X_WB(b);
+      kinematics.pointJacobian(b, X_WB * body.p_BCom, J_v);
+      Matrix3Xd J_w = Matrix3Xd::Zero(3, n);
+      for (int j = 0; j < b; ++j) J_w.col(j) = kinematics.axis_W(j);
+      const Eigen::Matrix3d I_W = X_WB.linear() * body.I_BCom * X_WB.linear().transpose();
+      expected += body.mass * J_v.transpose() * J_v + J_w.transpose() * I_W * J_w;
+    }
+    const Eigen::MatrixXd& M = sim.jointSpaceInertia();
+    // The simulation raises every principal moment to at least 1e-6 kg m² (Bullet needs them
+    // positive); the rotational terms are 1e-3 kg m² and more.
+    EXPECT_LT((M - expected).cwiseAbs().maxCoeff(), 2e-6) << "posture " << q.transpose();
+    EXPECT_GT((expected - Eigen::MatrixXd(expected.diagonal().asDiagonal())).cwiseAbs().maxCoeff(), 0.1);  // coupled
+  }
+}
+
+TEST(Simulation, SaysWhenEvenTheMostPhysicsStepsAreNotEnough) {
+  const RobotModel feather = scaledLwr4(1e-4);
+  Simulation sim(feather, nullptr, simParameters());
+  sim.reset(bentPosture());
+  ASSERT_EQ(sim.writeCommand(holdCommand(bentPosture(), 300.0, 0.95)), CommandStatus::kAccepted);
+  sim.step();
+  EXPECT_FALSE(sim.substepCapReached());
+  ASSERT_EQ(sim.writeCommand(holdCommand(bentPosture(), 1e6, 0.95)), CommandStatus::kAccepted);
+  sim.step();
+  EXPECT_TRUE(sim.substepCapReached());
+  EXPECT_EQ(sim.lastSubsteps(), Simulation::kSubstepCap);
+  sim.reset(bentPosture());
+  EXPECT_FALSE(sim.substepCapReached());
 }
 
 TEST(Simulation, AStifferCommandTakesMorePhysicsStepsAtOnce) {
