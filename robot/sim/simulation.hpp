@@ -5,9 +5,10 @@
 //   τ = g(q) + K (q_cmd − q) − D q̇ − d_drift q̇,   D_jj = 2 ζ_j sqrt(K_jj M_jj(q)),
 // where g(q) compensates gravity as the robot's own controller does, ζ is the command's
 // normalized damping, M_jj the joint-space inertia and d_drift an added viscous damping so that
-// the arm does not drift once released (DESIGN §3; on very light links at most 4000 M_jj /s). The torque is clipped to the URDF's effort
-// limits. A *hand* applies an external force at a point on any link (the GUI's mouse, the
-// simulated tutor); τ_ext is reported as the robot would estimate it: J_pᵀ F at the contact.
+// the arm does not drift once released (DESIGN §3; on very light links at most 4000 s⁻¹ M_jj).
+// The torque is clipped to the URDF's effort limits. A *hand* applies an external force at a
+// point on any link (the GUI's mouse, the simulated tutor); τ_ext is reported as the robot would
+// estimate it: J_pᵀ F at the contact.
 //
 // Stepping is deterministic: every step() advances exactly cycleTime() (1 ms) in equal physics
 // steps, with the impedance law re-evaluated in each (the LWR's inner loop runs faster than
