@@ -6,10 +6,13 @@
 #include <osg/MatrixTransform>
 #include <osg/Point>
 #include <osg/ShapeDrawable>
+#include <osgDB/Options>
+#include <osgText/Font>
 #include <osgText/Text>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 
 #include "render/shapes.hpp"
@@ -280,6 +283,126 @@ int showCollisions(RobotGraph& robot, const std::vector<std::string>& touching) 
   return coloured;
 }
 
+std::vector<char32_t> decodeUtf8(const std::string& text) {
+  constexpr char32_t kReplacement = 0xFFFD;
+  std::vector<char32_t> code_points;
+  code_points.reserve(text.size());
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const auto lead = static_cast<unsigned char>(text[i]);
+    int length = 0;
+    char32_t value = 0;
+    char32_t smallest = 0;  // below it the form is overlong
+    if (lead < 0x80) {
+      code_points.push_back(lead);
+      ++i;
+      continue;
+    }
+    if ((lead & 0xE0U) == 0xC0U) {
+      length = 2, value = lead & 0x1FU, smallest = 0x80;
+    } else if ((lead & 0xF0U) == 0xE0U) {
+      length = 3, value = lead & 0x0FU, smallest = 0x800;
+    } else if ((lead & 0xF8U) == 0xF0U) {
+      length = 4, value = lead & 0x07U, smallest = 0x10000;
+    }
+    bool valid = length > 0 && i + static_cast<std::size_t>(length) <= text.size();
+    for (int k = 1; valid && k < length; ++k) {
+      const auto next = static_cast<unsigned char>(text[i + static_cast<std::size_t>(k)]);
+      valid = (next & 0xC0U) == 0x80U;
+      value = (value << 6U) | (next & 0x3FU);
+    }
+    valid = valid && value >= smallest && value <= 0x10FFFF && (value < 0xD800 || value > 0xDFFF);
+    // An invalid lead byte is skipped alone, so that the characters after it still read.
+    code_points.push_back(valid ? value : kReplacement);
+    i += valid ? static_cast<std::size_t>(length) : 1;
+  }
+  return code_points;
+}
+
+namespace {
+
+constexpr float kLegendMargin = 10.0F;
+constexpr float kLegendLine = 20.0F;
+constexpr float kLegendSwatch = 12.0F;
+constexpr float kLegendCharHeight = 14.0F;
+
+// A TrueType face for the labels, read anew for each legend (OSG's cache would share its glyph
+// textures across OpenGL contexts that come and go); null where the system has none, and the
+// labels fall back to OSG's built-in face, which has ASCII glyphs alone.
+osg::ref_ptr<osgText::Font> readLegendFont() {
+  osg::ref_ptr<osgDB::Options> options = new osgDB::Options();
+  options->setObjectCacheHint(osgDB::Options::CACHE_NONE);
+  for (const char* path : {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+                           "/usr/share/fonts/TTF/DejaVuSans.ttf", "/usr/share/fonts/dejavu/DejaVuSans.ttf"}) {
+    if (!std::filesystem::is_regular_file(path)) continue;
+    if (osg::ref_ptr<osgText::Font> font = osgText::readRefFontFile(path, options.get())) return font;
+  }
+  return {};
+}
+
+// `code_points` as the face can draw them: the built-in face shows '?' for what is not ASCII.
+osgText::String drawableText(const std::vector<char32_t>& code_points, bool truetype) {
+  osgText::String text;
+  for (const char32_t c : code_points) {
+    if (!truetype && c == U'\u2026') {
+      text.insert(text.end(), 3, U'.');
+      continue;
+    }
+    const bool printable = c >= 0x20 && c != 0x7F && !(c >= 0x80 && c < 0xA0);
+    text.push_back(!printable ? U'?' : (truetype || c < 0x80 ? static_cast<unsigned int>(c) : U'?'));
+  }
+  return text;
+}
+
+osg::ref_ptr<osgText::Text> makeLabel(const osgText::String& label, osgText::Font* font) {
+  osg::ref_ptr<osgText::Text> text = new osgText::Text();
+  if (font != nullptr) text->setFont(font);
+  text->setCharacterSize(kLegendCharHeight);
+  text->setColor(osg::Vec4(0.08F, 0.08F, 0.1F, 1.0F));
+  text->setAxisAlignment(osgText::Text::SCREEN);
+  // On the base line, so that rows with and without descenders line up with their swatches.
+  text->setAlignment(osgText::Text::LEFT_BASE_LINE);
+  text->setText(label);
+  return text;
+}
+
+float labelWidth(osgText::Text& text) {
+  const osg::BoundingBox& box = text.getBoundingBox();
+  return box.valid() ? box.xMax() - box.xMin() : 0.0F;
+}
+
+// The label, cut at a code point and ended with an ellipsis where it would be wider than
+// `max_width` pixels.
+osg::ref_ptr<osgText::Text> fittedLabel(const std::string& utf8, osgText::Font* font, float max_width) {
+  const bool truetype = font != nullptr;
+  std::vector<char32_t> code_points = decodeUtf8(utf8);
+  osg::ref_ptr<osgText::Text> text = makeLabel(drawableText(code_points, truetype), font);
+  const std::vector<char32_t> ellipsis =
+      truetype ? std::vector<char32_t>{U'\u2026'} : std::vector<char32_t>{U'.', U'.', U'.'};
+  for (int attempt = 0; attempt < 8 && labelWidth(*text) > max_width && !code_points.empty(); ++attempt) {
+    // Glyph widths vary, so cut in proportion and measure again.
+    const float ratio = max_width / labelWidth(*text);
+    const auto keep = static_cast<std::size_t>(
+        std::max(0.0F, std::floor(ratio * static_cast<float>(code_points.size())) - static_cast<float>(ellipsis.size())));
+    code_points.resize(std::min(keep, code_points.size() - 1));
+    std::vector<char32_t> shown = code_points;
+    shown.insert(shown.end(), ellipsis.begin(), ellipsis.end());
+    text->setText(drawableText(shown, truetype));
+  }
+  return text;
+}
+
+}  // namespace
+
+std::vector<LegendEntry> legendRows(const std::vector<LegendEntry>& entries, int viewport_height) {
+  const auto fitting = static_cast<std::size_t>(
+      std::max(1.0F, std::floor((static_cast<float>(viewport_height) - 2.0F * kLegendMargin) / kLegendLine)));
+  if (entries.size() <= fitting) return entries;
+  std::vector<LegendEntry> rows(entries.begin(), entries.begin() + static_cast<std::ptrdiff_t>(fitting - 1));
+  rows.push_back({"\u2026 and " + std::to_string(entries.size() - rows.size()) + " more", Eigen::Vector4f::Zero()});
+  return rows;
+}
+
 osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, int viewport_width,
                                      int viewport_height) {
   osg::ref_ptr<osg::Camera> hud = new osg::Camera();
@@ -296,15 +419,11 @@ osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, in
   state->setAttributeAndModes(new osg::BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA));
   if (entries.empty()) return hud;
 
-  constexpr float kMargin = 10.0F;
-  constexpr float kLine = 20.0F;
-  constexpr float kSwatch = 12.0F;
-  constexpr float kCharHeight = 14.0F;
-  const float top = static_cast<float>(viewport_height) - kMargin;
-  const auto rows = static_cast<float>(entries.size());
-  std::size_t longest = 0;
-  for (const LegendEntry& entry : entries) longest = std::max(longest, entry.label.size());
-  const float width = 3.0F * kMargin + kSwatch + 0.62F * kCharHeight * static_cast<float>(longest);
+  const std::vector<LegendEntry> rows = legendRows(entries, viewport_height);
+  const float top = static_cast<float>(viewport_height) - kLegendMargin;
+  const float text_x = 2.0F * kLegendMargin + kLegendSwatch;
+  const float max_label_width = std::max(kLegendCharHeight, static_cast<float>(viewport_width) - text_x - 2.0F * kLegendMargin);
+  const osg::ref_ptr<osgText::Font> font = readLegendFont();
 
   osg::ref_ptr<osg::Geode> geode = new osg::Geode();
   // A light panel behind the entries, then one swatch per entry (quads, drawn in order).
@@ -316,21 +435,25 @@ osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, in
       colors->push_back(color);
     }
   };
-  quad(kMargin * 0.5F, top - rows * kLine - kMargin * 0.5F, kMargin * 0.5F + width, top + kMargin * 0.5F,
+  // Labels first: the panel behind them is as wide as the widest.
+  std::vector<osg::ref_ptr<osgText::Text>> labels;
+  float widest = 0.0F;
+  for (const LegendEntry& row : rows) {
+    labels.push_back(fittedLabel(row.label, font.get(), max_label_width));
+    widest = std::max(widest, labelWidth(*labels.back()));
+  }
+  const float bottom = top - static_cast<float>(rows.size()) * kLegendLine - kLegendMargin * 0.5F;
+  quad(kLegendMargin * 0.5F, bottom, text_x + widest + kLegendMargin, top + kLegendMargin * 0.5F,
        osg::Vec4(1.0F, 1.0F, 1.0F, 0.78F));
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    const float y = top - static_cast<float>(i + 1) * kLine + 0.5F * (kLine - kSwatch);
-    Eigen::Vector4f rgba = entries[i].rgba;
-    rgba[3] = 1.0F;
-    quad(kMargin, y, kMargin + kSwatch, y + kSwatch, toOsgColor(rgba));
-    osg::ref_ptr<osgText::Text> text = new osgText::Text();
-    text->setCharacterSize(kCharHeight);
-    text->setColor(osg::Vec4(0.08F, 0.08F, 0.1F, 1.0F));
-    text->setAxisAlignment(osgText::Text::SCREEN);
-    text->setAlignment(osgText::Text::LEFT_BOTTOM);
-    text->setPosition(osg::Vec3(2.0F * kMargin + kSwatch, y, 0.0F));
-    text->setText(entries[i].label);
-    geode->addDrawable(text);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const float y = top - static_cast<float>(i + 1) * kLegendLine + 0.5F * (kLegendLine - kLegendSwatch);
+    if (!rows[i].rgba.isZero()) {
+      Eigen::Vector4f rgba = rows[i].rgba;
+      rgba[3] = 1.0F;
+      quad(kLegendMargin, y, kLegendMargin + kLegendSwatch, y + kLegendSwatch, toOsgColor(rgba));
+    }
+    labels[i]->setPosition(osg::Vec3(text_x, y + 1.0F, 0.0F));
+    geode->addDrawable(labels[i]);
   }
   osg::ref_ptr<osg::Geometry> panel = new osg::Geometry();
   panel->setVertexArray(quads);

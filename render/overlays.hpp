@@ -124,9 +124,19 @@ struct LegendEntry {
   Eigen::Vector4f rgba;
 };
 /// The legend as a head-up display: a camera drawn after the scene, in pixels of a viewport of
-/// width x height, with one coloured swatch and label per entry in the top-left corner.
+/// width x height, with one coloured swatch and label per entry in the top-left corner. Labels
+/// are UTF-8 (area names are the tutor's); each is cut with an ellipsis where it would leave the
+/// viewport, and entries beyond the viewport's height end in one "… and N more" line.
 osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, int viewport_width,
                                      int viewport_height);
+
+/// The code points of UTF-8 `text`; a byte that starts no valid sequence (stray continuation,
+/// overlong form, surrogate, beyond U+10FFFF, cut short) reads as U+FFFD.
+std::vector<char32_t> decodeUtf8(const std::string& text);
+
+/// The legend's rows for a viewport `viewport_height` pixels high: all entries when they fit,
+/// else as many as fit but one and a last row "… and N more" (rgba all zero: no swatch).
+std::vector<LegendEntry> legendRows(const std::vector<LegendEntry>& entries, int viewport_height);
 
 // --- The ITM graph, updated incrementally ---------------------------------------------------
 

@@ -303,6 +303,65 @@ TEST_F(OverlayRender, LegendDrawsItsSwatchesInTheTopLeftCorner) {
   EXPECT_EQ(image.pixel(kWidth - 5, kHeight - 5), empty.pixel(kWidth - 5, kHeight - 5));
 }
 
+// Pixels in [x0, x1) x [y0, y1) (rows from the top) as dark as the labels' ink.
+int inkPixels(const Image& image, int x0, int y0, int x1, int y1) {
+  int count = 0;
+  for (int y = y0; y < y1; ++y) {
+    for (int x = x0; x < x1; ++x) {
+      const auto p = image.pixel(x, y);
+      if (p[0] < 110 && p[1] < 110 && p[2] < 110) ++count;
+    }
+  }
+  return count;
+}
+
+TEST_F(OverlayRender, LegendDrawsLabelsOutsideAscii) {
+  // The first row's label spans x >= 32, y (from the top) in [10, 30].
+  world_.overlays().setContent(OverlayLayer::kLegend, makeLegend({{"", OverlayPalette::area(0)}}, kWidth, kHeight));
+  const int blank = inkPixels(render(), 32, 10, 160, 30);
+  world_.overlays().setContent(OverlayLayer::kLegend,
+                               makeLegend({{"\u00c4\u00d6\u00dc \u0416\u0414 \u03a9", OverlayPalette::area(0)}}, kWidth, kHeight));
+  EXPECT_GT(inkPixels(render(), 32, 10, 160, 30), blank + 20) << "umlauts, Cyrillic and Greek leave ink";
+}
+
+TEST_F(OverlayRender, LegendCutsALabelTooLongForThePicture) {
+  const Image empty = render();
+  world_.overlays().setContent(OverlayLayer::kLegend,
+                               makeLegend({{std::string(300, 'W'), OverlayPalette::area(0)}}, kWidth, kHeight));
+  const Image image = render();
+  EXPECT_GT(inkPixels(image, kWidth / 2, 10, kWidth - 20, 30), 20) << "the label runs across the picture";
+  for (int y = 0; y < 40; ++y) {
+    EXPECT_EQ(image.pixel(kWidth - 2, y), empty.pixel(kWidth - 2, y)) << "panel or label at the right edge, row " << y;
+  }
+}
+
+TEST(OverlayLegend, RowsBeyondThePicturesHeightEndInOneCountingRow) {
+  std::vector<LegendEntry> entries;
+  for (int i = 0; i < 100; ++i) entries.push_back({"area " + std::to_string(i), OverlayPalette::area(i)});
+  // 240 px less two 10 px margins hold eleven 20 px rows.
+  const std::vector<LegendEntry> rows = legendRows(entries, 240);
+  ASSERT_EQ(rows.size(), 11U);
+  EXPECT_EQ(rows[9].label, "area 9");
+  EXPECT_EQ(rows[10].label, "\u2026 and 90 more");
+  EXPECT_TRUE(rows[10].rgba.isZero()) << "no swatch";
+  entries.resize(11);
+  EXPECT_EQ(legendRows(entries, 240).size(), 11U) << "all that fit are shown as they are";
+  EXPECT_EQ(legendRows(entries, 240).back().label, "area 10");
+  EXPECT_EQ(legendRows(entries, 1).size(), 1U) << "at least one row";
+}
+
+TEST(OverlayLegend, DecodesUtf8AndReadsBrokenBytesAsReplacementCharacters) {
+  EXPECT_EQ(decodeUtf8("a\u00e9\u20ac\U0001F600"), (std::vector<char32_t>{U'a', 0xE9, 0x20AC, 0x1F600}));
+  constexpr char32_t kBad = 0xFFFD;
+  EXPECT_EQ(decodeUtf8("\x80z"), (std::vector<char32_t>{kBad, U'z'})) << "stray continuation byte";
+  EXPECT_EQ(decodeUtf8("\xC0\xAF"), (std::vector<char32_t>{kBad, kBad})) << "overlong '/'";
+  EXPECT_EQ(decodeUtf8("\xED\xA0\x80"), (std::vector<char32_t>{kBad, kBad, kBad})) << "a surrogate";
+  EXPECT_EQ(decodeUtf8("\xF4\x90\x80\x80"), (std::vector<char32_t>(4, kBad))) << "beyond U+10FFFF";
+  EXPECT_EQ(decodeUtf8("ab\xE2\x82"), (std::vector<char32_t>{U'a', U'b', kBad, kBad})) << "cut short";
+  EXPECT_EQ(decodeUtf8("\xFF"), (std::vector<char32_t>{kBad}));
+  EXPECT_TRUE(decodeUtf8("").empty());
+}
+
 TEST_F(OverlayRender, GhostArmTintsThePictureWithoutHidingTheArm) {
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
   world_.setRobot(model);
