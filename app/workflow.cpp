@@ -730,8 +730,10 @@ void Workflow::recordSample() {
   if (state_.time - last_sample_time_ < options_.sample_period - 1e-9) return;
   last_sample_time_ = state_.time;
   const Eigen::Vector3d p = state_.p_WT();
-  // Every position of the configuration stage feeds the ITM (DESIGN §3, Chap. 7).
-  if (stage_ == Stage::kConfiguration) {
+  // Every position of the configuration stage feeds the ITM (DESIGN §3, Chap. 7), a map of the
+  // visited free space: a simulated arm that sank into an obstacle (the simulation lets links
+  // pass through) visited no free space there.
+  if (stage_ == Stage::kConfiguration && !state_.in_contact) {
     itm_.insert(p, state_.q);
     ++itm_version_;
   }

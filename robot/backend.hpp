@@ -21,6 +21,9 @@ struct RobotState {
   Eigen::VectorXd q_cmd;        ///< the command the inner loop currently tracks
   Eigen::VectorXd tau_ext;      ///< estimated external joint torques [Nm] (FRI estExtJntTrq)
   Eigen::Isometry3d X_WT = Eigen::Isometry3d::Identity();  ///< tip pose for q
+  /// The simulation alone: a link overlaps an obstacle, the table or another link, a posture no
+  /// real arm can be in (the simulated links pass through). A real robot, over FRI, reports false.
+  bool in_contact = false;
   Eigen::Vector3d p_WT() const { return X_WT.translation(); }
 
   /// Sizes every vector for `dof` joints (zeros), so that later reads do not allocate.

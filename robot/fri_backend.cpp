@@ -108,6 +108,7 @@ void FriBackend::readState(RobotState& state) const {
   state.q_cmd = state_.q_cmd;
   state.tau_ext = state_.tau_ext;
   state.X_WT = state_.X_WT;
+  state.in_contact = false;
 }
 
 bool FriBackend::commandingPermitted() const {

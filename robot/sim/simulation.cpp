@@ -414,6 +414,7 @@ void Simulation::readState(RobotState& state) const {
   state.qd = qd_;
   state.q_cmd = command_.q_cmd;
   state.X_WT = kinematics_.X_WT();
+  state.in_contact = !contacts_.empty();
   // τ_ext as the robot estimates it: the hand's force mapped through the contact's Jacobian.
   if (hand_body_ > 0) {
     kinematics_.pointJacobian(hand_body_, kinematics_.X_WB(hand_body_) * hand_p_B_, jacobian_);

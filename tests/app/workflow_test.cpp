@@ -49,6 +49,7 @@ class ScriptedBackend final : public robot::RobotBackend {
     state_.X_WT = kinematics_.X_WT();
   }
   void rest() { state_.qd.setZero(); state_.tau_ext.setZero(); }
+  void overlapObstacle(bool in_contact) { state_.in_contact = in_contact; }
   const robot::JointImpedanceCommand& last() const { return last_; }
   const robot::RobotState& state() const { return state_; }
 
@@ -191,6 +192,34 @@ TEST(Workflow, TriggersSelectTheInteractionControllerOfEachSubStage) {
   workflow.step();
   EXPECT_DOUBLE_EQ(f.backend.last().stiffness[0], 80.0);
   EXPECT_TRUE(f.backend.last().q_cmd.isApprox(posture(0.3), 1e-12));  // springs back to q_fixed
+}
+
+TEST(Workflow, TheItmLeavesOutWhereTheSimulatedArmOverlapsAnObstacle) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  const auto tipAt = [](const Eigen::VectorXd& q) {
+    robot::Kinematics kinematics(lwr4());
+    kinematics.update(q);
+    return Eigen::Vector3d(kinematics.X_WT().translation());
+  };
+  const auto nearestNodeTo = [&](const Eigen::Vector3d& p) {
+    double nearest = 1e9;
+    for (int id : workflow.itm().nodeIds()) nearest = std::min(nearest, (workflow.itm().prototype(id).head<3>() - p).norm());
+    return nearest;
+  };
+  // Free, then sunk into an obstacle on the other side, then free again.
+  for (const auto& [a1, overlapping] : {std::pair{-1.2, false}, std::pair{1.2, true}, std::pair{0.0, false}}) {
+    f.backend.overlapObstacle(overlapping);
+    for (int i = 0; i <= 50; ++i) {
+      f.backend.move(posture(a1 + 0.2 * i / 50.0), 0.3);
+      run(workflow, 0.01);
+    }
+  }
+  ASSERT_GE(workflow.itm().nodeCount(), 2);
+  EXPECT_LT(nearestNodeTo(tipAt(posture(-1.1))), 0.05);
+  EXPECT_LT(nearestNodeTo(tipAt(posture(0.1))), 0.05);
+  EXPECT_GT(nearestNodeTo(tipAt(posture(1.3))), 0.3) << "no node where the arm overlapped the obstacle";
 }
 
 TEST(Workflow, FullSessionCreatesAreasLearnsAndReachesExecution) {

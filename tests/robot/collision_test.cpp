@@ -91,6 +91,9 @@ TEST(CollisionWorld, ReportsABoxAcrossTheArmsPathWithTheLinkThatHitsIt) {
   Simulation sim(threeLinkArm(), &scene, parameters);
   sim.reset(Eigen::Vector3d(0.0, 0.0, 0.0));
   EXPECT_TRUE(sim.contacts().empty());
+  RobotState free_state;
+  sim.readState(free_state);
+  EXPECT_FALSE(free_state.in_contact);
   ParameterSet limits(limiterParameters());
   CommandLimiter limiter(threeLinkArm(), limits, sim.cycleTime());
   limiter.reset(Eigen::Vector3d::Zero());
@@ -107,6 +110,7 @@ TEST(CollisionWorld, ReportsABoxAcrossTheArmsPathWithTheLinkThatHitsIt) {
     if (first_contact_angle < 0 && !sim.contacts().empty()) {
       RobotState state;
       sim.readState(state);
+      EXPECT_TRUE(state.in_contact) << "the measured state says the arm overlaps an obstacle";
       first_contact_angle = state.q[1];
     }
   }
