@@ -359,6 +359,16 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planWay(const Eigen::VectorXd& from
 std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested,
                                                           int* reaching, bool push_links_clear) {
   if (reaching != nullptr) *reaching = 0;
+  too_heavy_candidates_ = 0;
+  lightest_rejected_ = {};
+  // A person does not choose a posture the arm cannot hold up against gravity.
+  const auto holdable = [&](const Eigen::VectorXd& q_candidate) {
+    const robot::Simulation::GravityLoad load = arm()->gravityLoad(q_candidate);
+    if (load.ratio <= kHoldableLoad) return true;
+    ++too_heavy_candidates_;
+    if (too_heavy_candidates_ == 1 || load.ratio < lightest_rejected_.ratio) lightest_rejected_ = load;
+    return false;
+  };
   const int dof = model_->dof();
   const Eigen::VectorXd lower = model_->softLowerLimits();
   const Eigen::VectorXd upper = model_->softUpperLimits();
@@ -416,7 +426,7 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
     if ((kinematics_.p_WT() - p_W).norm() > 1e-3) continue;
     if (reaching != nullptr) ++*reaching;
     world_->update(q);
-    if (!world_->contacts().empty()) continue;
+    if (!world_->contacts().empty() || !holdable(q)) continue;
     const double clearance = world_->clearance(0.5).distance;
     candidates.push_back({PostureChoice{clearance >= options_.min_clearance, q, clearance}, score(q, clearance)});
   }
@@ -433,7 +443,7 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
       kinematics_.update(q);
       if ((kinematics_.p_WT() - p_W).norm() > 1e-3) continue;
       world_->update(q);
-      if (!world_->contacts().empty()) continue;
+      if (!world_->contacts().empty() || !holdable(q)) continue;
       const double clearance = world_->clearance(0.5).distance;
       if (clearance <= start.choice.clearance) continue;
       candidates.push_back({PostureChoice{clearance >= options_.min_clearance, q, clearance}, score(q, clearance)});
@@ -756,9 +766,14 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
   int reaching = 0;
   const std::vector<PostureChoice> postures = choosePostures(area.target, suggested, &reaching, !area.automatic);
   if (postures.empty()) {
-    area.failure = reaching == 0 ? "no posture within the joint limits puts the tip there (" + std::to_string(options_.posture_candidates) +
-                                       " IK searches)"
-                                 : "every posture found that reaches it makes a contact";
+    if (reaching == 0) {
+      area.failure = "no posture within the joint limits puts the tip there (" + std::to_string(options_.posture_candidates) + " IK searches)";
+    } else if (too_heavy_candidates_ > 0) {
+      area.failure = "the joints cannot hold the arm up there: of the postures found that reach it without a contact, the "
+                     "lightest needs " + arm()->describe(lightest_rejected_);
+    } else {
+      area.failure = "every posture found that reaches it makes a contact";
+    }
     return false;
   }
   if (!postures.front().found) {

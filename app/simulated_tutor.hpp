@@ -138,6 +138,8 @@ class SimulatedTutor {
   /// candidate reached p_W collision-free; `reaching` (if given) counts the candidates that put
   /// the tip on p_W at all, with or without a contact. With `push_links_clear`, where no
   /// candidate keeps the clearance, the best ones are pushed clear (TutorOptions::clearing_candidates).
+  /// A posture whose gravity load exceeds kHoldableLoad of a joint's effort is left out (the arm
+  /// would sag out of it); lightest_rejected_ keeps the least such load of the last call.
   std::vector<PostureChoice> choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested,
                                             int* reaching = nullptr, bool push_links_clear = false);
 
@@ -259,6 +261,13 @@ class SimulatedTutor {
   std::uint64_t ticks_ = 0;
   double wall_start_ = -1.0;
   std::string last_failure_detail_;
+  // Of the last choosePostures(): the candidates that reached p_W free of contacts but that the
+  // joints could not hold against gravity, and the least load among them.
+  int too_heavy_candidates_ = 0;
+  robot::Simulation::GravityLoad lightest_rejected_;
+  /// The share of a joint's effort limit gravity may take at a posture the tutor chooses: the
+  /// rest moves the arm and holds it against the hand.
+  static constexpr double kHoldableLoad = 0.9;
   std::vector<Eigen::Vector3d> check_points_;
   std::vector<bool> check_failed_;
 };

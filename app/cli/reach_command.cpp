@@ -64,6 +64,9 @@ Json runReach(const ReachOptions& options) {
   request.max_time = options.max_time;
 
   const robot::ReachResult result = robot::reach(model, &scene, parameters, request);
+  if (!result.gravity_overload.empty()) {
+    std::fprintf(stderr, "warning: the joints cannot hold the arm up: %s (the URDF's <limit effort>)\n", result.gravity_overload.c_str());
+  }
   Json events = Json::array();
   for (const auto& event : result.collision_events) {
     events.push_back({{"time_s", event.time}, {"link", event.link}, {"other", event.other}, {"self", event.self_collision}});
@@ -88,6 +91,7 @@ Json runReach(const ReachOptions& options) {
           {"null_space_scaled", result.null_space_scaled},
           {"torque_saturations", result.torque_saturations},
           {"max_substeps", result.max_substeps},
+          {"gravity_overload", result.gravity_overload},
           {"rejected_commands", result.rejected_commands},
           {"target", toJson(target)},
           {"position", toJson(result.position)},

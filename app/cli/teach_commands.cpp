@@ -150,6 +150,17 @@ Json runTeach(const TeachOptions& options) {
   robot::Simulation& sim = *owned_sim;
   const Eigen::VectorXd home = app::homePosture(model, scene);
   if (!home.isApprox(model.midPosture())) sim.reset(home);
+  // Joints too weak to hold the arm at its start posture let it sag before any hand touches it,
+  // into the table or an obstacle, and every later failure would read as a contact.
+  robot::RobotState start_state;
+  sim.readState(start_state);
+  const robot::Simulation::GravityLoad start_load = sim.gravityLoad(start_state.q);
+  std::string start_sags;
+  if (start_load.ratio > 1.0) {
+    start_sags = "the arm cannot hold itself up at its start posture: it needs " + sim.describe(start_load) +
+                 " (the URDF's <limit effort>)";
+    std::fprintf(stderr, "warning: %s\n", start_sags.c_str());
+  }
   // fri-sim: the same Bullet arm behind the FRI controller stand-in in lockstep, in-process; the
   // workflow drives it through RobotConnection and the FRI backend over UDP loopback, as it
   // drives the real LWR IV, while the tutor's hands push the arm behind the stand-in.
@@ -443,6 +454,7 @@ Json runTeach(const TeachOptions& options) {
                  {"tutor", tutor_areas},
                  {"simulated_time_s", report.simulated_time},
                  {"max_substeps", max_substeps},
+                 {"start_gravity_load", start_load.ratio},
                  {"wall_time_s", wall_seconds},
                  {"interrupted", report.interrupted}};
   if (report.interrupted) {
@@ -465,7 +477,8 @@ Json runTeach(const TeachOptions& options) {
   if (workflow.areas().empty()) {
     // The session is written all the same (events, the ITM of the attempts): nothing is lost.
     const std::string reason = report.areas.empty() ? std::string("none was tried") : report.areas.front().failure;
-    throw CommandFailed("teach: no training area could be taught (" + std::to_string(report.areas.size()) +
+    throw CommandFailed("teach: no training area could be taught" + (start_sags.empty() ? "" : ": " + start_sags) + " (" +
+                            std::to_string(report.areas.size()) +
                             " tried; the first: " + reason + "); the session was written to " + options.out,
                         std::move(result));
   }

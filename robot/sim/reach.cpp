@@ -1,5 +1,6 @@
 #include "robot/sim/reach.hpp"
 
+#include <array>
 #include <cmath>
 
 #include "robot/errors.hpp"
@@ -98,6 +99,15 @@ ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSe
   result.null_space_scaled = controller.nullSpaceScaled();
   result.torque_saturations = sim.torqueSaturations();
   result.max_substeps = sim.maxSubsteps();
+  const std::array<std::pair<const Eigen::VectorXd*, const char*>, 2> checked = {
+      {{&request.start, "the start"}, {&result.q, "the final posture"}}};
+  for (const auto& [checked_q, where] : checked) {
+    const Simulation::GravityLoad load = sim.gravityLoad(*checked_q);
+    if (load.ratio > 1.0) {
+      result.gravity_overload = std::string("at ") + where + " the arm needs " + sim.describe(load);
+      break;
+    }
+  }
   return result;
 }
 

@@ -50,6 +50,9 @@ struct ReachResult {
   std::uint64_t torque_saturations = 0;
   int max_substeps = 0;                 ///< the most physics steps one control cycle took
   std::uint64_t rejected_commands = 0;  ///< commands the simulated robot refused (should be 0)
+  /// Where the joints cannot hold the arm against gravity at the start or the final posture
+  /// (Simulation::gravityLoad above 1): which, and how much; empty otherwise.
+  std::string gravity_overload;
 };
 
 /// Runs the simulation until the target is reached (error below tolerance and the command at

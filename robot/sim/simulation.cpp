@@ -234,26 +234,58 @@ void Simulation::readJoints() {
 
 void Simulation::computeModelTerms() {
   kinematics_.update(q_);
+  modelTerms(kinematics_, gravity_torque_, &inertia_diagonal_);
+}
+
+void Simulation::modelTerms(const Kinematics& kinematics, Eigen::VectorXd& gravity_torque,
+                            Eigen::VectorXd* inertia_diagonal) const {
   const int n = model_->dof();
-  gravity_torque_.setZero();
-  inertia_diagonal_.setZero();
+  gravity_torque.setZero(n);
+  if (inertia_diagonal != nullptr) inertia_diagonal->setZero(n);
   for (int j = 0; j < n; ++j) {
-    const Eigen::Vector3d axis = kinematics_.axis_W(j);
-    const Eigen::Vector3d origin = kinematics_.X_WB(j + 1).translation();
-    const bool prismatic = model_->joints()[static_cast<std::size_t>(j)].type == JointType::kPrismatic;
+    const Eigen::Vector3d axis = kinematics.axis_W(j);
+    const Eigen::Vector3d origin = kinematics.X_WB(j + 1).translation();
+    const bool prismatic = isPrismatic(j);
     for (int b = j + 1; b <= n; ++b) {
-      const Eigen::Isometry3d& X_WB = kinematics_.X_WB(b);
+      const Eigen::Isometry3d& X_WB = kinematics.X_WB(b);
       const Eigen::Vector3d c_W = X_WB * coms_[static_cast<std::size_t>(b)];
       const double m = masses_[static_cast<std::size_t>(b)];
       // ∂c/∂q_j: the velocity of the body's centre of mass for a unit joint velocity.
       const Eigen::Vector3d v = prismatic ? axis : Eigen::Vector3d(axis.cross(c_W - origin));
-      gravity_torque_[j] += m * gravity_ * v.z();
-      inertia_diagonal_[j] += m * v.squaredNorm();
+      gravity_torque[j] += m * gravity_ * v.z();
+      if (inertia_diagonal == nullptr) continue;
+      (*inertia_diagonal)[j] += m * v.squaredNorm();
       if (!prismatic) {
-        inertia_diagonal_[j] += axis.dot(X_WB.linear() * inertias_[static_cast<std::size_t>(b)] * X_WB.linear().transpose() * axis);
+        (*inertia_diagonal)[j] += axis.dot(X_WB.linear() * inertias_[static_cast<std::size_t>(b)] * X_WB.linear().transpose() * axis);
       }
     }
   }
+}
+
+std::string Simulation::describe(const GravityLoad& load) const {
+  if (load.joint < 0) return "no joint with an effort limit";
+  const char* unit = isPrismatic(load.joint) ? " N" : " Nm";
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(load.torque < 10.0 ? 1 : 0) << "joint '"
+       << model_->joints()[static_cast<std::size_t>(load.joint)].name << "' to hold " << load.torque << unit
+       << " against gravity, " << (load.ratio > 1.0 ? "above" : "within") << " its effort limit of "
+       << std::setprecision(load.effort < 10.0 ? 1 : 0) << load.effort << unit;
+  return text.str();
+}
+
+Simulation::GravityLoad Simulation::gravityLoad(const Eigen::VectorXd& q) const {
+  if (q.size() != model_->dof()) throw InputError("gravityLoad: expected " + std::to_string(model_->dof()) + " joint values");
+  Kinematics kinematics(*model_);
+  kinematics.update(q);
+  Eigen::VectorXd gravity_torque;
+  modelTerms(kinematics, gravity_torque, nullptr);
+  GravityLoad load;
+  for (int j = 0; j < model_->dof(); ++j) {
+    if (effort_[j] <= 0.0) continue;
+    const double ratio = std::abs(gravity_torque[j]) / effort_[j];
+    if (load.joint < 0 || ratio > load.ratio) load = {j, std::abs(gravity_torque[j]), effort_[j], ratio};
+  }
+  return load;
 }
 
 double Simulation::driftDamping(double joint_inertia) const { return std::min(drift_damping_, kMaxDriftRate * joint_inertia); }

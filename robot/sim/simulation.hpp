@@ -21,6 +21,7 @@
 // matters for evaluations is that no contact goes unnoticed.
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "robot/backend.hpp"
@@ -90,10 +91,26 @@ class Simulation final : public RobotBackend {
   /// Gravity compensation torque g(q) [Nm] at the current posture.
   const Eigen::VectorXd& gravityTorque() const { return gravity_torque_; }
 
+  /// The joint gravity loads most against its effort limit at a posture: |g_j(q)| / effort_j
+  /// largest (a URDF effort of 0 counts as unlimited). Above 1 the joint cannot hold the arm
+  /// there and it sags, whatever it is commanded. Allocates: not for the control cycle.
+  struct GravityLoad {
+    int joint = -1;          ///< -1: every joint is unlimited
+    double torque = 0.0;     ///< |g_j(q)| [Nm or N]
+    double effort = 0.0;     ///< the joint's effort limit [Nm or N]
+    double ratio = 0.0;      ///< torque / effort
+  };
+  GravityLoad gravityLoad(const Eigen::VectorXd& q) const;
+  /// "joint 'j2' to hold 850 Nm against gravity, above its effort limit of 100 Nm" (N for a
+  /// prismatic joint; "above" or "within").
+  std::string describe(const GravityLoad& load) const;
+
  private:
   struct Impl;
   void readJoints();
   void computeModelTerms();  // kinematics, g(q), M_jj(q) at q_
+  // g(q) and, when given, M_jj(q) at the posture `kinematics` was updated to.
+  void modelTerms(const Kinematics& kinematics, Eigen::VectorXd& gravity_torque, Eigen::VectorXd* inertia_diagonal) const;
   double driftDamping(double joint_inertia) const;  // sim.drift_damping, bounded for light links
   bool isPrismatic(int joint) const { return model_->joints()[static_cast<std::size_t>(joint)].type == JointType::kPrismatic; }
 

@@ -390,6 +390,33 @@ TEST(SimulatedTutor, SaysWhyAnAreaInsideAnObstacleOrOutOfReachIsNotTaught) {
   EXPECT_EQ(teaching.workflow->areas().size(), 1U);
 }
 
+// The LWR IV with a shoulder joint (A2) of 3 Nm: it cannot hold the arm in any posture that
+// reaches setup A's first area (a person sees the arm sink), and the area's failure says so
+// instead of naming the contacts of the sunken arm.
+TEST(SimulatedTutor, SaysWhenTheJointsCannotHoldTheArmInAnyPostureReachingTheArea) {
+  const std::filesystem::path urdf_file = resolveRobotPath("lwr4");
+  std::ostringstream text;
+  text << std::ifstream(urdf_file).rdbuf();
+  std::string urdf = text.str();
+  const std::size_t a2 = urdf.find("<joint name=\"A2\"");
+  ASSERT_NE(a2, std::string::npos);
+  const std::size_t effort = urdf.find("effort=\"176.0\"", a2);
+  ASSERT_NE(effort, std::string::npos);
+  urdf.replace(effort, std::string("effort=\"176.0\"").size(), "effort=\"3.0\"");
+  const robot::RobotModel weak = robot::RobotModel::fromUrdfString(urdf, urdf_file.parent_path());
+
+  robot::Scene scene = robot::loadScene("setup_A");
+  scene.training_areas.resize(1);
+  ShortTeaching teaching(scene, weak);
+  teaching.tutor_options.check_points = 0;
+  const TutorReport report = teaching.configure(1);
+  ASSERT_GE(report.areas.size(), 1U);
+  EXPECT_FALSE(report.areas[0].taught);
+  EXPECT_NE(report.areas[0].failure.find("the joints cannot hold the arm up there"), std::string::npos) << report.areas[0].failure;
+  EXPECT_NE(report.areas[0].failure.find("joint 'A2'"), std::string::npos) << report.areas[0].failure;
+  EXPECT_NE(report.areas[0].failure.find("above its effort limit of 3.0 Nm"), std::string::npos) << report.areas[0].failure;
+}
+
 // The LWR IV standing straight up, an area beside it at x = 0: the tip pushed towards it (in the
 // plane x = 0, through every joint axis) turns no joint, and on_affected never fired at any force
 // (the area was given up). The tutor pushes where the arm gives instead.

@@ -87,6 +87,41 @@ TEST(RobotCli, ReachWithoutASceneIsReachInTheEmptyScene) {
   std::filesystem::remove(urdf);
 }
 
+// A 5 kg forearm held out level pulls about 10 Nm on its shoulder: with 2 Nm of effort the
+// arm cannot hold itself, and reach says so beside its status; with 200 Nm it is silent.
+TEST(RobotCli, ReachSaysWhenTheJointsCannotHoldTheArmUp) {
+  const auto write_arm = [](double effort) {
+    const std::filesystem::path urdf = std::filesystem::temp_directory_path() /
+                                       ("flexirob-reach-weak-" + std::to_string(::getpid()) + "-" + std::to_string(static_cast<int>(effort)) + ".urdf");
+    const std::string limit = "velocity=\"2\" effort=\"" + std::to_string(effort) + "\"";
+    testing::writeText(urdf, R"(<robot name="weak"><link name="base"/>
+      <joint name="j1" type="revolute"><parent link="base"/><child link="post"/><origin xyz="0 0 0.3"/><axis xyz="0 0 1"/>
+        <limit lower="-3" upper="3" )" + limit + R"(/></joint>
+      <link name="post"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+      <joint name="shoulder" type="revolute"><parent link="post"/><child link="fore"/><axis xyz="0 1 0"/>
+        <limit lower="-2.5" upper="2.5" )" + limit + R"(/></joint>
+      <link name="fore"><inertial><origin xyz="0 0 0.2"/><mass value="5"/><inertia ixx="0.07" iyy="0.07" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+      <joint name="elbow" type="revolute"><parent link="fore"/><child link="hand"/><origin xyz="0 0 0.4"/><axis xyz="0 1 0"/>
+        <limit lower="-2.5" upper="2.5" )" + limit + R"(/></joint>
+      <link name="hand"><inertial><origin xyz="0 0 0.1"/><mass value="0.5"/><inertia ixx="0.002" iyy="0.002" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+      </robot>)");
+    return urdf;
+  };
+  const std::filesystem::path weak = write_arm(2.0), strong = write_arm(200.0);
+  const std::string target = " --target 0.45,0,0.45 --max-time 3 --scene empty";
+  const auto sagging = runCliBinary("reach --robot " + weak.string() + target);
+  const auto holding = runCliBinary("reach --robot " + strong.string() + target);
+  ASSERT_EQ(sagging.exit_code, 0) << sagging.err;
+  ASSERT_EQ(holding.exit_code, 0) << holding.err;
+  const std::string overload = sagging.json().at("gravity_overload");
+  EXPECT_NE(overload.find("joint 'shoulder' to hold"), std::string::npos) << overload;
+  EXPECT_NE(sagging.err.find("warning: the joints cannot hold the arm up"), std::string::npos) << sagging.err;
+  EXPECT_EQ(holding.json().at("gravity_overload"), "");
+  EXPECT_EQ(holding.err.find("cannot hold"), std::string::npos) << holding.err;
+  std::filesystem::remove(weak);
+  std::filesystem::remove(strong);
+}
+
 TEST(RobotCli, FkNamesJointsBeyondTheirLimitsAndStillGivesThePose) {
   // A2 of the LWR IV stops at 120 deg = 2.094 rad; A4 at -120 deg.
   const auto result = runCliBinary("fk --robot lwr4 --q 0,2.5,0,-2.2,0,0,0");

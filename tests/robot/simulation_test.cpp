@@ -358,6 +358,68 @@ TEST(Simulation, TheJointSpaceInertiaIsTheSumOverTheBodiesOfTheirJacobiansWeight
   }
 }
 
+TEST(Simulation, GravityLoadIsTheSlopeOfThePotentialEnergyAgainstTheEffortLimits) {
+  // g_j = ∂V/∂q_j with V = Σ_b m_b g z_b (the bodies' centres of mass), by central differences;
+  // the load names the joint with the largest |g_j| / effort_j.
+  const RobotModel arm9 = RobotModel::fromUrdfFile(resolveRobotPath("arm9"));
+  const ParameterSet parameters = simParameters();
+  Simulation sim(arm9, nullptr, parameters);
+  const double g = parameters.get("sim.gravity");
+  const int n = arm9.dof();
+  const auto potential = [&](const Eigen::VectorXd& q) {
+    Kinematics kinematics(arm9);
+    kinematics.update(q);
+    double V = 0.0;
+    for (int b = 1; b <= n; ++b) {
+      const Body& body = arm9.bodies()[static_cast<std::size_t>(b)];
+      V += body.mass * g * (kinematics.X_WB(b) * body.p_BCom).z();
+    }
+    return V;
+  };
+  std::mt19937 engine(5);
+  for (int trial = 0; trial < 5; ++trial) {
+    Eigen::VectorXd q(n);
+    for (int j = 0; j < n; ++j) {
+      q[j] = std::uniform_real_distribution<double>(arm9.softLowerLimits()[j], arm9.softUpperLimits()[j])(engine);
+    }
+    int worst = -1;
+    double worst_ratio = 0.0, worst_torque = 0.0;
+    for (int j = 0; j < n; ++j) {
+      constexpr double kStep = 1e-6;
+      const Eigen::VectorXd dq = kStep * Eigen::VectorXd::Unit(n, j);
+      const double torque = std::abs(potential(q + dq) - potential(q - dq)) / (2.0 * kStep);
+      const double ratio = torque / arm9.joints()[static_cast<std::size_t>(j)].limits.effort;
+      if (ratio > worst_ratio) worst = j, worst_ratio = ratio, worst_torque = torque;
+    }
+    const Simulation::GravityLoad load = sim.gravityLoad(q);
+    ASSERT_EQ(load.joint, worst) << "posture " << q.transpose();
+    EXPECT_NEAR(load.torque, worst_torque, 1e-5 * std::max(1.0, worst_torque));
+    EXPECT_NEAR(load.ratio, worst_ratio, 1e-6);
+    EXPECT_GT(load.torque, 1.0) << "a posture that loads some joint";
+  }
+  EXPECT_THROW(sim.gravityLoad(Eigen::VectorXd::Zero(3)), InputError);
+}
+
+TEST(Simulation, TheBuiltInArmsHoldThemselvesUpWhereverTheirLimitsLetThemStand) {
+  // The simulated tutor chooses no posture whose gravity load exceeds 0.9 of an effort limit;
+  // for the arms of the thesis' experiments that must leave every posture open.
+  for (const char* robot : {"lwr4", "arm9"}) {
+    const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath(robot));
+    Simulation sim(model, nullptr, simParameters());
+    std::mt19937 engine(11);
+    double heaviest = 0.0;
+    for (int trial = 0; trial < 2000; ++trial) {
+      Eigen::VectorXd q(model.dof());
+      for (int j = 0; j < model.dof(); ++j) {
+        q[j] = std::uniform_real_distribution<double>(model.lowerLimits()[j], model.upperLimits()[j])(engine);
+      }
+      heaviest = std::max(heaviest, sim.gravityLoad(q).ratio);
+    }
+    EXPECT_LT(heaviest, 0.9) << robot;
+    EXPECT_GT(heaviest, 0.05) << robot << ": some posture loads a joint";
+  }
+}
+
 TEST(Simulation, SaysWhenEvenTheMostPhysicsStepsAreNotEnough) {
   const RobotModel feather = scaledLwr4(1e-4);
   Simulation sim(feather, nullptr, simParameters());
