@@ -163,52 +163,73 @@ ArmReach armReach(const robot::RobotModel& model) {
       break;
     }
   }
-  result.shoulder = kinematics.X_WB(shoulder).translation();
-  for (int b = shoulder; b <= model.dof(); ++b) {
-    result.reach = std::max(result.reach, result.fromShoulder(kinematics.X_WB(b).translation()));
-  }
-  result.reach = std::max(result.reach, result.fromShoulder(kinematics.p_WT()));
-  // The posture nearest zero need not be the stretched one (an arm with elbow offsets stands
-  // folded at zero, and its reach would read 0.15 m short): the farthest the tip gets from the
-  // shoulder within the limits, over seeded random postures, the best of them climbed joint by
-  // joint. Seeded, so every caller gets the same reach.
-  const Eigen::VectorXd lower = model.sampleLowerLimits(), upper = model.sampleUpperLimits();
-  const auto tipDistance = [&](const Eigen::VectorXd& posture) {
-    kinematics.update(posture);
-    return result.fromShoulder(kinematics.p_WT());
+  const auto is_prismatic = [&](int body) {
+    return model.joints()[static_cast<std::size_t>(body - 1)].type == robot::JointType::kPrismatic;
   };
-  // The joints before the shoulder stay as they are: they move the shoulder itself (off the
-  // first axis on an arm with a shoulder offset), and the reach is measured from where it is.
-  const int first_free = shoulder - 1;
-  learning::UniformRandom random(1);
-  Eigen::VectorXd best = q;
-  double best_distance = tipDistance(q);
-  for (int sample = 0; sample < 2000; ++sample) {
-    Eigen::VectorXd candidate = q;
-    const int free_joints = model.dof() - first_free;
-    candidate.tail(free_joints) = random.uniform(lower.tail(free_joints), upper.tail(free_joints));
-    if (const double distance = tipDistance(candidate); distance > best_distance) {
-      best_distance = distance;
-      best = candidate;
+  const Eigen::VectorXd lower = model.sampleLowerLimits(), upper = model.sampleUpperLimits();
+  // The farthest the tip gets from `centre` within the limits with joints first_free.. free,
+  // the others where q has them: body origins in q, then seeded random postures, the best of
+  // them climbed joint by joint. (The posture nearest zero need not be the stretched one: an
+  // arm with elbow offsets stands folded at zero, and its reach would read 0.15 m short.)
+  // Seeded, so every caller gets the same reach.
+  const auto farthest = [&](const Eigen::Vector3d& centre, int first_body, int first_free) {
+    kinematics.update(q);
+    double farthest_distance = (kinematics.p_WT() - centre).norm();
+    for (int b = first_body; b <= model.dof(); ++b) {
+      farthest_distance = std::max(farthest_distance, (kinematics.X_WB(b).translation() - centre).norm());
     }
-  }
-  for (double step = 0.2; step > 1e-3; step *= 0.5) {
-    for (bool improved = true; improved;) {
-      improved = false;
-      for (int j = first_free; j < model.dof(); ++j) {
-        for (const double sign : {-1.0, 1.0}) {
-          Eigen::VectorXd candidate = best;
-          candidate[j] = std::clamp(candidate[j] + sign * step, lower[j], upper[j]);
-          if (const double distance = tipDistance(candidate); distance > best_distance + 1e-9) {
-            best_distance = distance;
-            best = candidate;
-            improved = true;
+    const auto tipDistance = [&](const Eigen::VectorXd& posture) {
+      kinematics.update(posture);
+      return (kinematics.p_WT() - centre).norm();
+    };
+    learning::UniformRandom random(1);
+    Eigen::VectorXd best = q;
+    double best_distance = tipDistance(q);
+    for (int sample = 0; sample < 2000; ++sample) {
+      Eigen::VectorXd candidate = q;
+      const int free_joints = model.dof() - first_free;
+      candidate.tail(free_joints) = random.uniform(lower.tail(free_joints), upper.tail(free_joints));
+      if (const double distance = tipDistance(candidate); distance > best_distance) {
+        best_distance = distance;
+        best = candidate;
+      }
+    }
+    for (double step = 0.2; step > 1e-3; step *= 0.5) {
+      for (bool improved = true; improved;) {
+        improved = false;
+        for (int j = first_free; j < model.dof(); ++j) {
+          for (const double sign : {-1.0, 1.0}) {
+            Eigen::VectorXd candidate = best;
+            candidate[j] = std::clamp(candidate[j] + sign * step, lower[j], upper[j]);
+            if (const double distance = tipDistance(candidate); distance > best_distance + 1e-9) {
+              best_distance = distance;
+              best = candidate;
+              improved = true;
+            }
           }
         }
       }
     }
+    return std::max(farthest_distance, best_distance);
+  };
+  result.shoulder = kinematics.X_WB(shoulder).translation();
+  // The joints before the shoulder stay as they are: they move the shoulder itself (off the
+  // first axis on an arm with a shoulder offset), and the reach is measured from where it is.
+  result.reach = farthest(result.shoulder, shoulder, shoulder - 1);
+  // A sphere about the shoulder describes an arm whose joints before it turn it about the first
+  // axis, near which it lies. Where a joint before it slides (a lifting column), or the joints
+  // before it swing it far about the base (a SCARA's tilting wrist), the sphere is the wrong
+  // shape: the reach is then taken from the first joint with every joint free, a sphere that
+  // holds all the arm can reach.
+  bool sliding_before = false;
+  for (int b = 1; b <= shoulder; ++b) sliding_before = sliding_before || is_prismatic(b);
+  const Eigen::Vector3d shoulder_offset = result.shoulder - result.base_point;
+  const double shoulder_off_axis = (shoulder_offset - shoulder_offset.dot(result.base_axis) * result.base_axis).norm();
+  if (sliding_before || shoulder_off_axis > 0.5 * result.reach) {
+    shoulder = 1;
+    result.shoulder = result.base_point;
+    result.reach = farthest(result.shoulder, 1, 0);
   }
-  result.reach = std::max(result.reach, best_distance);
   // Without a joint turning the rest about another axis there is no base column around an axis
   // of the first joint; the arm sweeps through it.
   result.base_radius = shoulder == 1 ? 0.0 : std::min(0.2, 0.25 * result.reach);

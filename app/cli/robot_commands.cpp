@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "app/cli/cli_support.hpp"
+#include "app/evaluation.hpp"
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
@@ -43,6 +44,8 @@ Json robotInfo(const robot::RobotModel& model) {
   }
   Json links = Json::array();
   for (const auto& body : model.bodies()) links.push_back(body.name);
+  // What the tutor and the evaluations take as within reach: a sphere about the shoulder.
+  const app::ArmReach reach = app::armReach(model);
   double total_mass = 0.0;
   Json assumed = Json::array();
   Json held = Json::array();
@@ -60,7 +63,8 @@ Json robotInfo(const robot::RobotModel& model) {
           {"bodies", links},
           {"mass_kg", total_mass},
           {"bodies_with_assumed_mass", assumed},
-          {"links_held_still", held}};
+          {"links_held_still", held},
+          {"reach", {{"shoulder", toJson(reach.shoulder)}, {"radius_m", reach.reach}, {"base_column_radius_m", reach.base_radius}}}};
 }
 
 Json forwardKinematics(const robot::RobotModel& model, const Eigen::VectorXd& q) {

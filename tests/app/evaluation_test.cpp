@@ -168,6 +168,43 @@ TEST(Evaluation, TheArmsRoomIsWithinReachAndOffTheColumnAroundItsFirstAxis) {
   EXPECT_NEAR(offset.reach, 0.8, 1e-9);
 }
 
+// A SCARA: a lifting column, three joints about z, a wrist tilting about y at the tip. The first
+// joint not about z is the tilt, at the tip itself: a sphere about it would hold nothing. The
+// reach is then taken from the first joint with every joint free, and holds every tip position.
+TEST(Evaluation, TheReachOfAScaraHoldsEveryTipPositionWithinItsLimits) {
+  const std::string urdf = R"(<robot name="scara"><link name="base"/>
+  <joint name="lift" type="prismatic"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.06"/><axis xyz="0 0 1"/>
+    <limit lower="0.05" upper="0.5" velocity="1" effort="100"/></joint>
+  <link name="l1"/>
+  <joint name="shoulder" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.3"/><axis xyz="0 0 1"/>
+    <limit lower="-2.6" upper="2.6" velocity="1" effort="100"/></joint>
+  <link name="l2"/>
+  <joint name="elbow" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0.35 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-2.6" upper="2.6" velocity="1" effort="100"/></joint>
+  <link name="l3"/>
+  <joint name="wrist" type="revolute"><parent link="l3"/><child link="l4"/><origin xyz="0.3 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-2.9" upper="2.9" velocity="1" effort="100"/></joint>
+  <link name="l4"/>
+  <joint name="tilt" type="revolute"><parent link="l4"/><child link="l5"/><origin xyz="0.1 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-1.5" upper="1.5" velocity="1" effort="100"/></joint>
+  <link name="l5"/>
+  <joint name="tool" type="fixed"><parent link="l5"/><child link="tip"/><origin xyz="0 0 -0.1"/></joint>
+  <link name="tip"/></robot>)";
+  const auto model = robot::RobotModel::fromUrdfString(urdf, ".");
+  const ArmReach scara = armReach(model);
+  robot::Kinematics kinematics(model);
+  learning::UniformRandom random(4);
+  double farthest = 0.0;
+  for (int sample = 0; sample < 3000; ++sample) {
+    kinematics.update(random.uniform(model.lowerLimits(), model.upperLimits()));
+    farthest = std::max(farthest, scara.fromShoulder(kinematics.p_WT()));
+  }
+  EXPECT_LE(farthest, scara.reach + 1e-9);
+  EXPECT_GT(farthest, 0.9 * scara.reach) << "and not far beyond what the arm reaches";
+  // A place 0.5 m out at the height of the arm is within reach, and not in a base column.
+  EXPECT_TRUE(scara.roomFor(Eigen::Vector3d(0.4, 0.3, 0.6), 0.05));
+}
+
 TEST(Evaluation, MotionReachesAFreeTargetWithoutCollision) {
   Parameters s;
   const auto map = constantMap();
