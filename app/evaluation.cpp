@@ -268,6 +268,7 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
   const Eigen::VectorXd sample_lower = model.sampleLowerLimits();
   const Eigen::VectorXd sample_upper = model.sampleUpperLimits();
   robot::HierarchicalController controller(model, parameters);
+  controller.useForKinematicSearch();
   robot::Kinematics kinematics(model);
   Eigen::VectorXd q(dof), q_null(dof), q_target(dof);
   for (int seed = 0; seed < seeds; ++seed) {

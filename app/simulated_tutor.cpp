@@ -160,6 +160,7 @@ std::string SimulatedTutor::describePosture(const Eigen::VectorXd& q) {
 
 bool SimulatedTutor::helixFree(const Eigen::VectorXd& q_fixed, const std::vector<Eigen::Vector3d>& helix, double margin) {
   robot::HierarchicalController controller(*model_, parameters_);
+  controller.useForKinematicSearch();
   const Eigen::VectorXd lower = model_->softLowerLimits();
   const Eigen::VectorXd upper = model_->softUpperLimits();
   Eigen::VectorXd q = q_fixed, q_target(q.size());
@@ -375,6 +376,7 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
   const Eigen::VectorXd sample_lower = model_->sampleLowerLimits();
   const Eigen::VectorXd sample_upper = model_->sampleUpperLimits();
   robot::HierarchicalController controller(*model_, parameters_);
+  controller.useForKinematicSearch();
   struct Candidate {
     PostureChoice choice;
     double score;

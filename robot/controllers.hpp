@@ -133,6 +133,12 @@ class HierarchicalController {
   Status target(const Eigen::VectorXd& q, const Eigen::Vector3d& p_des, const Eigen::VectorXd& q_c, double dt,
                 Eigen::VectorXd& q_target);
 
+  /// For kinematic searches (IK as target() iterated a fixed number of times), not motions:
+  /// joints the URDF allows less than kSearchVelocity step as if allowed that much, so that the
+  /// search covers a slow arm's joint range as well (the LWR IV's joints all allow more).
+  void useForKinematicSearch() { v_max_ = v_max_.cwiseMax(kSearchVelocity); }
+  static constexpr double kSearchVelocity = 1.5;  ///< [rad/s, m/s]
+
   /// Of the last velocity() call: the task error |x_des − x| [m], σ_min of J, and the damping μ².
   double taskError() const { return task_error_; }
   double smallestSingularValue() const { return sigma_min_; }

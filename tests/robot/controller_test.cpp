@@ -81,6 +81,40 @@ TEST(HierarchicalController, TaskErrorConvergesWhateverTheNullSpaceTarget) {
   }
 }
 
+// An arm whose joints the URDF lets move 0.02 rad/s: an IK search of 400 steps of 0.02 s would
+// move each joint 0.16 rad at most, and a target 1 rad of the shoulder away would read as
+// unreachable. As a kinematic search the steps are those of the LWR IV.
+TEST(HierarchicalController, AKinematicSearchCoversASlowArmsJointRange) {
+  std::string urdf = "<robot name=\"slow\"><link name=\"base\"/>";
+  std::string parent = "base";
+  for (int i = 1; i <= 4; ++i) {
+    const std::string link = "l" + std::to_string(i);
+    urdf += "<joint name=\"j" + std::to_string(i) + "\" type=\"revolute\"><parent link=\"" + parent + "\"/><child link=\"" + link +
+            "\"/><origin xyz=\"0 0 " + (i == 1 ? "0.1" : "0.25") + "\"/><axis xyz=\"" + (i == 1 ? "0 0 1" : "0 1 0") +
+            "\"/><limit lower=\"-2.5\" upper=\"2.5\" velocity=\"0.02\" effort=\"100\"/></joint><link name=\"" + link + "\"/>";
+    parent = link;
+  }
+  urdf += R"(<joint name="tip_joint" type="fixed"><parent link="l4"/><child link="tip"/><origin xyz="0 0 0.25"/></joint><link name="tip"/></robot>)";
+  const RobotModel slow = RobotModel::fromUrdfString(urdf, ".");
+  const ParameterSet parameters = controlParameters();
+  Eigen::VectorXd q_goal(4);
+  q_goal << 1.0, 0.6, 0.5, 0.4;
+  const Eigen::Vector3d p_des = tipPose(slow, q_goal).translation();
+  const auto search = [&](bool as_kinematic_search) {
+    HierarchicalController controller(slow, parameters);
+    if (as_kinematic_search) controller.useForKinematicSearch();
+    Eigen::VectorXd q = Eigen::VectorXd::Zero(4), q_target(4);
+    q[1] = 0.1;  // off the straight-up singularity
+    for (int it = 0; it < 400; ++it) {
+      controller.target(q, p_des, q_goal, 0.02, q_target);
+      q = q_target;
+    }
+    return (tipPose(slow, q).translation() - p_des).norm();
+  };
+  EXPECT_GT(search(false), 0.1) << "a motion keeps to the URDF's 0.02 rad/s";
+  EXPECT_LT(search(true), 1e-4);
+}
+
 // Four links turning about parallel axes (y): the tip moves in the x-z plane only, so J has a
 // zero singular value in every posture. Targets in that plane are reached as precisely as by the
 // LWR IV, not held short by damping meant for singularities.
