@@ -35,6 +35,8 @@ Json runReach(const ReachOptions& options) {
   const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
   robot::checkPosturesFit(scene, model, robot_name);
   const Eigen::Vector3d target = parseNumberList(options.target, "--target", 3);
+  // As scene files: a coordinate beyond 1 km is a mistake (units, a missing decimal point).
+  if (target.cwiseAbs().maxCoeff() > 1000.0) throw InputError("--target: coordinates beyond 1000 m");
   // The robot stands on the table top z = 0 (as in scene files, docs/SCENES.md): a target under
   // it could only be reached through it.
   if (target.z() < 0.0) {
@@ -64,6 +66,12 @@ Json runReach(const ReachOptions& options) {
   request.max_time = options.max_time;
 
   const robot::ReachResult result = robot::reach(model, &scene, parameters, request);
+  if (result.status == "unreachable" && !result.joints_at_limits.empty()) {
+    std::string joints;
+    for (const auto& name : result.joints_at_limits) joints += (joints.empty() ? "" : ", ") + name;
+    std::fprintf(stderr, "note: the controller stalled %.3f m from the target with %s on %s limits; another start (--from) may reach it\n",
+                 result.error_m, joints.c_str(), result.joints_at_limits.size() == 1 ? "its" : "their");
+  }
   if (!result.gravity_overload.empty()) {
     std::fprintf(stderr, "warning: the joints cannot hold the arm up: %s (the URDF's <limit effort>)\n", result.gravity_overload.c_str());
   }
@@ -92,6 +100,7 @@ Json runReach(const ReachOptions& options) {
           {"torque_saturations", result.torque_saturations},
           {"max_substeps", result.max_substeps},
           {"gravity_overload", result.gravity_overload},
+          {"joints_at_limits", result.joints_at_limits},
           {"rejected_commands", result.rejected_commands},
           {"target", toJson(target)},
           {"position", toJson(result.position)},

@@ -1,5 +1,6 @@
 #include "robot/sim/reach.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -48,6 +49,10 @@ ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSe
   double progress_time = 0.0;
   double reached_since = -1.0;
   const auto max_steps = static_cast<std::uint64_t>(std::ceil(request.max_time / sim.cycleTime()));
+  // A joint allowed 0.02 rad/s needs 50 s where the LWR IV's need 1: judge progress on the arm's
+  // own time scale (the LWR IV's slowest joint allows 1.9 rad/s, and keeps the stall time).
+  const double slowest = limiter.velocityLimit().minCoeff();
+  const double stall_time = request.stall_time * std::max(1.0, 1.0 / std::max(slowest, 1e-6));
   result.status = "timeout";
   for (std::uint64_t k = 0; k < max_steps; ++k) {
     // Eq. 2.11 integrated on the previous command, smoothed and clamped (Sect. 8.1).
@@ -74,7 +79,7 @@ ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSe
       }
     } else {
       reached_since = -1.0;
-      if (reference_error > request.tolerance && state.time - progress_time > request.stall_time) {
+      if (reference_error > request.tolerance && state.time - progress_time > stall_time) {
         result.status = "unreachable";
         break;
       }
@@ -86,6 +91,11 @@ ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSe
   result.position = state.p_WT();
   result.error_m = (state.p_WT() - request.target).norm();
   result.posture_error_rad = model.postureDifference(state.q, posture).norm();
+  for (int j = 0; j < model.dof(); ++j) {
+    if (std::min(state.q[j] - model.softLowerLimits()[j], model.softUpperLimits()[j] - state.q[j]) < 1e-3) {
+      result.joints_at_limits.push_back(model.joints()[static_cast<std::size_t>(j)].name);
+    }
+  }
   result.collisions = sim.collisions().events();
   result.colliding_steps = sim.collisions().collidingSteps();
   const CollisionWorld& world = *sim.collisionWorld();

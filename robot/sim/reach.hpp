@@ -22,7 +22,9 @@ struct ReachRequest {
   Eigen::VectorXd posture;   ///< null-space target q_c [rad]; empty: the start posture
   double tolerance = 1e-4;   ///< [m] task error counted as reached
   double max_time = 30.0;    ///< [s] of simulated time
-  double stall_time = 2.0;   ///< [s] without progress after which the target counts as out of reach
+  /// [s] without progress after which the target counts as out of reach; for an arm whose
+  /// slowest joint is allowed less than 1 rad/s, longer in proportion (progress is slower).
+  double stall_time = 2.0;
 };
 
 struct ReachEvent {
@@ -53,6 +55,9 @@ struct ReachResult {
   /// Where the joints cannot hold the arm against gravity at the start or the final posture
   /// (Simulation::gravityLoad above 1): which, and how much; empty otherwise.
   std::string gravity_overload;
+  /// Joints within 1 mrad (1 mm) of a soft limit at the end: where the controller stalled on
+  /// them, another start may reach the target.
+  std::vector<std::string> joints_at_limits;
 };
 
 /// Runs the simulation until the target is reached (error below tolerance and the command at

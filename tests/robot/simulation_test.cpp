@@ -477,6 +477,52 @@ TEST(Reach, ConvergesToReachableTargetsWhateverThePosture) {
   }
 }
 
+// The LWR IV with every joint allowed 0.05 rad/s: its tip closes in on the target by well under
+// 1 % per the LWR IV's 2 s, yet it gets there. Progress is judged on its own time scale, not
+// called out of reach after 3 s.
+TEST(Reach, ASlowArmIsGivenTheTimeItNeedsInsteadOfCalledOutOfReach) {
+  const std::filesystem::path file = resolveRobotPath("lwr4");
+  std::ifstream in(file);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const RobotModel slow =
+      RobotModel::fromUrdfString(std::regex_replace(text, std::regex(R"re(velocity="[0-9.]+")re"), R"(velocity="0.05")"), file.parent_path());
+  ASSERT_DOUBLE_EQ(slow.velocityLimits().maxCoeff(), 0.05);
+  const std::vector<ParameterDeclaration> declarations = reachParameters();
+  const ParameterSet parameters(declarations);
+  ReachRequest request;
+  request.start = slow.midPosture();
+  request.target = Eigen::Vector3d(-0.4, 0.2, 0.4);
+  request.max_time = 90.0;
+  const ReachResult result = reach(slow, nullptr, parameters, request);
+  EXPECT_EQ(result.status, "reached") << "after " << result.time_s << " s, " << result.error_m << " m short";
+  EXPECT_GT(result.time_s, 10.0) << "slowly";
+}
+
+// Three joints, the second held to ±0.3 rad: a target low beside the arm needs it tilted 1.2 rad.
+// The controller pushes it onto its limit, and the elbow onto its own as far as it folds out,
+// and stalls there; the result names both.
+TEST(Reach, NamesTheJointsItStalledOnAtTheirLimits) {
+  const RobotModel arm = RobotModel::fromUrdfString(R"(<robot name="held"><link name="base"/>
+    <joint name="turn" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/><axis xyz="0 0 1"/>
+      <limit lower="-2" upper="2" velocity="2" effort="100"/></joint><link name="l1"/>
+    <joint name="tilt" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.2"/><axis xyz="0 1 0"/>
+      <limit lower="-0.3" upper="0.3" velocity="2" effort="100"/></joint><link name="l2"/>
+    <joint name="bend" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.4"/><axis xyz="0 1 0"/>
+      <limit lower="-2" upper="2" velocity="2" effort="100"/></joint><link name="l3"/>
+    <joint name="tool" type="fixed"><parent link="l3"/><child link="tip"/><origin xyz="0 0 0.4"/></joint><link name="tip"/></robot>)",
+                                                    ".");
+  const std::vector<ParameterDeclaration> declarations = reachParameters();
+  const ParameterSet parameters(declarations);
+  ReachRequest request;
+  request.start = Eigen::Vector3d(0.0, 0.0, 0.3);
+  request.target = Eigen::Vector3d(0.75, 0.0, 0.05);
+  request.max_time = 20.0;
+  const ReachResult result = reach(arm, nullptr, parameters, request);
+  EXPECT_EQ(result.status, "unreachable");
+  EXPECT_EQ(result.joints_at_limits, (std::vector<std::string>{"tilt", "bend"}));
+  EXPECT_NEAR(result.q[1], arm.softUpperLimits()[1], 1e-3);
+}
+
 TEST(Reach, TheNineJointArmReachesFromMidRangeWithoutItsWristShaking) {
   // Where two of arm9's wrist axes come close to parallel, a mode of little inertia and the sum
   // of both joints' damping made 4 physics steps per cycle unstable: the torques saturated for
