@@ -3,6 +3,7 @@
 // results, in the style of the thesis' figures: reachable targets (Fig. 3.10), the implicit
 // scene model (Fig. 4.6), confidence slices (Fig. 6.5), the ITM graph with planned paths
 // (Fig. 7.7, 8.4).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -26,6 +27,7 @@
 #include "render/offscreen.hpp"
 #include "render/overlays.hpp"
 #include "render/world.hpp"
+#include "robot/collision.hpp"
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
@@ -262,6 +264,28 @@ Json renderPicture(const RenderOptions& options) {
   }
   model.checkPosture(q);
   const Json beyond_limits = options.q.empty() ? Json::array() : warnBeyondLimits(model, q);
+  // Links the posture puts into an obstacle, the table or each other are drawn red and named:
+  // a picture of an arm buried in a box must not look like a picture of a free arm.
+  Json contacts = Json::array();
+  std::vector<std::string> touching_links;
+  {
+    robot::CollisionWorld collisions(model, scene);
+    collisions.update(q);
+    std::ostringstream said;
+    for (const robot::Contact& contact : collisions.contacts()) {
+      const std::string& link = collisions.bodyName(contact.body);
+      const std::string other = collisions.otherName(contact);
+      contacts.push_back({{"link", link}, {"other", other}, {"depth_m", contact.depth}});
+      if (std::find(touching_links.begin(), touching_links.end(), link) == touching_links.end()) touching_links.push_back(link);
+      if (contacts.size() <= 3) {
+        said << (contacts.size() > 1 ? ", " : "") << printable(link) << " in " << printable(other) << " (" << std::fixed << std::setprecision(1)
+             << 1000.0 * contact.depth << " mm)";
+      }
+    }
+    if (!contacts.empty()) {
+      std::cerr << "note: the posture puts " << said.str() << (contacts.size() > 3 ? " and more" : "") << "; drawn red\n";
+    }
+  }
 
   std::set<render::OverlayLayer> hidden;
   if (!options.hide.empty()) {
@@ -289,7 +313,10 @@ Json renderPicture(const RenderOptions& options) {
   world.setGridVisible(!options.no_grid);
   robot::Kinematics kinematics(model);
   kinematics.update(q);
-  if (world.robot() != nullptr) world.robot()->setPosture(kinematics);
+  if (world.robot() != nullptr) {
+    world.robot()->setPosture(kinematics);
+    if (!touching_links.empty()) render::showCollisions(*world.robot(), touching_links);
+  }
   // What the views frame: the robot, the scene's areas and targets and the obstacles near the
   // robot (World::focusBox), grown by every overlay drawn (empty at first when there is neither
   // robot nor scene, so that the overlays alone are framed).
@@ -299,6 +326,7 @@ Json renderPicture(const RenderOptions& options) {
 
   render::Overlays& overlays = world.overlays();
   std::vector<render::LegendEntry> legend;
+  if (!touching_links.empty() && !options.no_robot) legend.push_back({"Link in contact", render::OverlayPalette::collision()});
   // Point sizes and line widths are pixels of the render target: with supersampling they scale
   // with it, so that they keep their size in the picture.
   const auto scale = static_cast<float>(options.supersampling);
@@ -482,6 +510,7 @@ Json renderPicture(const RenderOptions& options) {
           {"scene", scene.name.empty() ? std::string("empty") : scene.name},
           {"q", toJson(q)},
           {"beyond_limits", beyond_limits},
+          {"contacts", contacts},
           {"tip_position", toJson(kinematics.p_WT())},
           {"tip_pixel", tip_pixel ? toJson(*tip_pixel) : Json(nullptr)},
           {"camera",
