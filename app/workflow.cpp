@@ -506,7 +506,9 @@ void Workflow::checkJointLimits(const Eigen::VectorXd& q_fixed, int area) {
       // To a tenth of a degree or millimetre: what a person reads; closer than that is at it.
       const double shown = std::round(std::abs(margin) * (sliding ? 1000.0 : 180.0 / std::numbers::pi) * 10.0) / 10.0;
       std::ostringstream detail;
-      detail << "posture near the joint limit: joint " << (j + 1) << " (" << joint.name << ") is ";
+      // Named as the area will be (the tutor's name for it, else the one it gets when created).
+      const std::string name = next_area_name_.empty() ? "area_" + std::to_string(area + 1) : next_area_name_;
+      detail << "posture near the joint limit at area '" << name << "': joint " << (j + 1) << " (" << joint.name << ") is ";
       if (shown == 0.0) {
         detail << "at its limit";
       } else {

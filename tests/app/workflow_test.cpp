@@ -327,14 +327,18 @@ TEST(Workflow, WarnsWhenThePostureIsNearAJointLimit) {
   Eigen::VectorXd q = posture(0.0);
   q[0] = lwr4().softUpperLimits()[0] - 0.05;
   teachArea(workflow, f.backend, q);
-  int warnings = 0;
+  workflow.nameNextArea("shelf");
+  teachArea(workflow, f.backend, q);
+  std::vector<std::string> details;
   for (const auto& event : workflow.events()) {
-    if (event.kind == WorkflowEvent::Kind::kWarning && event.name == "joint_limit") {
-      ++warnings;
-      EXPECT_NE(event.detail.find("joint 1"), std::string::npos) << event.detail;
-    }
+    if (event.kind == WorkflowEvent::Kind::kWarning && event.name == "joint_limit") details.push_back(event.detail);
   }
-  EXPECT_EQ(warnings, 1);
+  ASSERT_EQ(details.size(), 2U);
+  for (const auto& detail : details) EXPECT_NE(detail.find("joint 1 (A1)"), std::string::npos) << detail;
+  EXPECT_NE(details[0].find("at area 'area_1'"), std::string::npos) << details[0];
+  EXPECT_NE(details[1].find("at area 'shelf'"), std::string::npos) << details[1];
+  ASSERT_EQ(workflow.areas().size(), 2U);
+  EXPECT_EQ(workflow.areas()[1].name, "shelf") << "the name the warning gave it";
 }
 
 // The joint-limit warnings of an area taught in posture q.
