@@ -13,7 +13,7 @@ namespace flexirob::app {
 robot::ParameterSet sceneParameters(const robot::Scene& scene) {
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);
-  parameters.applyOverrides(scene.parameters);
+  parameters.applyOverrides(scene.parameters, robot::sceneOrigin(scene));
   return parameters;
 }
 

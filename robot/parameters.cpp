@@ -29,17 +29,22 @@ void ParameterSet::set(const std::string& name, double value) {
   if (!std::isfinite(value) || value < declaration.min_value || value > declaration.max_value) {
     std::ostringstream message;
     message << "parameter '" << name << "': expected a value in [" << declaration.min_value << ", "
-            << declaration.max_value << "] " << declaration.unit << ", got " << value;
+            << declaration.max_value << "]" << (declaration.unit[0] == '\0' ? "" : " ") << declaration.unit << ", got " << value;
     throw InputError(message.str());
   }
   values_[name] = value;
 }
 
-int ParameterSet::applyOverrides(const std::map<std::string, double>& overrides) {
+int ParameterSet::applyOverrides(const std::map<std::string, double>& overrides, const std::string& origin) {
   int applied = 0;
   for (const auto& [name, value] : overrides) {
     if (values_.count(name) == 0) continue;
-    set(name, value);
+    try {
+      set(name, value);
+    } catch (const InputError& e) {
+      if (origin.empty()) throw;
+      throw InputError(origin + ": " + e.what());
+    }
     ++applied;
   }
   return applied;

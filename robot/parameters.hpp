@@ -28,7 +28,8 @@ class ParameterSet {
   void set(const std::string& name, double value);
   /// Applies the entries of `overrides` whose names are declared here; other names are ignored
   /// (a scene overrides parameters of several components at once). Returns how many applied.
-  int applyOverrides(const std::map<std::string, double>& overrides);
+  /// A value out of range throws InputError, prefixed with `origin` (a scene file) if given.
+  int applyOverrides(const std::map<std::string, double>& overrides, const std::string& origin = "");
   const std::vector<ParameterDeclaration>& declarations() const { return declarations_; }
 
  private:

@@ -992,6 +992,10 @@ Scene loadSceneFile(const fs::path& file) {
   return scene;
 }
 
+std::string sceneOrigin(const Scene& scene) {
+  return scene.source.empty() ? "scene '" + printable(scene.name) + "'" : scene.source.string();
+}
+
 Scene loadScene(const std::string& name_or_path) {
   if (name_or_path.empty()) {
     // No scene requested: nothing around the robot; needs no resources folder.

@@ -149,6 +149,9 @@ Scene parseScene(const std::string& yaml_text, const std::filesystem::path& base
 /// significant digits, rotations as quaternions, mesh and robot paths as stored).
 std::string sceneToYaml(const Scene& scene);
 
+/// Where a scene came from, for messages: its file, else "scene 'name'".
+std::string sceneOrigin(const Scene& scene);
+
 /// A built-in name (see builtinSceneNames) or a path to a scene file; "" or "empty" is the
 /// empty scene.
 Scene loadScene(const std::string& name_or_path);

@@ -226,7 +226,7 @@ void MainWindow::buildDocks() {
 
 void MainWindow::resetParameters() {
   parameters_ = std::make_unique<robot::ParameterSet>(declarations_);
-  parameters_->applyOverrides(scene_.parameters);
+  parameters_->applyOverrides(scene_.parameters, robot::sceneOrigin(scene_));
   parameters_->applyOverrides(parameter_edits_);
   parameter_panel_->setParameters(*parameters_);
 }
@@ -234,7 +234,7 @@ void MainWindow::resetParameters() {
 void MainWindow::applyParameters(const std::map<std::string, double>& values) {
   // Keep only what differs from the scene's values, so that a later scene keeps its own.
   robot::ParameterSet scene_values(declarations_);
-  scene_values.applyOverrides(scene_.parameters);
+  scene_values.applyOverrides(scene_.parameters, robot::sceneOrigin(scene_));
   parameter_edits_.clear();
   for (const auto& [name, value] : values) {
     if (scene_values.has(name) && scene_values.get(name) != value) parameter_edits_[name] = value;
@@ -407,6 +407,8 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
   robot::Scene scene;
   try {
     scene = robot::loadScene(name_or_path);
+    // A parameter out of its range refuses the scene here, with the scene kept as it was.
+    robot::ParameterSet(declarations_).applyOverrides(scene.parameters, robot::sceneOrigin(scene));
   } catch (const std::exception& error) {
     reportError(tr("Cannot load scene '%1'").arg(QString::fromStdString(name_or_path)), error);
     return false;

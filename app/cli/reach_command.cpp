@@ -46,7 +46,7 @@ Json runReach(const ReachOptions& options) {
   }
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);
-  parameters.applyOverrides(scene.parameters);
+  parameters.applyOverrides(scene.parameters, robot::sceneOrigin(scene));
 
   robot::ReachRequest request;
   request.target = target;

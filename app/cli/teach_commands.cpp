@@ -141,7 +141,7 @@ Json runTeach(const TeachOptions& options) {
   const std::string scene_reference = portableReference(options.scene, robot::builtinSceneNames());
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);
-  parameters.applyOverrides(scene.parameters);
+  parameters.applyOverrides(scene.parameters, robot::sceneOrigin(scene));
 
   if (options.backend != "sim" && options.backend != "fri-sim") {
     throw InputError("--backend: expected sim or fri-sim, got '" + options.backend + "'");

@@ -350,7 +350,9 @@ TEST(CollisionWorld, ContactsDependOnThePostureAloneNotOnThePosturesQueriedBefor
       EXPECT_EQ(in_turn[c].body, alone[c].body);
       EXPECT_EQ(in_turn[c].obstacle, alone[c].obstacle);
       EXPECT_NEAR(in_turn[c].depth, alone[c].depth, 1e-9);
-      if (c > 0) EXPECT_GE(alone[c - 1].depth, alone[c].depth) << "the deepest contact first";
+      if (c > 0) {
+        EXPECT_GE(alone[c - 1].depth, alone[c].depth) << "the deepest contact first";
+      }
     }
   };
   int in_contact = 0;

@@ -353,6 +353,13 @@ TEST(Parameters, RefusesValuesOutsideTheDeclaredRange) {
   EXPECT_EQ(parameters.get("hierarchical.kappa_x"), 30.0);
   EXPECT_EQ(parameters.applyOverrides({{"hierarchical.kappa_q", 4.0}, {"other.component", 1.0}}), 1);
   EXPECT_EQ(parameters.get("hierarchical.kappa_q"), 4.0);
+  // A scene's value out of range names the scene file, the parameter, the range and its unit.
+  try {
+    parameters.applyOverrides({{"hierarchical.kappa_q", -5.0}}, "cell.yaml");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "cell.yaml: parameter 'hierarchical.kappa_q': expected a value in [0, 100] 1/s, got -5");
+  }
 }
 
 }  // namespace

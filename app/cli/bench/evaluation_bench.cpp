@@ -24,7 +24,7 @@ void reachableWorkspaceSetupI(benchmark::State& state, double spacing) {
   const robot::Scene scene = robot::loadScene("setup_I");
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);
-  parameters.applyOverrides(scene.parameters);
+  parameters.applyOverrides(scene.parameters, robot::sceneOrigin(scene));
   const int n = model.dof();
   const Eigen::VectorXd home = scene.home_posture.value_or(model.midPosture());
   // q_c(x): an ELM on 500 postures around the home posture, as a taught session would give.

@@ -125,7 +125,7 @@ PlanningComparison comparePlanning(const PlanningOptions& options) {
   const robot::Scene scene = robot::loadScene(options.scene);
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);
-  parameters.applyOverrides(scene.parameters);
+  parameters.applyOverrides(scene.parameters, robot::sceneOrigin(scene));
   const int n = model.dof();
 
   // The session: taught by the simulated tutor as `teach` does (ELM, same seed).
