@@ -119,11 +119,21 @@ robot::RobotModel loadSessionRobot(const std::string& reference, const std::stri
   // A session stores a file robot by its absolute path (portableReference), so its folder is known
   // even after the file has gone.
   const std::filesystem::path file = builtin ? resolveRobotPath(reference) : std::filesystem::path(reference);
-  if (fileText(file) != stored_urdf) {
-    std::fprintf(stderr, "note: the robot '%s' is not the one the session was taught with (changed or missing); the session's stored copy is used\n",
+  const std::optional<std::string> on_disk = fileText(file);
+  try {
+    robot::RobotModel stored = robot::RobotModel::fromUrdfString(stored_urdf, file.parent_path(), tip);
+    if (on_disk != stored_urdf) {
+      std::fprintf(stderr, "note: the robot '%s' is not the one the session was taught with (changed or missing); the session's stored copy is used\n",
+                   reference.c_str());
+    }
+    return stored;
+  } catch (const InputError& damaged) {
+    // A damaged session file: the robot's own file, where it still reads, is the next best.
+    if (!on_disk) throw InputError(std::string("robot stored in the session: ") + damaged.what() + ", and '" + reference + "' cannot be read");
+    std::fprintf(stderr, "note: the robot stored in the session does not read (%s); '%s' is used instead\n", damaged.what(),
                  reference.c_str());
+    return robot::RobotModel::fromUrdfString(*on_disk, file.parent_path(), tip);
   }
-  return robot::RobotModel::fromUrdfString(stored_urdf, file.parent_path(), tip);
 }
 
 robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text) {
@@ -140,12 +150,21 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
   } catch (const InputError&) {
     // Moved, deleted or no longer valid: the stored copy is all there is.
   }
+  const std::filesystem::path base_dir = file.empty() ? std::filesystem::current_path() : file.parent_path();
+  robot::Scene scene;
+  try {
+    scene = robot::parseScene(stored_scene_text, base_dir, "scene stored in the session");
+  } catch (const InputError& damaged) {
+    // A damaged session file: the scene file, where it still reads, is the next best.
+    if (!on_disk) throw InputError(std::string(damaged.what()) + ", and '" + reference + "' cannot be read either");
+    std::fprintf(stderr, "note: the scene stored in the session does not read (%s); '%s' is used instead\n", damaged.what(),
+                 reference.c_str());
+    return loadSceneNoting(reference);
+  }
   if (on_disk != stored_scene_text) {
     std::fprintf(stderr, "note: the scene '%s' is not the one the session was taught with (changed or missing); the session's stored copy is used\n",
                  reference.c_str());
   }
-  const std::filesystem::path base_dir = file.empty() ? std::filesystem::current_path() : file.parent_path();
-  robot::Scene scene = robot::parseScene(stored_scene_text, base_dir, "scene stored in the session");
   for (const std::string& note : robot::sceneNotes(scene)) std::fprintf(stderr, "note: %s\n", note.c_str());
   return scene;
 }

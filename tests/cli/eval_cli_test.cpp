@@ -240,6 +240,44 @@ TEST(EvalReachableCli, EvaluatesTheRobotAndSceneTheSessionStoresNotTheFilesChang
   std::filesystem::remove_all(robot_dir.parent_path());
 }
 
+// A session whose stored scene and robot copies were damaged (the files beside it intact): the
+// files serve, each with a note that says which copy did not read, instead of an error about
+// the damaged copy after a note that blames the intact file.
+TEST(EvalReachableCli, ADamagedStoredSceneOrRobotFallsBackToTheIntactFiles) {
+  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
+  const Eigen::Vector3d taught = robot::tipPose(model, tinySessionPostures().front()).translation();
+  const auto scene = scratchDir() / "intact.yaml";
+  std::ostringstream text;
+  text << "name: intact\ntargets: [[" << taught.x() << ", " << taught.y() << ", " << taught.z() << "]]\n";
+  writeText(scene, text.str());
+  const auto robot_dir = scratchDir() / "intact-robot" / "lwr4";
+  std::filesystem::remove_all(robot_dir.parent_path());
+  std::filesystem::create_directories(robot_dir.parent_path());
+  std::filesystem::copy(resolveRobotPath("lwr4").parent_path(), robot_dir, std::filesystem::copy_options::recursive);
+  const auto session = tinySession(scene.string(), "damaged-copies.json");
+  storeTaughtCopies(session, robot_dir / "lwr4.urdf", scene.string());
+  nlohmann::json json = nlohmann::json::parse(std::ifstream(session));
+  json["scene_text"] = "name: [unclosed";
+  json["robot_urdf"] = "<robot name=\"cut";
+  writeText(session, json.dump());
+
+  const auto result = runCliBinary("eval reachable --spacing 0.3 --session " + session.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_TRUE(result.json().at("scene_targets").at(0).at("reached").get<bool>()) << result.out;
+  EXPECT_NE(result.err.find("note: the scene stored in the session does not read"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("'" + scene.string() + "' is used instead"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("note: the robot stored in the session does not read"), std::string::npos) << result.err;
+  EXPECT_EQ(result.err.find("is not the one the session was taught with"), std::string::npos) << result.err;
+
+  // Without the files as well, the one-line error says both.
+  std::filesystem::remove(scene);
+  const auto lost = runCliBinary("eval reachable --spacing 0.3 --session " + session.string());
+  EXPECT_EQ(lost.exit_code, 2);
+  EXPECT_NE(lost.err.find("cannot be read"), std::string::npos) << lost.err;
+  std::filesystem::remove(session);
+  std::filesystem::remove_all(robot_dir.parent_path());
+}
+
 TEST(EvalReachableCli, ASessionStillBeingWrittenIsNotedAndWithoutAFinishedAreaSaysItWasInterrupted) {
   const auto file = scratchDir() / "interrupted.db";
   std::filesystem::remove(file);
