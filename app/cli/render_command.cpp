@@ -169,6 +169,12 @@ SessionOverlay sessionFromRecording(const std::string& file) {
   session.scene = teaching.scene;
   session.robot_urdf = teaching.robot_urdf;
   session.scene_text = teaching.scene_text;
+  Eigen::Index unfinished = 0;
+  for (const app::RecordedArea& area : teaching.areas) unfinished += area.unfinished_X.cols();
+  if (unfinished > 0) {
+    std::cerr << "note: " << unfinished << " samples of a RECORDING that no area record closed (the session ended in it, or "
+              << "its record is missing) are drawn; eval and the learner leave them out\n";
+  }
   for (const app::RecordedArea& area : teaching.areas) {
     render::AreaSamples cloud;
     cloud.area = area.index;

@@ -291,6 +291,12 @@ TEST(EvalReachableCli, ASessionStillBeingWrittenIsNotedAndWithoutAFinishedAreaSa
   EXPECT_EQ(result.exit_code, 2) << result.err;
   EXPECT_NE(result.err.find("note: the session '" + file.string() + "' was not closed cleanly"), std::string::npos) << result.err;
   EXPECT_NE(result.err.find("was interrupted before any area was finished"), std::string::npos) << result.err;
+  // render draws the unfinished recording's sample and says it is not learned from.
+  const auto picture = scratchDir() / "interrupted.png";
+  const auto drawn = runCliBinary("render --width 64 --height 48 --supersample 1 --session " + file.string() + " --out " + picture.string());
+  EXPECT_EQ(drawn.exit_code, 0) << drawn.err;
+  EXPECT_EQ(drawn.json().at("overlays").at("samples"), 1) << drawn.out;
+  EXPECT_NE(drawn.err.find("note: 1 samples of a RECORDING that no area record closed"), std::string::npos) << drawn.err;
   recorder.close();
   std::filesystem::remove(file);
 }
