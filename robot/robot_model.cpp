@@ -54,10 +54,37 @@ constexpr int kMaxXmlDepth = 100;
 // well under this); bounds urdfdom's work and memory on absurd files.
 constexpr std::size_t kMaxXmlElements = 1'000'000;
 
-// A linear pre-scan of the XML structure: element depth and count only (comments, CDATA,
+// Whether the start tag xml[begin, end) (from '<' to before '>') reads as a name followed by
+// name="value" pairs: urdfdom's XML errors name no place, so a failed parse is located with this.
+bool startTagWellFormed(const std::string& xml, std::size_t begin, std::size_t end) {
+  const auto space = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
+  std::size_t k = begin + 1;
+  while (k < end && !space(xml[k]) && xml[k] != '/') ++k;
+  if (k == begin + 1) return false;  // no element name
+  while (true) {
+    while (k < end && space(xml[k])) ++k;
+    if (k >= end || (xml[k] == '/' && k + 1 == end)) return true;
+    const std::size_t name_begin = k;
+    while (k < end && !space(xml[k]) && xml[k] != '=' && xml[k] != '/' && xml[k] != '"' && xml[k] != '\'') ++k;
+    if (k == name_begin) return false;
+    while (k < end && space(xml[k])) ++k;
+    if (k >= end || xml[k] != '=') return false;
+    ++k;
+    while (k < end && space(xml[k])) ++k;
+    if (k >= end || (xml[k] != '"' && xml[k] != '\'')) return false;
+    const std::size_t close = xml.find(xml[k], k + 1);
+    if (close == std::string::npos || close >= end) return false;
+    k = close + 1;
+    if (k < end && !space(xml[k]) && xml[k] != '/') return false;  // a quote inside the value
+  }
+}
+
+// A linear pre-scan of the XML structure: element depth and count (comments, CDATA,
 // processing instructions, declarations and quoted attribute values are skipped). Whether the
-// document is well formed is left to urdfdom.
-void checkXmlShape(const std::string& xml) {
+// document is well formed is left to urdfdom; returns the line of the first start tag whose
+// attributes do not read (0: none), for urdfdom's error to name a place.
+std::size_t checkXmlShape(const std::string& xml) {
+  std::size_t first_bad_tag = std::string::npos;
   int depth = 0;
   std::size_t elements = 0;
   const auto skipPast = [&xml](std::size_t from, const char* terminator) {
@@ -91,6 +118,7 @@ void checkXmlShape(const std::string& xml) {
           break;
         }
       }
+      if (first_bad_tag == std::string::npos && !startTagWellFormed(xml, i, std::min(j, xml.size()))) first_bad_tag = i;
       if (j >= xml.size()) break;
       if (xml[j - 1] != '/') ++depth;
       if (++elements > kMaxXmlElements) {
@@ -103,6 +131,8 @@ void checkXmlShape(const std::string& xml) {
     }
     i = xml.find('<', i);
   }
+  if (first_bad_tag == std::string::npos) return 0;
+  return 1 + static_cast<std::size_t>(std::count(xml.begin(), xml.begin() + static_cast<std::ptrdiff_t>(first_bad_tag), '\n'));
 }
 
 std::string oneLine(std::string text) {
@@ -398,7 +428,7 @@ RobotModel RobotModel::fromUrdfFile(const fs::path& urdf_file, const std::string
 RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& base_dir,
                                       const std::string& tip_link) {
   if (xml.size() > kMaxUrdfBytes) throw InputError("URDF is larger than 64 MB");
-  checkXmlShape(xml);
+  const std::size_t bad_tag_line = checkXmlShape(xml);
   ErrorCollector collector;
   console_bridge::OutputHandler* previous = console_bridge::getOutputHandler();
   console_bridge::useOutputHandler(&collector);
@@ -411,7 +441,8 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
   console_bridge::useOutputHandler(previous);
   if (!urdf_model) {
     const std::string reason = collector.first_error.empty() ? "malformed XML" : oneLine(collector.first_error);
-    throw InputError("invalid URDF: " + reason);
+    throw InputError("invalid URDF: " + reason +
+                     (bad_tag_line > 0 ? " (the first malformed tag is on line " + std::to_string(bad_tag_line) + ")" : ""));
   }
   if (urdf_model->links_.size() > kMaxLinks) throw InputError("URDF has more than 10000 links");
   try {

@@ -78,6 +78,24 @@ TEST(HostileUrdf, NestingInsideCommentsCdataAndAttributesIsNotCounted) {
   EXPECT_EQ(model.dof(), 1);
 }
 
+TEST(HostileUrdf, AMalformedTagIsLocatedByItsLine) {
+  // urdfdom's XML errors ("Error reading Attributes") name no place: the line of the first tag
+  // whose attributes do not read is added. Well-formed tags around it (self-closing, single
+  // quotes, spaces about '=') are not taken for it.
+  const std::string head = "<robot name='r'>\n<link name = \"base\"/>\n<link name=\"l1\" />\n";
+  const std::string joint_text = "<joint name=\"j1\" type=\"continuous\"><parent link=\"base\"/><child link=\"l1\"/></joint>\n";
+  const std::string broken = head + "<joint name=\"a \"quoted\" name\" type=\"continuous\"><parent link=\"base\"/><child link=\"l1\"/></joint>\n</robot>";
+  const std::string message = inputErrorOf([&broken] { RobotModel::fromUrdfString(broken, kResources); });
+  EXPECT_NE(message.find("invalid URDF"), std::string::npos) << message;
+  EXPECT_NE(message.find("the first malformed tag is on line 4"), std::string::npos) << message;
+  // A document urdfdom refuses for what it means, not how it is written, gets no line.
+  const std::string unknown_parent = head + "<joint name=\"j1\" type=\"continuous\"><parent link=\"nowhere\"/><child link=\"l1\"/></joint>\n</robot>";
+  const std::string meaning = inputErrorOf([&unknown_parent] { RobotModel::fromUrdfString(unknown_parent, kResources); });
+  EXPECT_FALSE(meaning.empty());
+  EXPECT_EQ(meaning.find("malformed tag"), std::string::npos) << meaning;
+  EXPECT_EQ(RobotModel::fromUrdfString(head + joint_text + "</robot>", kResources).dof(), 1);
+}
+
 // (A million-joint URDF is refused by its size: tests/cli/hostile_cli_test.cpp.)
 TEST(HostileUrdf, MoreLinksThanTheLimitUnderTheSizeLimitAreRefusedByCount) {
   std::ostringstream xml;
