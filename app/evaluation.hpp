@@ -72,13 +72,16 @@ Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& 
 /// place is chosen for the arm (an area, a drawn trajectory) and to bound the grid targets.
 struct ArmReach {
   /// Origin of the first joint whose axis is not parallel to the first joint's (the LWR IV's A2),
-  /// of the first joint if there is none; in the posture nearest zero [m, W]
+  /// of the first joint if there is none, or if a joint before it slides or it lies farther off
+  /// the first axis than half the reach (a SCARA: the reach is then measured from the first
+  /// joint with every joint free); in the posture nearest zero [m, W]
   Eigen::Vector3d shoulder = Eigen::Vector3d::Zero();
   double reach = 0.0;  ///< the largest distance of a body origin (posture nearest zero) or the tip (any posture within the limits) from the shoulder [m]
   Eigen::Vector3d base_point = Eigen::Vector3d::Zero();  ///< a point of the first joint's axis [m, W]
   Eigen::Vector3d base_axis = Eigen::Vector3d::UnitZ();  ///< its direction (unit) [W]
   /// The column's radius: 0.2 m (the LWR IV's base and first links), a quarter of the reach on
-  /// smaller arms; 0 when every joint turns about an axis parallel to the first [m].
+  /// smaller arms; 0 when the shoulder is the first joint (every joint turns about an axis
+  /// parallel to the first, or the SCARA case above) [m].
   double base_radius = 0.2;
 
   double fromShoulder(const Eigen::Vector3d& p_W) const { return (p_W - shoulder).norm(); }

@@ -771,8 +771,10 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     if (reaching == 0) {
       area.failure = "no posture within the joint limits puts the tip there (" + std::to_string(options_.posture_candidates) + " IK searches)";
     } else if (too_heavy_candidates_ > 0) {
-      area.failure = "the joints cannot hold the arm up there: of the postures found that reach it without a contact, the "
-                     "lightest needs " + arm()->describe(lightest_rejected_);
+      area.failure = "the joints cannot hold the arm up there (a posture may take at most " +
+                     std::to_string(static_cast<int>(std::lround(100.0 * kHoldableLoad))) +
+                     " % of an effort limit): of the postures found that reach it without a contact, the lightest needs " +
+                     arm()->describe(lightest_rejected_);
     } else {
       area.failure = "every posture found that reaches it makes a contact";
     }

@@ -458,7 +458,7 @@ void Workflow::onTrigger(Trigger trigger) {
       emit(WorkflowEvent::Kind::kTrigger, toString(trigger), from);
       q_fixed_ = state_.q;
       setState(stage_, SubStage::kPosed);
-      if (stage_ == Stage::kConfiguration) checkJointLimits(q_fixed_, static_cast<int>(areas_.size()));
+      if (stage_ == Stage::kConfiguration) checkJointLimits(q_fixed_, recordingArea());
       break;
     case SubStage::kPosed:
       if (!affected) return;
@@ -506,8 +506,12 @@ void Workflow::checkJointLimits(const Eigen::VectorXd& q_fixed, int area) {
       // To a tenth of a degree or millimetre: what a person reads; closer than that is at it.
       const double shown = std::round(std::abs(margin) * (sliding ? 1000.0 : 180.0 / std::numbers::pi) * 10.0) / 10.0;
       std::ostringstream detail;
-      // Named as the area will be (the tutor's name for it, else the one it gets when created).
-      const std::string name = next_area_name_.empty() ? "area_" + std::to_string(area + 1) : next_area_name_;
+      // Named as the area will be: the one re-taught keeps its name; a new one gets the tutor's
+      // name for it, else the one it gets when created.
+      const bool reteaching = area < static_cast<int>(areas_.size());
+      const std::string name = reteaching                 ? areas_[static_cast<std::size_t>(area)].name
+                               : next_area_name_.empty() ? "area_" + std::to_string(area + 1)
+                                                         : next_area_name_;
       detail << "posture near the joint limit at area '" << name << "': joint " << (j + 1) << " (" << joint.name << ") is ";
       if (shown == 0.0) {
         detail << "at its limit";

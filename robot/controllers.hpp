@@ -134,8 +134,10 @@ class HierarchicalController {
                 Eigen::VectorXd& q_target);
 
   /// For kinematic searches (IK as target() iterated a fixed number of times), not motions:
-  /// joints the URDF allows less than kSearchVelocity step as if allowed that much, so that the
-  /// search covers a slow arm's joint range as well (the LWR IV's joints all allow more).
+  /// joints allowed less than kSearchVelocity (URDF limit times limits.velocity_scale) step as if
+  /// allowed that much, so that the search covers a slow arm's joint range as well (the LWR IV's
+  /// joints all allow more at the default scale of 1; a scene that slows them below 0.78 gets
+  /// the LWR IV's own search steps back).
   void useForKinematicSearch() { v_max_ = v_max_.cwiseMax(kSearchVelocity); }
   static constexpr double kSearchVelocity = 1.5;  ///< [rad/s, m/s]
 

@@ -282,14 +282,20 @@ Json renderPicture(const RenderOptions& options) {
       const std::string& link = collisions.bodyName(contact.body);
       const std::string other = collisions.otherName(contact);
       contacts.push_back({{"link", link}, {"other", other}, {"depth_m", contact.depth}});
-      if (std::find(touching_links.begin(), touching_links.end(), link) == touching_links.end()) touching_links.push_back(link);
+      // Both links of a contact between two links are drawn red.
+      for (const std::string& touching : {link, contact.isSelfCollision() ? other : std::string()}) {
+        if (!touching.empty() && std::find(touching_links.begin(), touching_links.end(), touching) == touching_links.end()) {
+          touching_links.push_back(touching);
+        }
+      }
       if (contacts.size() <= 3) {
         said << (contacts.size() > 1 ? ", " : "") << printable(link) << " in " << printable(other) << " (" << std::fixed << std::setprecision(1)
              << 1000.0 * contact.depth << " mm)";
       }
     }
     if (!contacts.empty()) {
-      std::cerr << "note: the posture puts " << said.str() << (contacts.size() > 3 ? " and more" : "") << "; drawn red\n";
+      std::cerr << "note: the posture puts " << said.str() << (contacts.size() > 3 ? " and more" : "")
+                << (options.no_robot ? "" : "; drawn red") << "\n";
     }
   }
 

@@ -50,7 +50,8 @@ ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSe
   double reached_since = -1.0;
   const auto max_steps = static_cast<std::uint64_t>(std::ceil(request.max_time / sim.cycleTime()));
   // A joint allowed 0.02 rad/s needs 50 s where the LWR IV's need 1: judge progress on the arm's
-  // own time scale (the LWR IV's slowest joint allows 1.9 rad/s, and keeps the stall time).
+  // own time scale (the LWR IV's slowest joint allows 1.9 rad/s, and keeps the stall time unless
+  // limits.velocity_scale slows it below 1 rad/s).
   const double slowest = limiter.velocityLimit().minCoeff();
   const double stall_time = request.stall_time * std::max(1.0, 1.0 / std::max(slowest, 1e-6));
   result.status = "timeout";
@@ -91,8 +92,10 @@ ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSe
   result.position = state.p_WT();
   result.error_m = (state.p_WT() - request.target).norm();
   result.posture_error_rad = model.postureDifference(state.q, posture).norm();
+  // The command, which the limiter holds on a limit exactly, not the measured posture around it.
+  const Eigen::VectorXd& commanded = limiter.command();
   for (int j = 0; j < model.dof(); ++j) {
-    if (std::min(state.q[j] - model.softLowerLimits()[j], model.softUpperLimits()[j] - state.q[j]) < 1e-3) {
+    if (std::min(commanded[j] - model.softLowerLimits()[j], model.softUpperLimits()[j] - commanded[j]) < 1e-6) {
       result.joints_at_limits.push_back(model.joints()[static_cast<std::size_t>(j)].name);
     }
   }
@@ -110,7 +113,7 @@ ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSe
   result.torque_saturations = sim.torqueSaturations();
   result.max_substeps = sim.maxSubsteps();
   const std::array<std::pair<const Eigen::VectorXd*, const char*>, 2> checked = {
-      {{&request.start, "the start"}, {&result.q, "the final posture"}}};
+      {{&start, "the start"}, {&result.q, "the final posture"}}};
   for (const auto& [checked_q, where] : checked) {
     const Simulation::GravityLoad load = sim.gravityLoad(*checked_q);
     if (load.ratio > 1.0) {

@@ -55,8 +55,8 @@ struct ReachResult {
   /// Where the joints cannot hold the arm against gravity at the start or the final posture
   /// (Simulation::gravityLoad above 1): which, and how much; empty otherwise.
   std::string gravity_overload;
-  /// Joints within 1 mrad (1 mm) of a soft limit at the end: where the controller stalled on
-  /// them, another start may reach the target.
+  /// Joints commanded onto a soft limit at the end: where the controller stalled on them,
+  /// another start may reach the target.
   std::vector<std::string> joints_at_limits;
 };
 

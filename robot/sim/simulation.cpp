@@ -265,11 +265,13 @@ void Simulation::modelTerms(const Kinematics& kinematics, Eigen::VectorXd& gravi
 std::string Simulation::describe(const GravityLoad& load) const {
   if (load.joint < 0) return "no joint with an effort limit";
   const char* unit = isPrismatic(load.joint) ? " N" : " Nm";
+  // One decimal below 10 as printed (9.97 prints as 10, not 10.0).
+  const auto decimals = [](double value) { return value < 9.95 ? 1 : 0; };
   std::ostringstream text;
-  text << std::fixed << std::setprecision(load.torque < 10.0 ? 1 : 0) << "joint '"
+  text << std::fixed << std::setprecision(decimals(load.torque)) << "joint '"
        << model_->joints()[static_cast<std::size_t>(load.joint)].name << "' to hold " << load.torque << unit
-       << " against gravity, " << (load.ratio > 1.0 ? "above" : "within") << " its effort limit of "
-       << std::setprecision(load.effort < 10.0 ? 1 : 0) << load.effort << unit;
+       << " against gravity, " << std::setprecision(0) << 100.0 * load.ratio << " % of its effort limit of "
+       << std::setprecision(decimals(load.effort)) << load.effort << unit;
   return text.str();
 }
 

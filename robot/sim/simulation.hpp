@@ -101,8 +101,8 @@ class Simulation final : public RobotBackend {
     double ratio = 0.0;      ///< torque / effort
   };
   GravityLoad gravityLoad(const Eigen::VectorXd& q) const;
-  /// "joint 'j2' to hold 850 Nm against gravity, above its effort limit of 100 Nm" (N for a
-  /// prismatic joint; "above" or "within").
+  /// "joint 'j2' to hold 850 Nm against gravity, 850 % of its effort limit of 100 Nm" (N for a
+  /// prismatic joint).
   std::string describe(const GravityLoad& load) const;
 
  private:

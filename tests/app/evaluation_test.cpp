@@ -190,19 +190,27 @@ TEST(Evaluation, TheReachOfAScaraHoldsEveryTipPositionWithinItsLimits) {
   <link name="l5"/>
   <joint name="tool" type="fixed"><parent link="l5"/><child link="tip"/><origin xyz="0 0 -0.1"/></joint>
   <link name="tip"/></robot>)";
-  const auto model = robot::RobotModel::fromUrdfString(urdf, ".");
-  const ArmReach scara = armReach(model);
-  robot::Kinematics kinematics(model);
-  learning::UniformRandom random(4);
-  double farthest = 0.0;
-  for (int sample = 0; sample < 3000; ++sample) {
-    kinematics.update(random.uniform(model.lowerLimits(), model.upperLimits()));
-    farthest = std::max(farthest, scara.fromShoulder(kinematics.p_WT()));
+  // The same arm on a fixed column (no lift): the tilt is still the first joint not about z,
+  // and it lies 0.75 m off the first axis.
+  std::string fixed_column = urdf;
+  const std::string lift = R"(<joint name="lift" type="prismatic">)";
+  fixed_column.replace(fixed_column.find(lift), lift.size(), R"(<joint name="lift" type="fixed">)");
+  for (const std::string& text : {urdf, fixed_column}) {
+    const auto model = robot::RobotModel::fromUrdfString(text, ".");
+    const ArmReach scara = armReach(model);
+    EXPECT_DOUBLE_EQ(scara.base_radius, 0.0) << model.dof() << " joints";
+    robot::Kinematics kinematics(model);
+    learning::UniformRandom random(4);
+    double farthest = 0.0;
+    for (int sample = 0; sample < 3000; ++sample) {
+      kinematics.update(random.uniform(model.lowerLimits(), model.upperLimits()));
+      farthest = std::max(farthest, scara.fromShoulder(kinematics.p_WT()));
+    }
+    EXPECT_LE(farthest, scara.reach + 1e-9) << model.dof() << " joints";
+    EXPECT_GT(farthest, 0.9 * scara.reach) << model.dof() << " joints: not far beyond what the arm reaches";
+    // A place 0.5 m out at the height of the arm is within reach, and not in a base column.
+    EXPECT_TRUE(scara.roomFor(Eigen::Vector3d(0.4, 0.3, 0.36 + (model.dof() == 5 ? 0.2 : 0.0)), 0.05)) << model.dof() << " joints";
   }
-  EXPECT_LE(farthest, scara.reach + 1e-9);
-  EXPECT_GT(farthest, 0.9 * scara.reach) << "and not far beyond what the arm reaches";
-  // A place 0.5 m out at the height of the arm is within reach, and not in a base column.
-  EXPECT_TRUE(scara.roomFor(Eigen::Vector3d(0.4, 0.3, 0.6), 0.05));
 }
 
 TEST(Evaluation, MotionReachesAFreeTargetWithoutCollision) {

@@ -414,7 +414,8 @@ TEST(SimulatedTutor, SaysWhenTheJointsCannotHoldTheArmInAnyPostureReachingTheAre
   EXPECT_FALSE(report.areas[0].taught);
   EXPECT_NE(report.areas[0].failure.find("the joints cannot hold the arm up there"), std::string::npos) << report.areas[0].failure;
   EXPECT_NE(report.areas[0].failure.find("joint 'A2'"), std::string::npos) << report.areas[0].failure;
-  EXPECT_NE(report.areas[0].failure.find("above its effort limit of 3.0 Nm"), std::string::npos) << report.areas[0].failure;
+  EXPECT_NE(report.areas[0].failure.find("% of its effort limit of 3.0 Nm"), std::string::npos) << report.areas[0].failure;
+  EXPECT_NE(report.areas[0].failure.find("at most 90 % of an effort limit"), std::string::npos) << report.areas[0].failure;
 }
 
 // The LWR IV standing straight up, an area beside it at x = 0: the tip pushed towards it (in the

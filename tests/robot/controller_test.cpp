@@ -83,7 +83,7 @@ TEST(HierarchicalController, TaskErrorConvergesWhateverTheNullSpaceTarget) {
 
 // An arm whose joints the URDF lets move 0.02 rad/s: an IK search of 400 steps of 0.02 s would
 // move each joint 0.16 rad at most, and a target 1 rad of the shoulder away would read as
-// unreachable. As a kinematic search the steps are those of the LWR IV.
+// unreachable. As a kinematic search its joints step at 1.5 rad/s at least.
 TEST(HierarchicalController, AKinematicSearchCoversASlowArmsJointRange) {
   std::string urdf = "<robot name=\"slow\"><link name=\"base\"/>";
   std::string parent = "base";

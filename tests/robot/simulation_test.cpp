@@ -498,6 +498,16 @@ TEST(Reach, ASlowArmIsGivenTheTimeItNeedsInsteadOfCalledOutOfReach) {
   EXPECT_GT(result.time_s, 10.0) << "slowly";
 }
 
+TEST(Reach, StartsFromMidRangeWhenNoStartIsGiven) {
+  const std::vector<ParameterDeclaration> declarations = reachParameters();
+  const ParameterSet parameters(declarations);
+  ReachRequest request;  // no start, no posture: both mid-range
+  request.target = Eigen::Vector3d(-0.45, 0.25, 0.45);
+  const ReachResult result = reach(lwr4(), nullptr, parameters, request);
+  EXPECT_EQ(result.status, "reached");
+  EXPECT_EQ(result.gravity_overload, "");
+}
+
 // Three joints, the second held to ±0.3 rad: a target low beside the arm needs it tilted 1.2 rad.
 // The controller pushes it onto its limit, and the elbow onto its own as far as it folds out,
 // and stalls there; the result names both.
