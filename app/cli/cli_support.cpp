@@ -75,11 +75,22 @@ Json toJsonRows(const Eigen::MatrixXd& m) {
   return rows;
 }
 
-void checkOutputPath(const std::string& option, const std::string& path) {
+void checkOutputPath(const std::string& option, const std::string& path,
+                     const std::vector<std::pair<std::string, std::string>>& inputs) {
   namespace fs = std::filesystem;
   if (path.empty()) throw InputError(option + ": expected a file path");
   std::error_code error;
   if (fs::is_directory(path, error)) throw InputError(option + ": '" + path + "' is a directory; expected a file path");
+  // Outputs are written to a temporary file renamed into place: over /dev/null or a pipe that
+  // would put a regular file where the device was.
+  if (fs::exists(path, error) && !fs::is_regular_file(path, error)) {
+    throw InputError(option + ": '" + path + "' is not a regular file (a device, a pipe or a socket); expected a file path");
+  }
+  for (const auto& [input_option, input] : inputs) {
+    if (!input.empty() && fs::exists(path, error) && fs::equivalent(input, path, error)) {
+      throw InputError(option + ": '" + path + "' is the " + input_option + " file the run reads; give another file");
+    }
+  }
   const fs::path folder = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
   if (!fs::is_directory(folder, error)) {
     throw InputError(option + (fs::exists(folder, error) ? ": '" + folder.string() + "' is a file, not a folder"

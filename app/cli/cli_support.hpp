@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "app/cli/number_list.hpp"
 #include "robot/robot_model.hpp"
@@ -102,9 +104,11 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region);
 Json toJson(const Eigen::VectorXd& v);
 Json toJsonRows(const Eigen::MatrixXd& m);
 
-/// Refuses (InputError naming `option`) an output path that is a directory or whose folder does
-/// not exist or cannot be written, before any work is done for it.
-void checkOutputPath(const std::string& option, const std::string& path);
+/// Refuses (InputError naming `option`) an output path that is a directory, a device, a pipe or
+/// a socket, that is one of the run's `inputs` ({option, path}: writing would destroy what is
+/// being read), or whose folder does not exist or cannot be written, before any work is done.
+void checkOutputPath(const std::string& option, const std::string& path,
+                     const std::vector<std::pair<std::string, std::string>>& inputs = {});
 
 /// robot::loadScene, and its sceneNotes on stderr ("note: ..."), once per scene and process.
 robot::Scene loadSceneNoting(const std::string& name_or_path);

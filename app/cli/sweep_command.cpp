@@ -320,6 +320,7 @@ Json runSweep(const SweepOptions& options) {
   }
   // A sweep runs for minutes: a --json file that cannot be written is refused before it starts.
   if (!options.json_out.empty()) checkOutputPath("--json", options.json_out);
+  if (!options.markdown.empty()) checkOutputPath("--markdown", options.markdown);
   std::ofstream file;
   if (!options.markdown.empty()) {
     file.open(options.markdown);

@@ -2,6 +2,7 @@
 // and exactly one line "error: ..." on stderr, quickly and without exhausting memory
 // (docs/RELIABILITY.md).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -127,6 +128,27 @@ TEST_F(HostileCli, ReachRefusesTargetsUnderTheTableAndPosturesOutsideTheLimits) 
   expectRefused(runCliBinary("reach --target 1e300,0,0.5"), "--target: coordinates beyond 1000 m");
   expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --posture 0,0,0,0,0,0,10"), "--posture: joint 7");
   expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --from 0,0,0,0,0,0,10"), "--from: joint 7");
+}
+
+// Outputs are written to a temporary file renamed into place: a pipe (or /dev/null) at --out
+// would have been replaced by a regular file, and --out naming the --data file destroyed it.
+TEST_F(HostileCli, AnOutputOntoADeviceOrTheInputFileIsRefused) {
+  const fs::path pipe = dir_ / "pipe";
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  expectRefused(runCliBinary("teach --scene setup_A --areas 1 --overwrite --out " + pipe.string()), "is not a regular file");
+  EXPECT_FALSE(fs::is_regular_file(pipe)) << "still the pipe";
+  std::string rows = "area,x,y,z,q1,q2\n";
+  for (int i = 0; i < 20; ++i) rows += "0," + std::to_string(0.01 * i) + ",0.2,0.3," + std::to_string(0.02 * i) + ",0.5\n";
+  const fs::path data = write("data.csv", rows);
+  expectRefused(runCliBinary("learn fit --data " + data.string() + " --out " + data.string()), "is the --data file the run reads");
+  std::string stream = "x,y,z,q1\n";
+  for (int i = 0; i < 20; ++i) stream += std::to_string(0.05 * i) + ",0.2,0.3," + std::to_string(0.1 * i) + "\n";
+  const fs::path samples = write("stream.csv", stream);
+  expectRefused(runCliBinary("itm build --data " + samples.string() + " --out " + samples.string()), "is the --data file the run reads");
+  std::ifstream kept(data);
+  std::string header;
+  std::getline(kept, header);
+  EXPECT_EQ(header, "area,x,y,z,q1,q2") << "the data file is as it was";
 }
 
 TEST_F(HostileCli, GarbageModelGraphAndSessionFilesAreRefused) {
