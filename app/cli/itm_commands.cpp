@@ -97,6 +97,7 @@ class StreamReader {
         char* end = nullptr;
         const double value = std::strtod(cursor, &end);
         if (end == cursor || errno == ERANGE || !std::isfinite(value)) fail("column " + std::to_string(column + 1) + " is not a finite number");
+        if (std::abs(value) > 1e6) fail("column " + std::to_string(column + 1) + " is beyond ±1e6");
         cursor = end;
         while (*cursor == ' ' || *cursor == '\t' || *cursor == '\r') ++cursor;
         if (column + 1 < columns_) {

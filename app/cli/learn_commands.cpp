@@ -126,6 +126,9 @@ LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
       if (fields[i].empty() || end != fields[i].c_str() + fields[i].size() || errno == ERANGE || !std::isfinite(value)) {
         throw InputError(at + ", column '" + header[i] + "': '" + fields[i] + "' is not a finite number");
       }
+      // Positions in metres and joint values in radians (or metres): beyond a million is a
+      // mistake, and its square would overflow the learners' sums.
+      if (std::abs(value) > 1e6) throw InputError(at + ", column '" + header[i] + "': '" + fields[i] + "' is beyond ±1e6");
       if (csv.has_area && i == 0) {
         if (value < 0 || value != std::floor(value) || value > 1e6) {
           throw InputError(at + ": area '" + fields[i] + "' is not an integer in 0...1000000");

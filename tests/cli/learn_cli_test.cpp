@@ -180,6 +180,7 @@ TEST_F(LearnCli, RefusesBrokenCsvWithExitCodeTwoAndOneLine) {
       {"x,y,z,q1\n0.1,abc,0.3,0.4\n", "column 'y': 'abc' is not a finite number"},
       {"x,y,z,q1\n0.1,nan,0.3,0.4\n", "is not a finite number"},
       {"x,y,z,q1\n0.1,1e999,0.3,0.4\n", "is not a finite number"},
+      {"x,y,z,q1\n0.1,0.2,0.3,1e300\n", "column 'q1': '1e300' is beyond ±1e6"},
       {"x,y,z,q2\n0.1,0.2,0.3,0.4\n", "expected column 'q1'"},
       {"x,y,z\n0.1,0.2,0.3\n", "no joint columns"},
       {"area,x,y,z,q1\n-1,0.1,0.2,0.3,0.4\n", "area '-1' is not an integer"},
