@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "app/session_reader.hpp"
+#include "app/session_schema.hpp"
 #include "app/session_teaching.hpp"
 #include "app/study_metrics.hpp"
 #include "robot/collision.hpp"
@@ -429,6 +430,10 @@ StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions
       const SessionReader reader(files[i]);
       study.participants.push_back(analyseSession(reader, options.replay_interval));
     } catch (const InputError& error) {
+      study.skipped.push_back(files[i].filename().string() + ": " + error.what());
+    } catch (const SqliteError& error) {
+      // A damaged file among good ones (a row of the wrong size, a corrupt page): skipped, the
+      // others analysed.
       study.skipped.push_back(files[i].filename().string() + ": " + error.what());
     }
   }

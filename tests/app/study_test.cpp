@@ -13,6 +13,7 @@
 
 #include "app/session_reader.hpp"
 #include "app/session_recorder.hpp"
+#include "app/session_schema.hpp"
 #include "robot/backend.hpp"
 #include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
@@ -369,18 +370,25 @@ TEST(StudyReplay, CountsContactsOfTheRecordedPosturesInTheRecordedScene) {
   EXPECT_EQ(clear.e_coll, 0);
   EXPECT_EQ(clear.colliding_samples, 0);
 
-  // The folder as a study: both sessions, a foreign file listed as skipped.
+  // The folder as a study: both sessions; a foreign file and a session with a damaged row
+  // listed as skipped.
   {
     std::ofstream junk(dir / "junk.db");
     junk << "not a session";
+  }
+  std::filesystem::copy_file(dir / "free.db", dir / "damaged.db");
+  {
+    SqliteDatabase db((dir / "damaged.db").string(), 0x00000002);
+    db.exec("UPDATE state SET q = x'0102' WHERE id = 5");
   }
   StudyOptions options;
   options.replay_interval = 0.0;
   const StudyResult study = analyseStudy(dir, options);
   ASSERT_EQ(study.participants.size(), 2U);
   EXPECT_EQ(study.participants[0].participant, "box");
-  ASSERT_EQ(study.skipped.size(), 1U);
-  EXPECT_EQ(study.skipped[0].rfind("junk.db: ", 0), 0U);
+  ASSERT_EQ(study.skipped.size(), 2U);
+  EXPECT_EQ(study.skipped[0].rfind("damaged.db: ", 0), 0U) << study.skipped[0];
+  EXPECT_EQ(study.skipped[1].rfind("junk.db: ", 0), 0U) << study.skipped[1];
   EXPECT_THROW(analyseStudy(dir / "none"), InputError);
   std::filesystem::remove_all(dir);
 }
