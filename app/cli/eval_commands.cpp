@@ -54,6 +54,7 @@ struct Session {
   /// carry; as the file counts it where the file keeps no name (version 1 sessions).
   std::vector<std::string> taught_names;
   std::unique_ptr<planning::Itm> itm;
+  std::string learner = "elm";  ///< the learner the session was taught with (what eval and plan use by default)
 };
 
 // A posture the robot cannot take would be learned and planned with as if it could (a hand-edited
@@ -96,8 +97,16 @@ void checkTipPositionsMatchPostures(const Session& session) {
 
 // A session recorded in SQLite by the session recorder: the complete areas' latest takes.
 Session loadRecordedSession(const std::string& file) {
-  app::RecordedTeaching teaching = app::readRecordedTeaching(app::SessionReader(file));
+  const app::SessionReader reader(file);
+  app::RecordedTeaching teaching = app::readRecordedTeaching(reader);
   Session session;
+  // teach records its options as JSON (`parameters`); the last model's learner otherwise.
+  const Json parameters = Json::parse(reader.metadata().parameters, nullptr, false);
+  if (parameters.is_object() && parameters.contains("learner") && parameters.at("learner").is_string()) {
+    session.learner = parameters.at("learner").get<std::string>();
+  } else if (const std::vector<app::ModelRecord> models = reader.models(); !models.empty()) {
+    session.learner = models.back().learner_kind;
+  }
   session.robot = teaching.robot;
   session.tip = teaching.tip;
   session.scene = teaching.scene;
@@ -165,6 +174,7 @@ Session loadSession(const std::string& file) {
     session.robot = json.at("robot").get<std::string>();
     session.tip = json.value("tip", "");
     session.scene = json.at("scene").get<std::string>();
+    session.learner = json.value("learner", "elm");
     session.model = std::make_unique<robot::RobotModel>(
         loadSessionRobot(session.robot, json.value("robot_urdf", ""), session.tip));
     session.scene_data = loadSessionScene(session.scene, json.value("scene_text", ""));
@@ -236,7 +246,7 @@ Json pointsJson(const std::vector<Eigen::Vector3d>& points) {
 
 struct EvalOptions {
   std::string session;
-  std::string learner = "elm";
+  std::string learner;  ///< empty: the session's
   double spacing = 0.0;
   std::string postures = "demonstrated";
   int goals = 10;
@@ -246,6 +256,11 @@ struct EvalOptions {
   std::string approach = "visited";  ///< reachable / scene-model: where each target is approached from
   std::string source = "auto";  ///< trajectories: the scene's, or drawn around the training data
 };
+
+// The learner asked for, else the one the session was taught with.
+std::string learnerOf(const EvalOptions& options, const Session& session) {
+  return options.learner.empty() ? session.learner : options.learner;
+}
 
 // A grid without targets has no reachability to report (0 of 0 is not 0 %): `command` fails
 // saying why each point was left out, with `json` as its result.
@@ -261,7 +276,7 @@ void requireTargets(const std::string& command, const app::ReachableResult& resu
 Json runReachable(const EvalOptions& options) {
   const Session session = loadSession(options.session);
   const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
-  const auto learner = learnMap(session, options.learner);
+  const auto learner = learnMap(session, learnerOf(options, session));
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
   const app::ApproachFrom approach = app::parseApproach(options.approach);
   const app::ReachableResult result =
@@ -281,7 +296,7 @@ Json runReachable(const EvalOptions& options) {
                {"in_obstacles", result.in_obstacles},
                {"spacing_m", grid.spacing},
                {"tolerance_m", grid.tolerance},
-               {"learner", options.learner},
+               {"learner", learnerOf(options, session)},
                {"areas", session.q_fixed.size()},
                {"samples", session.data.size()},
                {"inaccessible", result.inaccessible},
@@ -349,7 +364,7 @@ std::vector<app::EvaluatedArea> sessionAreas(const Session& session) {
 Json runSceneModel(const EvalOptions& options) {
   const Session session = loadSession(options.session);
   const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
-  const auto learner = learnMap(session, options.learner);
+  const auto learner = learnMap(session, learnerOf(options, session));
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
   // Eq. 4.1 uses the postures the reachability evaluation ends in (Sect. 4.2.2).
   const app::ReachableResult reachable =
@@ -366,7 +381,7 @@ Json runSceneModel(const EvalOptions& options) {
                   {"excluded", reachable.excluded},
                   {"inaccessible", reachable.inaccessible},
                   {"spacing_m", grid.spacing},
-                  {"learner", options.learner},
+                  {"learner", learnerOf(options, session)},
                   {"areas", session.q_fixed.size()}});
   const app::SceneModelResult model = app::evaluateSceneModel(*session.model, session.scene_data, grid, reachable.final_postures);
   return {{"workspace_points", model.workspace_points},
@@ -379,7 +394,7 @@ Json runSceneModel(const EvalOptions& options) {
           {"free_points_in_model", model.free_points_in_model},
           {"reachable_fraction", reachable.reachable_fraction},
           {"spacing_m", grid.spacing},
-          {"learner", options.learner},
+          {"learner", learnerOf(options, session)},
           {"areas", session.q_fixed.size()},
           {"model", pointsJson(model.model)}};
 }
@@ -422,7 +437,7 @@ Json trajectoryJson(const app::TrajectoryResult& result) {
 
 Json runTrajectories(const EvalOptions& options) {
   const Session session = loadSession(options.session);
-  const auto learner = learnMap(session, options.learner);
+  const auto learner = learnMap(session, learnerOf(options, session));
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
   const app::TrajectoryResult result =
       app::evaluateTrajectories(*session.model, session.scene_data, parameters, *learner, sessionAreas(session),
@@ -443,7 +458,7 @@ Json runTrajectories(const EvalOptions& options) {
     std::cerr << "note: ... and " << impossible - kNotesOnStderr << " more (\"impossible_trajectories\" in the JSON)\n";
   }
   Json out = trajectoryJson(result);
-  out["learner"] = options.learner;
+  out["learner"] = learnerOf(options, session);
   out["speed_m_s"] = options.speed;
   out["areas"] = session.q_fixed.size();
   return out;
@@ -451,7 +466,7 @@ Json runTrajectories(const EvalOptions& options) {
 
 Json runPlan(const EvalOptions& options) {
   const Session session = loadSession(options.session);
-  const auto learner = learnMap(session, options.learner);
+  const auto learner = learnMap(session, learnerOf(options, session));
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
   const Eigen::VectorXd start = session.q_fixed.empty() ? startPosture(session) : session.q_fixed.front();
   const app::PlanningResult result =
@@ -480,7 +495,7 @@ Json runPlan(const EvalOptions& options) {
           {"contacts", result.contacts},
           {"itm_nodes", session.itm->nodeCount()},
           {"disconnected_nodes", result.disconnected_nodes},
-          {"learner", options.learner},
+          {"learner", learnerOf(options, session)},
           {"motions", motions}};
 }
 
@@ -492,19 +507,19 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   eval->require_subcommand(1);
   CLI::App* reachable = eval->add_subcommand("reachable", "reachable workspace on the evaluation grid (Sect. 3.3.2)");
   reachable->add_option("--session", options->session, "session file written by teach")->required();
-  reachable->add_option("--learner", options->learner, "elm, oselm or llm");
+  reachable->add_option("--learner", options->learner, "elm, oselm or llm (default: the one the session was taught with)");
   reachable->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
   addApproachOption(*reachable, options->approach);
   reachable->callback([&runner, options] { runner.select([options] { return runReachable(*options); }); });
   CLI::App* scene_model = eval->add_subcommand("scene-model", "implicit scene model S of Eq. 4.1 and how much of the obstacles it encloses");
   scene_model->add_option("--session", options->session, "session file written by teach")->required();
-  scene_model->add_option("--learner", options->learner, "elm, oselm or llm");
+  scene_model->add_option("--learner", options->learner, "elm, oselm or llm (default: the one the session was taught with)");
   scene_model->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
   addApproachOption(*scene_model, options->approach);
   scene_model->callback([&runner, options] { runner.select([options] { return runSceneModel(*options); }); });
   CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
   trajectories->add_option("--session", options->session, "session file written by teach")->required();
-  trajectories->add_option("--learner", options->learner, "elm, oselm or llm");
+  trajectories->add_option("--learner", options->learner, "elm, oselm or llm (default: the one the session was taught with)");
   trajectories->add_option("--source", options->source,
                            "the scene's trajectories (scene), trajectories drawn in the boxes around each area's "
                            "training data and between them, as the thesis defines its regions (training-data), or "
@@ -519,7 +534,7 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   plan->add_option("--session", options->session, "session file written by teach")->required();
   plan->add_option("--goals", options->goals, "number of goals")->check(finiteRange(1, 10000));
   plan->add_option("--seed", options->seed, "random seed")->check(seedValidator());
-  plan->add_option("--learner", options->learner, "elm, oselm or llm");
+  plan->add_option("--learner", options->learner, "elm, oselm or llm (default: the one the session was taught with)");
   plan->add_option("--postures", options->postures,
                    "null-space posture along a path: the postures shown along it in CONFIGURATION (demonstrated) "
                    "or the learned map alone, as in the thesis (learned)")

@@ -164,6 +164,25 @@ TEST(EvalSceneModelCli, WithoutObstaclePointsTheEnclosedFractionIsNull) {
   std::filesystem::remove(scene);
 }
 
+// A session taught with the LLM is evaluated and planned with the LLM unless another learner is
+// asked for; one without a learner (written before sessions named it) with the ELM.
+TEST(EvalReachableCli, UsesTheLearnerTheSessionWasTaughtWithUnlessAskedForAnother) {
+  const auto session = tinySession("setup_I", "taught-with-llm.json");
+  nlohmann::json json = nlohmann::json::parse(std::ifstream(session));
+  const auto learnerOf = [](const testing::CliResult& result) {
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return result.exit_code == 0 ? result.json().at("learner").get<std::string>() : std::string();
+  };
+  const std::string reachable = "eval reachable --spacing 0.4 --session " + session.string();
+  EXPECT_EQ(learnerOf(runCliBinary(reachable)), "elm");
+  json["learner"] = "llm";
+  writeText(session, json.dump());
+  EXPECT_EQ(learnerOf(runCliBinary(reachable)), "llm");
+  EXPECT_EQ(learnerOf(runCliBinary("plan --goals 1 --session " + session.string())), "llm");
+  EXPECT_EQ(learnerOf(runCliBinary(reachable + " --learner elm")), "elm");
+  std::filesystem::remove(session);
+}
+
 TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   // One target where the first area's posture puts the tip, one far beyond the arm's reach.
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
