@@ -154,13 +154,19 @@ Json table32(std::ostream& md) {
   return out;
 }
 
-// Tab. 3.3 (and Eq. 4.1 on the same evaluation).
-Json table33(const SweepOptions& options, std::ostream& md) {
-  const std::vector<std::tuple<std::string, int, std::string>> rows{
+// Tab. 3.3's rows: scene, areas, the thesis' explored / reachable %.
+const std::vector<std::tuple<std::string, int, std::string>>& tab33Rows() {
+  static const std::vector<std::tuple<std::string, int, std::string>> rows{
       {"setup_I", 1, "4.9 / 51.3"},   {"setup_I", 2, "9.2 / 47.3"},   {"setup_I", 4, "23.7 / 89.7"},
       {"setup_I", 6, "31.0 / 93.0"},  {"setup_I", 12, "36.5 / 97.1"}, {"setup_II", 1, "7.1 / 51.6"},
       {"setup_II", 2, "9.7 / 64.8"},  {"setup_II", 4, "19.1 / 73.5"}, {"setup_II", 6, "31.6 / 80.8"},
       {"setup_II", 21, "56.5 / 94.1"}};
+  return rows;
+}
+
+// Tab. 3.3 (and Eq. 4.1 on the same evaluation).
+Json table33(const SweepOptions& options, std::ostream& md) {
+  const auto& rows = tab33Rows();
   const app::ApproachFrom approach = app::parseApproach(options.approach);
   md << "\n## Tab. 3.3 — reachable workspace (ELM, tutor seed 1, targets approached from: " << options.approach
      << "), with the implicit scene model (Eq. 4.1)\n\n"
@@ -317,6 +323,21 @@ Json runSweep(const SweepOptions& options) {
   const std::set<std::string> known{"3.2", "3.3", "3.4", "7.1", "8.3"};
   for (const auto& table : options.tables) {
     if (known.count(table) == 0) throw InputError("--tables: unknown table '" + table + "' (3.2, 3.3, 3.4, 7.1, 8.3)");
+  }
+  // --only names rows of Tab. 3.3: one that is not there, or without Tab. 3.3, would run nothing.
+  if (!options.only.empty()) {
+    std::string known_rows;
+    std::set<std::string> known_row_names;
+    for (const auto& [scene_name, areas, thesis] : tab33Rows()) {
+      known_row_names.insert(scene_name + ":" + std::to_string(areas));
+      known_rows += (known_rows.empty() ? "" : ", ") + scene_name + ":" + std::to_string(areas);
+    }
+    for (const auto& row : options.only) {
+      if (known_row_names.count(row) == 0) throw InputError("--only: Tab. 3.3 has no row '" + row + "' (" + known_rows + ")");
+    }
+    if (std::find(options.tables.begin(), options.tables.end(), "3.3") == options.tables.end()) {
+      throw InputError("--only: selects rows of Tab. 3.3, which --tables leaves out");
+    }
   }
   // A sweep runs for minutes: a --json file that cannot be written is refused before it starts.
   if (!options.json_out.empty()) checkOutputPath("--json", options.json_out);

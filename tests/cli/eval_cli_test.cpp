@@ -435,7 +435,9 @@ TEST(EvalCli, BadArgumentsGiveExitCodeTwoAndOneLine) {
       "eval trajectories --session " + session.string() + " --seed 010",
       "sweep --tables 9.9",
       "sweep --spacing 0",
-      "sweep --seeds 0"};
+      "sweep --seeds 0",
+      "sweep --tables 3.3 --only setup_I:3",     // no such row
+      "sweep --tables 3.2 --only setup_I:1"};    // rows of a table not run
   for (const std::string& arguments : bad) {
     const auto result = runCliBinary(arguments);
     EXPECT_EQ(result.exit_code, 2) << arguments << ": " << result.err;
