@@ -499,7 +499,9 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   teach->add_flag("--realtime", options->realtime, "pace the simulation at wall-clock speed");
   teach->add_flag("--overwrite", options->overwrite, "replace an existing --out file (without it, an existing file is refused)");
   teach->add_option("--learner", options->learner, "elm, oselm or llm");
-  teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m]")->check(finiteRange(0.005, 0.5));
+  // Below 1 cm even the fastest turns leave the joints under the still speed: on_converged would
+  // end the recording within 2 s (a 5 mm helix recorded 101 samples).
+  teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m], 0.01-0.5")->check(finiteRange(0.01, 0.5));
   teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(finiteRange(1, 1000));
   teach->add_option("--check-points", options->check_points,
                     "points on which areas beyond the scene's list are checked and taken back if the map got worse (0: random places, kept)")

@@ -147,9 +147,10 @@ TEST(TeachCli, TheSameSeedTeachesTheSameAreaOnBothBackends) {
   fs::remove(fri_out);
 }
 
-TEST(TeachCli, RefusesAnUnknownBackendAndFriForTheNineJointArmWithOneLine) {
+TEST(TeachCli, RefusesAnUnknownBackendFriForTheNineJointArmAndAHelixUnderACentimetreWithOneLine) {
   for (const std::string arguments : {"teach --backend carrier-pigeon --scene setup_A --areas 1",
-                                      "teach --backend fri-sim --robot arm9 --scene arm9_areas --areas 1"}) {
+                                      "teach --backend fri-sim --robot arm9 --scene arm9_areas --areas 1",
+                                      "teach --scene setup_A --areas 1 --diameter 0.005"}) {
     const auto result = runCliBinary(arguments + " --out " + scratch("refused.json").string());
     EXPECT_NE(result.exit_code, 0) << arguments;
     EXPECT_EQ(result.err.rfind("error: ", 0), 0U) << result.err;
