@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <map>
+#include <regex>
 #include <vector>
 
 #include "app/cli/bench/benchmarks.hpp"
@@ -204,6 +205,13 @@ void registerBenchCommand(CLI::App& app, CommandRunner& runner) {
       return;
     }
     runner.select([filter, repetitions, min_time] {
+      // Google Benchmark reads the filter as a POSIX extended expression and, when it does not
+      // compile, matches nothing: said as what it is.
+      try {
+        std::regex(*filter, std::regex::extended);
+      } catch (const std::regex_error&) {
+        throw InputError("--filter: '" + printable(*filter) + "' is not a valid regular expression");
+      }
       bench::registerAllBenchmarks();
       // Google Benchmark reads its settings from argv-style flags.
       std::vector<std::string> args{"flexirob-cli", "--benchmark_filter=" + *filter,

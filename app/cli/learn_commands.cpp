@@ -74,6 +74,12 @@ LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
     if (!std::getline(in, line)) throw InputError(path + ": empty file (expected a header row)");
     ++line_number;
   } while (trim(line).empty());
+  // A spreadsheet's UTF-8 byte order mark is no part of the first column's name.
+  if (line_number == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
+  // Classic Mac line ends (CR alone) would read as one long header line.
+  if (const std::size_t cr = line.find('\r'); cr != std::string::npos && cr + 1 < line.size()) {
+    throw InputError(path + ": lines end in a carriage return alone; expected LF or CRLF line ends");
+  }
   std::vector<std::string> header = splitFields(line);
   for (auto& name : header) name = lowercase(name);
   const std::string where = path + " line " + std::to_string(line_number);
@@ -84,7 +90,7 @@ LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
     column = 1;
   }
   if (header.size() < column + 3 || header[column] != "x" || header[column + 1] != "y" || header[column + 2] != "z") {
-    throw InputError(where + ": expected the header 'area,x,y,z,q1,...,qN' (area optional), got '" + trim(line) + "'");
+    throw InputError(where + ": expected the header 'area,x,y,z,q1,...,qN' (area optional), got '" + printable(trim(line)) + "'");
   }
   const std::size_t input_begin = column;
   std::size_t output_begin = input_begin + 3;
@@ -124,7 +130,7 @@ LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
       char* end = nullptr;
       const double value = std::strtod(fields[i].c_str(), &end);
       if (fields[i].empty() || end != fields[i].c_str() + fields[i].size() || errno == ERANGE || !std::isfinite(value)) {
-        throw InputError(at + ", column '" + header[i] + "': '" + fields[i] + "' is not a finite number");
+        throw InputError(at + ", column '" + printable(header[i]) + "': '" + printable(fields[i]) + "' is not a finite number");
       }
       // Positions in metres and joint values in radians (or metres): beyond a million is a
       // mistake, and its square would overflow the learners' sums.

@@ -126,6 +126,7 @@ TEST_F(HostileCli, NonFiniteAndOverflowingNumbersAreRefused) {
 TEST_F(HostileCli, ReachRefusesTargetsUnderTheTableAndPosturesOutsideTheLimits) {
   expectRefused(runCliBinary("reach --target -0.5,0.2,-0.4"), "below the table top");
   expectRefused(runCliBinary("reach --target 1e300,0,0.5"), "--target: coordinates beyond 1000 m");
+  expectRefused(runCliBinary("bench --filter ["), "--filter: '[' is not a valid regular expression");
   expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --posture 0,0,0,0,0,0,10"), "--posture: joint 7");
   expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --from 0,0,0,0,0,0,10"), "--from: joint 7");
 }

@@ -181,6 +181,8 @@ TEST_F(LearnCli, RefusesBrokenCsvWithExitCodeTwoAndOneLine) {
       {"x,y,z,q1\n0.1,nan,0.3,0.4\n", "is not a finite number"},
       {"x,y,z,q1\n0.1,1e999,0.3,0.4\n", "is not a finite number"},
       {"x,y,z,q1\n0.1,0.2,0.3,1e300\n", "column 'q1': '1e300' is beyond ±1e6"},
+      {"x,y,z,q1\r0.1,0.2,0.3,0.4\r", "lines end in a carriage return alone"},
+      {std::string("x,y,z,q1\n0.1,0.2,0.3,0.4\0\n", 25), "'0.4?' is not a finite number"},
       {"x,y,z,q2\n0.1,0.2,0.3,0.4\n", "expected column 'q1'"},
       {"x,y,z\n0.1,0.2,0.3\n", "no joint columns"},
       {"area,x,y,z,q1\n-1,0.1,0.2,0.3,0.4\n", "area '-1' is not an integer"},
@@ -193,6 +195,9 @@ TEST_F(LearnCli, RefusesBrokenCsvWithExitCodeTwoAndOneLine) {
     expectInputError(invoke("learn fit --learner elm --data " + data.string() + " --out " + path("m").string()), cases[i].fragment);
   }
   expectInputError(invoke("learn fit --data " + path("missing.csv").string() + " --out " + path("m").string()), "does not exist");
+  // A spreadsheet's byte order mark before the header is read past.
+  const fs::path marked = write("bom.csv", "\xEF\xBB\xBF" + trainingCsv(true));
+  EXPECT_EQ(invoke("learn fit --learner elm --data " + marked.string() + " --out " + path("m").string()).exit_code, 0);
 }
 
 TEST_F(LearnCli, RefusesBrokenOrMismatchedModelFilesWithExitCodeTwoAndOneLine) {
