@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <set>
 
 #include "app/cli/cli_support.hpp"
 #include "learning/bpdc.hpp"
@@ -199,6 +200,14 @@ Json fit(const FitOptions& options) {
         learner = std::make_unique<learning::OsElm>(M, N, learning::InputNormalization::identity(M), elm_params);
       }
     } else if (options.learner == "llm") {
+      // One local model per area, each epoch comparing every sample with every centre: a
+      // file of a sample per area (200 000) would run for hours.
+      constexpr std::size_t kMaxLlmAreas = 10000;
+      const std::size_t areas = std::set<int>(data.area.begin(), data.area.end()).size();
+      if (areas > kMaxLlmAreas) {
+        throw InputError("--learner llm: the data hold " + std::to_string(areas) + " areas; the LLM keeps one local model per area, at most " +
+                         std::to_string(kMaxLlmAreas));
+      }
       parameters = {{"eta", llm_params.eta}, {"max_epochs", llm_params.max_epochs}, {"tolerance", llm_params.tolerance},
                     {"patience", llm_params.patience}, {"seed", options.seed}};
       learner = std::make_unique<learning::Llm>(M, N, llm_params);

@@ -195,6 +195,11 @@ TEST_F(LearnCli, RefusesBrokenCsvWithExitCodeTwoAndOneLine) {
     expectInputError(invoke("learn fit --learner elm --data " + data.string() + " --out " + path("m").string()), cases[i].fragment);
   }
   expectInputError(invoke("learn fit --data " + path("missing.csv").string() + " --out " + path("m").string()), "does not exist");
+  // The LLM keeps a local model per area: 10 001 areas are refused before an hour of fitting.
+  std::string many = "area,x,y,z,q1\n";
+  for (int a = 0; a <= 10000; ++a) many += std::to_string(a) + "," + std::to_string(0.0001 * a) + ",0.2,0.3,0.4\n";
+  expectInputError(invoke("learn fit --learner llm --data " + write("many.csv", many).string() + " --out " + path("m").string()),
+                   "the data hold 10001 areas");
   // A spreadsheet's byte order mark before the header is read past.
   const fs::path marked = write("bom.csv", "\xEF\xBB\xBF" + trainingCsv(true));
   EXPECT_EQ(invoke("learn fit --learner elm --data " + marked.string() + " --out " + path("m").string()).exit_code, 0);
