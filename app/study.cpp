@@ -188,6 +188,7 @@ std::vector<AreaClusterSeeds> loadClusterSeeds(const std::filesystem::path& file
   while (std::getline(in, line)) {
     ++line_number;
     const std::string where = file.filename().string() + ":" + std::to_string(line_number);
+    if (line_number == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // a spreadsheet's byte order mark
     if (trim(line).empty() || trim(line)[0] == '#') continue;
     const auto fields = splitCsv(line);
     if (line_number == 1 && !fields.empty() && fields[0] == "area") continue;  // header
@@ -198,7 +199,7 @@ std::vector<AreaClusterSeeds> loadClusterSeeds(const std::filesystem::path& file
       area = std::stoi(fields[0], &used);
       if (used != fields[0].size() || area < 0) throw std::invalid_argument("area");
     } catch (const std::exception&) {
-      throw InputError("cluster seeds " + where + ": expected an area index >= 0, got '" + fields[0] + "'");
+      throw InputError("cluster seeds " + where + ": expected an area index >= 0, got '" + printable(fields[0]) + "'");
     }
     if (fields[1].empty()) throw InputError("cluster seeds " + where + ": empty cluster name");
     Eigen::VectorXd q(static_cast<Eigen::Index>(fields.size() - 2));
@@ -208,10 +209,11 @@ std::vector<AreaClusterSeeds> loadClusterSeeds(const std::filesystem::path& file
         q[static_cast<Eigen::Index>(i - 2)] = std::stod(fields[i], &used);
         if (used != fields[i].size()) throw std::invalid_argument("number");
       } catch (const std::exception&) {
-        throw InputError("cluster seeds " + where + ": expected a joint value in radians, got '" + fields[i] + "'");
+        throw InputError("cluster seeds " + where + ": expected a joint value in radians, got '" + printable(fields[i]) + "'");
       }
     }
     if (!q.allFinite()) throw InputError("cluster seeds " + where + ": non-finite joint value");
+    if (q.cwiseAbs().maxCoeff() > 1e6) throw InputError("cluster seeds " + where + ": a joint value beyond ±1e6 rad");
     if (joints && *joints != q.size()) {
       throw InputError("cluster seeds " + where + ": expected " + std::to_string(*joints) + " joint values, got " +
                        std::to_string(q.size()));
@@ -434,6 +436,9 @@ StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions
     } catch (const SqliteError& error) {
       // A damaged file among good ones (a row of the wrong size, a corrupt page): skipped, the
       // others analysed.
+      study.skipped.push_back(files[i].filename().string() + ": " + error.what());
+    } catch (const std::invalid_argument& error) {
+      // A damaged trajectory (non-finite points) the metrics refuse: the same.
       study.skipped.push_back(files[i].filename().string() + ": " + error.what());
     }
   }

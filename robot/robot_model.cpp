@@ -441,8 +441,11 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
   console_bridge::useOutputHandler(previous);
   if (!urdf_model) {
     const std::string reason = collector.first_error.empty() ? "malformed XML" : oneLine(collector.first_error);
+    // TinyXML's own errors ("Error reading Attributes", "Error parsing Element") name no place;
+    // urdfdom's about what the document means do, by the joint or link.
+    const bool xml_error = collector.first_error.rfind("Error", 0) == 0;
     throw InputError("invalid URDF: " + reason +
-                     (bad_tag_line > 0 ? " (the first malformed tag is on line " + std::to_string(bad_tag_line) + ")" : ""));
+                     (xml_error && bad_tag_line > 0 ? " (the first malformed tag is on line " + std::to_string(bad_tag_line) + ")" : ""));
   }
   if (urdf_model->links_.size() > kMaxLinks) throw InputError("URDF has more than 10000 links");
   try {

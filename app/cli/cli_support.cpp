@@ -76,14 +76,14 @@ Json toJsonRows(const Eigen::MatrixXd& m) {
 }
 
 void checkOutputPath(const std::string& option, const std::string& path,
-                     const std::vector<std::pair<std::string, std::string>>& inputs) {
+                     const std::vector<std::pair<std::string, std::string>>& inputs, bool replaced_by_rename) {
   namespace fs = std::filesystem;
   if (path.empty()) throw InputError(option + ": expected a file path");
   std::error_code error;
   if (fs::is_directory(path, error)) throw InputError(option + ": '" + path + "' is a directory; expected a file path");
-  // Outputs are written to a temporary file renamed into place: over /dev/null or a pipe that
-  // would put a regular file where the device was.
-  if (fs::exists(path, error) && !fs::is_regular_file(path, error)) {
+  // An output written to a temporary file renamed into place would put a regular file where
+  // /dev/null or a pipe was (outputs written in place may go to /dev/stdout).
+  if (replaced_by_rename && fs::exists(path, error) && !fs::is_regular_file(path, error)) {
     throw InputError(option + ": '" + path + "' is not a regular file (a device, a pipe or a socket); expected a file path");
   }
   for (const auto& [input_option, input] : inputs) {

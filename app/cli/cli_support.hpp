@@ -104,11 +104,13 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region);
 Json toJson(const Eigen::VectorXd& v);
 Json toJsonRows(const Eigen::MatrixXd& m);
 
-/// Refuses (InputError naming `option`) an output path that is a directory, a device, a pipe or
-/// a socket, that is one of the run's `inputs` ({option, path}: writing would destroy what is
-/// being read), or whose folder does not exist or cannot be written, before any work is done.
+/// Refuses (InputError naming `option`) an output path that is a directory, that is one of the
+/// run's `inputs` ({option, path}: writing would destroy what is being read), or whose folder
+/// does not exist or cannot be written, before any work is done; with `replaced_by_rename` (the
+/// output is written to a temporary file renamed into place) also a device, a pipe or a socket,
+/// which the rename would replace with a regular file.
 void checkOutputPath(const std::string& option, const std::string& path,
-                     const std::vector<std::pair<std::string, std::string>>& inputs = {});
+                     const std::vector<std::pair<std::string, std::string>>& inputs = {}, bool replaced_by_rename = false);
 
 /// robot::loadScene, and its sceneNotes on stderr ("note: ..."), once per scene and process.
 robot::Scene loadSceneNoting(const std::string& name_or_path);

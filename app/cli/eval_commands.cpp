@@ -95,18 +95,29 @@ void checkTipPositionsMatchPostures(const Session& session) {
   }
 }
 
+// The learner a session names, where eval and plan can learn with it; the ELM otherwise (a
+// BPDC model of the GUI, a hand-edited name), said in a note.
+std::string evaluableLearner(const std::string& named, const std::string& file) {
+  if (named == "elm" || named == "oselm" || named == "llm") return named;
+  std::fprintf(stderr, "note: the session '%s' was taught with the learner '%s', which eval and plan do not learn with; the ELM is used (--learner chooses another)\n",
+               file.c_str(), printable(named).c_str());
+  return "elm";
+}
+
 // A session recorded in SQLite by the session recorder: the complete areas' latest takes.
 Session loadRecordedSession(const std::string& file) {
   const app::SessionReader reader(file);
   app::RecordedTeaching teaching = app::readRecordedTeaching(reader);
   Session session;
-  // teach records its options as JSON (`parameters`); the last model's learner otherwise.
+  // teach records its options as JSON (`parameters`); the GUI's sessions name the learner of
+  // their last model.
   const Json parameters = Json::parse(reader.metadata().parameters, nullptr, false);
   if (parameters.is_object() && parameters.contains("learner") && parameters.at("learner").is_string()) {
     session.learner = parameters.at("learner").get<std::string>();
   } else if (const std::vector<app::ModelRecord> models = reader.models(); !models.empty()) {
     session.learner = models.back().learner_kind;
   }
+  session.learner = evaluableLearner(session.learner, file);
   session.robot = teaching.robot;
   session.tip = teaching.tip;
   session.scene = teaching.scene;
@@ -174,7 +185,7 @@ Session loadSession(const std::string& file) {
     session.robot = json.at("robot").get<std::string>();
     session.tip = json.value("tip", "");
     session.scene = json.at("scene").get<std::string>();
-    session.learner = json.value("learner", "elm");
+    session.learner = evaluableLearner(json.value("learner", "elm"), file);
     session.model = std::make_unique<robot::RobotModel>(
         loadSessionRobot(session.robot, json.value("robot_urdf", ""), session.tip));
     session.scene_data = loadSessionScene(session.scene, json.value("scene_text", ""));

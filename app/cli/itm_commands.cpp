@@ -63,9 +63,13 @@ class StreamReader {
     if (!std::getline(file_, header)) throw InputError(path + ": empty file (expected a header x,y,z,q1,...)");
     ++line_number_;
     if (header.size() >= 3 && header.compare(0, 3, "\xEF\xBB\xBF") == 0) header.erase(0, 3);  // UTF-8 BOM
+    // Classic Mac line ends (CR alone) would read as one long header line.
+    if (const std::size_t cr = header.find('\r'); cr != std::string::npos && cr + 1 < header.size()) {
+      throw InputError(path + ": lines end in a carriage return alone; expected LF or CRLF line ends");
+    }
     const auto names = splitFields(header);
     if (names.size() < 4 || lower(names[0]) != "x" || lower(names[1]) != "y" || lower(names[2]) != "z") {
-      throw InputError(path + " line 1: expected a header starting with x,y,z and then joint columns, got '" + trim(header) + "'");
+      throw InputError(path + " line 1: expected a header starting with x,y,z and then joint columns, got '" + printable(trim(header)) + "'");
     }
     std::size_t joints_from = 3;
     if (names.size() >= 7 && lower(names[3]) == "qw" && lower(names[4]) == "qx" && lower(names[5]) == "qy" && lower(names[6]) == "qz") {
@@ -145,7 +149,7 @@ struct BuildOptions {
 };
 
 Json buildMap(const BuildOptions& options) {
-  checkOutputPath("--out", options.out, {{"--data", options.data}});
+  checkOutputPath("--out", options.out, {{"--data", options.data}}, true);
   ItmParameters parameters = options.parameters;
   if (options.variant == "plain") {
     parameters.variant = planning::ItmVariant::kPlain;

@@ -108,7 +108,7 @@ LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
   for (std::size_t j = 0; j < outputs; ++j) {
     const std::string expected = "q" + std::to_string(j + first_joint);
     if (header[output_begin + j] != expected) {
-      throw InputError(where + ": expected column '" + expected + "', got '" + header[output_begin + j] + "'");
+      throw InputError(where + ": expected column '" + expected + "', got '" + printable(header[output_begin + j]) + "'");
     }
   }
   if (outputs_required && outputs == 0) throw InputError(where + ": no joint columns q1,...,qN");
@@ -135,7 +135,9 @@ LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
       }
       // Positions in metres and joint values in radians (or metres): beyond a million is a
       // mistake, and its square would overflow the learners' sums.
-      if (std::abs(value) > 1e6) throw InputError(at + ", column '" + header[i] + "': '" + fields[i] + "' is beyond ±1e6");
+      if (std::abs(value) > 1e6) {
+        throw InputError(at + ", column '" + printable(header[i]) + "': '" + printable(fields[i]) + "' is beyond ±1e6");
+      }
       if (csv.has_area && i == 0) {
         if (value < 0 || value != std::floor(value) || value > 1e6) {
           throw InputError(at + ": area '" + fields[i] + "' is not an integer in 0...1000000");
@@ -170,7 +172,7 @@ struct FitOptions {
 };
 
 Json fit(const FitOptions& options) {
-  checkOutputPath("--out", options.out, {{"--data", options.data}});
+  checkOutputPath("--out", options.out, {{"--data", options.data}}, true);
   LearningCsv csv = readLearningCsv(options.data, true);
   learning::TrainingSet& data = csv.data;
   const bool areas_inferred = !csv.has_area;

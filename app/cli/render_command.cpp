@@ -172,8 +172,9 @@ SessionOverlay sessionFromRecording(const std::string& file) {
   Eigen::Index unfinished = 0;
   for (const app::RecordedArea& area : teaching.areas) unfinished += area.unfinished_X.cols();
   if (unfinished > 0) {
-    std::cerr << "note: " << unfinished << " samples of a RECORDING that no area record closed (the session ended in it, or "
-              << "its record is missing) are drawn; eval and the learner leave them out\n";
+    std::cerr << "note: " << unfinished << (unfinished == 1 ? " sample" : " samples")
+              << " of a RECORDING that no area record closed (the session ended in it, or its record is missing) "
+              << (unfinished == 1 ? "is" : "are") << " drawn; eval and the learner leave them out\n";
   }
   for (const app::RecordedArea& area : teaching.areas) {
     render::AreaSamples cloud;
@@ -232,7 +233,9 @@ Json warnBeyondLimits(const robot::RobotModel& model, const Eigen::VectorXd& q) 
 }
 
 Json renderPicture(const RenderOptions& options) {
-  checkOutputPath("--out", options.out);
+  checkOutputPath("--out", options.out,
+                  {{"--session", options.session}, {"--scene", options.scene}, {"--robot", options.robot}, {"--reachable", options.reachable},
+                   {"--scene-model", options.scene_model}, {"--plan", options.plan}});
   const auto start = std::chrono::steady_clock::now();
   std::optional<SessionOverlay> session;
   if (!options.session.empty()) session = loadSessionOverlay(options.session);

@@ -193,6 +193,8 @@ Json reviewStudy(const StudyArguments& arguments) {
   options.success_e_task = arguments.success_e_task;
   options.replay_interval = arguments.replay_interval;
   options.progress = [](const std::string& what, double fraction) { reportProgress("review " + what, fraction); };
+  // A study runs for a while: a --plot path that cannot be written is refused before it.
+  if (!arguments.plot.empty()) checkOutputPath("--plot", arguments.plot);
   const app::StudyResult study = app::analyseStudy(arguments.folder, options);
 
   Json out;

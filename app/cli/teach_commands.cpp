@@ -127,7 +127,7 @@ class StopOnSignal {
 Json runTeach(const TeachOptions& options) {
   // From the start: a signal before the tutor's first cycle stops it there.
   const StopOnSignal stop_on_signal;
-  checkOutputPath("--out", options.out);
+  checkOutputPath("--out", options.out, {}, true);
   // Held to the end of the run: a second teach into the same file is refused at its start.
   const app::SessionWriteLock out_lock(options.out, "--out");
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);

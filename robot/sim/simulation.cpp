@@ -270,7 +270,9 @@ std::string Simulation::describe(const GravityLoad& load) const {
   std::ostringstream text;
   text << std::fixed << std::setprecision(decimals(load.torque)) << "joint '"
        << model_->joints()[static_cast<std::size_t>(load.joint)].name << "' to hold " << load.torque << unit
-       << " against gravity, " << std::setprecision(0) << 100.0 * load.ratio << " % of its effort limit of "
+       // Rounded away from 100 %, so that an overload never reads as exactly the limit.
+       << " against gravity, " << std::setprecision(0)
+       << (load.ratio > 1.0 ? std::ceil(100.0 * load.ratio) : std::floor(100.0 * load.ratio)) << " % of its effort limit of "
        << std::setprecision(decimals(load.effort)) << load.effort << unit;
   return text.str();
 }

@@ -170,6 +170,13 @@ TEST(StudyClusters, ReadsSeedFilesAndRefusesBadOnes) {
   refused("0,A,1,2\n0,B,1\n");
   refused("0,,1,2\n");
   refused("0,A,nan,2\n");
+  refused("0,A,1e300,2\n");
+  // A spreadsheet's byte order mark before the header is read past.
+  {
+    std::ofstream out(dir / "marked.csv");
+    out << "\xEF\xBB\xBF" << "area,name,q1,q2\n0,A,0.0,1.0\n";
+  }
+  EXPECT_EQ(loadClusterSeeds(dir / "marked.csv").size(), 1U);
   EXPECT_THROW(loadClusterSeeds(dir / "missing.csv"), InputError);
   std::filesystem::remove_all(dir);
 }

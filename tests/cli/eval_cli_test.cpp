@@ -180,6 +180,12 @@ TEST(EvalReachableCli, UsesTheLearnerTheSessionWasTaughtWithUnlessAskedForAnothe
   EXPECT_EQ(learnerOf(runCliBinary(reachable)), "llm");
   EXPECT_EQ(learnerOf(runCliBinary("plan --goals 1 --session " + session.string())), "llm");
   EXPECT_EQ(learnerOf(runCliBinary(reachable + " --learner elm")), "elm");
+  // A learner eval does not learn with (a BPDC model, a hand-edited name): the ELM, said.
+  json["learner"] = "bpdc";
+  writeText(session, json.dump());
+  const auto bpdc = runCliBinary(reachable);
+  EXPECT_EQ(learnerOf(bpdc), "elm");
+  EXPECT_NE(bpdc.err.find("taught with the learner 'bpdc'"), std::string::npos) << bpdc.err;
   std::filesystem::remove(session);
 }
 
@@ -315,7 +321,7 @@ TEST(EvalReachableCli, ASessionStillBeingWrittenIsNotedAndWithoutAFinishedAreaSa
   const auto drawn = runCliBinary("render --width 64 --height 48 --supersample 1 --session " + file.string() + " --out " + picture.string());
   EXPECT_EQ(drawn.exit_code, 0) << drawn.err;
   EXPECT_EQ(drawn.json().at("overlays").at("samples"), 1) << drawn.out;
-  EXPECT_NE(drawn.err.find("note: 1 samples of a RECORDING that no area record closed"), std::string::npos) << drawn.err;
+  EXPECT_NE(drawn.err.find("note: 1 sample of a RECORDING that no area record closed"), std::string::npos) << drawn.err;
   recorder.close();
   std::filesystem::remove(file);
 }

@@ -146,6 +146,9 @@ TEST_F(HostileCli, AnOutputOntoADeviceOrTheInputFileIsRefused) {
   for (int i = 0; i < 20; ++i) stream += std::to_string(0.05 * i) + ",0.2,0.3," + std::to_string(0.1 * i) + "\n";
   const fs::path samples = write("stream.csv", stream);
   expectRefused(runCliBinary("itm build --data " + samples.string() + " --out " + samples.string()), "is the --data file the run reads");
+  const fs::path scene = write("scene.yaml", "name: kept\n");
+  expectRefused(runCliBinary("render --scene " + scene.string() + " --out " + scene.string()), "is the --scene file the run reads");
+  EXPECT_EQ(fs::file_size(scene), 11U) << "the scene is as it was";
   std::ifstream kept(data);
   std::string header;
   std::getline(kept, header);

@@ -145,6 +145,8 @@ TEST(ItmCli, RefusesBrokenStreamsNamingTheLine) {
   expectOneLineError(runCliBinary("itm build --data " + (dir / "not_a_number.csv").string() + " --out " + out), "line 3");
   writeText(dir / "nan.csv", "x,y,z,q1\n0,0,nan,0\n");
   expectOneLineError(runCliBinary("itm build --data " + (dir / "nan.csv").string() + " --out " + out), "line 2");
+  writeText(dir / "mac.csv", "x,y,z,q1\r0,0,0.1,0\r0,0.1,0.1,0\r");
+  expectOneLineError(runCliBinary("itm build --data " + (dir / "mac.csv").string() + " --out " + out), "carriage return alone");
   writeText(dir / "huge.csv", "x,y,z,q1\n0,0,0.1,0\n0,1e300,0.1,0\n");
   expectOneLineError(runCliBinary("itm build --data " + (dir / "huge.csv").string() + " --out " + out), "column 2 is beyond ±1e6");
   writeText(dir / "header_only.csv", "x,y,z,q1\n");
