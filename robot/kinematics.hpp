@@ -17,6 +17,8 @@ using Matrix3Xd = Eigen::Matrix<double, 3, Eigen::Dynamic>;
 class Kinematics {
  public:
   explicit Kinematics(const RobotModel& model);
+  /// The model is kept by reference: a temporary would be gone after the constructor.
+  explicit Kinematics(const RobotModel&& model) = delete;
 
   /// Computes every body pose for posture q (size dof(), radians / metres).
   void update(const Eigen::VectorXd& q);

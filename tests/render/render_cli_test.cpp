@@ -441,7 +441,8 @@ TEST(RenderCommand, NamesAndDrawsRedTheLinksAPostureSinksIntoAnObstacle) {
   const auto scene = tempPng("crate.yaml");
   const auto file = tempPng("crate.png");
   const std::string posture = "0,0.6,0,-1.6,0,0.9,0";
-  robot::Kinematics kinematics(robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4")));
+  const robot::RobotModel lwr4 = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  robot::Kinematics kinematics(lwr4);  // keeps a reference to the model
   Eigen::VectorXd q(7);
   q << 0, 0.6, 0, -1.6, 0, 0.9, 0;
   kinematics.update(q);
