@@ -78,8 +78,11 @@ SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const
       home_(options_.home ? *options_.home : homePosture(sim.model(), scene)),
       random_(options_.seed) {
   if (home_.size() != model_->dof()) throw InputError("tutor: the home posture has the wrong number of joints");
-  if (!(options_.circle_diameter > 0.0) || options_.circle_diameter > 0.5) {
-    throw InputError("tutor: circle diameter must be in (0, 0.5] m");
+  if (!(options_.circle_diameter >= kSmallestCircleDiameter) || options_.circle_diameter > kLargestCircleDiameter) {
+    std::ostringstream message;
+    message << "tutor: circle diameter must be in [" << kSmallestCircleDiameter << ", " << kLargestCircleDiameter
+            << "] m, got " << options_.circle_diameter;
+    throw InputError(message.str());
   }
   if (options_.circles < 1 || options_.posture_candidates < 1 || options_.posture_attempts < 1) {
     throw InputError("tutor: circles, candidates and posture attempts must be >= 1");

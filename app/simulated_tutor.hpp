@@ -28,6 +28,11 @@
 
 namespace flexirob::app {
 
+/// [m] the helix diameters a tutor may be asked for: below 1 cm the recording is too small for
+/// on_converged to tell it from standing still; 0.5 m is past the largest a participant drew.
+inline constexpr double kSmallestCircleDiameter = 0.01;
+inline constexpr double kLargestCircleDiameter = 0.5;
+
 struct TutorOptions {
   std::uint64_t seed = 1;
   /// [m] largest diameter of the deflection helix (participants drew 0.02-0.32 m, Sect. 3.3);

@@ -501,7 +501,8 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   teach->add_option("--learner", options->learner, "elm, oselm or llm");
   // Below 1 cm even the fastest turns leave the joints under the still speed: on_converged would
   // end the recording within 2 s (a 5 mm helix recorded 101 samples).
-  teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m], 0.01-0.5")->check(finiteRange(0.01, 0.5));
+  teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m], 0.01-0.5")
+      ->check(finiteRange(app::kSmallestCircleDiameter, app::kLargestCircleDiameter));
   teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(finiteRange(1, 1000));
   teach->add_option("--check-points", options->check_points,
                     "points on which areas beyond the scene's list are checked and taken back if the map got worse (0: random places, kept)")

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <sstream>
@@ -309,6 +310,30 @@ TEST(SimulatedTutor, RefusesToStartFromAPostureInsideAnObstacle) {
   } catch (const flexirob::InputError& error) {
     EXPECT_NE(std::string(error.what()).find("into clamp, as every posture tried does; move clamp off the robot"), std::string::npos)
         << error.what();
+  }
+}
+
+// The library takes the range the CLI offers: a helix under 1 cm cannot be told from standing
+// still, and a NaN must not slip through a comparison.
+TEST(SimulatedTutor, RefusesAHelixDiameterOutsideTheRangeTeachOffers) {
+  const robot::Scene scene = robot::loadScene("setup_A");
+  robot::ParameterSet parameters(robot::reachParameters());
+  robot::Simulation sim(lwr4(), &scene, parameters);
+  Workflow workflow(sim, parameters, WorkflowOptions{});
+  for (const double diameter : {0.0, 0.005, 0.51, std::numeric_limits<double>::quiet_NaN()}) {
+    TutorOptions options;
+    options.circle_diameter = diameter;
+    try {
+      SimulatedTutor tutor(sim, workflow, scene, parameters, options);
+      FAIL() << "accepted a helix diameter of " << diameter << " m";
+    } catch (const flexirob::InputError& error) {
+      EXPECT_NE(std::string(error.what()).find("circle diameter must be in [0.01, 0.5] m"), std::string::npos) << error.what();
+    }
+  }
+  for (const double diameter : {kSmallestCircleDiameter, kLargestCircleDiameter}) {
+    TutorOptions options;
+    options.circle_diameter = diameter;
+    EXPECT_NO_THROW(SimulatedTutor(sim, workflow, scene, parameters, options)) << diameter;
   }
 }
 
