@@ -15,6 +15,7 @@
 #include "app/session_schema.hpp"
 #include "app/session_teaching.hpp"
 #include "app/study_metrics.hpp"
+#include "app/table_text.hpp"
 #include "robot/collision.hpp"
 #include "robot/errors.hpp"
 #include "robot/resources.hpp"
@@ -29,21 +30,6 @@ std::optional<double> median(std::vector<double> values) {
   std::sort(values.begin(), values.end());
   const std::size_t n = values.size();
   return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r");
-  if (first == std::string::npos) return "";
-  return text.substr(first, text.find_last_not_of(" \t\r") - first + 1);
-}
-
-std::vector<std::string> splitCsv(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream stream(line);
-  std::string field;
-  while (std::getline(stream, field, ',')) fields.push_back(trim(field));
-  if (!line.empty() && line.back() == ',') fields.emplace_back();
-  return fields;
 }
 
 // A CSV field: quoted when it holds a separator or a quote.
@@ -188,9 +174,9 @@ std::vector<AreaClusterSeeds> loadClusterSeeds(const std::filesystem::path& file
   while (std::getline(in, line)) {
     ++line_number;
     const std::string where = file.filename().string() + ":" + std::to_string(line_number);
-    if (line_number == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // a spreadsheet's byte order mark
-    if (trim(line).empty() || trim(line)[0] == '#') continue;
-    const auto fields = splitCsv(line);
+    if (line_number == 1) app::prepareFirstLine(line, "cluster seeds " + file.filename().string());
+    if (trimmed(line).empty() || trimmed(line)[0] == '#') continue;
+    const auto fields = splitCommaFields(line);
     if (line_number == 1 && !fields.empty() && fields[0] == "area") continue;  // header
     if (fields.size() < 3) throw InputError("cluster seeds " + where + ": expected area,name,q1,...");
     int area = 0;
@@ -204,16 +190,13 @@ std::vector<AreaClusterSeeds> loadClusterSeeds(const std::filesystem::path& file
     if (fields[1].empty()) throw InputError("cluster seeds " + where + ": empty cluster name");
     Eigen::VectorXd q(static_cast<Eigen::Index>(fields.size() - 2));
     for (std::size_t i = 2; i < fields.size(); ++i) {
-      try {
-        std::size_t used = 0;
-        q[static_cast<Eigen::Index>(i - 2)] = std::stod(fields[i], &used);
-        if (used != fields[i].size()) throw std::invalid_argument("number");
-      } catch (const std::exception&) {
-        throw InputError("cluster seeds " + where + ": expected a joint value in radians, got '" + printable(fields[i]) + "'");
+      const std::optional<double> value = parseDecimal(fields[i]);
+      if (!value) throw InputError("cluster seeds " + where + ": '" + printable(fields[i]) + "' is not a finite number");
+      if (std::abs(*value) > kLargestTableValue) {
+        throw InputError("cluster seeds " + where + ": '" + printable(fields[i]) + "' is beyond ±1e6");
       }
+      q[static_cast<Eigen::Index>(i - 2)] = *value;
     }
-    if (!q.allFinite()) throw InputError("cluster seeds " + where + ": non-finite joint value");
-    if (q.cwiseAbs().maxCoeff() > 1e6) throw InputError("cluster seeds " + where + ": a joint value beyond ±1e6 rad");
     if (joints && *joints != q.size()) {
       throw InputError("cluster seeds " + where + ": expected " + std::to_string(*joints) + " joint values, got " +
                        std::to_string(q.size()));

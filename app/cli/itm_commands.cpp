@@ -1,19 +1,19 @@
 // `itm build` and `itm path`: learn an instantaneous topological map (hybrid ITM, thesis
 // Chap. 7) from a recorded stream and plan paths through it.
 #include <algorithm>
-#include <cctype>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "app/cli/cli_support.hpp"
+#include "app/table_text.hpp"
 #include "planning/itm.hpp"
 #include "planning/itm_file.hpp"
 #include "planning/path_planner.hpp"
@@ -27,29 +27,6 @@ using planning::ItmParameters;
 using planning::TaskSpace;
 using Clock = std::chrono::steady_clock;
 
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r");
-  if (first == std::string::npos) return {};
-  const auto last = text.find_last_not_of(" \t\r");
-  return text.substr(first, last - first + 1);
-}
-
-std::vector<std::string> splitFields(const std::string& line) {
-  std::vector<std::string> fields;
-  std::size_t start = 0;
-  for (;;) {
-    const std::size_t end = line.find(',', start);
-    fields.push_back(trim(line.substr(start, end == std::string::npos ? std::string::npos : end - start)));
-    if (end == std::string::npos) break;
-    start = end + 1;
-  }
-  return fields;
-}
-
-std::string lower(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text;
-}
 
 /// Reads an ITM stream (header x,y,z[,qw,qx,qy,qz],q1..qN; one sample per row, in time order)
 /// and hands each row to `consume` as it is read, so that learning is online.
@@ -62,17 +39,14 @@ class StreamReader {
     std::string header;
     if (!std::getline(file_, header)) throw InputError(path + ": empty file (expected a header x,y,z,q1,...)");
     ++line_number_;
-    if (header.size() >= 3 && header.compare(0, 3, "\xEF\xBB\xBF") == 0) header.erase(0, 3);  // UTF-8 BOM
-    // Classic Mac line ends (CR alone) would read as one long header line.
-    if (const std::size_t cr = header.find('\r'); cr != std::string::npos && cr + 1 < header.size()) {
-      throw InputError(path + ": lines end in a carriage return alone; expected LF or CRLF line ends");
-    }
-    const auto names = splitFields(header);
-    if (names.size() < 4 || lower(names[0]) != "x" || lower(names[1]) != "y" || lower(names[2]) != "z") {
-      throw InputError(path + " line 1: expected a header starting with x,y,z and then joint columns, got '" + printable(trim(header)) + "'");
+    app::prepareFirstLine(header, path);
+    std::vector<std::string> names = app::splitCommaFields(header);
+    for (auto& name : names) name = app::lowercase(name);
+    if (names.size() < 4 || names[0] != "x" || names[1] != "y" || names[2] != "z") {
+      throw InputError(path + " line 1: expected a header starting with x,y,z and then joint columns, got '" + printable(app::trimmed(header)) + "'");
     }
     std::size_t joints_from = 3;
-    if (names.size() >= 7 && lower(names[3]) == "qw" && lower(names[4]) == "qx" && lower(names[5]) == "qy" && lower(names[6]) == "qz") {
+    if (names.size() >= 7 && names[3] == "qw" && names[4] == "qx" && names[5] == "qy" && names[6] == "qz") {
       space_ = TaskSpace::kPose;
       joints_from = 7;
     }
@@ -92,24 +66,20 @@ class StreamReader {
     while (std::getline(file_, line)) {
       ++line_number_;
       consumed_ += line.size() + 1;
-      if (trim(line).empty()) continue;
+      if (app::trimmed(line).empty()) continue;
       xi.resize(planning::storedSize(space_));
       q.resize(joints_);
-      const char* cursor = line.c_str();
+      const std::vector<std::string> fields = app::splitCommaFields(line);
+      if (fields.size() != static_cast<std::size_t>(columns_)) {
+        fail("expected " + std::to_string(columns_) + " values, got " + std::to_string(fields.size()));
+      }
       for (int column = 0; column < columns_; ++column) {
-        errno = 0;
-        char* end = nullptr;
-        const double value = std::strtod(cursor, &end);
-        if (end == cursor || errno == ERANGE || !std::isfinite(value)) fail("column " + std::to_string(column + 1) + " is not a finite number");
-        if (std::abs(value) > 1e6) fail("column " + std::to_string(column + 1) + " is beyond ±1e6");
-        cursor = end;
-        while (*cursor == ' ' || *cursor == '\t' || *cursor == '\r') ++cursor;
-        if (column + 1 < columns_) {
-          if (*cursor != ',') fail("expected " + std::to_string(columns_) + " values, got " + std::to_string(column + 1));
-          ++cursor;
-        } else if (*cursor != '\0') {
-          fail("expected " + std::to_string(columns_) + " values, got more");
-        }
+        const std::string& field = fields[static_cast<std::size_t>(column)];
+        const std::optional<double> parsed = app::parseDecimal(field);
+        const std::string at = "column " + std::to_string(column + 1) + " ('" + printable(field) + "')";
+        if (!parsed) fail(at + " is not a finite number");
+        const double value = *parsed;
+        if (std::abs(value) > app::kLargestTableValue) fail(at + " is beyond ±1e6");
         if (column < xi.size()) {
           xi[column] = value;
         } else {

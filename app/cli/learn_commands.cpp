@@ -4,17 +4,17 @@
 // inputs `x,y,z` [m], optionally followed by orientation inputs (e.g. `rx,ry,rz`, a rotation
 // vector [rad]), then the outputs `q1,...,qN` [rad]. `learn predict` needs only the inputs; if
 // the q columns are present it also reports the prediction error.
-#include <cctype>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <set>
 
 #include "app/cli/cli_support.hpp"
+#include "app/table_text.hpp"
 #include "learning/bpdc.hpp"
 #include "learning/clustering.hpp"
 #include "learning/elm.hpp"
@@ -32,29 +32,6 @@ struct LearningCsv {
   std::vector<std::string> input_names;
 };
 
-std::string lowercase(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text;
-}
-
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r");
-  if (first == std::string::npos) return "";
-  const auto last = text.find_last_not_of(" \t\r");
-  return text.substr(first, last - first + 1);
-}
-
-std::vector<std::string> splitFields(const std::string& line) {
-  std::vector<std::string> fields;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t end = line.find(',', start);
-    fields.push_back(trim(line.substr(start, end == std::string::npos ? std::string::npos : end - start)));
-    if (end == std::string::npos) break;
-    start = end + 1;
-  }
-  return fields;
-}
 
 bool isOutputName(const std::string& name) {
   return name.size() >= 2 && name[0] == 'q' && name.find_first_not_of("0123456789", 1) == std::string::npos;
@@ -74,15 +51,10 @@ LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
   do {
     if (!std::getline(in, line)) throw InputError(path + ": empty file (expected a header row)");
     ++line_number;
-  } while (trim(line).empty());
-  // A spreadsheet's UTF-8 byte order mark is no part of the first column's name.
-  if (line_number == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
-  // Classic Mac line ends (CR alone) would read as one long header line.
-  if (const std::size_t cr = line.find('\r'); cr != std::string::npos && cr + 1 < line.size()) {
-    throw InputError(path + ": lines end in a carriage return alone; expected LF or CRLF line ends");
-  }
-  std::vector<std::string> header = splitFields(line);
-  for (auto& name : header) name = lowercase(name);
+  } while (app::trimmed(line).empty());
+  if (line_number == 1) app::prepareFirstLine(line, path);
+  std::vector<std::string> header = app::splitCommaFields(line);
+  for (auto& name : header) name = app::lowercase(name);
   const std::string where = path + " line " + std::to_string(line_number);
   std::size_t column = 0;
   LearningCsv csv;
@@ -91,7 +63,7 @@ LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
     column = 1;
   }
   if (header.size() < column + 3 || header[column] != "x" || header[column + 1] != "y" || header[column + 2] != "z") {
-    throw InputError(where + ": expected the header 'area,x,y,z,q1,...,qN' (area optional), got '" + printable(trim(line)) + "'");
+    throw InputError(where + ": expected the header 'area,x,y,z,q1,...,qN' (area optional), got '" + printable(app::trimmed(line)) + "'");
   }
   const std::size_t input_begin = column;
   std::size_t output_begin = input_begin + 3;
@@ -120,27 +92,24 @@ LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
   Eigen::Index rows = 0;
   while (std::getline(in, line)) {
     ++line_number;
-    if (trim(line).empty()) continue;
-    const std::vector<std::string> fields = splitFields(line);
+    if (app::trimmed(line).empty()) continue;
+    const std::vector<std::string> fields = app::splitCommaFields(line);
     const std::string at = path + " line " + std::to_string(line_number);
     if (fields.size() != header.size()) {
       throw InputError(at + ": expected " + std::to_string(header.size()) + " values, got " + std::to_string(fields.size()));
     }
     for (std::size_t i = 0; i < fields.size(); ++i) {
-      errno = 0;
-      char* end = nullptr;
-      const double value = std::strtod(fields[i].c_str(), &end);
-      if (fields[i].empty() || end != fields[i].c_str() + fields[i].size() || errno == ERANGE || !std::isfinite(value)) {
+      const std::optional<double> parsed = app::parseDecimal(fields[i]);
+      if (!parsed) {
         throw InputError(at + ", column '" + printable(header[i]) + "': '" + printable(fields[i]) + "' is not a finite number");
       }
-      // Positions in metres and joint values in radians (or metres): beyond a million is a
-      // mistake, and its square would overflow the learners' sums.
-      if (std::abs(value) > 1e6) {
+      const double value = *parsed;
+      if (std::abs(value) > app::kLargestTableValue) {
         throw InputError(at + ", column '" + printable(header[i]) + "': '" + printable(fields[i]) + "' is beyond ±1e6");
       }
       if (csv.has_area && i == 0) {
-        if (value < 0 || value != std::floor(value) || value > 1e6) {
-          throw InputError(at + ": area '" + fields[i] + "' is not an integer in 0...1000000");
+        if (value < 0 || value != std::floor(value)) {
+          throw InputError(at + ": area '" + printable(fields[i]) + "' is not an integer in 0...1000000");
         }
         areas.push_back(static_cast<int>(value));
       } else {

@@ -1,11 +1,10 @@
 #include "app/cli/number_list.hpp"
 
 #include <algorithm>
-#include <cerrno>
-#include <cmath>
-#include <cstdlib>
+#include <optional>
 #include <vector>
 
+#include "app/table_text.hpp"
 #include "robot/errors.hpp"
 
 namespace flexirob::cli {
@@ -34,16 +33,9 @@ Eigen::VectorXd parseNumberList(const std::string& text, const std::string& what
     const auto last = token.find_last_not_of(" \t");
     token = first == std::string::npos ? std::string() : token.substr(first, last - first + 1);
     if (token.empty()) throw InputError(what + ": empty entry in '" + excerpt(text) + "'");
-    errno = 0;
-    char* parsed_end = nullptr;
-    const double value = std::strtod(token.c_str(), &parsed_end);
-    // strtod also reads hexadecimal ("0x1" = 1, "0x1p3" = 8), which the scene reader refuses:
-    // decimal only, as everywhere else.
-    const bool hexadecimal = token.find_first_of("xX") != std::string::npos;
-    if (hexadecimal || parsed_end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value)) {
-      throw InputError(what + ": '" + excerpt(token) + "' is not a finite number");
-    }
-    values.push_back(value);
+    const std::optional<double> value = app::parseDecimal(token);
+    if (!value) throw InputError(what + ": '" + excerpt(token) + "' is not a finite number");
+    values.push_back(*value);
     if (values.size() > max_count) throw InputError(what + ": more than " + std::to_string(max_count) + " entries");
     start = end + 1;
     if (end == text.size()) break;

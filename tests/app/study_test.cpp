@@ -171,6 +171,8 @@ TEST(StudyClusters, ReadsSeedFilesAndRefusesBadOnes) {
   refused("0,,1,2\n");
   refused("0,A,nan,2\n");
   refused("0,A,1e300,2\n");
+  refused("0,A,0x1,2\n");                    // decimal only, as every other table
+  refused("area,name,q1\r0,A,1\r1,B,2\r");  // carriage returns alone as line ends
   // A spreadsheet's byte order mark before the header is read past.
   {
     std::ofstream out(dir / "marked.csv");

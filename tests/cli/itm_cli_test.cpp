@@ -148,7 +148,11 @@ TEST(ItmCli, RefusesBrokenStreamsNamingTheLine) {
   writeText(dir / "mac.csv", "x,y,z,q1\r0,0,0.1,0\r0,0.1,0.1,0\r");
   expectOneLineError(runCliBinary("itm build --data " + (dir / "mac.csv").string() + " --out " + out), "carriage return alone");
   writeText(dir / "huge.csv", "x,y,z,q1\n0,0,0.1,0\n0,1e300,0.1,0\n");
-  expectOneLineError(runCliBinary("itm build --data " + (dir / "huge.csv").string() + " --out " + out), "column 2 is beyond ±1e6");
+  expectOneLineError(runCliBinary("itm build --data " + (dir / "huge.csv").string() + " --out " + out), "line 3: column 2 ('1e300') is beyond ±1e6");
+  // Decimal only, as the scene reader and the command line read numbers.
+  writeText(dir / "hex.csv", "x,y,z,q1\n0,0,0.1,0\n0x1,0,0.1,0\n");
+  expectOneLineError(runCliBinary("itm build --data " + (dir / "hex.csv").string() + " --out " + out),
+                     "line 3: column 1 ('0x1') is not a finite number");
   writeText(dir / "header_only.csv", "x,y,z,q1\n");
   expectOneLineError(runCliBinary("itm build --data " + (dir / "header_only.csv").string() + " --out " + out), "no samples");
   writeText(dir / "empty.csv", "");

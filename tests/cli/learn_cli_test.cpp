@@ -181,6 +181,7 @@ TEST_F(LearnCli, RefusesBrokenCsvWithExitCodeTwoAndOneLine) {
       {"x,y,z,q1\n0.1,nan,0.3,0.4\n", "is not a finite number"},
       {"x,y,z,q1\n0.1,1e999,0.3,0.4\n", "is not a finite number"},
       {"x,y,z,q1\n0.1,0.2,0.3,1e300\n", "column 'q1': '1e300' is beyond ±1e6"},
+      {"x,y,z,q1\n0.1,0x1p-2,0.3,0.4\n", "column 'y': '0x1p-2' is not a finite number"},
       {"x,y,z,q1\r0.1,0.2,0.3,0.4\r", "lines end in a carriage return alone"},
       {std::string("x,y,z,q1\n0.1,0.2,0.3,0.4\0\n", 25), "'0.4?' is not a finite number"},
       {"x,y,z,q2\n0.1,0.2,0.3,0.4\n", "expected column 'q1'"},
