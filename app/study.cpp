@@ -233,23 +233,18 @@ ParticipantResult analyseSession(const SessionReader& reader, double replay_inte
 
   // E_task over executed motions; shape metrics of teach-ins against their targets.
   const auto trajectories = reader.trajectories();
-  std::map<std::int64_t, const TrajectoryRecord*> by_id;
-  const TrajectoryRecord* first_target = nullptr;
-  for (const auto& t : trajectories) {
-    by_id[t.id] = &t;
-    if (t.kind == TrajectoryKind::Target && !first_target) first_target = &t;
-  }
+  const TrajectoryReferences references(trajectories);
   double error_sum = 0.0;
   Eigen::Index error_points = 0;
   std::vector<double> deviations, procrustes, jerks;
   for (const auto& t : trajectories) {
-    const auto found = by_id.find(t.reference_id);
-    const TrajectoryRecord* reference = found == by_id.end() ? nullptr : found->second;
-    if (t.kind == TrajectoryKind::Executed && reference && t.positions.cols() > 0 && reference->positions.cols() > 0) {
-      error_sum += taskSpaceError(targetsForExecution(t, *reference), t.positions) * static_cast<double>(t.positions.cols());
-      error_points += t.positions.cols();
+    if (t.kind == TrajectoryKind::Executed) {
+      if (const auto error = references.executionError(t)) {
+        error_sum += error->first * static_cast<double>(error->second);
+        error_points += error->second;
+      }
     } else if (t.kind == TrajectoryKind::TeachIn && t.positions.cols() > 0) {
-      const TrajectoryRecord* target = reference ? reference : first_target;
+      const TrajectoryRecord* target = references.targetOf(t);
       if (target && target->positions.cols() > 0) {
         deviations.push_back(maxDeviation(t.positions, target->positions));
         procrustes.push_back(procrustesDistance(t.positions, target->positions).distance);

@@ -160,4 +160,27 @@ Eigen::MatrixXd targetsForExecution(const TrajectoryRecord& executed, const Traj
   return interpolateColumns(reference.positions, normalized(reference.times, r), normalized(executed.times, k));
 }
 
+TrajectoryReferences::TrajectoryReferences(const std::vector<TrajectoryRecord>& trajectories) {
+  for (const TrajectoryRecord& trajectory : trajectories) {
+    by_id_[trajectory.id] = &trajectory;
+    if (trajectory.kind == TrajectoryKind::Target && first_target_ == nullptr) first_target_ = &trajectory;
+  }
+}
+
+const TrajectoryRecord* TrajectoryReferences::referenceOf(const TrajectoryRecord& trajectory) const {
+  const auto found = by_id_.find(trajectory.reference_id);
+  return found == by_id_.end() ? nullptr : found->second;
+}
+
+const TrajectoryRecord* TrajectoryReferences::targetOf(const TrajectoryRecord& teach_in) const {
+  const TrajectoryRecord* reference = referenceOf(teach_in);
+  return reference != nullptr ? reference : first_target_;
+}
+
+std::optional<std::pair<double, Eigen::Index>> TrajectoryReferences::executionError(const TrajectoryRecord& executed) const {
+  const TrajectoryRecord* reference = referenceOf(executed);
+  if (reference == nullptr || executed.positions.cols() == 0 || reference->positions.cols() == 0) return std::nullopt;
+  return std::make_pair(taskSpaceError(targetsForExecution(executed, *reference), executed.positions), executed.positions.cols());
+}
+
 }  // namespace flexirob::app

@@ -5,6 +5,8 @@
 // is a 3 x K matrix of points (one column per point).
 #include <Eigen/Core>
 #include <map>
+#include <optional>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -56,5 +58,24 @@ std::map<std::string, double> timePerPhase(const std::vector<StageRecord>& stage
 /// index by index when the point counts agree, otherwise interpolated at the same normalized
 /// time (0 at the first point, 1 at the last). 3 x K like executed.positions.
 Eigen::MatrixXd targetsForExecution(const TrajectoryRecord& executed, const TrajectoryRecord& reference);
+
+/// Which recorded trajectory each one is judged against: an executed motion against the
+/// reference it names; a teach-in against the target it names, or else the session's first
+/// target (Sect. 5.2.2). Keeps pointers into `trajectories`, which must outlive it.
+class TrajectoryReferences {
+ public:
+  explicit TrajectoryReferences(const std::vector<TrajectoryRecord>& trajectories);
+  /// The trajectory `trajectory` names as its reference, if the session holds it.
+  const TrajectoryRecord* referenceOf(const TrajectoryRecord& trajectory) const;
+  /// The reference, or else the session's first target; nullptr if neither.
+  const TrajectoryRecord* targetOf(const TrajectoryRecord& teach_in) const;
+  /// E_task (Eq. 3.20) of an executed motion against its reference and the points it counts
+  /// with; nothing without a reference or without points.
+  std::optional<std::pair<double, Eigen::Index>> executionError(const TrajectoryRecord& executed) const;
+
+ private:
+  std::map<std::int64_t, const TrajectoryRecord*> by_id_;
+  const TrajectoryRecord* first_target_ = nullptr;
+};
 
 }  // namespace flexirob::app

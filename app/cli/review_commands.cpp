@@ -95,35 +95,26 @@ Json review(const std::string& file) {
 
   // E_task (Eq. 3.20) over every executed motion that names its reference trajectory.
   const auto trajectories = reader.trajectories();
-  std::map<std::int64_t, const TrajectoryRecord*> by_id;
-  const TrajectoryRecord* first_target = nullptr;
-  for (const auto& t : trajectories) {
-    by_id[t.id] = &t;
-    if (t.kind == TrajectoryKind::Target && !first_target) first_target = &t;
-  }
+  const app::TrajectoryReferences references(trajectories);
   double error_sum = 0.0;
   std::int64_t error_points = 0;
   Json executed = Json::array();
   Json teach_in = Json::array();
   for (const auto& t : trajectories) {
-    const auto ref = by_id.find(t.reference_id);
-    const TrajectoryRecord* reference = ref == by_id.end() ? nullptr : ref->second;
     if (t.kind == TrajectoryKind::Executed) {
-      Json entry = trajectoryMetrics(t, reference);
+      Json entry = trajectoryMetrics(t, references.referenceOf(t));
       entry["outcome"] = t.outcome;
-      if (reference && t.positions.cols() > 0 && reference->positions.cols() > 0) {
-        const double e = app::taskSpaceError(app::targetsForExecution(t, *reference), t.positions);
-        entry["e_task"] = e;
-        error_sum += e * static_cast<double>(t.positions.cols());
-        error_points += t.positions.cols();
+      if (const auto error = references.executionError(t)) {
+        entry["e_task"] = error->first;
+        error_sum += error->first * static_cast<double>(error->second);
+        error_points += error->second;
       }
       const double t0 = t.times.size() > 0 ? t.times(0) : 0.0;
       const double t1 = t.times.size() > 0 ? t.times(t.times.size() - 1) : -1.0;
       entry["collisions"] = reader.collisions(t0, t1).size();
       executed.push_back(entry);
     } else if (t.kind == TrajectoryKind::TeachIn) {
-      // A teach-in is compared with the target it names, or else the session's first target.
-      teach_in.push_back(trajectoryMetrics(t, reference ? reference : first_target));
+      teach_in.push_back(trajectoryMetrics(t, references.targetOf(t)));
     }
   }
   out["e_task"] = error_points > 0 ? Json(error_sum / static_cast<double>(error_points)) : Json(nullptr);

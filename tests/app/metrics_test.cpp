@@ -156,5 +156,37 @@ TEST(StudyMetrics, ExecutionTargetsFollowTheReferenceInNormalizedTime) {
   EXPECT_NEAR(targets(0, 2), 1.0, 1e-15);
 }
 
+TEST(StudyMetrics, TeachInsAreJudgedAgainstTheTargetTheyNameOrElseTheFirstTarget) {
+  const auto straight = [](std::int64_t id, TrajectoryKind kind, std::int64_t reference_id, double y) {
+    TrajectoryRecord record;
+    record.id = id;
+    record.kind = kind;
+    record.reference_id = reference_id;
+    record.times = Eigen::Vector2d(0.0, 1.0);
+    record.positions = Eigen::MatrixXd::Zero(3, 2);
+    record.positions.row(0) << 0.0, 1.0;
+    record.positions.row(1).setConstant(y);
+    return record;
+  };
+  const std::vector<TrajectoryRecord> trajectories = {
+      straight(1, TrajectoryKind::TeachIn, -1, 0.5),    // before any target, names none
+      straight(2, TrajectoryKind::Target, -1, 0.0),
+      straight(3, TrajectoryKind::Target, -1, 0.2),
+      straight(4, TrajectoryKind::TeachIn, 3, 0.3),     // names the second target
+      straight(5, TrajectoryKind::Executed, 3, 0.25),   // 5 cm off its reference all along
+      straight(6, TrajectoryKind::Executed, 99, 0.0),   // names a trajectory the session lacks
+      straight(7, TrajectoryKind::Executed, -1, 0.0)};  // names none
+  const TrajectoryReferences references(trajectories);
+  EXPECT_EQ(references.targetOf(trajectories[0]), &trajectories[1]);
+  EXPECT_EQ(references.targetOf(trajectories[3]), &trajectories[2]);
+  EXPECT_EQ(references.referenceOf(trajectories[0]), nullptr);
+  const auto error = references.executionError(trajectories[4]);
+  ASSERT_TRUE(error.has_value());
+  EXPECT_NEAR(error->first, 0.05, 1e-12);
+  EXPECT_EQ(error->second, 2);
+  EXPECT_FALSE(references.executionError(trajectories[5]).has_value());
+  EXPECT_FALSE(references.executionError(trajectories[6]).has_value());
+}
+
 }  // namespace
 }  // namespace flexirob::app
