@@ -50,18 +50,20 @@ osg::ref_ptr<osg::Geometry> makeGeometry(osg::Vec3Array* vertices, const osg::Ve
 }  // namespace
 
 Eigen::Vector4f OverlayPalette::area(int index) {
-  // Eight hues chosen to stay apart from each other, from the other overlays' colours (reached
-  // green, unreached red, ITM orange and brown, path magenta, scene model grey) and from the
-  // light background and the grey obstacles: at least 0.29 apart in RGB.
+  // Eight colours chosen to stay apart in CIELAB (ΔE76 at least 36) from each other and from
+  // every other overlay (reached green, unreached red, ITM orange and brown, path magenta,
+  // trajectories black, purple and blue, the scene model's grey, the force's yellow) and from
+  // the light background, with a lightness L* of 35-70 so that small points show on it. The
+  // first ones are the farthest apart: most sessions have few areas.
   static const std::array<Eigen::Vector4f, 8> kColors = {
-      Eigen::Vector4f(0.00F, 0.45F, 0.70F, 1.0F),  // blue
-      Eigen::Vector4f(0.80F, 0.40F, 0.70F, 1.0F),  // reddish purple
-      Eigen::Vector4f(0.00F, 0.62F, 0.45F, 1.0F),  // bluish green
-      Eigen::Vector4f(0.40F, 0.20F, 0.60F, 1.0F),  // violet
-      Eigen::Vector4f(0.10F, 0.85F, 0.85F, 1.0F),  // cyan
-      Eigen::Vector4f(0.65F, 0.85F, 0.20F, 1.0F),  // lime
-      Eigen::Vector4f(0.55F, 0.00F, 0.75F, 1.0F),  // purple
-      Eigen::Vector4f(0.35F, 0.70F, 0.90F, 1.0F),  // sky blue
+      Eigen::Vector4f(0.30F, 0.00F, 1.00F, 1.0F),  // ultramarine
+      Eigen::Vector4f(0.15F, 0.75F, 0.60F, 1.0F),  // turquoise
+      Eigen::Vector4f(0.15F, 0.50F, 1.00F, 1.0F),  // azure
+      Eigen::Vector4f(0.45F, 0.50F, 0.00F, 1.0F),  // olive
+      Eigen::Vector4f(0.95F, 0.50F, 0.45F, 1.0F),  // salmon
+      Eigen::Vector4f(0.75F, 0.60F, 0.90F, 1.0F),  // lilac
+      Eigen::Vector4f(0.15F, 0.40F, 0.20F, 1.0F),  // forest green
+      Eigen::Vector4f(0.55F, 0.25F, 0.00F, 1.0F),  // rust
   };
   const int n = static_cast<int>(kColors.size());
   return kColors[static_cast<std::size_t>(((index % n) + n) % n)];

@@ -69,22 +69,51 @@ const CameraPose& testCamera() {
   return camera;
 }
 
+// CIE L*a*b* (D65) of an sRGB colour, for distances that follow what the eye tells apart.
+Eigen::Vector3d cieLab(const Eigen::Vector4f& rgba) {
+  const auto linear = [](double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); };
+  const double r = linear(rgba[0]), g = linear(rgba[1]), b = linear(rgba[2]);
+  const double x = (0.4124 * r + 0.3576 * g + 0.1805 * b) / 0.95047;
+  const double y = 0.2126 * r + 0.7152 * g + 0.0722 * b;
+  const double z = (0.0193 * r + 0.1192 * g + 0.9505 * b) / 1.08883;
+  const auto f = [](double t) { return t > 216.0 / 24389.0 ? std::cbrt(t) : (24389.0 / 27.0 * t + 16.0) / 116.0; };
+  return {116.0 * f(y) - 16.0, 500.0 * (f(x) - f(y)), 200.0 * (f(y) - f(z))};
+}
+
+double deltaE(const Eigen::Vector4f& a, const Eigen::Vector4f& b) { return (cieLab(a) - cieLab(b)).norm(); }
+
 TEST(OverlayPalette, AreaColoursDifferFromEachOtherAndFromTheOtherOverlaysAndRepeatAfterEight) {
+  // ΔE76 of about 2 is the smallest difference seen side by side; 30 tells small points apart.
+  constexpr double kApart = 30.0;
+  EXPECT_NEAR(cieLab(Eigen::Vector4f(1.0F, 1.0F, 1.0F, 1.0F))[0], 100.0, 1e-3);  // white
+  EXPECT_NEAR(deltaE(Eigen::Vector4f(1.0F, 0.0F, 0.0F, 1.0F), Eigen::Vector4f(0.0F, 0.0F, 1.0F, 1.0F)), 176.3, 0.2);
   for (int a = 0; a < 8; ++a) {
     for (int b = a + 1; b < 8; ++b) {
-      EXPECT_GT((OverlayPalette::area(a) - OverlayPalette::area(b)).head<3>().norm(), 0.2) << a << " vs " << b;
+      EXPECT_GT(deltaE(OverlayPalette::area(a), OverlayPalette::area(b)), kApart) << a << " vs " << b;
     }
   }
-  // Samples are drawn together with targets, the ITM graph, paths and the scene model: no area
-  // may look like one of them.
+  // Samples are drawn together with targets, the ITM graph, paths, trajectories, the scene
+  // model and the force arrow, on the light background: no area may look like one of them,
+  // and every area must stand out from the background.
   const std::vector<std::pair<const char*, Eigen::Vector4f>> others = {
-      {"reachable", OverlayPalette::reachable()}, {"unreachable", OverlayPalette::unreachable()},
-      {"ITM node", OverlayPalette::itmNode()},     {"ITM edge", OverlayPalette::itmEdge()},
-      {"planned path", OverlayPalette::plannedPath()}, {"scene model", OverlayPalette::sceneModel()}};
+      {"reachable", OverlayPalette::reachable()},
+      {"unreachable", OverlayPalette::unreachable()},
+      {"ITM node", OverlayPalette::itmNode()},
+      {"ITM edge", OverlayPalette::itmEdge()},
+      {"planned path", OverlayPalette::plannedPath()},
+      {"target trajectory", OverlayPalette::targetTrajectory()},
+      {"teach-in", OverlayPalette::teachInTrajectory()},
+      {"executed motion", OverlayPalette::executedTrajectory()},
+      {"scene model", OverlayPalette::sceneModel()},
+      {"force", OverlayPalette::force()},
+      {"background", Palette::background()}};
   for (int a = 0; a < 8; ++a) {
     for (const auto& [name, colour] : others) {
-      EXPECT_GT((OverlayPalette::area(a) - colour).head<3>().norm(), 0.25) << "area " << a << " vs " << name;
+      EXPECT_GT(deltaE(OverlayPalette::area(a), colour), kApart) << "area " << a << " vs " << name;
     }
+    const double lightness = cieLab(OverlayPalette::area(a))[0];
+    EXPECT_GT(lightness, 30.0) << "area " << a << " is too dark to tell from the black target trajectory";
+    EXPECT_LT(lightness, 75.0) << "area " << a << " is too light for the background";
   }
   EXPECT_EQ(OverlayPalette::area(9), OverlayPalette::area(1));
   EXPECT_EQ(OverlayPalette::area(-1), OverlayPalette::area(7));
