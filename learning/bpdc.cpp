@@ -135,6 +135,7 @@ void Bpdc::fit(const TrainingSet& data, const CancellationToken& cancel) {
     ++epochs_;
     if (!std::isfinite(mse)) throw std::runtime_error("BPDC fit diverged; lower eta");
     history_.push_back(mse);
+    if (params_.on_epoch) params_.on_epoch(epochs_, mse);
     if (mse <= params_.target_mse) break;
     stale = mse < best * (1.0 - params_.tolerance) ? 0 : stale + 1;
     best = std::min(best, mse);

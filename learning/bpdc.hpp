@@ -37,6 +37,7 @@ struct BpdcParams {
   double tolerance = 1e-4;           ///< relative improvement that counts as progress
   int patience = 20;                 ///< epochs without progress before stopping
   std::uint64_t seed = 1;
+  EpochObserver on_epoch;            ///< told after each epoch (empty: nobody)
 
   void validate() const;
 };

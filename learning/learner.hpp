@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -21,6 +22,10 @@ namespace flexirob::learning {
 /// Largest supported input / output dimension (a guard against absurd files and data).
 inline constexpr int kMaxInputDim = 64;
 inline constexpr int kMaxOutputDim = 256;
+
+/// Told after each epoch of an iterative fit (LLM, BPDC): the epochs done and the training MSE
+/// [rad²] after the last one. Runs on the fitting thread, so it must be quick (a progress line).
+using EpochObserver = std::function<void(int epochs, double training_mse)>;
 
 /// Thrown by a fit that saw its cancellation token set.
 class TrainingCancelled : public std::runtime_error {

@@ -131,6 +131,7 @@ void Llm::fit(const TrainingSet& data, const CancellationToken& cancel) {
     ++epochs_;
     const double mse = trainingMse();
     if (!std::isfinite(mse)) throw std::runtime_error("LLM fit diverged; lower eta");
+    if (params_.on_epoch) params_.on_epoch(epochs_, mse);
     if (mse < best * (1.0 - params_.tolerance)) {
       stale_epochs = 0;
     } else {

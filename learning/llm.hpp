@@ -25,6 +25,7 @@ struct LlmParams {
   int patience = 10;          ///< epochs without progress before stopping
   double target_mse = 1e-10;  ///< [rad²] stop as soon as the fit is this good
   std::uint64_t seed = 1;     ///< presentation order of the samples
+  EpochObserver on_epoch;     ///< told after each epoch (empty: nobody)
 
   void validate() const;
 };

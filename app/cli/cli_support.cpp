@@ -180,11 +180,28 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
   return scene;
 }
 
-void reportProgress(const std::string& what, double fraction) {
+namespace {
+bool progressShown() {
   static const bool enabled = isatty(STDERR_FILENO) != 0 || std::getenv("FLEXIROB_PROGRESS") != nullptr;
-  if (!enabled) return;
+  return enabled;
+}
+}  // namespace
+
+void reportProgress(const std::string& what, double fraction) {
+  if (!progressShown()) return;
   const int percent = static_cast<int>(std::lround(std::clamp(fraction, 0.0, 1.0) * 100.0));
   std::fprintf(stderr, "\r%s: %3d%%%s", what.c_str(), percent, percent >= 100 ? "\n" : "");
+  std::fflush(stderr);
+}
+
+void reportStatus(const std::string& status, bool done) {
+  if (!progressShown()) return;
+  // Spaces over what a longer line before left on the right (no terminal codes: the line may
+  // go to a log).
+  static std::size_t shown_length = 0;
+  const std::string padding(shown_length > status.size() ? shown_length - status.size() : 0, ' ');
+  std::fprintf(stderr, "\r%s%s%s", status.c_str(), padding.c_str(), done ? "\n" : "");
+  shown_length = done ? 0 : status.size();
   std::fflush(stderr);
 }
 

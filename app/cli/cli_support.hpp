@@ -131,4 +131,8 @@ CLI::Option* addApproachOption(CLI::App& command, std::string& approach);
 /// unless FLEXIROB_PROGRESS=1.
 void reportProgress(const std::string& what, double fraction);
 
+/// The same for work whose end is not known in advance (a fit that stops when it no longer
+/// improves): `status` replaces the line shown before; `done` ends the line.
+void reportStatus(const std::string& status, bool done = false);
+
 }  // namespace flexirob::cli

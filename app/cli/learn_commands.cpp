@@ -9,9 +9,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <limits>
 #include <optional>
 #include <set>
+#include <sstream>
 
 #include "app/cli/cli_support.hpp"
 #include "app/table_text.hpp"
@@ -159,6 +161,25 @@ Json fit(const FitOptions& options) {
   llm_params.tolerance = options.tolerance;
   llm_params.patience = options.patience;
   llm_params.seed = static_cast<std::uint64_t>(options.seed);
+  // The LLM and the BPDC learn in epochs until the fit stops improving: how long is not known
+  // beforehand, and a large file takes minutes, so each epoch is shown (at most once a second).
+  const auto fit_start = std::chrono::steady_clock::now();
+  auto last_shown = fit_start;  // a fit done within a second shows nothing
+  bool shown = false;
+  int epochs_done = 0;
+  const learning::EpochObserver show_epoch = [&, learner_name = options.learner](int epochs, double mse) {
+    epochs_done = epochs;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_shown < std::chrono::seconds(1)) return;
+    last_shown = now;
+    shown = true;
+    std::ostringstream status;
+    status << "learn fit (" << learner_name << "): epoch " << epochs << " of at most " << options.max_epochs
+           << ", training MSE " << std::setprecision(4) << mse << " rad², "
+           << std::fixed << std::setprecision(0) << std::chrono::duration<double>(now - fit_start).count() << " s";
+    reportStatus(status.str());
+  };
+  llm_params.on_epoch = show_epoch;
 
   std::unique_ptr<learning::Learner> learner;
   Json parameters;
@@ -186,6 +207,7 @@ Json fit(const FitOptions& options) {
       learning::BpdcParams bpdc_params;
       bpdc_params.max_epochs = options.max_epochs;
       bpdc_params.seed = static_cast<std::uint64_t>(options.seed);
+      bpdc_params.on_epoch = show_epoch;
       parameters = {{"reservoir", bpdc_params.reservoir}, {"max_epochs", bpdc_params.max_epochs}, {"seed", options.seed}};
       learner = std::make_unique<learning::Bpdc>(M, N, bpdc_params);
     }
@@ -196,6 +218,7 @@ Json fit(const FitOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   learner->fit(data);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (shown) reportStatus("learn fit (" + options.learner + "): done after " + std::to_string(epochs_done) + " epochs", true);
   const double mse = learner->meanSquaredError(data);
   learner->save(options.out);
 

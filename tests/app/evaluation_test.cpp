@@ -588,8 +588,7 @@ TEST(Evaluation, ReachabilityStartsFromTheNearestPostureOfTheDemonstration) {
   // is the nearest.
   Eigen::VectorXd elsewhere = ready();
   elsewhere[0] -= 0.6;
-  Eigen::VectorXd farther = shown;
-  farther[0] += 0.5;
+  const Eigen::VectorXd farther = shown + 0.5 * Eigen::VectorXd::Unit(shown.size(), 0);
   learning::TrainingSet demonstration;
   demonstration.X.resize(3, 3);
   demonstration.Y.resize(7, 3);

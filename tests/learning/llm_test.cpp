@@ -183,6 +183,22 @@ TEST(Llm, FitHonoursCancellation) {
   EXPECT_THROW(llm.fit(data, token), TrainingCancelled);
 }
 
+// What a progress line shows: every epoch in order, with the training MSE of the weights it
+// left (the last one is the fitted map's own error, computed here by prediction).
+TEST(Llm, TellsItsObserverEachEpochAndTheTrainingErrorAfterIt) {
+  const TrainingSet data = helixAreas({{-0.75, -0.35, 0.35}, {-0.25, 0.35, 0.55}}, 30, 7);
+  std::vector<std::pair<int, double>> told;
+  LlmParams params;
+  params.max_epochs = 40;
+  params.on_epoch = [&told](int epochs, double mse) { told.emplace_back(epochs, mse); };
+  Llm llm(3, 7, params);
+  llm.fit(data);
+  ASSERT_EQ(static_cast<int>(told.size()), llm.epochs());
+  ASSERT_GT(llm.epochs(), 1);
+  for (std::size_t i = 0; i < told.size(); ++i) EXPECT_EQ(told[i].first, static_cast<int>(i) + 1);
+  EXPECT_NEAR(told.back().second, llm.meanSquaredError(data), 1e-12 * (1.0 + told.back().second));
+}
+
 TEST(Bpdc, LearnsASmoothMapAsProofOfConcept) {
   const TrainingSet data = helixAreas({{-0.75, -0.35, 0.35}, {-0.25, 0.35, 0.55}}, 30, 7);
   BpdcParams params;
@@ -197,6 +213,20 @@ TEST(Bpdc, LearnsASmoothMapAsProofOfConcept) {
   EXPECT_LT(final_mse, 0.05 * variance);
   EXPECT_LT(final_mse, 0.2 * net.history().front());
   EXPECT_TRUE(net.predict(Eigen::Vector3d(1e9, -1e9, 0.0)).allFinite());
+}
+
+TEST(Bpdc, TellsItsObserverEachEpochWithTheErrorItRecords) {
+  const TrainingSet data = helixAreas({{-0.75, -0.35, 0.35}, {-0.25, 0.35, 0.55}}, 10, 7);
+  std::vector<double> told;
+  BpdcParams params;
+  params.max_epochs = 5;
+  params.on_epoch = [&told](int epochs, double mse) {
+    EXPECT_EQ(epochs, static_cast<int>(told.size()) + 1);
+    told.push_back(mse);
+  };
+  Bpdc net(3, 7, params);
+  net.fit(data);
+  EXPECT_EQ(told, net.history());
 }
 
 }  // namespace
