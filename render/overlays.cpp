@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <initializer_list>
 #include <stdexcept>
 
 #include "render/shapes.hpp"
@@ -328,19 +329,51 @@ constexpr float kLegendLine = 20.0F;
 constexpr float kLegendSwatch = 12.0F;
 constexpr float kLegendCharHeight = 14.0F;
 
-// A TrueType face for the labels, read anew for each legend (OSG's cache would share its glyph
-// textures across OpenGL contexts that come and go); null where the system has none, and the
-// labels fall back to OSG's built-in face, which has ASCII glyphs alone.
-osg::ref_ptr<osgText::Font> readLegendFont() {
+// A TrueType face read anew for each legend (OSG's cache would share its glyph textures across
+// OpenGL contexts that come and go), from the first of `paths` the system has; null if none.
+osg::ref_ptr<osgText::Font> readFirstFont(std::initializer_list<const char*> paths) {
   osg::ref_ptr<osgDB::Options> options = new osgDB::Options();
   options->setObjectCacheHint(osgDB::Options::CACHE_NONE);
-  for (const char* path : {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-                           "/usr/share/fonts/TTF/DejaVuSans.ttf", "/usr/share/fonts/dejavu/DejaVuSans.ttf"}) {
+  for (const char* path : paths) {
     if (!std::filesystem::is_regular_file(path)) continue;
     if (osg::ref_ptr<osgText::Font> font = osgText::readRefFontFile(path, options.get())) return font;
   }
   return {};
 }
+
+// The faces of the labels: DejaVu Sans (Latin, Greek, Cyrillic and more; fonts-dejavu-core),
+// and for a label in Chinese, Japanese or Korean, which DejaVu does not cover, WenQuanYi Micro
+// Hei (fonts-wqy-microhei; it has the Latin letters too, so one face draws the whole label).
+// Where the system has neither, the labels fall back to OSG's built-in face, ASCII alone.
+class LegendFonts {
+ public:
+  osgText::Font* faceFor(const std::vector<char32_t>& code_points) {
+    if (!latin_read_) {
+      latin_ = readFirstFont({"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf", "/usr/share/fonts/TTF/DejaVuSans.ttf",
+                              "/usr/share/fonts/dejavu/DejaVuSans.ttf"});
+      latin_read_ = true;
+    }
+    if (std::any_of(code_points.begin(), code_points.end(), isEastAsian)) {
+      if (!east_asian_read_) {
+        east_asian_ = readFirstFont({"/usr/share/fonts/truetype/wqy/wqy-microhei.ttc", "/usr/share/fonts/wqy-microhei/wqy-microhei.ttc"});
+        east_asian_read_ = true;
+      }
+      if (east_asian_ != nullptr) return east_asian_.get();
+    }
+    return latin_.get();
+  }
+
+ private:
+  // Kana, CJK ideographs and their punctuation, Hangul, full-width forms.
+  static bool isEastAsian(char32_t c) {
+    return (c >= 0x2E80 && c <= 0x9FFF) || (c >= 0xAC00 && c <= 0xD7AF) || (c >= 0xF900 && c <= 0xFAFF) ||
+           (c >= 0xFE30 && c <= 0xFE4F) || (c >= 0xFF00 && c <= 0xFFEF) || (c >= 0x20000 && c <= 0x3134F);
+  }
+
+  osg::ref_ptr<osgText::Font> latin_, east_asian_;
+  bool latin_read_ = false;
+  bool east_asian_read_ = false;
+};
 
 // `code_points` as the face can draw them: the built-in face shows '?' for what is not ASCII.
 osgText::String drawableText(const std::vector<char32_t>& code_points, bool truetype) {
@@ -375,9 +408,10 @@ float labelWidth(osgText::Text& text) {
 
 // The label, cut at a code point and ended with an ellipsis where it would be wider than
 // `max_width` pixels.
-osg::ref_ptr<osgText::Text> fittedLabel(const std::string& utf8, osgText::Font* font, float max_width) {
-  const bool truetype = font != nullptr;
+osg::ref_ptr<osgText::Text> fittedLabel(const std::string& utf8, LegendFonts& fonts, float max_width) {
   std::vector<char32_t> code_points = decodeUtf8(utf8);
+  osgText::Font* font = fonts.faceFor(code_points);
+  const bool truetype = font != nullptr;
   osg::ref_ptr<osgText::Text> text = makeLabel(drawableText(code_points, truetype), font);
   const std::vector<char32_t> ellipsis =
       truetype ? std::vector<char32_t>{U'\u2026'} : std::vector<char32_t>{U'.', U'.', U'.'};
@@ -425,7 +459,7 @@ osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, in
   const float top = static_cast<float>(viewport_height) - kLegendMargin;
   const float text_x = 2.0F * kLegendMargin + kLegendSwatch;
   const float max_label_width = std::max(kLegendCharHeight, static_cast<float>(viewport_width) - text_x - 2.0F * kLegendMargin);
-  const osg::ref_ptr<osgText::Font> font = readLegendFont();
+  LegendFonts fonts;
 
   osg::ref_ptr<osg::Geode> geode = new osg::Geode();
   // A light panel behind the entries, then one swatch per entry (quads, drawn in order).
@@ -441,7 +475,7 @@ osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, in
   std::vector<osg::ref_ptr<osgText::Text>> labels;
   float widest = 0.0F;
   for (const LegendEntry& row : rows) {
-    labels.push_back(fittedLabel(row.label, font.get(), max_label_width));
+    labels.push_back(fittedLabel(row.label, fonts, max_label_width));
     widest = std::max(widest, labelWidth(*labels.back()));
   }
   const float bottom = top - static_cast<float>(rows.size()) * kLegendLine - kLegendMargin * 0.5F;

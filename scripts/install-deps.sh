@@ -12,7 +12,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libsqlite3-dev libnanoflann-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev liborocos-kdl-dev libompl-dev
   libboost-serialization-dev libboost-filesystem-dev libboost-system-dev
-  xvfb xauth fonts-dejavu-core
+  xvfb xauth fonts-dejavu-core fonts-wqy-microhei
   clang-14 libclang-rt-14-dev
 )
 

@@ -358,6 +358,25 @@ TEST_F(OverlayRender, LegendDrawsLabelsOutsideAscii) {
   EXPECT_GT(changedPixels(glyphs, render()), 20);
 }
 
+TEST_F(OverlayRender, LegendDrawsChineseJapaneseAndKoreanLabelsInTheirOwnGlyphs) {
+  // DejaVu has no CJK glyphs: every character would be the same empty box, and two labels of
+  // as many characters would look alike. In WenQuanYi Micro Hei (fonts-wqy-microhei) they differ.
+  const auto legendOf = [this](const char* label) {
+    world_.overlays().setContent(OverlayLayer::kLegend, makeLegend({{label, OverlayPalette::area(0)}}, kWidth, kHeight));
+    return render();
+  };
+  const Image japanese = legendOf("日本語");  // 日本語
+  const Image chinese = legendOf("中文区");   // 中文区
+  const Image korean = legendOf("한국어");    // 한국어
+  EXPECT_GT(changedPixels(japanese, chinese), 20);
+  EXPECT_GT(changedPixels(japanese, korean), 20);
+  EXPECT_GT(changedPixels(chinese, korean), 20);
+  // A label mixing Latin letters and CJK is drawn in one face, the Latin part included.
+  const Image mixed = legendOf("area 日本");
+  EXPECT_GT(changedPixels(mixed, legendOf("area 中文")), 20);
+  EXPECT_GT(inkPixels(mixed, 32, 10, 160, 30), inkPixels(legendOf("日本"), 32, 10, 160, 30) + 20);
+}
+
 TEST_F(OverlayRender, LegendCutsALabelTooLongForThePicture) {
   const Image empty = render();
   world_.overlays().setContent(OverlayLayer::kLegend,
