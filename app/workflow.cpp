@@ -84,6 +84,12 @@ LearnerKind learnerKindFromString(const std::string& name) {
 
 // ---------------------------------------------------------------------------------------------
 
+double nearLimitMargin(const robot::Joint& joint, const WorkflowOptions& options) {
+  const bool sliding = joint.type == robot::JointType::kPrismatic;
+  return std::min(sliding ? options.limit_warning_margin_m : options.limit_warning_margin,
+                  0.1 * (joint.limits.soft_upper - joint.limits.soft_lower));
+}
+
 std::unique_ptr<learning::Learner> makeLearner(const WorkflowOptions& options, int dof) {
   switch (options.learner) {
     case LearnerKind::kElm: return std::make_unique<learning::Elm>(3, dof, options.elm);
@@ -498,10 +504,7 @@ void Workflow::checkJointLimits(const Eigen::VectorXd& q_fixed, int area) {
     const robot::Joint& joint = model_robot_->joints()[static_cast<std::size_t>(j)];
     const bool sliding = joint.type == robot::JointType::kPrismatic;
     const double margin = std::min(q_fixed[j] - lower[j], upper[j] - q_fixed[j]);
-    // A joint's range may be narrow (a slide's travel of a few centimetres, a wrist of ±0.1 rad):
-    // near means within a tenth of it, or the margin if that is less.
-    const double near = std::min(sliding ? options_.limit_warning_margin_m : options_.limit_warning_margin,
-                                 0.1 * (upper[j] - lower[j]));
+    const double near = nearLimitMargin(joint, options_);
     if (margin < near) {
       // To a tenth of a degree or millimetre: what a person reads; closer than that is at it.
       const double shown = std::round(std::abs(margin) * (sliding ? 1000.0 : 180.0 / std::numbers::pi) * 10.0) / 10.0;

@@ -354,6 +354,11 @@ TransitionCheck checkTransition(const robot::RobotModel& model, const robot::Par
                                 int from_index, int to_index, robot::CollisionWorld* world, double speed,
                                 double tolerance);
 
+/// How near a soft limit a joint value is "near the limit" (Sect. 4.3.4): the options' margin
+/// in radians, or in metres for a prismatic joint, at most a tenth of the joint's range (a
+/// slide of a few centimetres, a wrist of ±0.1 rad).
+double nearLimitMargin(const robot::Joint& joint, const WorkflowOptions& options);
+
 /// A fresh learner of the given kind for 3-D inputs and `dof` outputs.
 std::unique_ptr<learning::Learner> makeLearner(const WorkflowOptions& options, int dof);
 

@@ -1,5 +1,7 @@
 #include "ui/joint_panel.hpp"
 
+#include "app/workflow.hpp"
+
 #include <QGridLayout>
 #include <QLabel>
 #include <QPainter>
@@ -59,8 +61,11 @@ void LimitSlider::paintEvent(QPaintEvent* event) {
   if (soft_upper_ < maximum()) painter.fillRect(QRect(QPoint(xOf(soft_upper_), top), QPoint(xOf(maximum()), top + 6)), zone);
 }
 
-LimitDistanceBar::LimitDistanceBar(const robot::JointLimits& limits, QWidget* parent)
-    : QWidget(parent), lower_(limits.soft_lower), upper_(limits.soft_upper) {
+LimitDistanceBar::LimitDistanceBar(const robot::Joint& joint, QWidget* parent)
+    : QWidget(parent),
+      lower_(joint.limits.soft_lower),
+      upper_(joint.limits.soft_upper),
+      red_margin_(app::nearLimitMargin(joint, app::WorkflowOptions{})) {
   setMinimumWidth(50);
   setSizePolicy(QSizePolicy::Preferred, QSizePolicy::Fixed);
 }
@@ -75,8 +80,8 @@ void LimitDistanceBar::setValue(double q) {
 
 LimitDistanceBar::Level LimitDistanceBar::level() const {
   if (!std::isfinite(distance_)) return Level::kOk;
-  if (distance_ < kRedMargin) return Level::kRed;
-  if (distance_ < kAmberMargin) return Level::kAmber;
+  if (distance_ < red_margin_) return Level::kRed;
+  if (distance_ < 2.0 * red_margin_) return Level::kAmber;
   return Level::kOk;
 }
 
@@ -99,13 +104,15 @@ void LimitDistanceBar::paintEvent(QPaintEvent*) {
 
 JointPanel::JointPanel(QWidget* parent) : QWidget(parent) {
   auto* layout = new QVBoxLayout(this);
-  auto* title = new QLabel(tr("<b>Joints</b> &nbsp; <small>slider red: beyond the software limits; bar: distance to the nearest software limit, amber below 0.35 rad, red below 0.17 rad</small>"), this);
+  auto* title = new QLabel(tr("<b>Joints</b> &nbsp; <small>slider red: beyond the software limits; bar: distance to the nearest software limit, red where a taught posture warns (0.17 rad, 2 cm for a slide, at most a tenth of the range), amber within twice that</small>"), this);
   title->setWordWrap(true);
   layout->addWidget(title);
   grid_ = new QGridLayout;
   layout->addLayout(grid_);
   auto* home = new QPushButton(tr("Home posture"), this);
   home->setToolTip(tr("Back to the start posture of robot and scene"));
+  home->setEnabled(false);  // until there is a robot
+  home_button_ = home;
   connect(home, &QPushButton::clicked, this, [this] {
     setPosture(home_);
     Q_EMIT postureChanged(posture());
@@ -149,7 +156,7 @@ void JointPanel::setRobot(const robot::RobotModel& model, const Eigen::VectorXd&
     grid_->addWidget(slider, j, 1);
     grid_->addWidget(value, j, 2);
     grid_->addWidget(limits, j, 3);
-    auto* bar = new LimitDistanceBar(joint.limits, this);
+    auto* bar = new LimitDistanceBar(joint, this);
     grid_->addWidget(bar, j, 4);
     bars_.push_back(bar);
     sliders_.push_back(slider);
@@ -161,6 +168,7 @@ void JointPanel::setRobot(const robot::RobotModel& model, const Eigen::VectorXd&
     });
   }
   grid_->setColumnStretch(1, 1);
+  home_button_->setEnabled(model.dof() > 0);
   setPosture(q);
 }
 

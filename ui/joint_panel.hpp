@@ -13,6 +13,8 @@
 class QLabel;
 class QGridLayout;
 
+class QPushButton;
+
 namespace flexirob::ui {
 
 /// A horizontal slider over [lower, upper] (radians or metres, in steps of 1e-3) that shades
@@ -35,19 +37,19 @@ class LimitSlider : public QSlider {
 };
 
 /// Distance of a joint to its nearest software limit as a bar (full: at mid range), green,
-/// amber below kAmberMargin and red below kRedMargin (Sect. 4.3.4: the tutor is warned when a
-/// posture nears a joint limit; kRedMargin is the workflow's warning margin).
+/// amber within twice the workflow's near-limit margin and red within it (Sect. 4.3.4: the
+/// tutor is warned when a posture nears a joint limit; app::nearLimitMargin: 0.17 rad, or 2 cm
+/// for a prismatic joint, at most a tenth of the joint's range).
 class LimitDistanceBar : public QWidget {
   Q_OBJECT
 
  public:
   enum class Level { kOk, kAmber, kRed };
-  static constexpr double kAmberMargin = 0.35;  ///< [rad] (or m for prismatic joints)
-  static constexpr double kRedMargin = 0.17;    ///< [rad] = WorkflowOptions::limit_warning_margin
 
-  LimitDistanceBar(const robot::JointLimits& limits, QWidget* parent = nullptr);
+  explicit LimitDistanceBar(const robot::Joint& joint, QWidget* parent = nullptr);
   void setValue(double q);
   double distance() const { return distance_; }
+  double redMargin() const { return red_margin_; }
   Level level() const;
   QSize sizeHint() const override { return {70, 14}; }
 
@@ -55,7 +57,7 @@ class LimitDistanceBar : public QWidget {
   void paintEvent(QPaintEvent* event) override;
 
  private:
-  double lower_, upper_, distance_ = 0.0;
+  double lower_, upper_, red_margin_, distance_ = 0.0;
 };
 
 class JointPanel : public QWidget {
@@ -87,6 +89,7 @@ class JointPanel : public QWidget {
   std::vector<LimitDistanceBar*> bars_;
   std::vector<bool> prismatic_;
   Eigen::VectorXd home_;
+  QPushButton* home_button_ = nullptr;
   bool updating_ = false;
 };
 

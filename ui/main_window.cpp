@@ -9,6 +9,7 @@
 #include <QDockWidget>
 #include <QFile>
 #include <QFileDialog>
+#include <QFontMetrics>
 #include <QInputDialog>
 #include <QKeyEvent>
 #include <QLabel>
@@ -67,9 +68,27 @@ Eigen::Vector4f collisionColour() { return {0.90F, 0.10F, 0.10F, 1.0F}; }
 // The posture shown before the live robot reports: where teaching starts, or the middle of the
 // limits where no collision world can be built for the robot and scene (starting the live robot
 // then reports why, in the GUI).
-Eigen::VectorXd shownHomePosture(const robot::RobotModel& model, const robot::Scene& scene) {
+// The scene as the robot can run in it: postures made for another arm (another joint count,
+// or beyond this arm's limits) left out, with the reason; the arm then starts in a free posture.
+robot::Scene sceneFitFor(const robot::Scene& scene, const robot::RobotModel& model, QString* problem) {
+  robot::Scene fit = scene;
   try {
-    return app::homePosture(model, scene);
+    robot::checkPosturesFit(scene, model, model.name());
+    problem->clear();
+  } catch (const std::exception& error) {
+    fit.home_posture.reset();
+    for (robot::Area& area : fit.training_areas) area.posture.reset();
+    for (robot::Area& area : fit.working_areas) area.posture.reset();
+    *problem = QCoreApplication::translate("MainWindow", "%1; the scene's postures are not used, the arm starts in a free posture")
+                   .arg(QString::fromUtf8(error.what()));
+  }
+  return fit;
+}
+
+Eigen::VectorXd shownHomePosture(const robot::RobotModel& model, const robot::Scene& scene) {
+  QString problem;
+  try {
+    return app::homePosture(model, sceneFitFor(scene, model, &problem));
   } catch (const std::exception&) {
     return model.midPosture();
   }
@@ -102,13 +121,22 @@ MainWindow::MainWindow(const std::string& robot, const std::string& scene, const
   banner_label_ = new QLabel(view_);
   banner_label_->setObjectName(QStringLiteral("banner"));
   banner_label_->setAttribute(Qt::WA_TransparentForMouseEvents);
-  banner_label_->setWordWrap(true);
+  // Two lines at most, each cut to the view's width (showBanner): a wrapped banner would grow
+  // over the robot.
+  banner_label_->setWordWrap(false);
   banner_label_->setAlignment(Qt::AlignCenter);
   QFont banner_font = banner_label_->font();
   banner_font.setPointSize(banner_font.pointSize() + 5);
   banner_font.setBold(true);
   banner_label_->setFont(banner_font);
   banner_label_->move(12, 10);
+  problem_label_ = new QLabel(view_);
+  problem_label_->setObjectName(QStringLiteral("problem"));
+  problem_label_->setAttribute(Qt::WA_TransparentForMouseEvents);
+  problem_label_->setWordWrap(true);
+  problem_label_->setStyleSheet(QStringLiteral("QLabel { background: rgba(255,236,236,235); color: #7a0000;"
+                                               " border: 1px solid #c00000; border-radius: 4px; padding: 6px; }"));
+  problem_label_->setVisible(false);
   key_map_label_ = new QLabel(view_);
   key_map_label_->setObjectName(QStringLiteral("key_map"));
   key_map_label_->setAttribute(Qt::WA_TransparentForMouseEvents);
@@ -124,7 +152,7 @@ MainWindow::MainWindow(const std::string& robot, const std::string& scene, const
   try {
     backend_ = app::parseBackendChoice(options_.backend);
   } catch (const std::exception& error) {
-    reportError(tr("Backend '%1'").arg(QString::fromStdString(options_.backend)), error);
+    reportProblem(Problem::kBackend, tr("%1; the simulation runs instead").arg(QString::fromUtf8(error.what())));
   }
 
   status_label_ = new QLabel;
@@ -161,6 +189,25 @@ void MainWindow::reportError(const QString& what, const std::exception& error) {
   const QString message = what + QStringLiteral(": ") + QString::fromUtf8(error.what());
   statusBar()->showMessage(message, 15000);
   qWarning("%s", qPrintable(message));
+}
+
+void MainWindow::reportProblem(Problem kind, const QString& message) {
+  problems_[kind] = message;
+  qWarning("%s", qPrintable(message));
+  QStringList lines;
+  for (const auto& [which, text] : problems_) lines << text;
+  problem_label_->setText(lines.join(QStringLiteral("\n")));
+  problem_label_->setVisible(true);
+  placeViewLabels();
+}
+
+void MainWindow::clearProblem(Problem kind) {
+  if (problems_.erase(kind) == 0) return;
+  QStringList lines;
+  for (const auto& [which, text] : problems_) lines << text;
+  problem_label_->setText(lines.join(QStringLiteral("\n")));
+  problem_label_->setVisible(!problems_.empty());
+  placeViewLabels();
 }
 
 void MainWindow::buildDocks() {
@@ -315,15 +362,24 @@ void MainWindow::startRecording() {
 
 void MainWindow::startLive() {
   if (!model_) return;
+  QString postures_problem;
+  live_scene_ = sceneFitFor(scene_, *model_, &postures_problem);
+  if (postures_problem.isEmpty()) {
+    clearProblem(Problem::kPostures);
+  } else {
+    reportProblem(Problem::kPostures, postures_problem);
+  }
   try {
     app::WorkflowOptions workflow_options;
-    live_ = std::make_unique<LiveTeaching>(*model_, scene_, *parameters_, workflow_options, backend_,
+    live_ = std::make_unique<LiveTeaching>(*model_, live_scene_, *parameters_, workflow_options, backend_,
                                            LiveTeaching::Options{});
   } catch (const std::exception& error) {
-    reportError(tr("Cannot start the robot on backend '%1'").arg(QString::fromStdString(backend_.text)), error);
+    reportProblem(Problem::kRobot, tr("Cannot start the robot on backend '%1': %2")
+                                       .arg(QString::fromStdString(backend_.text), QString::fromUtf8(error.what())));
     live_.reset();
     return;
   }
+  clearProblem(Problem::kRobot);
   startRecording();
   live_->start();
   last_warning_.clear();
@@ -355,10 +411,16 @@ bool MainWindow::saveSession(const QString& file) {
 
 bool MainWindow::loadRobot(const std::string& name_or_path) {
   std::unique_ptr<robot::RobotModel> model;
+  const auto refuse = [&](const std::exception& error) {
+    reportProblem(Problem::kRobot, tr("Cannot load robot '%1': %2%3")
+                                       .arg(QString::fromStdString(name_or_path), QString::fromUtf8(error.what()),
+                                            model_ ? tr("; the robot stays '%1'").arg(QString::fromStdString(model_->name()))
+                                                   : tr("; no robot runs (choose one in the Robot menu)")));
+  };
   try {
     model = std::make_unique<robot::RobotModel>(robot::RobotModel::fromUrdfFile(resolveRobotPath(name_or_path)));
   } catch (const std::exception& error) {
-    reportError(tr("Cannot load robot '%1'").arg(QString::fromStdString(name_or_path)), error);
+    refuse(error);
     return false;
   }
   stopLive();
@@ -368,7 +430,7 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
     model_ = std::move(model);
     kinematics_ = std::move(kinematics);
   } catch (const std::exception& error) {
-    reportError(tr("Cannot load robot '%1'").arg(QString::fromStdString(name_or_path)), error);
+    refuse(error);
     startLive();
     return false;
   }
@@ -410,7 +472,7 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
     // A parameter out of its range refuses the scene here, with the scene kept as it was.
     robot::ParameterSet(declarations_).applyOverrides(scene.parameters, robot::sceneOrigin(scene));
   } catch (const std::exception& error) {
-    reportError(tr("Cannot load scene '%1'").arg(QString::fromStdString(name_or_path)), error);
+    refuseScene(name_or_path, error);
     return false;
   }
   stopLive();
@@ -418,10 +480,11 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
     world_.setScene(scene);
     scene_ = std::move(scene);
   } catch (const std::exception& error) {
-    reportError(tr("Cannot load scene '%1'").arg(QString::fromStdString(name_or_path)), error);
+    refuseScene(name_or_path, error);
     startLive();
     return false;
   }
+  clearProblem(Problem::kScene);
   if (model_) {
     const Eigen::VectorXd home = shownHomePosture(*model_, scene_);
     joint_panel_->setPosture(home);
@@ -437,21 +500,32 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
   return true;
 }
 
+void MainWindow::refuseScene(const std::string& name_or_path, const std::exception& error) {
+  const QString shown = scene_.name.empty() ? QStringLiteral("empty") : QString::fromStdString(scene_.name);
+  reportProblem(Problem::kScene, tr("Cannot load scene '%1': %2; the scene stays '%3'")
+                                     .arg(QString::fromStdString(name_or_path), QString::fromUtf8(error.what()), shown));
+}
+
 bool MainWindow::setBackend(const std::string& choice) {
   app::BackendChoice parsed;
   try {
     parsed = app::parseBackendChoice(choice);
   } catch (const std::exception& error) {
-    reportError(tr("Backend '%1'").arg(QString::fromStdString(choice)), error);
+    reportProblem(Problem::kBackend, tr("%1; the backend stays '%2'")
+                                         .arg(QString::fromUtf8(error.what()), QString::fromStdString(backend_.text)));
     return false;
   }
+  clearProblem(Problem::kBackend);
   const app::BackendChoice previous = backend_;
   stopLive();
   backend_ = parsed;
   startLive();
   if (!live_) {  // e.g. the FRI port is taken or the robot is not an LWR IV: back to the previous
+    const auto why = problems_.find(Problem::kRobot);
+    const QString reason = why != problems_.end() ? why->second : tr("Cannot start the backend '%1'").arg(QString::fromStdString(choice));
     backend_ = previous;
     startLive();
+    reportProblem(Problem::kBackend, tr("%1; the backend stays '%2'").arg(reason, QString::fromStdString(backend_.text)));
     return false;
   }
   for (QAction* action : backend_menu_->actions()) {
@@ -489,6 +563,9 @@ void MainWindow::mirror() {
   }
   if (!live_ || !model_) {
     link_label_->setText(tr("no robot running"));
+    stage_panel_->showNoRobot(tr("No robot runs: the message in the view says why."));
+    showNoRobotBanner();
+    placeViewLabels();
     view_->requestFrame();
     return;
   }
@@ -500,7 +577,7 @@ void MainWindow::mirror() {
   driveKeyboard();
   const LiveSnapshot& s = live_->snapshot();
   handleEvents();
-  stage_panel_->showSnapshot(s);
+  stage_panel_->showSnapshot(s, robotMeasured());
   if (s.failed) {
     const auto end = std::find(s.failure.begin(), s.failure.end(), '\0');
     last_warning_ = tr("The robot stopped: %1").arg(QString::fromStdString(std::string(s.failure.begin(), end)));
@@ -543,7 +620,8 @@ void MainWindow::mirror() {
       force_arrow_->hide();
     }
     if (!last_warning_.isEmpty() || banner_label_->text().isEmpty() ||
-        banner_label_->property("stage").toString() != StagePanel::stageText(s.stage, s.sub_stage)) {
+        banner_label_->property("stage").toString() !=
+            StagePanel::stageText(s.stage, s.sub_stage) + (robotMeasured() ? QString() : QStringLiteral("?"))) {
       showBanner(last_warning_);
     }
   }
@@ -556,20 +634,49 @@ void MainWindow::mirror() {
   view_->requestFrame();
 }
 
-void MainWindow::showBanner(const QString& warning) {
-  const LiveSnapshot& s = live_->snapshot();
-  const QString stage = StagePanel::stageText(s.stage, s.sub_stage);
-  const QColor colour = StagePanel::stageColor(s.stage, s.sub_stage);
-  QString text = QString(stage).replace(QLatin1Char('\n'), QStringLiteral(" · "));
-  if (!warning.isEmpty()) text += QStringLiteral("\n⚠ ") + warning;
-  banner_label_->setProperty("stage", stage);
+bool MainWindow::robotMeasured() const {
+  if (!live_) return false;
+  const app::LinkStatus link = live_->linkStatus();
+  return link.kind == app::BackendKind::kSimulation || link.measurements > 0;
+}
+
+void MainWindow::showNoRobotBanner() {
+  const QString text = tr("NO ROBOT");
+  if (banner_label_->text() == text) return;
+  const QColor colour = StagePanel::stageColor(app::Stage::kIdle, app::SubStage::kNone);
+  banner_label_->setProperty("stage", QString());
   banner_label_->setText(text);
   banner_label_->setStyleSheet(
       QStringLiteral("QLabel { background: rgba(%1,%2,%3,215); color: white; border-radius: 6px; padding: 6px 14px; }")
           .arg(colour.red())
           .arg(colour.green())
           .arg(colour.blue()));
-  banner_label_->setMaximumWidth(std::max(200, view_->width() - 24));
+  banner_label_->adjustSize();
+  banner_label_->move(std::max(0, (view_->width() - banner_label_->width()) / 2), 10);
+}
+
+void MainWindow::showBanner(const QString& warning) {
+  const LiveSnapshot& s = live_->snapshot();
+  const QString stage = StagePanel::stageText(s.stage, s.sub_stage);
+  const QColor colour = StagePanel::stageColor(s.stage, s.sub_stage);
+  QString text = QString(stage).replace(QLatin1Char('\n'), QStringLiteral(" · "));
+  // One line of the warning: the whole of it is in the Teaching panel, and a banner as long as
+  // the warning would cover the robot.
+  const int widest = std::max(200, view_->width() - 24);
+  if (!warning.isEmpty()) {
+    text += QStringLiteral("\n⚠ ") +
+            QFontMetrics(banner_label_->font()).elidedText(QString(warning).replace(QLatin1Char('\n'), QLatin1Char(' ')),
+                                                           Qt::ElideRight, widest - 60);
+  }
+  if (!robotMeasured()) text += tr(" · no measurement yet");
+  banner_label_->setProperty("stage", stage + (robotMeasured() ? QString() : QStringLiteral("?")));
+  banner_label_->setText(text);
+  banner_label_->setStyleSheet(
+      QStringLiteral("QLabel { background: rgba(%1,%2,%3,215); color: white; border-radius: 6px; padding: 6px 14px; }")
+          .arg(colour.red())
+          .arg(colour.green())
+          .arg(colour.blue()));
+  banner_label_->setMaximumWidth(widest);
   banner_label_->adjustSize();
   banner_label_->move(std::max(0, (view_->width() - banner_label_->width()) / 2), 10);
   key_map_label_->move(12, std::max(0, view_->height() - key_map_label_->height() - 12));
@@ -694,10 +801,16 @@ void MainWindow::keyPressEvent(QKeyEvent* event) {
       }
       break;
     case TeleopAction::Kind::kTrigger:
-      if (live_) live_->fire(action->trigger);
-      break;
     case TeleopAction::Kind::kButton:
-      if (live_) live_->press(action->button);
+      if (!live_) {
+        statusBar()->showMessage(tr("No robot runs: the message in the view says why"), 8000);
+      } else if (!robotMeasured()) {
+        statusBar()->showMessage(tr("The robot has not sent a measurement yet: teaching starts when it does"), 8000);
+      } else if (action->kind == TeleopAction::Kind::kTrigger) {
+        live_->fire(action->trigger);
+      } else {
+        live_->press(action->button);
+      }
       break;
     case TeleopAction::Kind::kToggleMap:
       toggleKeyMap(!key_map_label_->isVisible());
@@ -952,6 +1065,15 @@ void MainWindow::placeViewLabels() {
   const QPoint corner(std::max(0, view_->width() - confidence_legend_->width() - 12),
                       std::max(0, view_->height() - confidence_legend_->height() - 12));
   if (confidence_legend_->pos() != corner) confidence_legend_->move(corner);
+  // The problems under the banner, across the view at most 720 px wide, every line whole.
+  if (problem_label_->isVisible()) {
+    const int width = std::clamp(view_->width() - 24, 120, 720);
+    const int height = problem_label_->heightForWidth(width);
+    problem_label_->resize(width, height > 0 ? height : problem_label_->sizeHint().height());
+    const int top = banner_label_->isVisible() && !banner_label_->text().isEmpty() ? banner_label_->geometry().bottom() + 8 : 10;
+    problem_label_->move(std::max(0, (view_->width() - width) / 2), top);
+    problem_label_->raise();
+  }
 }
 
 void MainWindow::clickGoal(const QPointF& position) {

@@ -93,6 +93,8 @@ class MainWindow : public QMainWindow {
   ForceArrow* forceArrow() const { return force_arrow_.get(); }
   QLabel* keyMapLabel() const { return key_map_label_; }
   QLabel* bannerLabel() const { return banner_label_; }
+  /// The problems the view shows (a robot, scene or backend that could not be used); hidden if none.
+  QLabel* problemLabel() const { return problem_label_; }
   render::World& world() { return world_; }
   render::Overlays& overlays() { return *overlays_; }
   const robot::RobotModel* robotModel() const { return model_.get(); }
@@ -156,6 +158,12 @@ class MainWindow : public QMainWindow {
   void buildDocks();
   void updateStatus();
   void reportError(const QString& what, const std::exception& error);
+  /// What keeps the window from doing what was asked: a robot, a scene or a backend that could
+  /// not be used. Shown whole in the view until that kind of thing is next loaded.
+  enum class Problem { kRobot, kScene, kPostures, kBackend };
+  void reportProblem(Problem kind, const QString& message);
+  void clearProblem(Problem kind);
+  void refuseScene(const std::string& name_or_path, const std::exception& error);
   /// Stops the live robot and closes its session (before model or scene change).
   void stopLive();
   /// Builds and starts the live robot for the current model, scene, backend and parameters.
@@ -166,6 +174,9 @@ class MainWindow : public QMainWindow {
   void updateOverlays(const LiveSnapshot& snapshot);
   void driveKeyboard();
   void showBanner(const QString& warning);
+  void showNoRobotBanner();
+  /// Whether the live robot has sent a state (always for the simulation; an FRI link may wait).
+  bool robotMeasured() const;
   void applyParameters(const std::map<std::string, double>& values);
   void resetParameters();
   void updatePlots(const LiveSnapshot& snapshot);
@@ -181,6 +192,7 @@ class MainWindow : public QMainWindow {
   std::unique_ptr<robot::RobotModel> model_;
   std::unique_ptr<robot::Kinematics> kinematics_;
   robot::Scene scene_;
+  robot::Scene live_scene_;  ///< scene_ as the live robot runs in it (sceneFitFor); outlives live_
   std::vector<robot::ParameterDeclaration> declarations_;
   std::unique_ptr<robot::ParameterSet> parameters_;
   std::map<std::string, double> parameter_edits_;  // operator's values, applied after scene overrides
@@ -197,6 +209,8 @@ class MainWindow : public QMainWindow {
   ParameterPanel* parameter_panel_ = nullptr;
   QLabel* key_map_label_ = nullptr;
   QLabel* banner_label_ = nullptr;
+  QLabel* problem_label_ = nullptr;
+  std::map<Problem, QString> problems_;
   QLabel* status_label_ = nullptr;
   QLabel* link_label_ = nullptr;
   QMenu* robot_menu_ = nullptr;

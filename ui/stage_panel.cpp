@@ -1,5 +1,8 @@
 #include "ui/stage_panel.hpp"
 
+#include <algorithm>
+
+#include <QFontMetrics>
 #include <QLabel>
 #include <QProgressBar>
 #include <QPushButton>
@@ -19,9 +22,13 @@ StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
   stage_label_->setFont(big);
   stage_label_->setWordWrap(true);
   layout->addWidget(stage_label_);
+  // As wide as the longest stage name needs, and no wider or narrower as the stage changes:
+  // a panel that grew with its text would shift the 3D view beside it at every stage.
+  setFixedWidth(std::max(240, QFontMetrics(big).horizontalAdvance(QStringLiteral("CONFIGURATION")) + 48));
 
   controller_label_ = new QLabel;
   controller_label_->setAlignment(Qt::AlignCenter);
+  controller_label_->setWordWrap(true);
   layout->addWidget(controller_label_);
 
   const struct {
@@ -105,7 +112,21 @@ QString StagePanel::stageText(app::Stage stage, app::SubStage sub_stage) {
   return text;
 }
 
-void StagePanel::showSnapshot(const LiveSnapshot& s) {
+void StagePanel::showNoRobot(const QString& reason) {
+  const QString text = tr("NO ROBOT");
+  if (text != shown_stage_) {
+    shown_stage_ = text;
+    stage_label_->setText(text);
+    stage_label_->setStyleSheet(QStringLiteral("QLabel { background: %1; color: white; border-radius: 6px; }")
+                                    .arg(stageColor(app::Stage::kIdle, app::SubStage::kNone).name()));
+  }
+  controller_label_->setText(reason);
+  for (QPushButton* button : buttons_) button->setEnabled(false);
+  learning_bar_->setVisible(false);
+  counts_label_->clear();
+}
+
+void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured) {
   const QString text = stageText(s.stage, s.sub_stage);
   if (text != shown_stage_) {
     shown_stage_ = text;
@@ -114,10 +135,14 @@ void StagePanel::showSnapshot(const LiveSnapshot& s) {
     stage_label_->setStyleSheet(QStringLiteral("QLabel { background: %1; color: white; border-radius: 6px; }")
                                     .arg(colour.name()));
   }
-  controller_label_->setText(tr("controller: %1%2").arg(QString::fromLatin1(app::toString(s.controller)), s.keyboard_mode ? tr(" (keyboard)") : QString()));
-  for (int b = 0; b < 4; ++b) buttons_[b]->setEnabled(s.running && buttonMakesSense(static_cast<app::Button>(b), s));
+  controller_label_->setText(robot_measured ? tr("controller: %1%2").arg(QString::fromLatin1(app::toString(s.controller)),
+                                                                       s.keyboard_mode ? tr(" (keyboard)") : QString())
+                                           : tr("waiting for the robot's first measurement"));
+  for (int b = 0; b < 4; ++b) {
+    buttons_[b]->setEnabled(robot_measured && s.running && buttonMakesSense(static_cast<app::Button>(b), s));
+  }
   learning_bar_->setVisible(s.learning);
-  counts_label_->setText(tr("areas %1   teach-ins %2   model %3\non_affected %4   on_converged %5\nITM %6 nodes, %7 edges   "
+  counts_label_->setText(tr("areas %1   teach-ins %2   model %3\non_affected %4   on_converged %5\nITM nodes %6, edges %7   "
                             "collisions %8")
                              .arg(s.areas)
                              .arg(s.teach_ins)

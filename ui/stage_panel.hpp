@@ -23,7 +23,11 @@ class StagePanel : public QWidget {
   explicit StagePanel(QWidget* parent = nullptr);
 
   /// Shows the state of `snapshot` (cheap when nothing changed; called at display rate).
-  void showSnapshot(const LiveSnapshot& snapshot);
+  /// Without a measurement of the robot yet (`robot_measured` false: an FRI link waiting for
+  /// the arm) every button is disabled: the workflow would teach on a posture never measured.
+  void showSnapshot(const LiveSnapshot& snapshot, bool robot_measured = true);
+  /// No robot runs (it could not be loaded or started): every button disabled, and why.
+  void showNoRobot(const QString& reason);
   /// A tutor warning or a refused request, shown until the next one or until cleared.
   void showWarning(const QString& text);
   void clearWarning();

@@ -4,11 +4,13 @@
 #include <QAction>
 #include <QApplication>
 #include <QDoubleSpinBox>
+#include <QFile>
 #include <QGuiApplication>
 #include <QLabel>
 #include <QMouseEvent>
 #include <QPushButton>
 #include <QStandardPaths>
+#include <QStatusBar>
 #include <QTemporaryDir>
 #include <QTest>
 
@@ -118,6 +120,75 @@ class OperatorTest : public QObject {
     QTest::keyClick(&window, Qt::Key_F6);
     QTRY_VERIFY(window.stagePanel()->warningLabel()->text().contains(QStringLiteral("finished_configuration")));
     QCOMPARE(window.live()->snapshot().stage, Stage::kIdle);
+  }
+
+  // What the window says and allows when a robot, a scene or the link to the arm fails: the
+  // reason whole in the view, no button that would teach on nothing.
+  void aRobotThatCannotBeLoadedLeavesNoButtonToPressAndSaysWhy() {
+    MainWindow window("/nonexistent/robot.urdf", "empty", quietOptions());
+    window.mirror();
+    QVERIFY(window.live() == nullptr);
+    flexirob::ui::StagePanel* panel = window.stagePanel();
+    for (const Button button : {Button::kStartConfiguration, Button::kFinishedConfiguration, Button::kStartProgramming,
+                                Button::kFinishedProgramming}) {
+      QVERIFY(!panel->button(button)->isEnabled());
+    }
+    QCOMPARE(panel->stageLabel()->text(), QStringLiteral("NO ROBOT"));
+    QVERIFY(!window.problemLabel()->isHidden());
+    QVERIFY(window.problemLabel()->text().contains(QStringLiteral("Cannot load robot '/nonexistent/robot.urdf'")));
+    QVERIFY(window.problemLabel()->text().contains(QStringLiteral("no robot runs")));
+    QTest::keyClick(&window, Qt::Key_F5);
+    QVERIFY(window.statusBar()->currentMessage().contains(QStringLiteral("No robot runs")));
+    // A robot that loads ends it.
+    QVERIFY(window.loadRobot("lwr4"));
+    waitRunning(window);
+    QVERIFY(window.problemLabel()->isHidden());
+    window.mirror();
+    QVERIFY(panel->button(Button::kStartConfiguration)->isEnabled());
+  }
+
+  void aSceneThatCannotBeLoadedIsNamedWithItsReasonUntilAnotherLoads() {
+    MainWindow window("lwr4", "/nonexistent/scene.yaml", quietOptions());
+    waitRunning(window);
+    QVERIFY(!window.problemLabel()->isHidden());
+    QVERIFY(window.problemLabel()->text().contains(QStringLiteral("Cannot load scene '/nonexistent/scene.yaml'")));
+    QVERIFY(window.problemLabel()->text().contains(QStringLiteral("the scene stays 'empty'")));
+    QVERIFY(window.loadScene("setup_I"));
+    QVERIFY(window.problemLabel()->isHidden());
+  }
+
+  void aScenesHomePostureBeyondTheLimitsIsLeftOutAndTheArmRuns() {
+    QTemporaryDir dir;
+    const QString file = dir.filePath(QStringLiteral("beyond.yaml"));
+    {
+      QFile out(file);
+      QVERIFY(out.open(QIODevice::WriteOnly));
+      out.write("name: beyond\nrobot: lwr4\nhome_posture: [0, 3.0, 0, 0, 0, 0, 0]\n");
+    }
+    MainWindow window("lwr4", file.toStdString(), quietOptions());
+    waitRunning(window);
+    QVERIFY(window.problemLabel()->text().contains(QStringLiteral("outside its limits")));
+    QVERIFY(window.problemLabel()->text().contains(QStringLiteral("the scene's postures are not used")));
+    const auto& s = window.live()->snapshot();
+    QVERIFY(std::abs(s.q[1]) < 2.0);  // A2, within its ±2.09 rad
+    window.mirror();
+    QVERIFY(window.stagePanel()->button(Button::kStartConfiguration)->isEnabled());
+  }
+
+  void anFriLinkThatHasMeasuredNothingTeachesNothing() {
+    MainWindow window("lwr4", "empty", quietOptions());
+    waitRunning(window);
+    // Nobody answers there: the link waits for the arm's first measurement.
+    if (!window.setBackend("fri://127.0.0.1:1")) QSKIP("the FRI port 49938 is taken on this machine");
+    QCOMPARE(window.live()->linkStatus().measurements, std::uint64_t{0});
+    window.mirror();
+    QVERIFY(!window.stagePanel()->button(Button::kStartConfiguration)->isEnabled());
+    QVERIFY(window.bannerLabel()->text().contains(QStringLiteral("no measurement yet")));
+    QTest::keyClick(&window, Qt::Key_F5);
+    QVERIFY(window.statusBar()->currentMessage().contains(QStringLiteral("has not sent a measurement")));
+    QTest::qWait(200);
+    QCOMPARE(window.live()->snapshot().stage, Stage::kIdle);
+    QVERIFY(window.setBackend("sim"));
   }
 
   void keysMoveTheNineDofArm() {
@@ -235,10 +306,10 @@ class OperatorTest : public QObject {
   }
 
   void jointLimitBarsTurnAmberThenRed() {
-    flexirob::robot::JointLimits limits;
-    limits.lower = limits.soft_lower = -2.0;
-    limits.upper = limits.soft_upper = 2.0;
-    flexirob::ui::LimitDistanceBar bar(limits);
+    flexirob::robot::Joint joint;
+    joint.limits.lower = joint.limits.soft_lower = -2.0;
+    joint.limits.upper = joint.limits.soft_upper = 2.0;
+    flexirob::ui::LimitDistanceBar bar(joint);
     using Level = flexirob::ui::LimitDistanceBar::Level;
     bar.setValue(0.0);
     QCOMPARE(bar.level(), Level::kOk);
@@ -248,6 +319,24 @@ class OperatorTest : public QObject {
     bar.setValue(-2.0 + 0.10);
     QCOMPARE(bar.level(), Level::kRed);
     QVERIFY(std::abs(bar.distance() - 0.10) < 1e-12);
+  }
+
+  // A slide of 12.6 cm: in metres, and within a tenth of its travel; mid-travel is far from
+  // either end (it had been red there, measured against 0.17 "rad").
+  void aShortSlidesBarIsGreenAtMidTravelAndRedNearItsEnds() {
+    flexirob::robot::Joint slide;
+    slide.type = flexirob::robot::JointType::kPrismatic;
+    slide.limits.lower = slide.limits.soft_lower = 0.0;
+    slide.limits.upper = slide.limits.soft_upper = 0.126;
+    flexirob::ui::LimitDistanceBar bar(slide);
+    using Level = flexirob::ui::LimitDistanceBar::Level;
+    QVERIFY(std::abs(bar.redMargin() - 0.0126) < 1e-12);
+    bar.setValue(0.063);
+    QCOMPARE(bar.level(), Level::kOk);
+    bar.setValue(0.020);
+    QCOMPARE(bar.level(), Level::kAmber);
+    bar.setValue(0.120);
+    QCOMPARE(bar.level(), Level::kRed);
   }
 
   void theKeyMapCoversTaskJointsTriggersAndButtons() {
