@@ -571,7 +571,9 @@ void Workflow::finishArea() {
   ++model_version_;  // the confidence model changed (and, re-teaching, the map was dropped)
   const TrainingArea& created = areas_[static_cast<std::size_t>(index)];
   std::ostringstream detail;
-  detail << created.name << ": " << created.X.cols() << " samples, centre (" << created.centre.transpose() << ") m";
+  detail << std::fixed << std::setprecision(3) << created.name << ": " << created.X.cols()
+         << (created.X.cols() == 1 ? " sample" : " samples") << ", centre (" << created.centre.x() << ", "
+         << created.centre.y() << ", " << created.centre.z() << ") m";
   emit(WorkflowEvent::Kind::kAreaCreated, created.name, detail.str(), index);
 }
 
@@ -677,8 +679,11 @@ void Workflow::collectLearning() {
   // OS-ELM: keep learning online from the refit on.
   if (result->online) online_ = std::move(result->online);
   std::ostringstream detail;
-  detail << toString(options_.learner) << " from " << areas_.size() << " areas, " << result->samples
-         << " samples in " << result->seconds << " s";
+  // What a person reads: milliseconds to a tenth, seconds to a hundredth.
+  detail << toString(options_.learner) << " from " << areas_.size() << (areas_.size() == 1 ? " area, " : " areas, ")
+         << result->samples << (result->samples == 1 ? " sample" : " samples") << " in " << std::fixed
+         << (result->seconds < 1.0 ? std::setprecision(1) : std::setprecision(2))
+         << (result->seconds < 1.0 ? 1000.0 * result->seconds : result->seconds) << (result->seconds < 1.0 ? " ms" : " s");
   emit(WorkflowEvent::Kind::kModelLearned, toString(options_.learner), detail.str());
   checks_ = std::move(result->checks);
   for (const auto& check : checks_) {

@@ -35,6 +35,10 @@ namespace {
 constexpr std::uintmax_t kMaxUrdfBytes = 64ULL * 1024 * 1024;
 // Far beyond any real arm; keeps absurd descriptions from exhausting memory in later stages.
 constexpr std::size_t kMaxLinks = 10000;
+// Beyond these a description is not of a robot arm (or is in millimetres): its numbers would
+// fill the joint panel and put the arm out of every view.
+constexpr double kLongestJointOffset = 100.0;  // [m] joint origin from its parent, prismatic travel
+constexpr double kWidestJointTurn = 1000.0;    // [rad] revolute limits (159 turns)
 
 // urdfdom reports parse errors through console_bridge; keep the first error as our reason and
 // keep the library from printing anything itself.
@@ -440,6 +444,11 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
   }
   console_bridge::useOutputHandler(previous);
   if (!urdf_model) {
+    // TinyXML calls a document without any element "empty", also when it holds text.
+    if (collector.first_error.find("Error document empty") != std::string::npos &&
+        xml.find_first_not_of(" \t\r\n") != std::string::npos) {
+      throw InputError("invalid URDF: no XML element in the file (a URDF is XML with a <robot> element)");
+    }
     const std::string reason = collector.first_error.empty() ? "malformed XML" : oneLine(collector.first_error);
     // TinyXML's own errors ("Error reading Attributes", "Error parsing Element") name no place;
     // urdfdom's about what the document means do, by the joint or link.
@@ -488,6 +497,13 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
     const urdf::Joint& joint = *link.parent_joint;
     const Eigen::Isometry3d X_PJ = X_BL * toIsometry(joint.parent_to_joint_origin_transform);
     if (!isFinite(X_PJ)) throw InputError("joint '" + joint.name + "': non-finite origin");
+    const urdf::Vector3& offset = joint.parent_to_joint_origin_transform.position;
+    if (const double reach = std::sqrt(offset.x * offset.x + offset.y * offset.y + offset.z * offset.z); reach > kLongestJointOffset) {
+      std::ostringstream message;
+      message << "joint '" << joint.name << "': origin " << reach << " m from its parent link, beyond "
+              << kLongestJointOffset << " m (a URDF is in metres)";
+      throw InputError(message.str());
+    }
     // Side-branches of the previous chain link belong to the current body.
     foldSubtree(model.bodies_.back(), *path[i - 1], X_BL, &link, base_dir);
     if (joint.type == urdf::Joint::FIXED) {
@@ -523,6 +539,14 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
       limits.upper = joint.limits->upper;
       if (!std::isfinite(limits.lower) || !std::isfinite(limits.upper) || limits.lower > limits.upper) {
         throw InputError("joint '" + joint.name + "': expected finite limits with lower <= upper");
+      }
+      const bool sliding = model_joint.type == JointType::kPrismatic;
+      const double widest = sliding ? kLongestJointOffset : kWidestJointTurn;
+      if (std::max(std::abs(limits.lower), std::abs(limits.upper)) > widest) {
+        std::ostringstream message;
+        message << "joint '" << joint.name << "': limits [" << limits.lower << ", " << limits.upper << "] beyond ±" << widest
+                << (sliding ? " m" : " rad; a joint that turns without end is of type 'continuous'");
+        throw InputError(message.str());
       }
     }
     limits.soft_lower = limits.lower;

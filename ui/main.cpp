@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "app/backend_factory.hpp"
 #include "ui/live_teaching.hpp"
 #include "ui/main_window.hpp"
 #include "ui/review_window.hpp"
@@ -197,8 +198,22 @@ int main(int argc, char** argv) {
     scripted_keys = *parsed;
   }
 
+  // A mistyped backend is refused as any other bad option is: starting the simulation instead
+  // would let the operator believe the real arm is connected.
+  if (parser.isSet(backend)) {
+    try {
+      flexirob::app::parseBackendChoice(parser.value(backend).toStdString());
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "error: --backend: %s\n", error.what());
+      return 2;
+    }
+  }
+
   int exit_code = 0;
   if (parser.isSet(review)) {
+    if (parser.isSet(robot) || parser.isSet(scene) || parser.isSet(backend)) {
+      std::fprintf(stderr, "note: --review shows the recording's own robot and scene; --robot, --scene and --backend are not used\n");
+    }
     flexirob::ui::ReviewWindow review_window;
     if (!review_window.open(parser.value(review).toStdString())) {
       std::fprintf(stderr, "error: %s\n", qPrintable(review_window.errorString()));

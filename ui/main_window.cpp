@@ -15,6 +15,7 @@
 #include <QLabel>
 #include <QMenuBar>
 #include <QMessageBox>
+#include <QScreen>
 #include <QScrollArea>
 #include <QSettings>
 #include <QStandardPaths>
@@ -165,7 +166,9 @@ MainWindow::MainWindow(const std::string& robot, const std::string& scene, const
   loadScene(scene);
   // Without an explicit robot, the robot the scene was made for.
   loadRobot(robot.empty() ? (scene_.robot.empty() ? std::string("lwr4") : scene_.robot) : robot);
-  resize(1280, 800);
+  // 1280 x 800, or what the screen has room for (a small screen keeps the window whole).
+  const QRect room = screen() != nullptr ? screen()->availableGeometry() : QRect(0, 0, 1280, 800);
+  resize(std::min(1280, room.width()), std::min(800, room.height()));
   if (options_.restore_layout) {
     QSettings settings;
     restoreGeometry(settings.value(QStringLiteral("window/geometry")).toByteArray());
@@ -263,7 +266,7 @@ void MainWindow::buildDocks() {
   // Live plots (issue #7 item 7): task error, joints against their limits, the control cycle.
   plot_panel_ = new PlotPanel;
   plot_panel_->setOrientation(Qt::Horizontal);
-  plot_panel_->setMinimumHeight(230);
+  plot_panel_->setMinimumHeight(150);
   auto* plot_dock = new QDockWidget(tr("Plots"), this);
   plot_dock->setObjectName(QStringLiteral("plots_dock"));
   plot_dock->setWidget(plot_panel_);

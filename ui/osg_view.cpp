@@ -18,7 +18,7 @@ namespace flexirob::ui {
 
 OsgView::OsgView(QWidget* parent)
     : QWidget(parent), viewer_(new osgViewer::Viewer), manipulator_(new osgGA::OrbitManipulator) {
-  setMinimumSize(320, 240);
+  setMinimumSize(320, 200);
   // Every pixel comes from the frame: Qt need not clear behind it.
   setAttribute(Qt::WA_OpaquePaintEvent);
   setFocusPolicy(Qt::StrongFocus);

@@ -50,7 +50,7 @@ TimePlot::TimePlot(const QString& title, const QString& value_label, QWidget* pa
   chart_->legend()->markers(cursor_).front()->setVisible(false);
   setChart(chart_);
   setRenderHint(QPainter::Antialiasing, false);  // thousands of points stay cheap to draw
-  setMinimumHeight(140);
+  setMinimumHeight(120);
   setTimeRange(0.0, 1.0);
   value_axis_->setRange(0.0, 1.0);
 }

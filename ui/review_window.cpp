@@ -12,6 +12,7 @@
 #include <QPainter>
 #include <QPushButton>
 #include <QSplitter>
+#include <QScreen>
 #include <QStatusBar>
 #include <QTimer>
 #include <QVBoxLayout>
@@ -249,7 +250,8 @@ ReviewWindow::ReviewWindow(QWidget* parent)
     updateConfidence(true);
     view_->requestFrame();
   });
-  resize(1200, 760);
+  const QRect room = screen() != nullptr ? screen()->availableGeometry() : QRect(0, 0, 1200, 760);
+  resize(std::min(1200, room.width()), std::min(760, room.height()));
   statusBar()->showMessage(QStringLiteral("Open a session recording"));
 }
 

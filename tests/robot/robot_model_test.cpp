@@ -268,6 +268,23 @@ INSTANTIATE_TEST_SUITE_P(
         BrokenUrdf{"malformed XML", "<robot name='x'><link name='a'>", "", "invalid URDF"},
         BrokenUrdf{"not XML", std::string("\x00\x01\x02garbage", 10), "", "invalid URDF"},
         BrokenUrdf{"empty file", "", "", "invalid URDF"},
+        BrokenUrdf{"plain text", "this is a robot\n", "", "no XML element in the file"},
+        BrokenUrdf{"a link a kilometre off",
+                   "<robot name='x'><link name='a'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/>"
+                   "<origin xyz='0 0 1000'/><axis xyz='0 0 1'/></joint><link name='b'/></robot>",
+                   "", "joint 'j': origin 1000 m from its parent link, beyond 100 m"},
+        BrokenUrdf{"a link in millimetres",
+                   "<robot name='x'><link name='a'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/>"
+                   "<origin xyz='0 0 310'/><axis xyz='0 0 1'/></joint><link name='b'/></robot>",
+                   "", "(a URDF is in metres)"},
+        BrokenUrdf{"revolute limits of 1e300 rad",
+                   "<robot name='x'><link name='a'/><joint name='j' type='revolute'><parent link='a'/><child link='b'/>"
+                   "<axis xyz='0 0 1'/><limit lower='-1e300' upper='1e300' velocity='1' effort='1'/></joint><link name='b'/></robot>",
+                   "", "beyond ±1000 rad; a joint that turns without end is of type 'continuous'"},
+        BrokenUrdf{"a slide a kilometre long",
+                   "<robot name='x'><link name='a'/><joint name='j' type='prismatic'><parent link='a'/><child link='b'/>"
+                   "<axis xyz='0 0 1'/><limit lower='0' upper='1000' velocity='1' effort='1'/></joint><link name='b'/></robot>",
+                   "", "limits [0, 1000] beyond ±100 m"},
         BrokenUrdf{"missing tip link", twoJointArm(), "nonexistent", "tip link 'nonexistent'"},
         BrokenUrdf{"joint to a missing link",
                    "<robot name='x'><link name='a'/><joint name='j' type='revolute'><parent link='a'/>"
