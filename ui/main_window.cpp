@@ -444,7 +444,7 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
   joint_panel_->setReadOnly(true);  // the panel mirrors the live arm; the backend owns the posture
   kinematics_->update(q);
   world_.robot()->setPosture(*kinematics_);
-  view_->setHomeCamera(world_.defaultCamera(static_cast<double>(view_->width()) / std::max(1, view_->height())));
+  frameView();
   for (QAction* action : robot_menu_->actions()) {
     action->setChecked(action->data().toString().toStdString() == name_or_path);
   }
@@ -488,13 +488,21 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
     return false;
   }
   clearProblem(Problem::kScene);
+  // What the CLI notes about a scene (places tens of metres away: a scene in millimetres?).
+  QStringList notes;
+  for (const std::string& note : robot::sceneNotes(scene_)) notes << tr("note: %1").arg(QString::fromStdString(note));
+  if (notes.isEmpty()) {
+    clearProblem(Problem::kSceneNotes);
+  } else {
+    reportProblem(Problem::kSceneNotes, notes.join(QLatin1Char('\n')));
+  }
   if (model_) {
     const Eigen::VectorXd home = shownHomePosture(*model_, scene_);
     joint_panel_->setPosture(home);
     kinematics_->update(home);
     world_.robot()->setPosture(*kinematics_);
   }
-  view_->setHomeCamera(world_.defaultCamera(static_cast<double>(view_->width()) / std::max(1, view_->height())));
+  frameView();
   const std::string shown = name_or_path.empty() ? std::string("empty") : name_or_path;
   for (QAction* action : scene_menu_->actions()) action->setChecked(action->data().toString().toStdString() == shown);
   resetParameters();
@@ -507,6 +515,19 @@ void MainWindow::refuseScene(const std::string& name_or_path, const std::excepti
   const QString shown = scene_.name.empty() ? QStringLiteral("empty") : QString::fromStdString(scene_.name);
   reportProblem(Problem::kScene, tr("Cannot load scene '%1': %2; the scene stays '%3'")
                                      .arg(QString::fromStdString(name_or_path), QString::fromUtf8(error.what()), shown));
+}
+
+void MainWindow::frameView() {
+  const render::CameraPose camera = world_.defaultCamera(static_cast<double>(view_->width()) / std::max(1, view_->height()));
+  view_->setHomeCamera(camera);
+  // Walls all round and a roof: no side shows the arm, so what hides it is drawn see-through.
+  const std::vector<std::string> revealed = world_.revealRobot(camera);
+  if (!revealed.empty()) {
+    QStringList names;
+    for (const std::string& name : revealed) names << QString::fromStdString(name);
+    statusBar()->showMessage(tr("Drawn see-through, as they hide the robot from every side: %1").arg(names.join(QStringLiteral(", "))),
+                             15000);
+  }
 }
 
 bool MainWindow::setBackend(const std::string& choice) {

@@ -160,10 +160,13 @@ class MainWindow : public QMainWindow {
   void reportError(const QString& what, const std::exception& error);
   /// What keeps the window from doing what was asked: a robot, a scene or a backend that could
   /// not be used. Shown whole in the view until that kind of thing is next loaded.
-  enum class Problem { kRobot, kScene, kPostures, kBackend };
+  enum class Problem { kRobot, kScene, kSceneNotes, kPostures, kBackend };
   void reportProblem(Problem kind, const QString& message);
   void clearProblem(Problem kind);
   void refuseScene(const std::string& name_or_path, const std::exception& error);
+  /// Points the home camera at the robot from a side obstacles do not hide it from, or draws
+  /// those that hide it from every side see-through.
+  void frameView();
   /// Stops the live robot and closes its session (before model or scene change).
   void stopLive();
   /// Builds and starts the live robot for the current model, scene, backend and parameters.
