@@ -172,7 +172,10 @@ SessionReader::SessionReader(const std::filesystem::path& file) : file_(file), i
     // Read the last state row once: a file cut inside its b-tree fails here, not in review.
     if (state_count_ > 0) stateAt(end_time_);
   } catch (const SqliteError& e) {
-    throw InputError("session file " + name + " cannot be read: " + e.what());
+    // SQLite's message may quote the damaged bytes or the statement that met them.
+    const bool damaged = e.code() == SQLITE_CORRUPT || e.code() == SQLITE_NOTADB || e.code() == SQLITE_ERROR;
+    throw InputError("session file " + name + " cannot be read" + (damaged ? " (damaged, or not a session)" : "") + ": " +
+                     printable(e.what(), 200));
   }
 }
 

@@ -263,10 +263,25 @@ ReviewWindow::~ReviewWindow() {
 bool ReviewWindow::open(const std::filesystem::path& file) {
   try {
     auto reader = std::make_unique<app::SessionReader>(file);
-    auto model = std::make_unique<robot::RobotModel>(recordedRobot(reader->metadata()));
+    const std::string name = file.filename().string();
+    std::unique_ptr<robot::RobotModel> model;
+    try {
+      model = std::make_unique<robot::RobotModel>(recordedRobot(reader->metadata()));
+    } catch (const InputError& error) {
+      throw InputError("the robot stored in " + name + ": " + error.what());
+    }
     robot::Scene scene;
     if (!reader->metadata().scene_text.empty()) {
-      scene = robot::parseScene(reader->metadata().scene_text, resourceDir() / "scenes", file.filename().string());
+      // Lines are counted in the stored scene text, not in the session file.
+      scene = robot::parseScene(reader->metadata().scene_text, resourceDir() / "scenes", "the scene stored in " + name);
+    }
+    // States of another arm would be replayed as nothing at all.
+    if (reader->stateCount() > 0) {
+      if (const std::optional<app::StateRecord> first = reader->stateAt(reader->startTime());
+          first && first->dof != model->dof()) {
+        throw InputError("session file " + name + ": its states hold " + std::to_string(first->dof) +
+                         " joint values, its robot '" + model->name() + "' has " + std::to_string(model->dof()) + " joints");
+      }
     }
     pause();
     world_->setRobot(*model);
@@ -366,7 +381,11 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     setTime(t0);
     return true;
   } catch (const std::exception& error) {
-    error_ = QString::fromUtf8(error.what());
+    // Every reason names the file (SQLite's own, read later, do not).
+    const std::string what = error.what();
+    const std::string name = file.filename().string();
+    error_ = QString::fromUtf8(what.find(name) == std::string::npos ? ("session file " + file.string() + ": " + printable(what, 300)).c_str()
+                                                                    : printable(what, 300).c_str());
     statusBar()->showMessage(QStringLiteral("cannot open %1: %2").arg(QString::fromStdString(file.string()), error_));
     return false;
   }

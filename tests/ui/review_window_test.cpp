@@ -35,11 +35,12 @@ Eigen::VectorXd postureAt(const robot::RobotModel& model, double t) {
 
 // A recording as the workflow writes one: stages with sub-stages, triggers and buttons, a
 // training area with samples, a teach-in trajectory and the robot's states at 1 kHz.
-void writeRecording(const std::filesystem::path& file) {
+// `robot_name` names the robot in the metadata (the states are the LWR IV's in any case).
+void writeRecording(const std::filesystem::path& file, const std::string& robot_name = "lwr4") {
   const auto path = resolveRobotPath("lwr4");
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(path);
   app::SessionMetadata meta;
-  meta.robot_name = "lwr4";
+  meta.robot_name = robot_name;
   std::ostringstream urdf;
   urdf << std::ifstream(path).rdbuf();
   meta.robot_urdf = urdf.str();
@@ -224,9 +225,21 @@ class ReviewWindowTest : public QObject {
     const auto junk = std::filesystem::path(dir_.path().toStdString()) / "junk.db";
     std::ofstream(junk) << "not a database";
     QVERIFY(!window.open(junk));
-    QVERIFY(!window.errorString().isEmpty());
+    QVERIFY(window.errorString().contains(QStringLiteral("junk.db")));
     QVERIFY(window.isOpen());
     QCOMPARE(window.reader()->file(), file_);
+  }
+
+  // The states of a 7-joint arm under the name of the 9-joint one: refused, not replayed as a
+  // robot that never moves.
+  void refusesARecordingWhoseStatesAreOfAnotherArm() {
+    const auto other = std::filesystem::path(dir_.path().toStdString()) / "named_arm9.db";
+    writeRecording(other, "arm9");
+    ui::ReviewWindow window;
+    QVERIFY(!window.open(other));
+    QVERIFY2(window.errorString().contains(QStringLiteral("its states hold 7 joint values, its robot")),
+             qPrintable(window.errorString()));
+    QVERIFY(window.errorString().contains(QStringLiteral("has 9 joints")));
   }
 
  private:
