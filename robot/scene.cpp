@@ -418,7 +418,11 @@ class SceneReader {
   std::string text(const Node& node, const std::string& path, std::size_t max_length) {
     visit(node, path);
     if (!node.IsScalar()) fail(node, path, "expected text, got " + kind(node));
-    if (node.Scalar().size() > max_length) fail(node, path, "text longer than " + std::to_string(max_length) + " characters");
+    // Characters, not bytes: "ä" is two bytes of UTF-8 (continuation bytes are 10xxxxxx).
+    const std::string& scalar = node.Scalar();
+    const auto characters = static_cast<std::size_t>(
+        std::count_if(scalar.begin(), scalar.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0U) != 0x80U; }));
+    if (characters > max_length) fail(node, path, "text longer than " + std::to_string(max_length) + " characters");
     return node.Scalar();
   }
 

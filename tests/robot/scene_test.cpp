@@ -586,6 +586,14 @@ TEST_F(SceneFileTest, RefusesValuesOfTheWrongType) {
   }
 }
 
+TEST_F(SceneFileTest, CountsTheLengthOfANameInCharactersNotBytes) {
+  std::string umlauts;
+  for (int i = 0; i < 200; ++i) umlauts += "\u00e4";  // 400 bytes of UTF-8
+  EXPECT_EQ(loadSceneFile(write("umlauts.yaml", "name: \"" + umlauts + "\"\n")).name, umlauts);
+  expectOneLineNamingFile(refusal("name: \"" + umlauts + "\u00e4\"\n"), "broken.yaml:1");
+  EXPECT_NE(refusal("name: " + std::string(201, 'a') + "\n").find("text longer than 200 characters"), std::string::npos);
+}
+
 TEST_F(SceneFileTest, RefusesNonFiniteNumbers) {
   for (const char* value : {".nan", ".NaN", ".inf", "-.inf", "nan", "inf", "1e999", "-1e400"}) {
     SCOPED_TRACE(value);
