@@ -195,8 +195,10 @@ void MainWindow::reportError(const QString& what, const std::exception& error) {
 }
 
 void MainWindow::reportProblem(Problem kind, const QString& message) {
+  const bool fresh = problems_.count(kind) == 0;
   problems_[kind] = message;
-  qWarning("%s", qPrintable(message));
+  // The late control loop is re-judged every two seconds; the log says when it starts.
+  if (fresh || kind != Problem::kDeadlines) qWarning("%s", qPrintable(message));
   QStringList lines;
   for (const auto& [which, text] : problems_) lines << text;
   problem_label_->setText(lines.join(QStringLiteral("\n")));
@@ -383,6 +385,8 @@ void MainWindow::startLive() {
     return;
   }
   clearProblem(Problem::kRobot);
+  clearProblem(Problem::kDeadlines);
+  deadline_clock_.invalidate();
   startRecording();
   live_->start();
   last_warning_.clear();
@@ -895,13 +899,43 @@ void MainWindow::updateStatus() {
   } else {
     text = tr("no robot   ");
   }
-  text += tr("scene %1").arg(QString::fromStdString(scene_.name.empty() ? std::string("empty") : scene_.name));
+  // A long scene name would push the live fields off the bar.
+  const QString scene_name = QString::fromStdString(scene_.name.empty() ? std::string("empty") : scene_.name);
+  text += tr("scene %1").arg(scene_name.size() > 40 ? scene_name.left(39) + QStringLiteral("…") : scene_name);
   if (live_) {
     const app::CycleStatistics stats = live_->statistics();
     text += tr("   control %1 cycles, %2 late").arg(stats.cycles).arg(stats.deadline_misses);
+    watchDeadlines(stats);
   }
   if (fps_ > 0.0) text += tr("   %1 fps").arg(fps_, 0, 'f', 1);
   status_label_->setText(text);
+}
+
+void MainWindow::watchDeadlines(const app::CycleStatistics& stats) {
+  // Judged over windows of two seconds: a late cycle now and then is a busy machine, most
+  // cycles late is an arm that no longer moves in real time (a scene of thousands of obstacles).
+  if (!deadline_clock_.isValid() || stats.cycles < deadline_cycles_) {
+    deadline_clock_.start();
+    deadline_cycles_ = stats.cycles;
+    deadline_misses_ = stats.deadline_misses;
+    return;
+  }
+  if (deadline_clock_.elapsed() < 2000) return;
+  const std::uint64_t cycles = stats.cycles - deadline_cycles_;
+  const std::uint64_t misses = stats.deadline_misses - deadline_misses_;
+  if (cycles >= 100 && 2 * misses > cycles) {
+    reportProblem(Problem::kDeadlines,
+                  tr("The control loop was late in %1 % of its last %2 cycles (a cycle took up to %3 ms): the robot does not "
+                     "move in real time. A scene of many obstacles or a busy machine does this.")
+                      .arg(std::lround(100.0 * static_cast<double>(misses) / static_cast<double>(cycles)))
+                      .arg(cycles)
+                      .arg(stats.max_compute_us / 1000.0, 0, 'f', 1));
+  } else {
+    clearProblem(Problem::kDeadlines);
+  }
+  deadline_clock_.start();
+  deadline_cycles_ = stats.cycles;
+  deadline_misses_ = stats.deadline_misses;
 }
 
 void MainWindow::buildMenus() {

@@ -160,13 +160,15 @@ class MainWindow : public QMainWindow {
   void reportError(const QString& what, const std::exception& error);
   /// What keeps the window from doing what was asked: a robot, a scene or a backend that could
   /// not be used. Shown whole in the view until that kind of thing is next loaded.
-  enum class Problem { kRobot, kScene, kSceneNotes, kPostures, kBackend };
+  enum class Problem { kRobot, kScene, kSceneNotes, kPostures, kBackend, kDeadlines };
   void reportProblem(Problem kind, const QString& message);
   void clearProblem(Problem kind);
   void refuseScene(const std::string& name_or_path, const std::exception& error);
   /// Points the home camera at the robot from a side obstacles do not hide it from, or draws
   /// those that hide it from every side see-through.
   void frameView();
+  /// Says in the view when most control cycles of the last seconds were late.
+  void watchDeadlines(const app::CycleStatistics& stats);
   /// Stops the live robot and closes its session (before model or scene change).
   void stopLive();
   /// Builds and starts the live robot for the current model, scene, backend and parameters.
@@ -228,6 +230,8 @@ class MainWindow : public QMainWindow {
   bool keyboard_mode_ = false;
   QElapsedTimer key_clock_;
   QString last_warning_;
+  QElapsedTimer deadline_clock_;
+  std::uint64_t deadline_cycles_ = 0, deadline_misses_ = 0;
   QElapsedTimer fps_clock_;
   long fps_frames_ = 0;
   QElapsedTimer run_clock_;  // since the first mirrored frame
