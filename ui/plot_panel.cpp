@@ -10,6 +10,7 @@
 #include <QVBoxLayout>
 
 #include <algorithm>
+#include <cmath>
 
 namespace flexirob::ui {
 
@@ -78,15 +79,45 @@ void TimePlot::hideFromLegend(int series) {
 
 void TimePlot::setSeriesName(int series, const QString& name) { series_.at(static_cast<std::size_t>(series))->setName(name); }
 
+double niceTickInterval(double span, int intervals) {
+  if (!(span > 0.0) || !std::isfinite(span) || intervals < 1) return 0.0;
+  const double raw = span / intervals;
+  const double decade = std::pow(10.0, std::floor(std::log10(raw)));
+  // The step whose count of intervals comes nearest the wish.
+  double best = decade;
+  for (const double factor : {1.0, 2.0, 5.0, 10.0}) {
+    const double step = factor * decade;
+    if (std::abs(span / step - intervals) < std::abs(span / best - intervals)) best = step;
+  }
+  return best;
+}
+
+namespace {
+// Ticks at round values (multiples of a 1-2-5 interval from zero), wherever the range ends.
+void roundTicks(QValueAxis* axis) {
+  const double interval = niceTickInterval(axis->max() - axis->min());
+  if (interval <= 0.0) return;
+  axis->setTickType(QValueAxis::TicksDynamic);
+  axis->setTickAnchor(0.0);
+  axis->setTickInterval(interval);
+}
+}  // namespace
+
 void TimePlot::setTimeRange(double t0, double t1) {
   if (!(t1 > t0)) t1 = t0 + 1e-3;
   time_axis_->setRange(t0, t1);
+  roundTicks(time_axis_);
+  // As many decimals as the interval needs: 0.5 s ticks read 0.5, 1.0; 2 s ticks read 2, 4.
+  const double interval = niceTickInterval(t1 - t0);
+  const int decimals = interval > 0.0 ? std::clamp(static_cast<int>(std::ceil(-std::log10(interval) - 1e-9)), 0, 3) : 1;
+  time_axis_->setLabelFormat(QStringLiteral("%.%1f").arg(decimals));
   updateCursorLine();
 }
 
 void TimePlot::setValueRange(double lower, double upper) {
   fixed_values_ = true;
   value_axis_->setRange(lower, upper);
+  roundTicks(value_axis_);
   updateCursorLine();
 }
 
@@ -100,10 +131,12 @@ void TimePlot::autoscale() {
     }
   }
   if (!(upper >= lower)) return;
+  if (upper - lower < minimum_span_) upper = lower + minimum_span_;
   const double margin = std::max(0.05 * (upper - lower), 1e-9 + 1e-3 * std::abs(upper));
   // A quantity that cannot be negative (an error norm, a compute time) is read against zero:
   // its axis starts there, never below, and not above either where all its values are large.
   value_axis_->setRange(lower >= 0.0 ? 0.0 : lower - margin, upper + margin);
+  roundTicks(value_axis_);
   updateCursorLine();
 }
 
@@ -141,6 +174,7 @@ PlotPanel::PlotPanel(QWidget* parent) : QWidget(parent) {
   layout->setContentsMargins(0, 0, 0, 0);
   task_error_ = new TimePlot(QStringLiteral("Task error"), QStringLiteral("[m]"), this);
   task_error_->addSeries(QStringLiteral("|x - x_des|"), QColor(0, 114, 178));
+  task_error_->setMinimumValueSpan(0.001);  // [m]
   // Joint values scaled to their hard limits: every joint shares one axis, the limits are the
   // lines at 0 and 1 (Sect. 4.3.4).
   joints_ = new TimePlot(QStringLiteral("Joints within their limits (0 = lower, 1 = upper)"), QString(), this);
@@ -148,6 +182,7 @@ PlotPanel::PlotPanel(QWidget* parent) : QWidget(parent) {
   cycles_ = new TimePlot(QStringLiteral("Control cycle"), QStringLiteral("[µs]"), this);
   compute_series_ = cycles_->addSeries(QStringLiteral("compute"), QColor(0, 158, 115));
   max_compute_series_ = cycles_->addSeries(QStringLiteral("max compute"), QColor(213, 94, 0), Qt::DotLine);
+  cycles_->setMinimumValueSpan(10.0);  // [µs]
   for (TimePlot* plot : {task_error_, joints_, cycles_}) {
     layout->addWidget(plot, 1);
     connect(plot, &TimePlot::cursorRequested, this, [this](double time) {

@@ -53,6 +53,9 @@ class TimePlot : public QChartView {
   /// Fixed value range; without it, the range follows the data (with 5 % margins; data that
   /// are all non-negative, such as errors and times, keep the axis at zero and above).
   void setValueRange(double lower, double upper);
+  /// The smallest span a range that follows the data shows (in the value's unit): a task error
+  /// of zero reads on a scale of millimetres, not of nanometres.
+  void setMinimumValueSpan(double span) { minimum_span_ = span; }
   /// The value axis' current range (lower, upper).
   std::pair<double, double> valueRange() const;
   void setCursorTime(double time);
@@ -78,7 +81,12 @@ class TimePlot : public QChartView {
   std::vector<QLineSeries*> series_;
   double cursor_time_ = 0.0;
   bool fixed_values_ = false;
+  double minimum_span_ = 0.0;
 };
+
+/// The tick interval of 1, 2 or 5 times a power of ten that divides `span` into nearest
+/// `intervals` parts (0 for an empty or non-finite span).
+double niceTickInterval(double span, int intervals = 4);
 
 class PlotPanel : public QWidget {
   Q_OBJECT

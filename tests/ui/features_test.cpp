@@ -13,6 +13,7 @@
 #include <QStandardPaths>
 #include <QStatusBar>
 #include <QTemporaryDir>
+#include <limits>
 #include <QTest>
 
 #include <cmath>
@@ -146,6 +147,21 @@ class FeaturesTest : public QObject {
     QVERIFY(grid.values(0, 0) < 0.05);
     // No area: no slice.
     QVERIFY(flexirob::ui::confidenceSlices(flexirob::learning::ConfidenceModel(), settings).empty());
+  }
+
+  void plotTicksFallOnRoundNumbers() {
+    using flexirob::ui::niceTickInterval;
+    QCOMPARE(niceTickInterval(9.0), 2.0);        // 0, 2, 4, 6, 8 s
+    QCOMPARE(niceTickInterval(1.1), 0.2);        // -0.05 ... 1.05 of the joints
+    QCOMPARE(niceTickInterval(0.00105), 0.0002);  // a task error of about a millimetre
+    QCOMPARE(niceTickInterval(58300.0), 20000.0);
+    QCOMPARE(niceTickInterval(0.0), 0.0);
+    QCOMPARE(niceTickInterval(std::numeric_limits<double>::infinity()), 0.0);
+    flexirob::ui::TimePlot plot(QStringLiteral("t"), QStringLiteral("[m]"));
+    plot.addSeries(QStringLiteral("zero"), Qt::blue);
+    plot.setMinimumValueSpan(0.001);
+    plot.setSeriesData(0, {QPointF(0.0, 0.0), QPointF(1.0, 0.0)});
+    QVERIFY(plot.valueRange().second >= 0.001);  // a millimetre scale, not one of nanometres
   }
 
   void thePlotsFollowTheLiveArmAndTheControlCycle() {
