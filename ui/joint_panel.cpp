@@ -36,7 +36,7 @@ LimitSlider::LimitSlider(const robot::JointLimits& limits, QWidget* parent) : QS
   soft_upper_ = toSteps(finiteOr(limits.soft_upper, upper));
   setSingleStep(toSteps(std::numbers::pi / 180.0));
   setPageStep(toSteps(10.0 * std::numbers::pi / 180.0));
-  setMinimumWidth(160);
+  setMinimumWidth(100);
 }
 
 void LimitSlider::setValueSi(double value) { setValue(toSteps(value)); }
@@ -135,7 +135,11 @@ void JointPanel::setRobot(const robot::RobotModel& model, const Eigen::VectorXd&
   for (int j = 0; j < model.dof(); ++j) {
     const robot::Joint& joint = model.joints()[static_cast<std::size_t>(j)];
     const bool prismatic = joint.type == robot::JointType::kPrismatic;
-    auto* name = new QLabel(QString::fromStdString(joint.name), this);
+    // A long joint name is cut (whole in the tooltip): the row keeps room for its bar.
+    const QString full_name = QString::fromStdString(joint.name);
+    auto* name = new QLabel(this);
+    name->setText(name->fontMetrics().elidedText(full_name, Qt::ElideRight, 110));
+    name->setToolTip(full_name);
     auto* slider = new LimitSlider(joint.limits, this);
     auto* value = new QLabel(this);
     value->setMinimumWidth(62);

@@ -204,7 +204,13 @@ void PlotPanel::setJoints(const std::vector<std::string>& names, const Eigen::Ve
   fresh->addSeries(QStringLiteral("limits"), QColor(200, 30, 30), Qt::DashLine, 1.0);
   fresh->addSeries(QString(), QColor(200, 30, 30), Qt::DashLine, 1.0);
   fresh->hideFromLegend(1);  // one legend entry for both limit lines
-  for (std::size_t j = 0; j < names.size(); ++j) fresh->addSeries(QString::fromStdString(names[j]), jointColor(static_cast<int>(j)));
+  // Legend entries share one row of about 50 px each: names longer than the LWR IV's "A1"
+  // would be cut to "…", so then every entry is the joint's number.
+  const bool short_names = std::all_of(names.begin(), names.end(), [](const std::string& name) { return name.size() <= 4; });
+  for (std::size_t j = 0; j < names.size(); ++j) {
+    fresh->addSeries(short_names ? QString::fromStdString(names[j]) : QStringLiteral("q%1").arg(j + 1),
+                     jointColor(static_cast<int>(j)));
+  }
   if (names.size() > 7) {
     // The legend does not wrap: beyond seven joints its labels would be elided to nothing.
     QFont font = fresh->chart()->legend()->font();
