@@ -386,6 +386,8 @@ void MainWindow::startLive() {
   }
   clearProblem(Problem::kRobot);
   clearProblem(Problem::kDeadlines);
+  clearProblem(Problem::kStartContact);
+  start_checked_ = false;
   deadline_clock_.invalidate();
   startRecording();
   live_->start();
@@ -609,6 +611,23 @@ void MainWindow::mirror() {
   if (s.failed) {
     const auto end = std::find(s.failure.begin(), s.failure.end(), '\0');
     last_warning_ = tr("The robot stopped: %1").arg(QString::fromStdString(std::string(s.failure.begin(), end)));
+  }
+  if (!start_checked_ && s.cycle > 0 && s.dof == model_->dof()) {
+    // An arm that starts in contact: the scene left it no free posture near the middle of its
+    // limits (or its home posture touches something); the red links alone would not say why.
+    start_checked_ = true;
+    if (s.contact_link_count > 0) {
+      QStringList links;
+      for (int i = 0; i < s.contact_link_count && i < app::kMaxContactBodies; ++i) {
+        if (s.contact_links[static_cast<std::size_t>(i)] != nullptr) links << QString::fromUtf8(s.contact_links[static_cast<std::size_t>(i)]);
+      }
+      reportProblem(Problem::kStartContact,
+                    live_scene_.home_posture
+                        ? tr("The arm starts in contact (%1): the scene's home_posture touches the scene").arg(links.join(QStringLiteral(", ")))
+                        : tr("The arm starts in contact (%1): no posture near the middle of its limits keeps clear of the scene; "
+                             "give the scene a collision-free home_posture")
+                              .arg(links.join(QStringLiteral(", "))));
+    }
   }
   if (s.cycle != shown_cycle_ && s.dof == model_->dof()) {
     recordItm(s, false);

@@ -160,7 +160,7 @@ class MainWindow : public QMainWindow {
   void reportError(const QString& what, const std::exception& error);
   /// What keeps the window from doing what was asked: a robot, a scene or a backend that could
   /// not be used. Shown whole in the view until that kind of thing is next loaded.
-  enum class Problem { kRobot, kScene, kSceneNotes, kPostures, kBackend, kDeadlines };
+  enum class Problem { kRobot, kScene, kSceneNotes, kPostures, kStartContact, kBackend, kDeadlines };
   void reportProblem(Problem kind, const QString& message);
   void clearProblem(Problem kind);
   void refuseScene(const std::string& name_or_path, const std::exception& error);
@@ -232,6 +232,7 @@ class MainWindow : public QMainWindow {
   QString last_warning_;
   QElapsedTimer deadline_clock_;
   std::uint64_t deadline_cycles_ = 0, deadline_misses_ = 0;
+  bool start_checked_ = false;  ///< whether the live arm's first state was checked for contacts
   QElapsedTimer fps_clock_;
   long fps_frames_ = 0;
   QElapsedTimer run_clock_;  // since the first mirrored frame
