@@ -119,7 +119,8 @@ void ConfidenceColourBar::paintEvent(QPaintEvent* /*event*/) {
   painter.setPen(QColor(136, 136, 136));
   painter.drawRect(rect().adjusted(0, 0, -1, -1));
   const QFontMetrics metrics(font());
-  const int top = 8 + metrics.height();
+  // Room under the title for half the "1" label, which is centred on the bar's top.
+  const int top = 10 + metrics.height() + metrics.ascent() / 2;
   const int bottom = height() - 10;
   const QRect bar(10, top, 22, std::max(10, bottom - top));
   QLinearGradient gradient(bar.bottomLeft(), bar.topLeft());

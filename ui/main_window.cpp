@@ -870,6 +870,7 @@ void MainWindow::toggleKeyMap(bool visible) {
   key_map_label_->adjustSize();
   key_map_label_->move(12, std::max(0, view_->height() - key_map_label_->height() - 12));
   key_map_label_->raise();
+  placeViewLabels();
 }
 
 void MainWindow::keyReleaseEvent(QKeyEvent* event) {
@@ -1139,8 +1140,13 @@ QWidget* MainWindow::confidenceLegend() const { return confidence_legend_; }
 void MainWindow::placeViewLabels() {
   const bool legend = confidence_slices_ > 0 && overlays_->visible(render::OverlayLayer::kConfidence);
   if (legend != confidence_legend_->isVisible()) confidence_legend_->setVisible(legend);
-  const QPoint corner(std::max(0, view_->width() - confidence_legend_->width() - 12),
-                      std::max(0, view_->height() - confidence_legend_->height() - 12));
+  QPoint corner(std::max(0, view_->width() - confidence_legend_->width() - 12),
+               std::max(0, view_->height() - confidence_legend_->height() - 12));
+  // The key map (lower left) can be wide, the 9-DoF arm's above all: the colour bar then
+  // stands above it rather than behind it.
+  if (key_map_label_->isVisible() && key_map_label_->geometry().right() + 8 > corner.x()) {
+    corner.setY(std::max(0, key_map_label_->geometry().top() - confidence_legend_->height() - 8));
+  }
   if (confidence_legend_->pos() != corner) confidence_legend_->move(corner);
   // The problems under the banner, across the view at most 720 px wide, every line whole.
   if (problem_label_->isVisible()) {
