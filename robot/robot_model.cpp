@@ -12,6 +12,7 @@
 #include <map>
 #include <numbers>
 #include <set>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -201,6 +202,14 @@ fs::path resolveMeshUri(const std::string& uri, const fs::path& base_dir, const 
   throw InputError("link '" + link + "': mesh file '" + uri + "' not found" + looked);
 }
 
+// Where a URDF's meshes are looked for, and whether one that is not there refuses the URDF
+// (left_out null) or is left out and named in left_out (a recording reviewed on a machine
+// without the robot's mesh folder).
+struct MeshSource {
+  fs::path base_dir;
+  std::vector<std::string>* left_out = nullptr;
+};
+
 Geometry toGeometry(const urdf::GeometrySharedPtr& geometry, const urdf::Pose& origin,
                     const fs::path& base_dir, const std::string& link) {
   if (!geometry) throw InputError("link '" + link + "': a visual or collision element has no geometry");
@@ -242,11 +251,25 @@ Geometry toGeometry(const urdf::GeometrySharedPtr& geometry, const urdf::Pose& o
 }
 
 // Adds a link's own geometry and inertia to a body; X_BL is the link's pose in the body frame.
+std::optional<Geometry> geometryOf(const urdf::GeometrySharedPtr& geometry, const urdf::Pose& origin,
+                                   const MeshSource& meshes, const std::string& link) {
+  try {
+    return toGeometry(geometry, origin, meshes.base_dir, link);
+  } catch (const InputError& error) {
+    const bool mesh = geometry && geometry->type == urdf::Geometry::MESH;
+    if (!mesh || meshes.left_out == nullptr) throw;
+    meshes.left_out->push_back(error.what());
+    return std::nullopt;
+  }
+}
+
 void foldLinkInto(Body& body, const urdf::Link& link, const Eigen::Isometry3d& X_BL,
-                  const fs::path& base_dir) {
+                  const MeshSource& meshes) {
   for (const auto& visual : link.visual_array) {
     if (!visual) continue;
-    Geometry geometry = toGeometry(visual->geometry, visual->origin, base_dir, link.name);
+    std::optional<Geometry> found = geometryOf(visual->geometry, visual->origin, meshes, link.name);
+    if (!found) continue;
+    Geometry& geometry = *found;
     geometry.X_BG = X_BL * geometry.X_BG;
     if (visual->material) {
       const auto& c = visual->material->color;
@@ -256,7 +279,9 @@ void foldLinkInto(Body& body, const urdf::Link& link, const Eigen::Isometry3d& X
   }
   for (const auto& collision : link.collision_array) {
     if (!collision) continue;
-    Geometry geometry = toGeometry(collision->geometry, collision->origin, base_dir, link.name);
+    std::optional<Geometry> found = geometryOf(collision->geometry, collision->origin, meshes, link.name);
+    if (!found) continue;
+    Geometry& geometry = *found;
     geometry.X_BG = X_BL * geometry.X_BG;
     body.collisions.push_back(std::move(geometry));
   }
@@ -399,16 +424,16 @@ Eigen::Isometry3d heldJointMotion(const urdf::Joint& joint) {
 // links past a --tip inside the chain) held still, so that they are still drawn, weighed and
 // collided with instead of vanishing from the model.
 void foldSubtree(Body& body, const urdf::Link& link, const Eigen::Isometry3d& X_BL, const urdf::Link* skip,
-                 const fs::path& base_dir) {
+                 const MeshSource& meshes) {
   for (const auto& child : link.child_links) {
     if (child.get() == skip || !child->parent_joint) continue;
     const urdf::Joint& joint = *child->parent_joint;
     const Eigen::Isometry3d X_BC = X_BL * toIsometry(joint.parent_to_joint_origin_transform) * heldJointMotion(joint);
     if (!isFinite(X_BC)) throw InputError("joint '" + joint.name + "': non-finite origin");
-    foldLinkInto(body, *child, X_BC, base_dir);
+    foldLinkInto(body, *child, X_BC, meshes);
     body.folded_links.push_back(child->name);
     if (joint.type != urdf::Joint::FIXED) body.held_links.push_back(child->name);
-    foldSubtree(body, *child, X_BC, nullptr, base_dir);
+    foldSubtree(body, *child, X_BC, nullptr, meshes);
   }
 }
 
@@ -430,7 +455,8 @@ RobotModel RobotModel::fromUrdfFile(const fs::path& urdf_file, const std::string
 }
 
 RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& base_dir,
-                                      const std::string& tip_link) {
+                                      const std::string& tip_link, std::vector<std::string>* left_out_meshes) {
+  const MeshSource meshes{base_dir, left_out_meshes};
   if (xml.size() > kMaxUrdfBytes) throw InputError("URDF is larger than 64 MB");
   const std::size_t bad_tag_line = checkXmlShape(xml);
   ErrorCollector collector;
@@ -488,7 +514,7 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
   model.tip_link_ = tip;
   model.bodies_.emplace_back();
   model.bodies_.back().name = root->name;
-  foldLinkInto(model.bodies_.back(), *root, Eigen::Isometry3d::Identity(), base_dir);
+  foldLinkInto(model.bodies_.back(), *root, Eigen::Isometry3d::Identity(), meshes);
 
   // Walk down the chain. X_BL: pose of the current link in the current body frame.
   Eigen::Isometry3d X_BL = Eigen::Isometry3d::Identity();
@@ -505,10 +531,10 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
       throw InputError(message.str());
     }
     // Side-branches of the previous chain link belong to the current body.
-    foldSubtree(model.bodies_.back(), *path[i - 1], X_BL, &link, base_dir);
+    foldSubtree(model.bodies_.back(), *path[i - 1], X_BL, &link, meshes);
     if (joint.type == urdf::Joint::FIXED) {
       X_BL = X_PJ;
-      foldLinkInto(model.bodies_.back(), link, X_BL, base_dir);
+      foldLinkInto(model.bodies_.back(), link, X_BL, meshes);
       model.bodies_.back().folded_links.push_back(link.name);
       continue;
     }
@@ -585,10 +611,10 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
     model.bodies_.emplace_back();
     model.bodies_.back().name = link.name;
     X_BL = Eigen::Isometry3d::Identity();
-    foldLinkInto(model.bodies_.back(), link, X_BL, base_dir);
+    foldLinkInto(model.bodies_.back(), link, X_BL, meshes);
   }
   // What hangs off the tip (tools, sensors, links past a tip inside the chain) moves with the last body.
-  foldSubtree(model.bodies_.back(), *path.back(), X_BL, nullptr, base_dir);
+  foldSubtree(model.bodies_.back(), *path.back(), X_BL, nullptr, meshes);
   model.X_last_body_tip_ = X_BL;
   if (model.joints_.empty()) throw InputError("no movable joint between root '" + root->name + "' and tip '" + tip + "'");
   assumeInertiaOfMasslessBodies(model.bodies_, model.joints_, model.X_last_body_tip_);

@@ -81,9 +81,13 @@ class RobotModel {
   /// whose links give no mass gets kAssumedMass (Body::inertia_assumed).
   static RobotModel fromUrdfFile(const std::filesystem::path& urdf_file,
                                  const std::string& tip_link = "");
-  /// As fromUrdfFile; relative mesh URIs are resolved against base_dir.
+  /// As fromUrdfFile; relative mesh URIs are resolved against base_dir. With left_out_meshes,
+  /// a mesh file that is not found is left out (the visual or collision element with it) and
+  /// its reason appended there, instead of refusing the URDF: for reviewing a recording whose
+  /// robot's mesh folder is not on this machine.
   static RobotModel fromUrdfString(const std::string& xml, const std::filesystem::path& base_dir,
-                                   const std::string& tip_link = "");
+                                   const std::string& tip_link = "",
+                                   std::vector<std::string>* left_out_meshes = nullptr);
 
   const std::string& name() const { return name_; }
   const std::filesystem::path& urdfPath() const { return urdf_path_; }

@@ -49,7 +49,10 @@ constexpr double kCollisionHold = 0.1;
 
 // The robot a recording was made with: the built-in or file model if it still resolves, else
 // the recorded URDF text (meshes resolved against the robot resources).
-robot::RobotModel recordedRobot(const app::SessionMetadata& meta) {
+// A recording made on another machine may name meshes this one lacks (the session holds the
+// URDF's text, not its mesh files): the arm is then drawn without them, and `left_out` says
+// which.
+robot::RobotModel recordedRobot(const app::SessionMetadata& meta, std::vector<std::string>* left_out) {
   try {
     const std::filesystem::path path = resolveRobotPath(meta.robot_name);
     if (std::filesystem::exists(path)) return robot::RobotModel::fromUrdfFile(path, meta.tip_link);
@@ -57,7 +60,7 @@ robot::RobotModel recordedRobot(const app::SessionMetadata& meta) {
     // Neither a built-in name nor an existing file any more: the recorded text follows.
   }
   if (meta.robot_urdf.empty()) throw InputError("the recording holds no robot description");
-  return robot::RobotModel::fromUrdfString(meta.robot_urdf, resourceDir() / "robots", meta.tip_link);
+  return robot::RobotModel::fromUrdfString(meta.robot_urdf, resourceDir() / "robots", meta.tip_link, left_out);
 }
 
 std::string bandLabel(const app::StageRecord& stage) {
@@ -265,8 +268,9 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     auto reader = std::make_unique<app::SessionReader>(file);
     const std::string name = file.filename().string();
     std::unique_ptr<robot::RobotModel> model;
+    std::vector<std::string> left_out;
     try {
-      model = std::make_unique<robot::RobotModel>(recordedRobot(reader->metadata()));
+      model = std::make_unique<robot::RobotModel>(recordedRobot(reader->metadata(), &left_out));
     } catch (const InputError& error) {
       throw InputError("the robot stored in " + name + ": " + error.what());
     }
@@ -372,11 +376,19 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     view_->setHomeCamera(world_->defaultCamera(static_cast<double>(std::max(1, view_->width())) /
                                                std::max(1, view_->height())));
     setWindowTitle(QStringLiteral("FlexIRob review — %1").arg(QString::fromStdString(file.filename().string())));
-    statusBar()->showMessage(QStringLiteral("%1: %2 states, %3 s, robot %4")
-                                 .arg(QString::fromStdString(file.string()))
-                                 .arg(reader_->stateCount())
-                                 .arg(t1 - t0, 0, 'f', 1)
-                                 .arg(QString::fromStdString(model_->name())));
+    QString status = QStringLiteral("%1: %2 states, %3 s, robot %4")
+                         .arg(QString::fromStdString(file.string()))
+                         .arg(reader_->stateCount())
+                         .arg(t1 - t0, 0, 'f', 1)
+                         .arg(QString::fromStdString(model_->name()));
+    if (!left_out.empty()) {
+      // Said on stderr as well: the status bar may be too narrow for the reason.
+      status += QStringLiteral(", drawn without %1 mesh(es) not on this machine: %2")
+                    .arg(left_out.size())
+                    .arg(QString::fromStdString(left_out.front()));
+      qWarning("note: %s", qPrintable(status));
+    }
+    statusBar()->showMessage(status);
     time_ = t0 - 1.0;  // force a redraw
     setTime(t0);
     return true;

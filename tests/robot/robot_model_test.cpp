@@ -359,6 +359,30 @@ INSTANTIATE_TEST_SUITE_P(
       return name;
     });
 
+// A recording reviewed where the robot's mesh folder is not: the arm without that mesh, and why.
+TEST(RobotModel, LeavesOutAMissingMeshWhenAskedAndNamesIt) {
+  TempDir dir;
+  const std::string xml = twoJointArm(
+      "<link name='deco'><visual><geometry><mesh filename='meshes/gone.stl'/></geometry></visual>"
+      "<visual><geometry><box size='0.1 0.1 0.1'/></geometry></visual>"
+      "<collision><geometry><mesh filename='meshes/gone.stl'/></geometry></collision></link>"
+      "<joint name='d' type='fixed'><parent link='tool'/><child link='deco'/></joint>");
+  EXPECT_THROW(RobotModel::fromUrdfString(xml, dir.path()), InputError);
+  std::vector<std::string> left_out;
+  const RobotModel model = RobotModel::fromUrdfString(xml, dir.path(), "", &left_out);
+  ASSERT_EQ(left_out.size(), 2U);  // the visual and the collision element
+  EXPECT_NE(left_out[0].find("mesh file 'meshes/gone.stl' not found"), std::string::npos) << left_out[0];
+  const Body& last = model.bodies().back();
+  bool box = false;
+  for (const Geometry& visual : last.visuals) {
+    EXPECT_NE(visual.kind, Geometry::Kind::kMesh);
+    box = box || visual.kind == Geometry::Kind::kBox;
+  }
+  EXPECT_TRUE(box) << "the link's other geometry stays";
+  // Anything else that is wrong still refuses the URDF.
+  EXPECT_THROW(RobotModel::fromUrdfString("<robot name='x'><link name='a'>", dir.path(), "", &left_out), InputError);
+}
+
 TEST(RobotModel, ResolvesPackageAndRelativeMeshUris) {
   TempDir dir;
   dir.write("my_robot/meshes/part.stl", "solid x\nendsolid x\n");
