@@ -140,6 +140,34 @@ Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& 
   return freest;
 }
 
+FittedScene fitSceneToRobot(const robot::Scene& scene, const robot::RobotModel& model) {
+  FittedScene fitted{scene, {}};
+  // Each posture checked alone, in a scene holding only it: one that does not fit costs no other.
+  const auto fits = [&](const auto& place_only_it) {
+    robot::Scene single;
+    single.name = scene.name;
+    single.robot = scene.robot;
+    place_only_it(single);
+    try {
+      robot::checkPosturesFit(single, model, model.name());
+      return true;
+    } catch (const InputError& error) {
+      fitted.left_out.emplace_back(error.what());
+      return false;
+    }
+  };
+  if (scene.home_posture && !fits([&](robot::Scene& single) { single.home_posture = scene.home_posture; })) {
+    fitted.scene.home_posture.reset();
+  }
+  for (robot::Area& area : fitted.scene.training_areas) {
+    if (area.posture && !fits([&](robot::Scene& single) { single.training_areas = {area}; })) area.posture.reset();
+  }
+  for (robot::Area& area : fitted.scene.working_areas) {
+    if (area.posture && !fits([&](robot::Scene& single) { single.working_areas = {area}; })) area.posture.reset();
+  }
+  return fitted;
+}
+
 ArmReach armReach(const robot::RobotModel& model) {
   const Eigen::VectorXd q = Eigen::VectorXd::Zero(model.dof())
                                 .cwiseMax(model.softLowerLimits())

@@ -67,6 +67,16 @@ MotionOutcome approachTarget(const robot::RobotModel& model, const robot::Parame
 /// evaluations start [rad].
 Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& scene);
 
+/// A scene as `model` can run in it: each posture (home, training and working areas) that does
+/// not fit the arm (another joint count, beyond a limit, an area posture putting the tip outside
+/// its area; robot::checkPosturesFit) left out, and why, one line each. The CLI refuses such a
+/// scene; the GUI runs the arm without those postures and says so.
+struct FittedScene {
+  robot::Scene scene;
+  std::vector<std::string> left_out;
+};
+FittedScene fitSceneToRobot(const robot::Scene& scene, const robot::RobotModel& model);
+
 /// Where the tip can usefully be asked to go: within reach of the shoulder and off the column
 /// around the first joint's axis, which the arm cannot put its own tip into. Used wherever a
 /// place is chosen for the arm (an area, a drawn trajectory) and to bound the grid targets.

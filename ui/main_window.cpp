@@ -69,21 +69,15 @@ Eigen::Vector4f collisionColour() { return {0.90F, 0.10F, 0.10F, 1.0F}; }
 // The posture shown before the live robot reports: where teaching starts, or the middle of the
 // limits where no collision world can be built for the robot and scene (starting the live robot
 // then reports why, in the GUI).
-// The scene as the robot can run in it: postures made for another arm (another joint count,
-// or beyond this arm's limits) left out, with the reason; the arm then starts in a free posture.
+// The scene as the robot can run in it (app::fitSceneToRobot), and what was left out of it.
 robot::Scene sceneFitFor(const robot::Scene& scene, const robot::RobotModel& model, QString* problem) {
-  robot::Scene fit = scene;
-  try {
-    robot::checkPosturesFit(scene, model, model.name());
-    problem->clear();
-  } catch (const std::exception& error) {
-    fit.home_posture.reset();
-    for (robot::Area& area : fit.training_areas) area.posture.reset();
-    for (robot::Area& area : fit.working_areas) area.posture.reset();
-    *problem = QCoreApplication::translate("MainWindow", "%1; the scene's postures are not used, the arm starts in a free posture")
-                   .arg(QString::fromUtf8(error.what()));
+  app::FittedScene fitted = app::fitSceneToRobot(scene, model);
+  QStringList lines;
+  for (const std::string& reason : fitted.left_out) {
+    lines << QCoreApplication::translate("MainWindow", "%1; that posture is not used").arg(QString::fromStdString(reason));
   }
-  return fit;
+  *problem = lines.join(QLatin1Char('\n'));
+  return std::move(fitted.scene);
 }
 
 Eigen::VectorXd shownHomePosture(const robot::RobotModel& model, const robot::Scene& scene) {
@@ -199,15 +193,14 @@ void MainWindow::reportProblem(Problem kind, const QString& message) {
   problems_[kind] = message;
   // The late control loop is re-judged every two seconds; the log says when it starts.
   if (fresh || kind != Problem::kDeadlines) qWarning("%s", qPrintable(message));
-  QStringList lines;
-  for (const auto& [which, text] : problems_) lines << text;
-  problem_label_->setText(lines.join(QStringLiteral("\n")));
-  problem_label_->setVisible(true);
-  placeViewLabels();
+  showProblems();
 }
 
 void MainWindow::clearProblem(Problem kind) {
-  if (problems_.erase(kind) == 0) return;
+  if (problems_.erase(kind) > 0) showProblems();
+}
+
+void MainWindow::showProblems() {
   QStringList lines;
   for (const auto& [which, text] : problems_) lines << text;
   problem_label_->setText(lines.join(QStringLiteral("\n")));
@@ -439,8 +432,8 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
     model_ = std::move(model);
     kinematics_ = std::move(kinematics);
   } catch (const std::exception& error) {
+    startLive();  // the robot before runs on; its start clears the robot's problems, so say it after
     refuse(error);
-    startLive();
     return false;
   }
   coloured_links_.clear();
@@ -612,7 +605,8 @@ void MainWindow::mirror() {
     const auto end = std::find(s.failure.begin(), s.failure.end(), '\0');
     last_warning_ = tr("The robot stopped: %1").arg(QString::fromStdString(std::string(s.failure.begin(), end)));
   }
-  if (!start_checked_ && s.cycle > 0 && s.dof == model_->dof()) {
+  // In the simulation only: a real arm's first state is where it stands, which no scene decides.
+  if (!start_checked_ && s.cycle > 0 && s.dof == model_->dof() && live_->simulated()) {
     // An arm that starts in contact: the scene left it no free posture near the middle of its
     // limits (or its home posture touches something); the red links alone would not say why.
     start_checked_ = true;
@@ -688,42 +682,36 @@ bool MainWindow::robotMeasured() const {
 }
 
 void MainWindow::showNoRobotBanner() {
-  const QString text = tr("NO ROBOT");
-  if (banner_label_->text() == text) return;
-  const QColor colour = StagePanel::stageColor(app::Stage::kIdle, app::SubStage::kNone);
-  banner_label_->setProperty("stage", QString());
-  banner_label_->setText(text);
-  banner_label_->setStyleSheet(
-      QStringLiteral("QLabel { background: rgba(%1,%2,%3,215); color: white; border-radius: 6px; padding: 6px 14px; }")
-          .arg(colour.red())
-          .arg(colour.green())
-          .arg(colour.blue()));
-  banner_label_->adjustSize();
-  banner_label_->move(std::max(0, (view_->width() - banner_label_->width()) / 2), 10);
+  if (banner_label_->text() != tr("NO ROBOT")) {
+    setBanner(tr("NO ROBOT"), StagePanel::stageColor(app::Stage::kIdle, app::SubStage::kNone), QString());
+  }
 }
 
 void MainWindow::showBanner(const QString& warning) {
   const LiveSnapshot& s = live_->snapshot();
   const QString stage = StagePanel::stageText(s.stage, s.sub_stage);
-  const QColor colour = StagePanel::stageColor(s.stage, s.sub_stage);
   QString text = QString(stage).replace(QLatin1Char('\n'), QStringLiteral(" · "));
+  const bool measured = robotMeasured();
+  if (!measured) text += tr(" · no measurement yet");
   // One line of the warning: the whole of it is in the Teaching panel, and a banner as long as
   // the warning would cover the robot.
-  const int widest = std::max(200, view_->width() - 24);
   if (!warning.isEmpty()) {
     text += QStringLiteral("\n⚠ ") +
             QFontMetrics(banner_label_->font()).elidedText(QString(warning).replace(QLatin1Char('\n'), QLatin1Char(' ')),
-                                                           Qt::ElideRight, widest - 60);
+                                                           Qt::ElideRight, std::max(200, view_->width() - 24) - 60);
   }
-  if (!robotMeasured()) text += tr(" · no measurement yet");
-  banner_label_->setProperty("stage", stage + (robotMeasured() ? QString() : QStringLiteral("?")));
+  setBanner(text, StagePanel::stageColor(s.stage, s.sub_stage), stage + (measured ? QString() : QStringLiteral("?")));
+}
+
+void MainWindow::setBanner(const QString& text, const QColor& colour, const QString& key) {
+  banner_label_->setProperty("stage", key);
   banner_label_->setText(text);
   banner_label_->setStyleSheet(
       QStringLiteral("QLabel { background: rgba(%1,%2,%3,215); color: white; border-radius: 6px; padding: 6px 14px; }")
           .arg(colour.red())
           .arg(colour.green())
           .arg(colour.blue()));
-  banner_label_->setMaximumWidth(widest);
+  banner_label_->setMaximumWidth(std::max(200, view_->width() - 24));
   banner_label_->adjustSize();
   banner_label_->move(std::max(0, (view_->width() - banner_label_->width()) / 2), 10);
   key_map_label_->move(12, std::max(0, view_->height() - key_map_label_->height() - 12));
@@ -921,7 +909,7 @@ void MainWindow::updateStatus() {
   }
   // A long scene name would push the live fields off the bar.
   const QString scene_name = QString::fromStdString(scene_.name.empty() ? std::string("empty") : scene_.name);
-  text += tr("scene %1").arg(scene_name.size() > 40 ? scene_name.left(39) + QStringLiteral("…") : scene_name);
+  text += tr("scene %1").arg(status_label_->fontMetrics().elidedText(scene_name, Qt::ElideRight, 300));
   if (live_) {
     const app::CycleStatistics stats = live_->statistics();
     text += tr("   control %1 cycles, %2 late").arg(stats.cycles).arg(stats.deadline_misses);
@@ -945,8 +933,8 @@ void MainWindow::watchDeadlines(const app::CycleStatistics& stats) {
   const std::uint64_t misses = stats.deadline_misses - deadline_misses_;
   if (cycles >= 100 && 2 * misses > cycles) {
     reportProblem(Problem::kDeadlines,
-                  tr("The control loop was late in %1 % of its last %2 cycles (a cycle took up to %3 ms): the robot does not "
-                     "move in real time. A scene of many obstacles or a busy machine does this.")
+                  tr("The control loop was late in %1 % of its last %2 cycles (the longest cycle since the start took %3 ms): "
+                     "the robot does not move in real time. A scene of many obstacles or a busy machine does this.")
                       .arg(std::lround(100.0 * static_cast<double>(misses) / static_cast<double>(cycles)))
                       .arg(cycles)
                       .arg(stats.max_compute_us / 1000.0, 0, 'f', 1));

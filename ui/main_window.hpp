@@ -28,6 +28,7 @@
 #include "ui/live_teaching.hpp"
 #include "ui/teleop_keys.hpp"
 
+class QColor;
 class QLabel;
 class QMenu;
 class QTimer;
@@ -163,6 +164,7 @@ class MainWindow : public QMainWindow {
   enum class Problem { kRobot, kScene, kSceneNotes, kPostures, kStartContact, kBackend, kDeadlines };
   void reportProblem(Problem kind, const QString& message);
   void clearProblem(Problem kind);
+  void showProblems();
   void refuseScene(const std::string& name_or_path, const std::exception& error);
   /// Points the home camera at the robot from a side obstacles do not hide it from, or draws
   /// those that hide it from every side see-through.
@@ -180,6 +182,8 @@ class MainWindow : public QMainWindow {
   void driveKeyboard();
   void showBanner(const QString& warning);
   void showNoRobotBanner();
+  /// The banner's text and colour; `key` tells showBanner's callers what it shows.
+  void setBanner(const QString& text, const QColor& colour, const QString& key);
   /// Whether the live robot has sent a state (always for the simulation; an FRI link may wait).
   bool robotMeasured() const;
   void applyParameters(const std::map<std::string, double>& values);

@@ -10,6 +10,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "app/cli/cli_support.hpp"
@@ -69,17 +70,25 @@ class StreamReader {
       if (app::trimmed(line).empty()) continue;
       xi.resize(planning::storedSize(space_));
       q.resize(joints_);
-      const std::vector<std::string> fields = app::splitCommaFields(line);
-      if (fields.size() != static_cast<std::size_t>(columns_)) {
-        fail("expected " + std::to_string(columns_) + " values, got " + std::to_string(fields.size()));
-      }
+      // Fields read in place (a stream holds hundreds of thousands of lines); the messages are
+      // built only for a line that fails.
+      const auto column_text = [](int column, std::string_view field) {
+        return "column " + std::to_string(column + 1) + " ('" + printable(std::string(field)) + "')";
+      };
+      const std::string_view text(line);
+      std::size_t start = 0;
       for (int column = 0; column < columns_; ++column) {
-        const std::string& field = fields[static_cast<std::size_t>(column)];
+        const std::size_t comma = text.find(',', start);
+        if (comma == std::string_view::npos && column + 1 < columns_) {
+          fail("expected " + std::to_string(columns_) + " values, got " + std::to_string(column + 1));
+        }
+        if (comma != std::string_view::npos && column + 1 == columns_) fail("expected " + std::to_string(columns_) + " values, got more");
+        const std::string_view field = app::trimmedView(text.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+        start = comma + 1;
         const std::optional<double> parsed = app::parseDecimal(field);
-        const std::string at = "column " + std::to_string(column + 1) + " ('" + printable(field) + "')";
-        if (!parsed) fail(at + " is not a finite number");
+        if (!parsed) fail(column_text(column, field) + " is not a finite number");
         const double value = *parsed;
-        if (std::abs(value) > app::kLargestTableValue) fail(at + " is beyond ±1e6");
+        if (std::abs(value) > app::kLargestTableValue) fail(column_text(column, field) + " is beyond ±1e6");
         if (column < xi.size()) {
           xi[column] = value;
         } else {

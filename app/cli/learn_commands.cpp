@@ -167,14 +167,17 @@ Json fit(const FitOptions& options) {
   auto last_shown = fit_start;  // a fit done within a second shows nothing
   bool shown = false;
   int epochs_done = 0;
-  const learning::EpochObserver show_epoch = [&, learner_name = options.learner](int epochs, double mse) {
+  // The learner keeps this observer: it must not outlive this function's locals (it does not:
+  // it is made, fitted and saved here).
+  const learning::EpochObserver show_epoch = [&last_shown, &shown, &epochs_done, fit_start, max_epochs = options.max_epochs,
+                                              learner_name = options.learner](int epochs, double mse) {
     epochs_done = epochs;
     const auto now = std::chrono::steady_clock::now();
     if (now - last_shown < std::chrono::seconds(1)) return;
     last_shown = now;
     shown = true;
     std::ostringstream status;
-    status << "learn fit (" << learner_name << "): epoch " << epochs << " of at most " << options.max_epochs
+    status << "learn fit (" << learner_name << "): epoch " << epochs << " of at most " << max_epochs
            << ", training MSE " << std::setprecision(4) << mse << " rad², "
            << std::fixed << std::setprecision(0) << std::chrono::duration<double>(now - fit_start).count() << " s";
     reportStatus(status.str());
@@ -216,7 +219,13 @@ Json fit(const FitOptions& options) {
   }
 
   const auto start = std::chrono::steady_clock::now();
-  learner->fit(data);
+  try {
+    learner->fit(data);
+  } catch (...) {
+    // The error that follows gets a line of its own.
+    if (shown) reportStatus("learn fit (" + options.learner + "): stopped after " + std::to_string(epochs_done) + " epochs", true);
+    throw;
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (shown) reportStatus("learn fit (" + options.learner + "): done after " + std::to_string(epochs_done) + " epochs", true);
   const double mse = learner->meanSquaredError(data);

@@ -53,6 +53,30 @@ struct Parameters {
   robot::ParameterSet parameters;
 };
 
+// A posture that does not fit the arm costs only itself: the others stay, and each left out
+// is named once.
+TEST(Evaluation, FittingASceneToARobotLeavesOutOnlyThePosturesThatDoNotFit) {
+  robot::Scene scene = robot::loadScene("setup_I");
+  ASSERT_TRUE(scene.home_posture.has_value());
+  ASSERT_GE(scene.training_areas.size(), 2U);
+  ASSERT_TRUE(scene.training_areas[0].posture.has_value());
+  Eigen::VectorXd beyond = *scene.training_areas[1].posture;
+  beyond[1] = 3.0;  // A2 beyond its 2.09 rad
+  scene.training_areas[1].posture = beyond;
+  scene.training_areas[2].posture = Eigen::VectorXd::Zero(6);  // a posture of a six-joint arm
+  const FittedScene fitted = fitSceneToRobot(scene, lwr4());
+  ASSERT_TRUE(fitted.scene.home_posture.has_value());
+  EXPECT_TRUE(fitted.scene.home_posture->isApprox(*scene.home_posture));
+  ASSERT_TRUE(fitted.scene.training_areas[0].posture.has_value());
+  EXPECT_TRUE(fitted.scene.training_areas[0].posture->isApprox(*scene.training_areas[0].posture));
+  EXPECT_FALSE(fitted.scene.training_areas[1].posture.has_value());
+  EXPECT_FALSE(fitted.scene.training_areas[2].posture.has_value());
+  ASSERT_EQ(fitted.left_out.size(), 2U);
+  EXPECT_NE(fitted.left_out[0].find("outside its limits"), std::string::npos) << fitted.left_out[0];
+  EXPECT_NE(fitted.left_out[1].find("has 6 joint values"), std::string::npos) << fitted.left_out[1];
+  EXPECT_TRUE(fitSceneToRobot(robot::loadScene("setup_I"), lwr4()).left_out.empty());
+}
+
 TEST(Evaluation, AStartPostureThatTouchesSomethingGivesWayToTheNearestFreeOne) {
   // The LWR IV's limits are symmetric: the middle is the arm upright, its flange 1.18 m up.
   const Eigen::VectorXd mid = lwr4().midPosture();

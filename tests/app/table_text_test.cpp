@@ -16,11 +16,13 @@ TEST(TableText, ReadsDecimalNumbersWhole) {
   EXPECT_EQ(parseDecimal("+7"), 7.0);
   EXPECT_EQ(parseDecimal("1E3"), 1000.0);
   EXPECT_EQ(parseDecimal("1e308"), 1e308);  // in range; the readers judge the magnitude themselves
+  EXPECT_EQ(parseDecimal("1e-400"), 0.0);   // below the smallest double: zero, not "no number"
+  EXPECT_EQ(parseDecimal("2.5e-310"), 2.5e-310);  // a subnormal double
 }
 
 TEST(TableText, RefusesWhatIsNotOneFiniteDecimalNumber) {
   for (const std::string& field : std::vector<std::string>{"", " ", "abc", "1.5m", "1,5", "0x1", "0X1P3", "1e999", "-1e999", "inf", "-inf", "nan",
-                                  "NaN", "1e-400", std::string("0.4\0", 4)}) {
+                                  "NaN", "+-5", "++5", "-+5", "- 5", std::string("0.4\0", 4)}) {
     EXPECT_FALSE(parseDecimal(field).has_value()) << "'" << printable(field) << "'";
   }
 }

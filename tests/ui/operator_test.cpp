@@ -168,7 +168,7 @@ class OperatorTest : public QObject {
     MainWindow window("lwr4", file.toStdString(), quietOptions());
     waitRunning(window);
     QVERIFY(window.problemLabel()->text().contains(QStringLiteral("outside its limits")));
-    QVERIFY(window.problemLabel()->text().contains(QStringLiteral("the scene's postures are not used")));
+    QVERIFY(window.problemLabel()->text().contains(QStringLiteral("that posture is not used")));
     const auto& s = window.live()->snapshot();
     QVERIFY(std::abs(s.q[1]) < 2.0);  // A2, within its ±2.09 rad
     window.mirror();
