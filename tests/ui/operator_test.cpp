@@ -175,6 +175,36 @@ class OperatorTest : public QObject {
     QVERIFY(window.stagePanel()->button(Button::kStartConfiguration)->isEnabled());
   }
 
+  void aScenesNotesAndAnArmStartingInContactAreSaidInTheView() {
+    QTemporaryDir dir;
+    const QString far = dir.filePath(QStringLiteral("far.yaml"));
+    {
+      QFile out(far);
+      QVERIFY(out.open(QIODevice::WriteOnly));
+      out.write("name: far\nobstacles:\n  - {name: crate, shape: box, size: [0.2, 0.2, 0.2], position: [-640, 0, 0.1]}\n");
+    }
+    MainWindow window("lwr4", far.toStdString(), quietOptions());
+    waitRunning(window);
+    QVERIFY2(window.problemLabel()->text().contains(QStringLiteral("note: obstacle 'crate' lies 640 m")),
+             qPrintable(window.problemLabel()->text()));
+    QVERIFY(window.problemLabel()->text().contains(QStringLiteral("millimetres")));
+    QVERIFY(window.loadScene("empty"));
+    QVERIFY(window.problemLabel()->isHidden());
+
+    // A block round the wrist of the scene's own home posture: the arm starts touching it.
+    const QString block = dir.filePath(QStringLiteral("block.yaml"));
+    {
+      QFile out(block);
+      QVERIFY(out.open(QIODevice::WriteOnly));
+      out.write("name: block\nhome_posture: [0, 0, 0, 0, 0, 0, 0]\n"
+                "obstacles:\n  - {name: block, shape: box, size: [0.3, 0.3, 0.3], position: [0, 0, 1.1]}\n");
+    }
+    QVERIFY(window.loadScene(block.toStdString()));
+    waitRunning(window);
+    QTRY_VERIFY_WITH_TIMEOUT((window.mirror(), window.problemLabel()->text().contains(QStringLiteral("The arm starts in contact"))), 5000);
+    QVERIFY(window.problemLabel()->text().contains(QStringLiteral("the scene's home_posture touches the scene")));
+  }
+
   void anFriLinkThatHasMeasuredNothingTeachesNothing() {
     MainWindow window("lwr4", "empty", quietOptions());
     waitRunning(window);
