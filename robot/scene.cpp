@@ -1092,6 +1092,18 @@ std::vector<std::string> sceneNotes(const Scene& scene) {
          << " m from the robot's base; lengths are read in metres (was the scene written in millimetres?)";
     notes.push_back(note.str());
   }
+  // An area as wide as that, wherever its centre, hides the arm in the view and holds the
+  // whole workspace.
+  const auto noteWide = [&](const Area& area, const char* kind) {
+    const double extent = area.box ? 0.5 * area.box->norm() : area.radius;
+    if (!(extent > kFar)) return;
+    std::ostringstream note;
+    note << std::fixed << std::setprecision(0) << kind << " '" << area.name << "' reaches " << extent
+         << " m from its centre; lengths are read in metres (was the scene written in millimetres?)";
+    notes.push_back(note.str());
+  };
+  for (const Area& area : scene.training_areas) noteWide(area, "training area");
+  for (const Area& area : scene.working_areas) noteWide(area, "working area");
   return notes;
 }
 

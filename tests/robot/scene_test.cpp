@@ -355,6 +355,14 @@ TEST(SceneNotes, AScenePlacedTensOfMetresAwayIsNotedAsPerhapsWrittenInMillimetre
             "training area 'a' lies 707 m from the robot's base; lengths are read in metres (was the scene written in millimetres?)");
 }
 
+TEST(SceneNotes, AnAreaTensOfMetresWideIsNotedAsPerhapsWrittenInMillimetres) {
+  EXPECT_TRUE(sceneNotes(parseScene("training_areas:\n  - {name: a, centre: [-0.5, 0.3, 0.4], radius: 0.15}\n", ".", "m")).empty());
+  const Scene wide = parseScene("training_areas:\n  - {name: a, centre: [-0.5, 0.3, 0.4], radius: 999}\n", ".", "wide");
+  ASSERT_EQ(sceneNotes(wide).size(), 1U);
+  EXPECT_EQ(sceneNotes(wide)[0],
+            "training area 'a' reaches 999 m from its centre; lengths are read in metres (was the scene written in millimetres?)");
+}
+
 TEST(SceneNotes, AnObstacleWhollyUnderTheTableTopIsNotedUnlessThereIsNoTable) {
   const std::string obstacles =
       "obstacles:\n"
