@@ -58,6 +58,14 @@ void waitRunning(MainWindow& window) {
   QTRY_VERIFY_WITH_TIMEOUT(window.live() != nullptr && window.live()->snapshot().running, 10000);
 }
 
+// A scene file `name` in `dir` holding `yaml`; its path, empty if it could not be written.
+std::string writeScene(const QTemporaryDir& dir, const QString& name, const QByteArray& yaml) {
+  const QString path = dir.filePath(name);
+  QFile out(path);
+  if (!out.open(QIODevice::WriteOnly) || out.write(yaml) != yaml.size()) return {};
+  return path.toStdString();
+}
+
 }  // namespace
 
 class OperatorTest : public QObject {
@@ -159,13 +167,9 @@ class OperatorTest : public QObject {
 
   void aScenesHomePostureBeyondTheLimitsIsLeftOutAndTheArmRuns() {
     QTemporaryDir dir;
-    const QString file = dir.filePath(QStringLiteral("beyond.yaml"));
-    {
-      QFile out(file);
-      QVERIFY(out.open(QIODevice::WriteOnly));
-      out.write("name: beyond\nrobot: lwr4\nhome_posture: [0, 3.0, 0, 0, 0, 0, 0]\n");
-    }
-    MainWindow window("lwr4", file.toStdString(), quietOptions());
+    const std::string file = writeScene(dir, QStringLiteral("beyond.yaml"), "name: beyond\nrobot: lwr4\nhome_posture: [0, 3.0, 0, 0, 0, 0, 0]\n");
+    QVERIFY(!file.empty());
+    MainWindow window("lwr4", file, quietOptions());
     waitRunning(window);
     QVERIFY(window.problemLabel()->text().contains(QStringLiteral("outside its limits")));
     QVERIFY(window.problemLabel()->text().contains(QStringLiteral("that posture is not used")));
@@ -177,13 +181,9 @@ class OperatorTest : public QObject {
 
   void aScenesNotesAndAnArmStartingInContactAreSaidInTheView() {
     QTemporaryDir dir;
-    const QString far = dir.filePath(QStringLiteral("far.yaml"));
-    {
-      QFile out(far);
-      QVERIFY(out.open(QIODevice::WriteOnly));
-      out.write("name: far\nobstacles:\n  - {name: crate, shape: box, size: [0.2, 0.2, 0.2], position: [-640, 0, 0.1]}\n");
-    }
-    MainWindow window("lwr4", far.toStdString(), quietOptions());
+    const std::string far = writeScene(dir, QStringLiteral("far.yaml"), "name: far\nobstacles:\n  - {name: crate, shape: box, size: [0.2, 0.2, 0.2], position: [-640, 0, 0.1]}\n");
+    QVERIFY(!far.empty());
+    MainWindow window("lwr4", far, quietOptions());
     waitRunning(window);
     QVERIFY2(window.problemLabel()->text().contains(QStringLiteral("note: obstacle 'crate' lies 640 m")),
              qPrintable(window.problemLabel()->text()));
@@ -192,14 +192,10 @@ class OperatorTest : public QObject {
     QVERIFY(window.problemLabel()->isHidden());
 
     // A block round the wrist of the scene's own home posture: the arm starts touching it.
-    const QString block = dir.filePath(QStringLiteral("block.yaml"));
-    {
-      QFile out(block);
-      QVERIFY(out.open(QIODevice::WriteOnly));
-      out.write("name: block\nhome_posture: [0, 0, 0, 0, 0, 0, 0]\n"
+    const std::string block = writeScene(dir, QStringLiteral("block.yaml"), "name: block\nhome_posture: [0, 0, 0, 0, 0, 0, 0]\n"
                 "obstacles:\n  - {name: block, shape: box, size: [0.3, 0.3, 0.3], position: [0, 0, 1.1]}\n");
-    }
-    QVERIFY(window.loadScene(block.toStdString()));
+    QVERIFY(!block.empty());
+    QVERIFY(window.loadScene(block));
     waitRunning(window);
     QTRY_VERIFY_WITH_TIMEOUT((window.mirror(), window.problemLabel()->text().contains(QStringLiteral("The arm starts in contact"))), 5000);
     QVERIFY(window.problemLabel()->text().contains(QStringLiteral("the scene's home_posture touches the scene")));
