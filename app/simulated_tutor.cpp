@@ -401,10 +401,18 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
   }
   // Clearance up to a comfortable 8 cm counts; beyond it, the posture nearest the reference
   // (joint-space distance, 0.2 per rad: 4 cm less clearance weigh as much as 2.5 rad) wins.
-  // Postures near a joint limit are penalized (they would warn).
+  // Postures near a joint limit are penalized: they would warn, and the hands' deflections
+  // under π_rec would run the joint into its stop. Near as the warning counts it (a slide in
+  // metres, at most a tenth of its travel).
+  const auto near_limit = [&](const Eigen::VectorXd& q_candidate) {
+    for (int j = 0; j < dof; ++j) {
+      const double margin = std::min(q_candidate[j] - lower[j], upper[j] - q_candidate[j]);
+      if (margin < nearLimitMargin(model_->joints()[static_cast<std::size_t>(j)], workflow_->options())) return true;
+    }
+    return false;
+  };
   const auto score = [&](const Eigen::VectorXd& q_candidate, double clearance) {
-    const double limit_margin = std::min((q_candidate - lower).minCoeff(), (upper - q_candidate).minCoeff());
-    return std::min(clearance, 0.08) / 0.08 - 0.2 * (q_candidate - q_reference).norm() - (limit_margin < 0.2 ? 0.5 : 0.0);
+    return std::min(clearance, 0.08) / 0.08 - 0.2 * (q_candidate - q_reference).norm() - (near_limit(q_candidate) ? 0.5 : 0.0);
   };
   for (int c = 0; c < options_.posture_candidates; ++c) {
     // Null-space targets: the scene's suggestion, the reference posture, the current posture,

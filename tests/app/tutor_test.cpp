@@ -851,6 +851,55 @@ TEST(SimulatedTutor, PrefersAPostureWithEnoughClearanceOverANearerOneWithout) {
   EXPECT_LT((choice.q - suggested).norm(), 0.05);
 }
 
+// A seven-joint arm with a short slide (12.6 cm of travel) in the middle of its chain. IK
+// moves the slide first (a metre of slide moves the tip a metre, a radian of a joint less), so
+// it tends to end at a stop; the tutor penalized postures within 0.2 of a limit, which for a
+// slide of 12.6 cm was every posture, and it chose postures with the slide at its stop: the
+// area warned, and the hands' deflections under π_rec ran the slide into it.
+std::string armWithAShortSlide() {
+  std::ostringstream urdf;
+  urdf << "<robot name=\"slide7\"><link name=\"base\"/>\n";
+  const char* axes[] = {"0 0 1", "0 1 0", "0 0 1", "0 1 0", "0 0 1", "0 1 0", "0 0 1"};
+  std::string parent = "base";
+  double offset = 0.055;
+  for (int j = 0; j < 7; ++j) {
+    const std::string child = "l" + std::to_string(j + 1);
+    const bool slide = j == 2;
+    urdf << "<joint name=\"j" << j + 1 << "\" type=\"" << (slide ? "prismatic" : "revolute") << "\"><parent link=\"" << parent
+         << "\"/><child link=\"" << child << "\"/><origin xyz=\"0 0 " << offset << "\"/><axis xyz=\"" << axes[j] << "\"/>"
+         << "<limit lower=\"" << (slide ? 0.0 : -2.9) << "\" upper=\"" << (slide ? 0.126 : 2.9) << "\" velocity=\"1.5\" effort=\"150\"/></joint>\n"
+         << "<link name=\"" << child << "\"><inertial><origin xyz=\"0 0 0.0786\"/><mass value=\"1.83\"/>"
+         << "<inertia ixx=\"0.0047\" ixy=\"0\" ixz=\"0\" iyy=\"0.0047\" iyz=\"0\" izz=\"0.0019\"/></inertial>"
+         << "<collision><origin xyz=\"0 0 0.0786\"/><geometry><cylinder radius=\"0.046\" length=\"0.157\"/></geometry></collision></link>\n";
+    parent = child;
+    offset = 0.157;
+  }
+  urdf << "</robot>\n";
+  return urdf.str();
+}
+
+TEST(SimulatedTutor, ChoosesPosturesThatKeepAShortSlideAwayFromItsStops) {
+  const robot::RobotModel model = robot::RobotModel::fromUrdfString(armWithAShortSlide(), ".");
+  ASSERT_EQ(model.joints()[2].type, robot::JointType::kPrismatic);
+  robot::Scene scene;
+  scene.name = "open";
+  scene.home_posture = model.midPosture();
+  ShortTeaching teaching(scene, model);
+  teaching.tutor_options.posture_candidates = 24;
+  const double near = nearLimitMargin(model.joints()[2], teaching.workflow->options());
+  SimulatedTutor tutor(teaching.sim, *teaching.workflow, scene, teaching.parameters, teaching.tutor_options);
+  const std::vector<Eigen::Vector3d> places{{-0.48, -0.47, 0.48}, {0.45, 0.2, 0.55}, {0.1, 0.5, 0.35}};
+  for (const Eigen::Vector3d& place : places) {
+    const std::vector<PostureChoice> choices = tutor.choosePostures(place, std::nullopt);
+    ASSERT_FALSE(choices.empty()) << place.transpose();
+    const Eigen::VectorXd& q = choices.front().q;
+    EXPECT_LT((robot::tipPose(model, q).translation() - place).norm(), 1e-3) << place.transpose();
+    const double slide = q[2];
+    EXPECT_GE(std::min(slide - model.softLowerLimits()[2], model.softUpperLimits()[2] - slide), near)
+        << "slide at " << slide << " m, at " << place.transpose();
+  }
+}
+
 // Beyond the scene's list the tutor chooses where to teach: where the learned map fails, and an
 // area that makes the map miss more of its check points than before is taken back (removed from
 // the workflow), so no area it keeps made the map worse on them.
