@@ -187,10 +187,10 @@ osg::ref_ptr<osg::Node> makeGroundGrid(double half_extent, double spacing) {
   floor->addPrimitiveSet(new osg::DrawArrays(GL_QUADS, 0, 4));
   floor->getOrCreateStateSet()->setAttributeAndModes(new osg::PolygonOffset(1.0F, 1.0F));
   geode->addDrawable(floor);
-  // World axes at the mounting point, 0.25 m long.
+  // World axes at the mounting point: 0.25 m long on the LWR IV's grid.
   osg::ref_ptr<osg::Geode> axes = new osg::Geode();
-  const float length = 0.25F;
-  const float lift = 0.002F;  // just above the floor
+  const float length = extent / 6.0F;
+  const float lift = 0.02F * static_cast<float>(spacing);  // just above the floor
   axes->addDrawable(makeLines({{0, 0, lift}, {length, 0, lift}}, GL_LINES, osg::Vec4(0.85F, 0.1F, 0.1F, 1)));
   axes->addDrawable(makeLines({{0, 0, lift}, {0, length, lift}}, GL_LINES, osg::Vec4(0.1F, 0.65F, 0.1F, 1)));
   axes->addDrawable(makeLines({{0, 0, lift}, {0, 0, length}}, GL_LINES, osg::Vec4(0.1F, 0.2F, 0.9F, 1)));
@@ -201,6 +201,15 @@ osg::ref_ptr<osg::Node> makeGroundGrid(double half_extent, double spacing) {
   osg::StateSet* state = group->getOrCreateStateSet();
   state->setMode(GL_LIGHTING, osg::StateAttribute::OFF | osg::StateAttribute::PROTECTED);
   return group;
+}
+
+GroundGridSize groundGridSize(double reach) {
+  if (!(reach > 0.0) || !std::isfinite(reach)) return {1.5, 0.1};
+  const double spacing = std::pow(10.0, std::floor(std::log10(reach / 10.0)));
+  const double major = 5.0 * spacing;
+  // A hair below the multiple, so that a reach whose 1.25 times lands on a line is not pushed
+  // a whole major step out by rounding.
+  return {major * std::ceil(1.25 * reach / major - 1e-9), spacing};
 }
 
 World::World()
@@ -237,6 +246,13 @@ void World::setRobot(const robot::RobotModel& model) {
   // with some of their surroundings.
   const auto [center_W, reach] = reachSphere(model);
   setFocusSphere(center_W, 1.25 * reach + 0.25);
+  // The grid at the arm's scale: a 20 cm arm on 10 cm squares, or a 3 m arm on a grid smaller
+  // than its reach, hides the size it has.
+  const GroundGridSize size = groundGridSize(reach);
+  osg::ref_ptr<osg::Node> grid = makeGroundGrid(size.half_extent, size.spacing);
+  grid->setNodeMask(grid_->getNodeMask());
+  root_->replaceChild(grid_, grid);
+  grid_ = grid;
   surroundings_radius_ = 0.08 * reach;
 }
 

@@ -62,8 +62,18 @@ const std::vector<std::string>& defaultViewOrder();
 inline constexpr double kAcceptableHiddenFraction = 0.15;
 
 /// A square grid on z = 0 of the given half extent and line spacing [m], every fifth line
-/// darker, with the world axes (x red, y green, z blue) at the origin.
+/// darker, with the world axes (x red, y green, z blue) at the origin, a sixth of the half
+/// extent long.
 osg::ref_ptr<osg::Node> makeGroundGrid(double half_extent = 1.5, double spacing = 0.1);
+
+/// The ground grid's size for an arm of the given reach [m]: lines a decade below a tenth of the
+/// reach apart (0.1 m for the LWR IV, 1 cm for a 20 cm arm), reaching at least 1.25 times the
+/// reach out, to the next darker line (1.5 m for the LWR IV).
+struct GroundGridSize {
+  double half_extent;
+  double spacing;
+};
+GroundGridSize groundGridSize(double reach);
 
 class World {
  public:

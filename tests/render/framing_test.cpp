@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <osg/ComputeBoundsVisitor>
+#include <osg/NodeVisitor>
 #include <filesystem>
 #include <string>
 
@@ -70,6 +72,72 @@ int visibleRobotPixels(World& world, const CameraPose& camera) {
     }
   }
   return count;
+}
+
+// An arm of three joints whose links add up to `reach` [m] (a fifth, two fifths, two fifths).
+robot::RobotModel armOfReach(double reach) {
+  std::string urdf = "<robot name=\"scaled\"><link name=\"base\"/>";
+  const double parts[] = {0.2, 0.4, 0.4};
+  std::string parent = "base";
+  for (int j = 0; j < 3; ++j) {
+    const std::string child = "l" + std::to_string(j + 1);
+    urdf += "<joint name=\"j" + std::to_string(j + 1) + "\" type=\"revolute\"><parent link=\"" + parent + "\"/><child link=\"" +
+            child + "\"/><origin xyz=\"0 0 " + std::to_string(parts[j] * reach) + "\"/><axis xyz=\"0 1 0\"/>" +
+            "<limit lower=\"-2\" upper=\"2\" velocity=\"1\" effort=\"10\"/></joint><link name=\"" + child + "\"/>";
+    parent = child;
+  }
+  return robot::RobotModel::fromUrdfString(urdf + "</robot>", ".");
+}
+
+// Half the width of the ground grid in the world's picture, and whether it is drawn.
+std::pair<double, bool> groundGridHalfWidth(World& world) {
+  struct FindGrid : osg::NodeVisitor {
+    FindGrid() : osg::NodeVisitor(TRAVERSE_ALL_CHILDREN) { setNodeMaskOverride(~0U); }
+    void apply(osg::Node& node) override {
+      if (node.getName() == "ground_grid") found = &node;
+      traverse(node);
+    }
+    osg::Node* found = nullptr;
+  } finder;
+  world.root()->accept(finder);
+  if (finder.found == nullptr) return {0.0, false};
+  osg::ComputeBoundsVisitor bounds;
+  finder.found->accept(bounds);
+  bool drawn = true;
+  for (const osg::Node* node = finder.found; node != nullptr; node = node->getNumParents() > 0 ? node->getParent(0) : nullptr) {
+    drawn = drawn && node->getNodeMask() != 0U;
+  }
+  return {0.5 * static_cast<double>(bounds.getBoundingBox().xMax() - bounds.getBoundingBox().xMin()), drawn};
+}
+
+// A 20 cm arm on 10 cm squares, or a 4 m arm on a grid smaller than its reach, hides its size;
+// the LWR IV keeps the grid of the thesis' pictures (0.1 m squares, 1.5 m out).
+TEST(Framing, TheGroundGridIsDrawnAtTheArmsScale) {
+  const robot::RobotModel lwr4 = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  const GroundGridSize thesis = groundGridSize(reachSphere(lwr4).second);
+  EXPECT_DOUBLE_EQ(thesis.spacing, 0.1);
+  EXPECT_NEAR(thesis.half_extent, 1.5, 1e-12);
+  for (const double reach : {0.2, 4.0}) {
+    const robot::RobotModel arm = armOfReach(reach);
+    EXPECT_NEAR(reachSphere(arm).second, reach, 1e-6);
+    const GroundGridSize size = groundGridSize(reach);
+    // Ten to a hundred squares across the reach, out to the next darker line beyond 1.25 times it.
+    EXPECT_GE(reach / size.spacing, 10.0 - 1e-9) << reach;
+    EXPECT_LT(reach / size.spacing, 100.0) << reach;
+    EXPECT_GE(size.half_extent, 1.25 * reach - 1e-9) << reach;
+    EXPECT_LT(size.half_extent, 1.25 * reach + 5.0 * size.spacing) << reach;
+    World world;
+    world.setGridVisible(false);
+    world.setRobot(arm);
+    const auto [half_width, drawn] = groundGridHalfWidth(world);
+    EXPECT_NEAR(half_width, size.half_extent, 1e-5) << reach;
+    EXPECT_FALSE(drawn) << reach << ": a hidden grid stays hidden with the new robot";
+  }
+  World world;
+  world.setRobot(lwr4);
+  const auto [half_width, drawn] = groundGridHalfWidth(world);
+  EXPECT_NEAR(half_width, 1.5, 1e-5);
+  EXPECT_TRUE(drawn);
 }
 
 TEST(Framing, ClipsABoxToThePartInsideASphere) {
