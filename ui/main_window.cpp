@@ -45,6 +45,7 @@
 #include "ui/plot_panel.hpp"
 #include "ui/review_window.hpp"
 #include "ui/stage_panel.hpp"
+#include "ui/status_message.hpp"
 
 #ifndef FLEXIROB_VERSION_STRING
 #define FLEXIROB_VERSION_STRING "unknown"
@@ -184,7 +185,7 @@ MainWindow::~MainWindow() {
 
 void MainWindow::reportError(const QString& what, const std::exception& error) {
   const QString message = what + QStringLiteral(": ") + QString::fromUtf8(error.what());
-  statusBar()->showMessage(message, 15000);
+  showStatusMessage(statusBar(), message, 15000);
   qWarning("%s", qPrintable(message));
 }
 
@@ -287,7 +288,7 @@ void MainWindow::applyParameters(const std::map<std::string, double>& values) {
   stopLive();
   resetParameters();
   startLive();
-  statusBar()->showMessage(tr("Parameters applied (%1 changed); the robot restarted").arg(parameter_edits_.size()), 8000);
+  showStatusMessage(statusBar(), tr("Parameters applied (%1 changed); the robot restarted").arg(parameter_edits_.size()), 8000);
 }
 
 void MainWindow::stopLive() {
@@ -326,7 +327,7 @@ void MainWindow::startRecording() {
   const QString directory =
       QStandardPaths::writableLocation(QStandardPaths::AppDataLocation) + QStringLiteral("/sessions");
   if (!QDir().mkpath(directory)) {
-    statusBar()->showMessage(tr("Cannot create %1: this run is not recorded").arg(directory), 15000);
+    showStatusMessage(statusBar(), tr("Cannot create %1: this run is not recorded").arg(directory), 15000);
     return;
   }
   const QString file = directory + QStringLiteral("/session-") +
@@ -391,7 +392,7 @@ void MainWindow::startLive() {
 
 bool MainWindow::saveSession(const QString& file) {
   if (!recorder_ || !live_) {
-    statusBar()->showMessage(tr("No session is being recorded"), 10000);
+    showStatusMessage(statusBar(), tr("No session is being recorded"), 10000);
     return false;
   }
   // Everything shown so far goes in; saveCopy closes the recorder, so record on into a new file.
@@ -401,7 +402,7 @@ bool MainWindow::saveSession(const QString& file) {
   bool ok = true;
   try {
     recorder_->saveCopy(file.toStdString());
-    statusBar()->showMessage(tr("Session saved to %1").arg(file), 10000);
+    showStatusMessage(statusBar(), tr("Session saved to %1").arg(file), 10000);
   } catch (const std::exception& error) {
     reportError(tr("Cannot save the session to %1").arg(file), error);
     ok = false;
@@ -524,7 +525,7 @@ void MainWindow::frameView() {
   if (!revealed.empty()) {
     QStringList names;
     for (const std::string& name : revealed) names << QString::fromStdString(name);
-    statusBar()->showMessage(tr("Drawn see-through, as they hide the robot from every side: %1").arg(names.join(QStringLiteral(", "))),
+    showStatusMessage(statusBar(), tr("Drawn see-through, as they hide the robot from every side: %1").arg(names.join(QStringLiteral(", "))),
                              15000);
   }
 }
@@ -740,13 +741,13 @@ void MainWindow::handleEvents() {
     if (event.kind == K::kWarning || event.kind == K::kRefused) {
       last_warning_ = QString::fromStdString(event.detail.empty() ? event.name : event.detail);
       stage_panel_->showWarning(last_warning_);
-      statusBar()->showMessage(last_warning_, 15000);
+      showStatusMessage(statusBar(), last_warning_, 15000);
     } else if (event.kind == K::kStage || event.kind == K::kButton) {
       // A new stage: the old warning no longer applies to what the operator sees.
       last_warning_.clear();
       stage_panel_->clearWarning();
     } else if (event.kind == K::kCheck || event.kind == K::kModelLearned || event.kind == K::kAreaCreated) {
-      statusBar()->showMessage(QString::fromStdString(event.detail.empty() ? event.name : event.detail), 10000);
+      showStatusMessage(statusBar(), QString::fromStdString(event.detail.empty() ? event.name : event.detail), 10000);
     }
   }
 }
@@ -838,9 +839,9 @@ void MainWindow::keyPressEvent(QKeyEvent* event) {
     case TeleopAction::Kind::kTrigger:
     case TeleopAction::Kind::kButton:
       if (!live_) {
-        statusBar()->showMessage(tr("No robot runs: the message in the view says why"), 8000);
+        showStatusMessage(statusBar(), tr("No robot runs: the message in the view says why"), 8000);
       } else if (!robotMeasured()) {
-        statusBar()->showMessage(tr("The robot has not sent a measurement yet: teaching starts when it does"), 8000);
+        showStatusMessage(statusBar(), tr("The robot has not sent a measurement yet: teaching starts when it does"), 8000);
       } else if (action->kind == TeleopAction::Kind::kTrigger) {
         live_->fire(action->trigger);
       } else {
@@ -965,12 +966,12 @@ void MainWindow::buildMenus() {
         QStandardPaths::writableLocation(QStandardPaths::AppDataLocation) + QStringLiteral("/sessions"),
         tr("FlexIRob sessions (*.flexirob *.sqlite *.db);;All files (*)"));
     if (!path.isEmpty() && openRecording(path) == nullptr) {
-      QMessageBox::warning(this, tr("Open recording"), statusBar()->currentMessage());
+      QMessageBox::warning(this, tr("Open recording"), fullStatusMessage(statusBar()));
     }
   });
   file->addAction(tr("&Review this run"), this, [this] {
     if (session_file_.isEmpty()) {
-      statusBar()->showMessage(tr("This run is not recorded"), 10000);
+      showStatusMessage(statusBar(), tr("This run is not recorded"), 10000);
       return;
     }
     handleEvents();
@@ -991,7 +992,7 @@ void MainWindow::buildMenus() {
   file->addAction(tr("Save &screenshot…"), this, [this] {
     const QString path = QFileDialog::getSaveFileName(this, tr("Save screenshot"), QStringLiteral("flexirob.png"),
                                                       tr("PNG (*.png)"));
-    if (!path.isEmpty() && !grab().save(path)) statusBar()->showMessage(tr("Cannot write %1").arg(path), 10000);
+    if (!path.isEmpty() && !grab().save(path)) showStatusMessage(statusBar(), tr("Cannot write %1").arg(path), 10000);
   });
   file->addSeparator();
   file->addAction(tr("&Quit"), QKeySequence::Quit, this, &QWidget::close);
@@ -1066,7 +1067,7 @@ void MainWindow::buildMenus() {
   connect(overlay_menu, &OverlayMenu::toggled, this, [this] { view_->requestFrame(); });
   QMenu* help = menuBar()->addMenu(tr("&Help"));
   help->addAction(tr("&Mouse"), this, [this] {
-    statusBar()->showMessage(tr("Left drag on a link: pull the arm   Left drag elsewhere: orbit   Middle or "
+    showStatusMessage(statusBar(), tr("Left drag on a link: pull the arm   Left drag elsewhere: orbit   Middle or "
                                 "Shift+left drag: pan   Right drag or wheel: zoom   Double click: home view   "
                                 "Ctrl+click in EXECUTION: set a goal, plan and execute"),
                              15000);
@@ -1164,7 +1165,7 @@ void MainWindow::clickGoal(const QPointF& position) {
                                                 Eigen::Vector2d(position.x(), position.y()), nodes, origin,
                                                 direction, s.p_WT[2]);
   if (!pick) {
-    statusBar()->showMessage(tr("No goal there: click on the explored region (the ITM graph)"), 8000);
+    showStatusMessage(statusBar(), tr("No goal there: click on the explored region (the ITM graph)"), 8000);
     return;
   }
   setGoal(pick->goal_W);
@@ -1177,7 +1178,7 @@ bool MainWindow::setGoal(const Eigen::Vector3d& goal_W) {
     goal_ = goal_W;
     // The goal shows at once; the path joins it when the workflow has planned it.
     overlays_->setContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(goal_W));
-    statusBar()->showMessage(tr("Goal (%1, %2, %3) m: planning through the ITM graph")
+    showStatusMessage(statusBar(), tr("Goal (%1, %2, %3) m: planning through the ITM graph")
                                  .arg(goal_W.x(), 0, 'f', 3)
                                  .arg(goal_W.y(), 0, 'f', 3)
                                  .arg(goal_W.z(), 0, 'f', 3),
@@ -1226,7 +1227,7 @@ ReviewWindow* MainWindow::openRecording(const QString& file) {
   auto* review = new ReviewWindow(this);  // a window of its own, closed with the main window
   review->setAttribute(Qt::WA_DeleteOnClose);
   if (!review->open(file.toStdString())) {
-    statusBar()->showMessage(tr("Cannot open %1: %2").arg(file, review->errorString()), 15000);
+    showStatusMessage(statusBar(), tr("Cannot open %1: %2").arg(file, review->errorString()), 15000);
     delete review;
     return nullptr;
   }

@@ -36,6 +36,7 @@
 #include "ui/osg_view.hpp"
 #include "ui/overlay_menu.hpp"
 #include "ui/plot_panel.hpp"
+#include "ui/status_message.hpp"
 
 namespace flexirob::ui {
 
@@ -255,7 +256,7 @@ ReviewWindow::ReviewWindow(QWidget* parent)
   });
   const QRect room = screen() != nullptr ? screen()->availableGeometry() : QRect(0, 0, 1200, 760);
   resize(std::min(1200, room.width()), std::min(760, room.height()));
-  statusBar()->showMessage(QStringLiteral("Open a session recording"));
+  showStatusMessage(statusBar(), QStringLiteral("Open a session recording"));
 }
 
 ReviewWindow::~ReviewWindow() {
@@ -388,7 +389,7 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
                     .arg(QString::fromStdString(left_out.front()));
       qWarning("note: %s", qPrintable(status));
     }
-    statusBar()->showMessage(status);
+    showStatusMessage(statusBar(), status);
     time_ = t0 - 1.0;  // force a redraw
     setTime(t0);
     return true;
@@ -398,7 +399,7 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     const std::string name = file.filename().string();
     error_ = QString::fromUtf8(what.find(name) == std::string::npos ? ("session file " + file.string() + ": " + printable(what, 300)).c_str()
                                                                     : printable(what, 300).c_str());
-    statusBar()->showMessage(QStringLiteral("cannot open %1: %2").arg(QString::fromStdString(file.string()), error_));
+    showStatusMessage(statusBar(), QStringLiteral("cannot open %1: %2").arg(QString::fromStdString(file.string()), error_));
     return false;
   }
 }
@@ -522,7 +523,7 @@ void ReviewWindow::updateItm() {
     overlay.setGraph(nodes, edges);
   } catch (const std::exception& error) {
     overlay.clear();
-    statusBar()->showMessage(QStringLiteral("ITM snapshot at %1 s unreadable: %2").arg(record.time).arg(QString::fromUtf8(error.what())),
+    showStatusMessage(statusBar(), QStringLiteral("ITM snapshot at %1 s unreadable: %2").arg(record.time).arg(QString::fromUtf8(error.what())),
                              10000);
   }
 }
@@ -542,7 +543,7 @@ void ReviewWindow::updateConfidence(bool force) {
       if (area.complete && area.X.cols() > 0) model.addArea(area.X);
     }
   } catch (const std::exception& error) {
-    statusBar()->showMessage(QStringLiteral("Training areas unreadable: %1").arg(QString::fromUtf8(error.what())), 10000);
+    showStatusMessage(statusBar(), QStringLiteral("Training areas unreadable: %1").arg(QString::fromUtf8(error.what())), 10000);
   }
   if (model.areas() == 0) {
     world_->overlays().setContent(render::OverlayLayer::kConfidence, nullptr);

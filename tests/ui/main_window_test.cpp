@@ -5,7 +5,10 @@
 #include <QMouseEvent>
 #include <QWheelEvent>
 #include <QGuiApplication>
+#include <QLabel>
+#include <QMainWindow>
 #include <QMenu>
+#include <QStatusBar>
 #include <QSignalSpy>
 #include <QTest>
 
@@ -17,6 +20,7 @@
 #include "ui/main_window.hpp"
 #include "tests/ui/ui_test_support.hpp"
 #include "ui/osg_view.hpp"
+#include "ui/status_message.hpp"
 
 using flexirob::ui::MainWindow;
 
@@ -66,6 +70,37 @@ class MainWindowTest : public QObject {
     QVERIFY(!window.scene().obstacles.empty());
     // One transform per body in the view's tree.
     QCOMPARE(window.world().robot()->bodyCount(), static_cast<int>(window.robotModel()->bodies().size()));
+  }
+
+  // A message longer than the room left of the permanent fields ran into them mid-word
+  // ("… posture erro" + "sim simulated"); it is cut at a word's end, the whole in the tooltip.
+  void aLongStatusMessageIsCutAtAWordEndBeforeThePermanentFields() {
+    QMainWindow window;
+    auto* field = new QLabel(QStringLiteral("sim simulated, 1.0 ms   robot lwr4 (7 joints)"));
+    field->setFixedWidth(320);
+    window.statusBar()->addPermanentWidget(field);
+    window.resize(760, 300);
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    const QString message = QStringLiteral(
+        "area_1 -> area_2: mean error 0.4 mm, max 1.2 mm, posture error 0.03 rad; the straight way between the two "
+        "areas keeps 4.1 cm from the box");
+    QVERIFY(window.statusBar()->fontMetrics().horizontalAdvance(message) > field->geometry().left());
+    flexirob::ui::showStatusMessage(window.statusBar(), message, 0);
+    const QString shown = window.statusBar()->currentMessage();
+    QVERIFY2(shown.endsWith(QStringLiteral(" …")), qPrintable(shown));
+    const QString kept = shown.chopped(2);
+    QVERIFY(message.startsWith(kept));
+    QCOMPARE(message.at(kept.size()), QLatin1Char(' '));  // no word shown in part
+    QVERIFY(kept.size() > message.size() / 3);
+    QVERIFY2(window.statusBar()->fontMetrics().horizontalAdvance(shown) < field->geometry().left(), qPrintable(shown));
+    QCOMPARE(flexirob::ui::fullStatusMessage(window.statusBar()), message);
+    QCOMPARE(window.statusBar()->toolTip(), message);
+    // A message that fits is shown whole, without a tooltip.
+    flexirob::ui::showStatusMessage(window.statusBar(), QStringLiteral("Session saved"), 0);
+    QCOMPARE(window.statusBar()->currentMessage(), QStringLiteral("Session saved"));
+    QCOMPARE(flexirob::ui::fullStatusMessage(window.statusBar()), QStringLiteral("Session saved"));
+    QVERIFY(window.statusBar()->toolTip().isEmpty());
   }
 
   void theViewAndTheJointPanelMirrorTheLiveArm() {

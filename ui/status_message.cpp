@@ -1,0 +1,54 @@
+#include "ui/status_message.hpp"
+
+#include <QFontMetrics>
+#include <QStatusBar>
+#include <QStyle>
+#include <QVariant>
+#include <algorithm>
+
+namespace flexirob::ui {
+namespace {
+
+constexpr const char* kFullMessage = "flexirobFullMessage";
+constexpr const char* kShownMessage = "flexirobShownMessage";
+
+// What QStatusBar leaves for its temporary message: its width less the visible widgets it holds
+// (the permanent fields, the size grip) and the spacing about each.
+int messageRoom(const QStatusBar* bar) {
+  const int spacing = bar->style()->pixelMetric(QStyle::PM_LayoutHorizontalSpacing);
+  int room = bar->contentsRect().width() - 2 * std::max(spacing, 6);
+  for (const QObject* child : bar->children()) {
+    const auto* widget = qobject_cast<const QWidget*>(child);
+    if (widget == nullptr || !widget->isVisible() || widget->isWindow()) continue;
+    room -= widget->width() + std::max(spacing, 6);
+  }
+  return std::max(room, 0);
+}
+
+}  // namespace
+
+void showStatusMessage(QStatusBar* bar, const QString& message, int timeout_ms) {
+  if (bar == nullptr) return;
+  QString shown = message;
+  const QFontMetrics metrics = bar->fontMetrics();
+  const int room = messageRoom(bar);
+  if (bar->isVisible() && metrics.horizontalAdvance(message) > room) {
+    shown = metrics.elidedText(message, Qt::ElideRight, room);
+    // Cut at the last word's end that fits, so that no word or number is shown in part.
+    const int cut = shown.lastIndexOf(QLatin1Char(' '), shown.size() - 2);
+    if (cut > shown.size() / 2) shown = shown.left(cut) + QStringLiteral(" …");
+  }
+  bar->setProperty(kFullMessage, message);
+  bar->setProperty(kShownMessage, shown);
+  bar->setToolTip(shown == message ? QString() : message);
+  bar->showMessage(shown, timeout_ms);
+}
+
+QString fullStatusMessage(const QStatusBar* bar) {
+  if (bar == nullptr) return {};
+  const QString current = bar->currentMessage();
+  if (!current.isEmpty() && current == bar->property(kShownMessage).toString()) return bar->property(kFullMessage).toString();
+  return current;
+}
+
+}  // namespace flexirob::ui
