@@ -350,6 +350,10 @@ void MainWindow::startRecording() {
     metadata.software_version = FLEXIROB_VERSION_STRING;
     recorder_ = std::make_unique<app::SessionRecorder>(file.toStdString(), metadata);
     session_file_ = file;
+    // The stage the workflow is in when the file starts (IDLE at a start, any stage after a
+    // save), so that the review's bands begin with the recording, not at the first change.
+    const LiveSnapshot& now = live_->snapshot();
+    recorder_->recordStage({now.time, app::toString(now.stage), app::toString(now.sub_stage)});
     // The control thread records the robot state of every cycle, the training samples and the
     // areas; this window adds stages, signals, models and graphs.
     live_->setRecorder(recorder_.get());

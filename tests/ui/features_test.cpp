@@ -14,6 +14,7 @@
 #include <QStatusBar>
 #include <QTemporaryDir>
 #include <limits>
+#include <QSet>
 #include <QTest>
 
 #include <cmath>
@@ -162,6 +163,17 @@ class FeaturesTest : public QObject {
     plot.setMinimumValueSpan(0.001);
     plot.setSeriesData(0, {QPointF(0.0, 0.0), QPointF(1.0, 0.0)});
     QVERIFY(plot.valueRange().second >= 0.001);  // a millimetre scale, not one of nanometres
+    // A recording of one state: its second is shown, and the ticks read as distinct times
+    // (they had all read "0.0").
+    plot.setTimeRange(3.5, 3.5);
+    QCOMPARE(plot.timeRange(), std::make_pair(3.5, 4.5));
+    const QStringList ticks = plot.timeTickLabels();
+    QVERIFY2(ticks.size() >= 3, qPrintable(ticks.join(QStringLiteral(" "))));
+    QVERIFY(ticks.front().toDouble() >= 3.5 && ticks.front().toDouble() < 3.75);
+    QCOMPARE(QSet<QString>(ticks.begin(), ticks.end()).size(), ticks.size());
+    // Two seconds of a session: 0.5 s apart, one decimal.
+    plot.setTimeRange(0.0, 2.0);
+    QCOMPARE(plot.timeTickLabels(), QStringList({"0.0", "0.5", "1.0", "1.5", "2.0"}));
   }
 
   void thePlotsFollowTheLiveArmAndTheControlCycle() {
@@ -317,6 +329,8 @@ class FeaturesTest : public QObject {
     // Before anything was recorded there is neither.
     review->setTime(review->reader()->startTime());
     QCOMPARE(review->confidenceSlicesShown(), 0);
+    // The bands begin with the recording: IDLE until the first key (F5), not a gap.
+    QCOMPARE(review->stageAt(review->reader()->startTime()), std::string("IDLE"));
 
     // A file that is no recording is refused with its reason, and no window opens.
     const QString bogus = directory.filePath(QStringLiteral("bogus.flexirob"));
