@@ -104,14 +104,30 @@ void roundTicks(QValueAxis* axis) {
 }  // namespace
 
 void TimePlot::setTimeRange(double t0, double t1) {
-  if (!(t1 > t0)) t1 = t0 + 1e-3;
+  if (!(t1 > t0)) t1 = t0 + 1.0;
   time_axis_->setRange(t0, t1);
   roundTicks(time_axis_);
   // As many decimals as the interval needs: 0.5 s ticks read 0.5, 1.0; 2 s ticks read 2, 4.
   const double interval = niceTickInterval(t1 - t0);
   const int decimals = interval > 0.0 ? std::clamp(static_cast<int>(std::ceil(-std::log10(interval) - 1e-9)), 0, 3) : 1;
   time_axis_->setLabelFormat(QStringLiteral("%.%1f").arg(decimals));
+  time_decimals_ = decimals;
   updateCursorLine();
+}
+
+std::pair<double, double> TimePlot::timeRange() const { return {time_axis_->min(), time_axis_->max()}; }
+
+QStringList TimePlot::timeTickLabels() const {
+  // As QValueAxis draws dynamic ticks: multiples of the interval from the anchor, within range.
+  QStringList labels;
+  const double interval = time_axis_->tickInterval();
+  if (!(interval > 0.0)) return labels;
+  const double anchor = time_axis_->tickAnchor();
+  for (double k = std::ceil((time_axis_->min() - anchor) / interval - 1e-9); anchor + k * interval <= time_axis_->max() + 1e-9 * interval;
+       k += 1.0) {
+    labels << QString::number(anchor + k * interval, 'f', time_decimals_);
+  }
+  return labels;
 }
 
 void TimePlot::setValueRange(double lower, double upper) {

@@ -19,6 +19,8 @@
 #include <utility>
 #include <vector>
 
+#include <QStringList>
+
 class QChart;
 class QLineSeries;
 class QValueAxis;
@@ -49,7 +51,12 @@ class TimePlot : public QChartView {
   void hideFromLegend(int series);
   int seriesCount() const { return static_cast<int>(series_.size()); }
   const QLineSeries* series(int index) const { return series_.at(static_cast<std::size_t>(index)); }
+  /// Shows t0..t1 [s]; a recording of one instant (t1 <= t0) is shown over the second after it,
+  /// so that its ticks read as times rather than as one value repeated.
   void setTimeRange(double t0, double t1);
+  /// The time axis' range (t0, t1) and the labels of its ticks, as drawn.
+  std::pair<double, double> timeRange() const;
+  QStringList timeTickLabels() const;
   /// Fixed value range; without it, the range follows the data (with 5 % margins; data that
   /// are all non-negative, such as errors and times, keep the axis at zero and above).
   void setValueRange(double lower, double upper);
@@ -76,6 +83,7 @@ class TimePlot : public QChartView {
 
   QChart* chart_ = nullptr;
   QValueAxis* time_axis_ = nullptr;
+  int time_decimals_ = 1;  // of the time axis' labels
   QValueAxis* value_axis_ = nullptr;
   QLineSeries* cursor_ = nullptr;
   std::vector<QLineSeries*> series_;
