@@ -264,6 +264,16 @@ ArmReach armReach(const robot::RobotModel& model) {
   return result;
 }
 
+double ArmScale::mass() const { return std::min(1.0, inertia / (length * length)); }
+
+ArmScale armScale(const robot::RobotModel& model) {
+  ArmScale scale;
+  const ArmReach reach = armReach(model);
+  if (reach.reach > 0.0 && std::isfinite(reach.reach)) scale.length = std::min(1.0, reach.reach / kLwrShoulderReach);
+  scale.inertia = robot::inertiaScaleToLwr(model);
+  return scale;
+}
+
 bool ArmReach::roomFor(const Eigen::Vector3d& p_W, double margin) const {
   const Eigen::Vector3d offset = p_W - base_point;
   const double off_axis = (offset - offset.dot(base_axis) * base_axis).norm();

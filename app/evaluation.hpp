@@ -101,6 +101,24 @@ struct ArmReach {
 
 ArmReach armReach(const robot::RobotModel& model);
 
+/// [m] the LWR IV's reach from its shoulder (0.868 m), a little less.
+inline constexpr double kLwrShoulderReach = 0.85;
+
+/// How much smaller and lighter an arm is than the LWR IV, for what was sized for the LWR IV:
+/// Tab. A.1's gains, the interaction's admittance, and the simulated tutor's hands and
+/// distances. An arm of the LWR IV's size or larger scales nothing (every factor 1); a smaller
+/// or lighter one gets them in proportion, so that it moves as an LWR IV of its size would.
+struct ArmScale {
+  double length = 1.0;   ///< reach from the shoulder / kLwrShoulderReach, at most 1
+  double inertia = 1.0;  ///< robot::inertiaScaleToLwr()
+  /// Mass: inertia / length², at most 1 (Cartesian stiffness, damping and virtual mass).
+  double mass() const;
+  /// Force: mass × length (a hand's push).
+  double force() const { return mass() * length; }
+};
+
+ArmScale armScale(const robot::RobotModel& model);
+
 /// Drives the command from q_start towards p_des(t) (t in [0, duration], held after) for up to
 /// duration + settle seconds at 1 kHz, feeding the path's velocity forward (Eq. 2.6); ends early
 /// once settled on target. Checks contacts every 10 ms; `world` may be null.

@@ -114,7 +114,7 @@ namespace {
 
 /// The interaction controllers' and the triggers' parameters: values from `given` where it
 /// declares them (a scene's overrides), the triggers' from the workflow options.
-robot::ParameterSet workflowParameters(const robot::ParameterSet& given, const WorkflowOptions& options) {
+robot::ParameterSet workflowParameters(const robot::ParameterSet& given, const WorkflowOptions& options, const ArmScale& scale) {
   std::vector<robot::ParameterDeclaration> declarations = robot::interactionControllerParameters();
   for (const auto& declaration : robot::triggerParameters()) declarations.push_back(declaration);
   for (const auto& declaration : given.declarations()) {
@@ -128,7 +128,8 @@ robot::ParameterSet workflowParameters(const robot::ParameterSet& given, const W
       options.still_velocity <= 0.0 || options.max_recording_time <= 0.0) {
     throw InputError("workflow: sample period, trigger thresholds, converged time and recording time must be positive");
   }
-  parameters.set("triggers.torque_threshold", options.affected_torque);
+  // The LWR IV's threshold; a lighter arm's torques are smaller in proportion (ArmScale).
+  parameters.set("triggers.torque_threshold", options.affected_torque * scale.inertia);
   parameters.set("triggers.still_velocity", options.still_velocity);
   parameters.set("triggers.converged_time", options.converged_time);
   return parameters;
@@ -159,7 +160,8 @@ Workflow::Workflow(robot::RobotBackend& backend, const robot::ParameterSet& para
     : backend_(&backend),
       model_robot_(&backend.model()),
       options_(std::move(options)),
-      parameters_(workflowParameters(parameters, options_)),
+      arm_scale_(app::armScale(backend.model())),
+      parameters_(workflowParameters(parameters, options_, arm_scale_)),
       interaction_(backend.model(), parameters_, backend.cycleTime()),
       triggers_(parameters_),
       confidence_(options_.confidence_d),
@@ -178,6 +180,7 @@ Workflow::Workflow(robot::RobotBackend& backend, const robot::ParameterSet& para
   hold_q_ = state_.q;
   q_fixed_ = state_.q;
   interaction_.setConfidence(&area_confidence_);
+  interaction_.setArmScale(arm_scale_.inertia, arm_scale_.mass());
   setState(Stage::kIdle, SubStage::kNone);
   events_.clear();  // the initial state is no event
   command();

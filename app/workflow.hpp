@@ -32,6 +32,7 @@
 #include <thread>
 #include <vector>
 
+#include "app/evaluation.hpp"
 #include "learning/confidence.hpp"
 #include "learning/elm.hpp"
 #include "learning/learner.hpp"
@@ -226,6 +227,10 @@ class Workflow {
   std::uint64_t pathVersion() const { return path_version_; }
   const robot::RobotState& state() const { return state_; }
   const WorkflowOptions& options() const { return options_; }
+  /// The arm against the LWR IV (app/evaluation.hpp), which the gains are scaled by.
+  const ArmScale& armScale() const { return arm_scale_; }
+  /// [Nm] on_affected's threshold for this arm: options().affected_torque times its inertia scale.
+  double affectedTorque() const { return options_.affected_torque * arm_scale_.inertia; }
   const robot::RobotModel& robotModel() const { return *model_robot_; }
   robot::RobotBackend& backend() { return *backend_; }
 
@@ -293,6 +298,7 @@ class Workflow {
   robot::RobotBackend* backend_;
   const robot::RobotModel* model_robot_;
   WorkflowOptions options_;
+  ArmScale arm_scale_;
   robot::ParameterSet parameters_;
   robot::InteractionController interaction_;
   robot::InteractionTriggers triggers_;

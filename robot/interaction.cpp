@@ -74,9 +74,28 @@ InteractionController::InteractionController(const RobotModel& model, const Para
   gains_ = modeGains(mode_);
 }
 
+void InteractionController::setArmScale(double inertia, double mass) {
+  if (inertia > 0.0 && inertia <= 1.0) inertia_scale_ = inertia;
+  if (mass > 0.0 && mass <= 1.0) mass_scale_ = mass;
+}
+
+namespace {
+
+// Tab. A.1 for an arm `inertia` and `mass` times the LWR IV's: the stiffness in Nm/rad scales
+// with the joints' inertia (the same natural frequency), the admittance's virtual inertia with
+// the joints' in the joint-space modes and with the mass in the task-space one.
+ModeGains scaledGains(InteractionMode mode, double inertia, double mass) {
+  ModeGains gains = modeGains(mode);
+  gains.stiffness *= inertia;
+  gains.inertia *= mode == InteractionMode::kAssistedGravityCompensation ? mass : inertia;
+  return gains;
+}
+
+}  // namespace
+
 void InteractionController::start(InteractionMode mode, const RobotState& state) {
   mode_ = mode;
-  gains_ = modeGains(mode);
+  gains_ = scaledGains(mode, inertia_scale_, mass_scale_);
   limiter_.reset(state.q);
   q_des_ = limiter_.command();
   qd_des_.setZero();
@@ -120,7 +139,7 @@ void InteractionController::update(const RobotState& state, JointImpedanceComman
         const double inertia = gains_.inertia;
         for (int j = 0; j < n; ++j) {
           const double push = k * (state.q[j] - limiter_.command()[j]);
-          qd_[j] = (limiter_.velocity()[j] + dt_ * push / inertia) / (1.0 + dt_ * joint_damping_ / inertia);
+          qd_[j] = (limiter_.velocity()[j] + dt_ * push / inertia) / (1.0 + dt_ * joint_damping_ * inertia_scale_ / inertia);
         }
         limiter_.updateVelocity(qd_);
       }
@@ -147,9 +166,9 @@ void InteractionController::update(const RobotState& state, JointImpedanceComman
     case InteractionMode::kAssistedGravityCompensation: {
       if (!keyboard_ && state.X_WT.matrix().allFinite()) {
         // π_x: x_des follows the tip the tutor pulls, with virtual mass and Cartesian damping (Sect. 5.1).
-        const Eigen::Vector3d pull = cartesian_stiffness_ * (state.p_WT() - p_des_);
+        const Eigen::Vector3d pull = cartesian_stiffness_ * mass_scale_ * (state.p_WT() - p_des_);
         const double mass = gains_.inertia;
-        pd_des_ = (pd_des_ + dt_ * pull / mass) / (1.0 + dt_ * cartesian_damping_ / mass);
+        pd_des_ = (pd_des_ + dt_ * pull / mass) / (1.0 + dt_ * cartesian_damping_ * mass_scale_ / mass);
         p_des_ += pd_des_ * dt_;
       }
       if (map_ != nullptr) {
@@ -168,7 +187,7 @@ void InteractionController::update(const RobotState& state, JointImpedanceComman
       const double inertia = gains_.inertia;
       for (int j = 0; j < n; ++j) {
         const double push = state.tau_ext.size() == n && std::isfinite(state.tau_ext[j]) ? state.tau_ext[j] : 0.0;
-        qd_des_[j] = (qd_des_[j] + dt_ * push / inertia) / (1.0 + dt_ * joint_damping_ / inertia);
+        qd_des_[j] = (qd_des_[j] + dt_ * push / inertia) / (1.0 + dt_ * joint_damping_ * inertia_scale_ / inertia);
         q_des_[j] = std::clamp(q_des_[j] + qd_des_[j] * dt_, limiter_.lower()[j], limiter_.upper()[j]);
       }
       kinematics_.update(q_des_);

@@ -100,6 +100,12 @@ class InteractionController {
   /// Keyboard mode: the tutor commands x_des and q_c by steps instead of pushing the arm
   /// (the simulated 9-DoF arm of Sect. 8.1 has no hand to feel).
   void setKeyboardMode(bool keyboard) { keyboard_ = keyboard; }
+  /// Tab. A.1's gains and the admittances' damping are the LWR IV's. An arm lighter than it
+  /// gets its joint stiffness, joint-space virtual inertia and damping times `inertia` (of the
+  /// arm's joints to the LWR IV's), the Cartesian ones times `mass`, so that it moves as an
+  /// LWR IV of its size would (a light arm under the LWR IV's gains rings faster than the
+  /// control cycle samples it). Both in (0, 1]; 1 is the LWR IV. Takes effect at the next start().
+  void setArmScale(double inertia, double mass);
 
   /// One cycle: writes q_cmd, stiffness and damping for the current mode.
   void update(const RobotState& state, JointImpedanceCommand& command);
@@ -127,6 +133,7 @@ class InteractionController {
   const ConfidenceMap* confidence_ = nullptr;
   InteractionMode mode_ = InteractionMode::kHierarchicalControl;
   ModeGains gains_{};
+  double inertia_scale_ = 1.0, mass_scale_ = 1.0;  // setArmScale()
   bool keyboard_ = false;
   Eigen::VectorXd q_fixed_, q_c_, q_des_, qd_des_, qd_, q_map_;
   Matrix3Xd J_des_;                 // tip position Jacobian at q_des (assistance blending)

@@ -2,6 +2,9 @@
 
 #include "robot/errors.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace flexirob::robot {
 
 Kinematics::Kinematics(const RobotModel& model)
@@ -75,6 +78,40 @@ Eigen::Isometry3d tipPose(const RobotModel& model, const Eigen::VectorXd& q) {
   Kinematics kinematics(model);
   kinematics.update(q);
   return kinematics.X_WT();
+}
+
+Eigen::VectorXd jointInertiaDiagonal(const RobotModel& model, const Eigen::VectorXd& q) {
+  const int dof = model.dof();
+  Kinematics kinematics(model);
+  kinematics.update(q);
+  Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(dof);
+  Matrix3Xd Jp(3, dof);
+  for (int b = 1; b < static_cast<int>(model.bodies().size()); ++b) {
+    const Body& body = model.bodies()[static_cast<std::size_t>(b)];
+    if (!(body.mass > 0.0)) continue;
+    const Eigen::Isometry3d& X_WB = kinematics.X_WB(b);
+    kinematics.pointJacobian(b, X_WB * body.p_BCom, Jp);
+    const Eigen::Matrix3d I_W = X_WB.linear() * body.I_BCom * X_WB.linear().transpose();
+    for (int j = 0; j < dof; ++j) {
+      diagonal[j] += body.mass * Jp.col(j).squaredNorm();
+      // A turning joint spins every body after it about its axis as well.
+      if (b > j && model.joints()[static_cast<std::size_t>(j)].type != JointType::kPrismatic) {
+        const Eigen::Vector3d axis = kinematics.axis_W(j);
+        diagonal[j] += axis.dot(I_W * axis);
+      }
+    }
+  }
+  return diagonal;
+}
+
+double inertiaScaleToLwr(const RobotModel& model) {
+  const Eigen::VectorXd q = Eigen::VectorXd::Zero(model.dof()).cwiseMax(model.softLowerLimits()).cwiseMin(model.softUpperLimits());
+  const Eigen::VectorXd inertia = jointInertiaDiagonal(model, q);
+  double largest = 0.0;  // of the turning joints (a slide's is a mass)
+  for (int j = 0; j < model.dof(); ++j) {
+    if (model.joints()[static_cast<std::size_t>(j)].type != JointType::kPrismatic) largest = std::max(largest, inertia[j]);
+  }
+  return largest > 0.0 && std::isfinite(largest) ? std::min(1.0, largest / kLwrLargestJointInertia) : 1.0;
 }
 
 }  // namespace flexirob::robot

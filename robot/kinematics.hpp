@@ -52,4 +52,17 @@ class Kinematics {
 /// Convenience: tip pose for posture q.
 Eigen::Isometry3d tipPose(const RobotModel& model, const Eigen::VectorXd& q);
 
+/// The diagonal of the joint-space inertia matrix M(q) [kg m², kg for a slide] from the bodies'
+/// masses and inertias (the kinetic energy of each joint moving alone at unit speed).
+Eigen::VectorXd jointInertiaDiagonal(const RobotModel& model, const Eigen::VectorXd& q);
+
+/// [kg m²] the LWR IV's largest joint inertia in the posture nearest zero (A2 under the upright
+/// arm, 3.07 kg m²), a little less.
+inline constexpr double kLwrLargestJointInertia = 3.0;
+
+/// The largest joint inertia of the turning joints in the posture nearest zero over the LWR
+/// IV's, at most 1: what the gains and dampings sized for the LWR IV are scaled by on a lighter
+/// arm (1 for the LWR IV, arm9 and anything heavier; 1 without a turning joint or a mass).
+double inertiaScaleToLwr(const RobotModel& model);
+
 }  // namespace flexirob::robot

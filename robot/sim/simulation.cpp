@@ -26,7 +26,7 @@ constexpr std::array kSimulationParameters{
                          "physics steps per 1 ms control cycle (the impedance law is evaluated in each)"},
     ParameterDeclaration{"sim.gravity", 9.81, 0.0, 20.0, "m/s^2", "gravitational acceleration along -z"},
     ParameterDeclaration{"sim.drift_damping", 0.5, 0.0, 50.0, "Nms/rad",
-                         "added joint damping so that a released arm comes to rest"},
+                         "added joint damping so that a released arm comes to rest (the LWR IV's; a lighter arm gets it in proportion to its joint inertia)"},
     ParameterDeclaration{"sim.stiffness", 300.0, 0.0, 5000.0, "Nm/rad",
                          "joint stiffness until the first command (hierarchical control, Tab. A.1)"},
     ParameterDeclaration{"sim.damping", 0.95, 0.0, 1.0, "",
@@ -107,7 +107,9 @@ Simulation::Simulation(const RobotModel& model, const Scene* scene, const Parame
       cycle_time_(1e-3),
       substeps_(static_cast<int>(parameters.get("sim.substeps"))),
       gravity_(parameters.get("sim.gravity")),
-      drift_damping_(parameters.get("sim.drift_damping")),
+      // Sized for the LWR IV: on a lighter arm 0.5 Nms/rad would be honey the interaction's
+      // (scaled) pushes could not move through.
+      drift_damping_(parameters.get("sim.drift_damping") * inertiaScaleToLwr(model)),
       impl_(std::make_unique<Impl>(model.dof())),
       kinematics_(model),
       jacobian_(3, model.dof()) {

@@ -2,6 +2,10 @@
 // reachable-workspace count and the explored fraction.
 #include <gtest/gtest.h>
 
+#include <sstream>
+
+#include <numbers>
+
 #include <unistd.h>
 
 #include <filesystem>
@@ -195,6 +199,64 @@ TEST(Evaluation, TheArmsRoomIsWithinReachAndOffTheColumnAroundItsFirstAxis) {
 // A SCARA: a lifting column, three joints about z, a wrist tilting about y at the tip. The first
 // joint not about z is the tilt, at the tip itself: a sphere about it would hold nothing. The
 // reach is then taken from the first joint with every joint free, and holds every tip position.
+// Three links of `length` [m] on joints about y (the first about z), each a point mass `mass`
+// [kg] at its end (a small sphere of inertia), standing upright at zero.
+std::string pointMassArm(double length, double mass) {
+  std::ostringstream urdf;
+  urdf << "<robot name=\"points\"><link name=\"base\"/>";
+  const char* axes[] = {"0 0 1", "0 1 0", "0 1 0", "0 1 0"};
+  std::string parent = "base";
+  for (int j = 0; j < 4; ++j) {
+    const std::string child = "l" + std::to_string(j + 1);
+    urdf << "<joint name=\"j" << j + 1 << "\" type=\"revolute\"><parent link=\"" << parent << "\"/><child link=\"" << child
+         << "\"/><origin xyz=\"0 0 " << (j <= 1 ? 0.0 : length) << "\"/><axis xyz=\"" << axes[j] << "\"/>"
+         << "<limit lower=\"-2\" upper=\"2\" velocity=\"1\" effort=\"100\"/></joint>"
+         << "<link name=\"" << child << "\"><inertial><origin xyz=\"0 0 " << (j == 0 ? 0.0 : length) << "\"/><mass value=\"" << mass
+         << "\"/><inertia ixx=\"1e-9\" ixy=\"0\" ixz=\"0\" iyy=\"1e-9\" iyz=\"0\" izz=\"1e-9\"/></inertial></link>";
+    parent = child;
+  }
+  urdf << "</robot>";
+  return urdf.str();
+}
+
+// M_jj of an upright chain of point masses: about the shoulder (j2), m (l² + (2l)² + (3l)²).
+TEST(Evaluation, TheJointInertiaOfAnUprightChainOfPointMassesIsTheirMomentAboutEachAxis) {
+  const double l = 0.3, m = 2.0;
+  const auto model = robot::RobotModel::fromUrdfString(pointMassArm(l, m), ".");
+  ASSERT_EQ(model.dof(), 4);
+  const Eigen::VectorXd M = robot::jointInertiaDiagonal(model, Eigen::VectorXd::Zero(4));
+  EXPECT_NEAR(M[0], 0.0, 1e-6);  // every mass on the first axis
+  EXPECT_NEAR(M[1], m * (l * l + 4 * l * l + 9 * l * l), 1e-6);
+  EXPECT_NEAR(M[2], m * (l * l + 4 * l * l), 1e-6);
+  EXPECT_NEAR(M[3], m * (l * l), 1e-6);
+  // Bent at the shoulder by 90°: the first axis now sees the masses 1, 2, 3 l out.
+  Eigen::VectorXd bent = Eigen::VectorXd::Zero(4);
+  bent[1] = std::numbers::pi / 2;
+  EXPECT_NEAR(robot::jointInertiaDiagonal(model, bent)[0], m * 14 * l * l, 1e-6);
+}
+
+// The LWR IV and arm9 scale nothing; an arm half as long and a tenth as heavy as some arm the
+// size of the LWR IV is half as long, a fortieth of its inertia, a tenth of its mass.
+TEST(Evaluation, AnArmIsScaledAgainstTheLwrIvBySizeAndWeight) {
+  for (const char* name : {"lwr4", "arm9"}) {
+    const ArmScale scale = armScale(robot::RobotModel::fromUrdfFile(resolveRobotPath(name)));
+    EXPECT_EQ(scale.length, 1.0) << name;
+    EXPECT_EQ(scale.inertia, 1.0) << name;
+    EXPECT_EQ(scale.mass(), 1.0) << name;
+  }
+  // The tip (the last link's origin) 0.4 m from the shoulder; 0.28 kg m² about it.
+  const auto full = robot::RobotModel::fromUrdfString(pointMassArm(0.2, 0.5), ".");
+  const auto small = robot::RobotModel::fromUrdfString(pointMassArm(0.1, 0.05), ".");
+  const ArmScale a = armScale(full), b = armScale(small);
+  EXPECT_NEAR(a.length, 0.4 / kLwrShoulderReach, 1e-6);
+  EXPECT_NEAR(a.inertia, 0.28 / robot::kLwrLargestJointInertia, 1e-6);
+  EXPECT_LT(a.mass(), 1.0);
+  EXPECT_NEAR(b.length / a.length, 0.5, 1e-6);
+  EXPECT_NEAR(b.inertia / a.inertia, 0.1 * 0.25, 1e-6);
+  EXPECT_NEAR(b.mass() / a.mass(), 0.1, 1e-6);
+  EXPECT_NEAR(b.force(), b.mass() * b.length, 1e-12);
+}
+
 TEST(Evaluation, TheReachOfAScaraHoldsEveryTipPositionWithinItsLimits) {
   const std::string urdf = R"(<robot name="scara"><link name="base"/>
   <joint name="lift" type="prismatic"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.06"/><axis xyz="0 0 1"/>
