@@ -75,6 +75,10 @@ SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const
       world_(std::make_unique<robot::CollisionWorld>(sim.model(), scene)),
       kinematics_(sim.model()),
       arm_reach_(armReach(sim.model())),
+      arm_scale_(armScale(sim.model())),
+      length_scale_(arm_scale_.length),
+      min_clearance_(length_scale_ * options_.min_clearance),
+      circle_diameter_(std::max(kSmallestCircleDiameter, length_scale_ * options_.circle_diameter)),
       home_(options_.home ? *options_.home : homePosture(sim.model(), scene)),
       random_(options_.seed) {
   if (home_.size() != model_->dof()) throw InputError("tutor: the home posture has the wrong number of joints");
@@ -349,12 +353,12 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planWay(const Eigen::VectorXd& from
   std::vector<Eigen::VectorXd> retreat;
   Eigen::VectorXd start = from;
   if (!postureFree(from, 0.0)) {
-    retreat = planRetreat(from, 0.5 * options_.min_clearance);
+    retreat = planRetreat(from, 0.5 * min_clearance_);
     if (retreat.empty()) return {};
     start = retreat.back();
   }
-  std::vector<Eigen::VectorXd> path = planApproach(start, to, options_.min_clearance);
-  if (path.empty()) path = planApproach(start, to, 0.5 * options_.min_clearance);
+  std::vector<Eigen::VectorXd> path = planApproach(start, to, min_clearance_);
+  if (path.empty()) path = planApproach(start, to, 0.5 * min_clearance_);
   if (path.empty() || retreat.empty()) return path;
   retreat.insert(retreat.end(), path.begin() + 1, path.end());
   return retreat;
@@ -402,17 +406,19 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
   // Clearance up to a comfortable 8 cm counts; beyond it, the posture nearest the reference
   // (joint-space distance, 0.2 per rad: 4 cm less clearance weigh as much as 2.5 rad) wins.
   // Postures near a joint limit are penalized: they would warn, and the hands' deflections
-  // under π_rec would run the joint into its stop. Near as the warning counts it (a slide in
-  // metres, at most a tenth of its travel).
+  // under π_rec would run the joint into its stop. Near: within 0.2 rad (a little beyond the
+  // warning's 0.17), a slide as the warning counts it (2 cm, at most a tenth of its travel;
+  // 0.2 m had put every posture of a short slide near, and the slide was parked at its stop).
   const auto near_limit = [&](const Eigen::VectorXd& q_candidate) {
     for (int j = 0; j < dof; ++j) {
-      const double margin = std::min(q_candidate[j] - lower[j], upper[j] - q_candidate[j]);
-      if (margin < nearLimitMargin(model_->joints()[static_cast<std::size_t>(j)], workflow_->options())) return true;
+      const robot::Joint& joint = model_->joints()[static_cast<std::size_t>(j)];
+      const double near = joint.type == robot::JointType::kPrismatic ? nearLimitMargin(joint, workflow_->options()) : 0.2;
+      if (std::min(q_candidate[j] - lower[j], upper[j] - q_candidate[j]) < near) return true;
     }
     return false;
   };
   const auto score = [&](const Eigen::VectorXd& q_candidate, double clearance) {
-    return std::min(clearance, 0.08) / 0.08 - 0.2 * (q_candidate - q_reference).norm() - (near_limit(q_candidate) ? 0.5 : 0.0);
+    return std::min(clearance, scaled(0.08)) / scaled(0.08) - 0.2 * (q_candidate - q_reference).norm() - (near_limit(q_candidate) ? 0.5 : 0.0);
   };
   for (int c = 0; c < options_.posture_candidates; ++c) {
     // Null-space targets: the scene's suggestion, the reference posture, the current posture,
@@ -441,7 +447,7 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
     world_->update(q);
     if (!world_->contacts().empty() || !holdable(q)) continue;
     const double clearance = world_->clearance(0.5).distance;
-    candidates.push_back({PostureChoice{clearance >= options_.min_clearance, q, clearance}, score(q, clearance)});
+    candidates.push_back({PostureChoice{clearance >= min_clearance_, q, clearance}, score(q, clearance)});
   }
   // Where no candidate keeps the clearance, a person takes the best postures found and pushes
   // the links away from what they come close to; they stay in the family the score chose.
@@ -459,7 +465,7 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
       if (!world_->contacts().empty() || !holdable(q)) continue;
       const double clearance = world_->clearance(0.5).distance;
       if (clearance <= start.choice.clearance) continue;
-      candidates.push_back({PostureChoice{clearance >= options_.min_clearance, q, clearance}, score(q, clearance)});
+      candidates.push_back({PostureChoice{clearance >= min_clearance_, q, clearance}, score(q, clearance)});
     }
   }
   // A posture with the clearance asked for beats every one without it, however near the
@@ -482,8 +488,8 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
 }
 
 Eigen::VectorXd SimulatedTutor::postureClearOfObstacles(const Eigen::Vector3d& p_W, const Eigen::VectorXd& q_start) {
-  constexpr double kInfluence = 0.08;  // [m] obstacles farther away do not push
-  constexpr double kPush = 1.0;        // [rad per m of intrusion into kInfluence, per unit of the Jacobian]
+  const double influence = scaled(0.08);  // [m] obstacles farther away do not push
+  constexpr double kPush = 1.0;        // [rad per m of intrusion into influence, per unit of the Jacobian]
   constexpr double kMaxStep = 0.05;    // [rad] per iteration, and [m] of task error corrected per iteration
   const int dof = model_->dof();
   const Eigen::VectorXd lower = model_->softLowerLimits();
@@ -500,14 +506,14 @@ Eigen::VectorXd SimulatedTutor::postureClearOfObstacles(const Eigen::Vector3d& p
     const Eigen::MatrixXd J_pinv = J.transpose() * JJt.inverse();
     Eigen::VectorXd dq = J_pinv * error;
     world_->update(q);
-    const robot::Clearance nearest = world_->clearance(kInfluence);
-    if (nearest.body >= 1 && nearest.obstacle >= 0 && nearest.distance < kInfluence) {
+    const robot::Clearance nearest = world_->clearance(influence);
+    if (nearest.body >= 1 && nearest.obstacle >= 0 && nearest.distance < influence) {
       // Apart, the witness points lead from the obstacle to the link; in contact, the other way.
       Eigen::Vector3d away = nearest.p_body_W - nearest.p_obstacle_W;
       if (nearest.distance < 0.0) away = -away;
       if (away.norm() > 1e-9) {
         kinematics_.pointJacobian(nearest.body, nearest.p_body_W, J_point);
-        const Eigen::VectorXd push = J_point.transpose() * away.normalized() * (kPush * (kInfluence - nearest.distance));
+        const Eigen::VectorXd push = J_point.transpose() * away.normalized() * (kPush * (influence - nearest.distance));
         dq += push - J_pinv * (J * push);
       }
     }
@@ -544,7 +550,8 @@ bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) 
   // base: every joint axis meets or parallels the line of the force) cannot be noticed at any
   // force; a person pushes where the arm gives instead, the direction the tip moves most
   // easily (towards the way to go where that has a part along it; either way where not).
-  if (kFirmestPush * torque_per_newton < workflow_->options().affected_torque) {
+  const double firm = kFirmPush * arm_scale_.force(), firmest = kFirmestPush * arm_scale_.force();
+  if (firmest * torque_per_newton < workflow_->affectedTorque()) {
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Jp, Eigen::ComputeThinU);
     Eigen::Vector3d gives = svd.matrixU().col(0);
     if (gives.dot(push) < 0.0) gives = -gives;
@@ -552,10 +559,10 @@ bool SimulatedTutor::grab(SubStage sub_stage, const Eigen::Vector3d& direction) 
     torque_per_newton = (Jp.transpose() * push).cwiseAbs().maxCoeff();
   }
   const double firmer =
-      std::clamp(2.0 * workflow_->options().affected_torque / std::max(torque_per_newton, 1e-6), kFirmPush, kFirmestPush);
+      std::clamp(2.0 * workflow_->affectedTorque() / std::max(torque_per_newton, 1e-6), firm, firmest);
   for (int attempt = 0; attempt < 2; ++attempt) {
-    if (attempt == 1 && firmer <= kFirmPush) break;
-    const double force = attempt == 0 ? kFirmPush : firmer;
+    if (attempt == 1 && firmer <= firm) break;
+    const double force = attempt == 0 ? firm : firmer;
     const double until = arm()->time() + 3.0;
     while (workflow_->subStage() == sub_stage && arm()->time() <= until) {
       arm()->setHandForce(model_->dof(), state_.p_WT(), force * push);
@@ -582,7 +589,7 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
       along = even ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitX();
     }
     bodies.push_back(b);
-    offsets.push_back(0.06 * along);
+    offsets.push_back(scaled(0.06) * along);
   }
   const auto m = static_cast<int>(bodies.size());
   const auto offset = [&offsets](int i) { return offsets[static_cast<std::size_t>(i)]; };
@@ -661,7 +668,8 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
       const Eigen::VectorXd inertia = arm()->inertiaDiagonal();
       const Eigen::VectorXd error = q_ref - state_.q;
       integral = (integral + error * (dt * m)).cwiseMax(-1.0).cwiseMin(1.0);
-      const Eigen::VectorXd push = inertia.cwiseMax(0.2).cwiseProduct(kJointStiffness * error + kJointIntegral * integral);
+      const Eigen::VectorXd push =
+          inertia.cwiseMax(0.2 * arm_scale_.inertia).cwiseProduct(kJointStiffness * error + kJointIntegral * integral);
       const Eigen::VectorXd tau = push - inertia.cwiseProduct(kJointDamping * state_.qd);
       kinematics_.update(state_.q);
       for (int i = 0; i < m; ++i) {
@@ -674,7 +682,8 @@ bool SimulatedTutor::pushAlong(const std::vector<Eigen::VectorXd>& path, double 
       const Eigen::VectorXd F = A.transpose() * AAt.ldlt().solve(tau);
       for (int i = 0; i < m; ++i) {
         Eigen::Vector3d f = F.segment<3>(3 * i) * m;
-        if (f.norm() > kMaxPointForce) f *= kMaxPointForce / f.norm();
+        const double most = kMaxPointForce * arm_scale_.force();
+        if (f.norm() > most) f *= most / f.norm();
         forces[static_cast<std::size_t>(i)] = f;
       }
     }
@@ -695,8 +704,10 @@ void SimulatedTutor::pushTip(const std::function<Eigen::Vector3d(double)>& p_ref
     const Eigen::Vector3d p = state_.p_WT();
     const Eigen::Vector3d v = (p - p_last) / arm()->cycleTime();
     p_last = p;
-    Eigen::Vector3d F = kTipStiffness * (p_ref(arm()->time() - start) - p) - kTipDamping * v;
-    if (F.norm() > kMaxTipForce) F *= kMaxTipForce / F.norm();
+    // A lighter arm is led with a lighter hand (ArmScale): the LWR IV's would ring a light tip.
+    Eigen::Vector3d F = arm_scale_.mass() * (kTipStiffness * (p_ref(arm()->time() - start) - p) - kTipDamping * v);
+    const double most = kMaxTipForce * arm_scale_.force();
+    if (F.norm() > most) F *= most / F.norm();
     arm()->setHandForce(model_->dof(), p, F);
     tick();
   }
@@ -739,10 +750,10 @@ void SimulatedTutor::leadTipOutOfAssistance(const std::vector<Eigen::VectorXd>& 
   // the lead too: a touch in POSED would start a recording.
   int cycle = 0;
   const long look_every = std::max(1L, std::lround(0.02 / arm()->cycleTime()));
-  const double margin = 0.5 * options_.min_clearance;
-  pushTipAlong(way, kLeadSpeed, 2.0, [&] {
+  const double margin = 0.5 * min_clearance_;
+  pushTipAlong(way, scaled(kLeadSpeed), 2.0, [&] {
     if (workflow_->subStage() != SubStage::kApproaching) return true;
-    if (assistanceAtTip() < kYieldingConfidence || (state_.p_WT() - way.back()).norm() < 0.02) return true;
+    if (assistanceAtTip() < kYieldingConfidence || (state_.p_WT() - way.back()).norm() < scaled(0.02)) return true;
     if (++cycle % look_every != 0) return false;
     world_->update(state_.q);
     return !world_->contacts().empty() || world_->clearance(2.0 * margin).distance < margin;
@@ -796,8 +807,8 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     area.clearance = postures.front().clearance;
     std::ostringstream failure;
     world_->update(postures.front().q);
-    const robot::Clearance nearest = world_->clearance(options_.min_clearance);
-    failure << std::fixed << std::setprecision(1) << "no posture with " << 100.0 * options_.min_clearance
+    const robot::Clearance nearest = world_->clearance(min_clearance_);
+    failure << std::fixed << std::setprecision(1) << "no posture with " << 100.0 * min_clearance_
             << " cm clearance (the best found keeps " << 100.0 * postures.front().clearance << " cm";
     if (nearest.obstacle >= 0) failure << ", " << world_->bodyName(nearest.body) << " to " << world_->obstacleName(nearest.obstacle);
     failure << ")";
@@ -846,7 +857,7 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     }
   }
   // A person moves slowly where the arm passes close to an obstacle.
-  const double speed = options_.approach_speed * std::clamp(std::max(0.0, pathClearance(path)) / 0.15, 0.1, 1.0);
+  const double speed = options_.approach_speed * std::clamp(std::max(0.0, pathClearance(path)) / scaled(0.15), 0.1, 1.0);
   if (!pushAlong(path, speed)) {
     area.failure = "the posture was not reached (" + last_failure_detail_ + ")";
     return false;
@@ -875,26 +886,26 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
   double scale = 1.0;
   const auto helix = [&](double t) {
     const double s = std::clamp(t / duration, 0.0, 1.0);
-    const double radius = scale * 0.5 * options_.circle_diameter * (1.0 / 3.0 + 2.0 / 3.0 * s);
+    const double radius = scale * 0.5 * circle_diameter_ * (1.0 / 3.0 + 2.0 / 3.0 * s);
     return Eigen::Vector3d(p0 + radius * (std::cos(omega * t) * u + std::sin(omega * t) * w) +
-                           scale * 0.5 * options_.helix_height * options_.circle_diameter * std::sin(2.0 * std::numbers::pi * s) * axis);
+                           scale * 0.5 * options_.helix_height * circle_diameter_ * std::sin(2.0 * std::numbers::pi * s) * axis);
   };
-  const double smallest = std::min(1.0, 0.02 / options_.circle_diameter);
+  const double smallest = std::min(1.0, scaled(0.02) / circle_diameter_);
   bool room = false;
   for (;; scale = std::max(smallest, scale * 0.7)) {
     std::vector<Eigen::Vector3d> points;
     for (double t = 0.0; t <= duration; t += 0.05 * options_.circle_period) points.push_back(helix(t));
-    room = helixFree(q_fixed, points, 0.5 * options_.min_clearance);
+    room = helixFree(q_fixed, points, 0.5 * min_clearance_);
     if (room || scale <= smallest) break;
   }
-  area.helix_diameter = scale * options_.circle_diameter;
+  area.helix_diameter = scale * circle_diameter_;
   // At a listed place the scene's author asked for an area, and the smallest helix is drawn; a
   // place the tutor picked itself it leaves for a roomier one, as a person would (a two-armed
   // robot's own torso 5 cm from the tip: the wrist touched it while recording).
   if (!room && area.automatic) {
     std::ostringstream failure;
     failure << std::fixed << std::setprecision(1) << "no room there for even a " << 100.0 * area.helix_diameter
-            << " cm helix (a posture on it comes within " << 50.0 * options_.min_clearance
+            << " cm helix (a posture on it comes within " << 50.0 * min_clearance_
             << " cm of an obstacle or of the arm itself)";
     area.failure = failure.str();
     return false;
@@ -946,7 +957,7 @@ void SimulatedTutor::drawCheckPoints() {
     const Eigen::Vector3d x = draw.uniform(grid.lower, grid.upper);
     if (arm_reach_.fromShoulder(x) > arm_reach_.reach || grid.excludes(x)) continue;
     // Only where some posture reaches without a contact (a person sees the arm cannot get there).
-    if (robot::obstacleAt(*scene_, x, 0.05) == nullptr && accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw)) {
+    if (robot::obstacleAt(*scene_, x, scaled(0.05)) == nullptr && accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw)) {
       check_points_.push_back(x);
     }
   }
@@ -974,8 +985,9 @@ int SimulatedTutor::mapFailures() {
 
 std::optional<Eigen::Vector3d> SimulatedTutor::nextAutomaticTarget(const robot::EvaluationGrid& grid,
                                                                    const std::vector<Eigen::Vector3d>& tried, bool where_it_fails) {
-  const auto near_tried = [&tried](const Eigen::Vector3d& x) {
-    return std::any_of(tried.begin(), tried.end(), [&x](const Eigen::Vector3d& t) { return (t - x).norm() < 0.1; });
+  const double apart = scaled(0.1);
+  const auto near_tried = [&tried, apart](const Eigen::Vector3d& x) {
+    return std::any_of(tried.begin(), tried.end(), [&](const Eigen::Vector3d& t) { return (t - x).norm() < apart; });
   };
   int best = -1;
   int best_neighbours = -1;
@@ -986,7 +998,7 @@ std::optional<Eigen::Vector3d> SimulatedTutor::nextAutomaticTarget(const robot::
       if (!roomyForAnArea(check_points_[i])) continue;
       int neighbours = 0;
       for (std::size_t j = 0; j < check_points_.size(); ++j) {
-        if (check_failed_[j] && (check_points_[j] - check_points_[i]).norm() < 0.2) ++neighbours;
+        if (check_failed_[j] && (check_points_[j] - check_points_[i]).norm() < scaled(0.2)) ++neighbours;
       }
       if (neighbours > best_neighbours) {
         best_neighbours = neighbours;
@@ -1022,9 +1034,9 @@ bool SimulatedTutor::roomyForAnArea(const Eigen::Vector3d& p_W) const {
   // the table it stands on, where the hands cannot lead the arm through a helix, and 5 cm inside
   // the arm's reach (the workspace box reaches beyond it, and a person does not pick a place the
   // arm cannot get to).
-  if (robot::obstacleAt(*scene_, p_W, 0.1) != nullptr) return false;
+  if (robot::obstacleAt(*scene_, p_W, scaled(0.1)) != nullptr) return false;
   if (scene_->grid && scene_->grid->excludes(p_W)) return false;
-  return p_W.z() >= 0.08 && arm_reach_.roomFor(p_W, 0.05);
+  return p_W.z() >= scaled(0.08) && arm_reach_.roomFor(p_W, scaled(0.05));
 }
 
 TutorReport SimulatedTutor::configure(int area_count) {
@@ -1102,9 +1114,11 @@ TutorReport SimulatedTutor::configureAreas(int area_count) {
       if (!place) {
         // Every place drawn was near an obstacle, excluded, beyond the arm or without a free
         // posture: a person would not teach the arm just anywhere.
-        area.failure = "no place of its own found: 200 random points of the evaluation grid were all within 0.1 m of an "
-                       "obstacle or of a place tried before, lower than 8 cm, in an excluded box, beyond the arm's reach or "
-                       "without a collision-free posture";
+        std::ostringstream failure;
+        failure << std::fixed << std::setprecision(1) << "no place of its own found: 200 random points of the evaluation grid were all within "
+                << 100.0 * scaled(0.1) << " cm of an obstacle or of a place tried before, lower than " << 100.0 * scaled(0.08)
+                << " cm, in an excluded box, beyond the arm's reach or without a collision-free posture";
+        area.failure = failure.str();
         report_.areas.push_back(area);
         break;
       }

@@ -37,7 +37,10 @@ struct TutorOptions {
   std::uint64_t seed = 1;
   /// [m] largest diameter of the deflection helix (participants drew 0.02-0.32 m, Sect. 3.3);
   /// the tutor draws smaller where the arm would come closer than half min_clearance to an
-  /// obstacle under π_rec, down to 0.02 m.
+  /// obstacle under π_rec, down to 0.02 m. These and min_clearance are for the LWR IV's size:
+  /// on a smaller arm the tutor takes them times ArmScale::length (the helix at least 1 cm): a
+  /// person keeps a 30 cm arm's links millimetres from a box, not 3 cm, and draws a helix it
+  /// can follow. Its hands push a lighter arm more gently (ArmScale).
   double circle_diameter = 0.3;
   double helix_height = 0.6;       ///< height range the helix sweeps over its turns, times the diameter
   int circles = 4;                 ///< turns of the helix per area
@@ -259,6 +262,12 @@ class SimulatedTutor {
   std::unique_ptr<robot::CollisionWorld> world_;
   robot::Kinematics kinematics_;
   ArmReach arm_reach_;  ///< where areas can lie
+  ArmScale arm_scale_;
+  double length_scale_;  ///< arm_scale_.length: the tutor's distances for this arm
+  double min_clearance_;    ///< [m] TutorOptions::min_clearance for this arm
+  double circle_diameter_;  ///< [m] TutorOptions::circle_diameter for this arm
+  /// [m] a distance chosen for the LWR IV, for this arm.
+  double scaled(double lwr_length) const { return length_scale_ * lwr_length; }
   Eigen::VectorXd home_;  ///< homePosture: where evaluations of the map start
   learning::UniformRandom random_;
   robot::RobotState state_;
