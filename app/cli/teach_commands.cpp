@@ -247,7 +247,20 @@ Json runTeach(const TeachOptions& options) {
   app::SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
 
   const auto wall_start = std::chrono::steady_clock::now();
-  const app::TutorReport report = tutor.configure(options.areas);
+  app::TutorReport report;
+  try {
+    report = tutor.configure(options.areas);
+  } catch (const InputError&) {
+    // Refused before configuration began (the start posture in an obstacle): nothing was taught,
+    // and a file left behind would only stand in the way of the corrected run (--out exists).
+    if (workflow.stage() == app::Stage::kIdle && workflow.areas().empty() && recorder) {
+      writer.reset();
+      recorder.reset();
+      std::error_code ignored;
+      std::filesystem::remove(options.out, ignored);
+    }
+    throw;
+  }
   const double wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
 
   // The session file.

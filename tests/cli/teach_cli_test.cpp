@@ -357,6 +357,23 @@ TEST(TeachCli, RefusesASceneWhosePosturesBelongToAnotherRobotWithOneLine) {
   EXPECT_FALSE(fs::exists(scratch("mismatch.json")));
 }
 
+// A home posture that puts a link into an obstacle is refused before anything is taught; the
+// session file the run had opened went with it, so the corrected run is not told --out exists.
+TEST(TeachCli, RefusesAStartPostureInAnObstacleAndLeavesNoSessionBehind) {
+  const fs::path scene = scratch("start_in_box.yaml");
+  std::ofstream(scene) << "name: start_in_box\nhome_posture: [0, 0, 0, 0, 0, 0, 0]\n"
+                          "obstacles:\n  - {name: post, shape: box, size: [0.2, 0.2, 0.2], position: [0.12, 0, 0.6]}\n";
+  const fs::path out = scratch("start_in_box.flexirob");
+  fs::remove(out);
+  const auto result = runCliBinary("teach --robot lwr4 --scene " + scene.string() + " --areas 1 --out " + out.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("into post"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(out)) << "a refused run leaves no session";
+  const auto again = runCliBinary("teach --robot lwr4 --scene " + scene.string() + " --areas 1 --out " + out.string());
+  EXPECT_NE(again.err.find("into post"), std::string::npos) << "the same reason, not '--out exists': " << again.err;
+  fs::remove(scene);
+}
+
 TEST(TeachCli, RefusesADirectoryAsTheSessionFileBeforeTeaching) {
   const fs::path folder = scratch("sessions_folder");
   fs::create_directories(folder);
