@@ -64,6 +64,24 @@ double spanOf(const Eigen::MatrixXd& X) {
 
 }  // namespace
 
+std::string failureKinds(const std::vector<TutorAreaReport>& areas) {
+  std::vector<std::pair<std::string, int>> kinds;  // in the order first met
+  for (const TutorAreaReport& area : areas) {
+    if (area.taught || area.failure.empty()) continue;
+    const std::string kind = area.failure.substr(0, std::min(area.failure.find(" ("), area.failure.find(": ")));
+    const auto known = std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == kind; });
+    if (known == kinds.end()) {
+      kinds.emplace_back(kind, 1);
+    } else {
+      ++known->second;
+    }
+  }
+  std::stable_sort(kinds.begin(), kinds.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+  std::string text;
+  for (const auto& [kind, count] : kinds) text += (text.empty() ? "" : ", ") + std::to_string(count) + " × " + kind;
+  return text;
+}
+
 SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const robot::Scene& scene,
                                const robot::ParameterSet& parameters, TutorOptions options)
     : sim_(&sim),

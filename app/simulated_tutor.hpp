@@ -123,6 +123,11 @@ struct PostureChoice {
   double clearance = 0.0;  ///< [m]
 };
 
+/// The reasons areas were not taught, counted by kind (a failure's text up to its first " ("
+/// or ": "), the most frequent first: "8 × the posture was not reached, 1 × taken back". Empty
+/// when every area was taught.
+std::string failureKinds(const std::vector<TutorAreaReport>& areas);
+
 class SimulatedTutor {
  public:
   /// sim, workflow and scene must outlive the tutor; the workflow drives the same simulation.

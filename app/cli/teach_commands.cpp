@@ -490,9 +490,12 @@ Json runTeach(const TeachOptions& options) {
   if (workflow.areas().empty()) {
     // The session is written all the same (events, the ITM of the attempts): nothing is lost.
     const std::string reason = report.areas.empty() ? std::string("none was tried") : report.areas.front().failure;
+    // Counted by kind: the first reason alone may be a minor one (a cramped listed place) where
+    // most attempts failed otherwise.
+    const std::string kinds = report.areas.size() > 1 ? ": " + app::failureKinds(report.areas) : std::string();
     throw CommandFailed("teach: no training area could be taught" + (start_sags.empty() ? "" : ": " + start_sags) + " (" +
-                            std::to_string(report.areas.size()) +
-                            " tried; the first: " + reason + "); the session was written to " + options.out,
+                            std::to_string(report.areas.size()) + " tried" + kinds + "; the first: " + reason +
+                            "); the session was written to " + options.out,
                         std::move(result));
   }
   return result;

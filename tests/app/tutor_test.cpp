@@ -964,6 +964,22 @@ TEST(SimulatedTutor, TeachesASmallLightArmAsItTeachesTheLwrIv) {
   EXPECT_LT(state.qd.cwiseAbs().maxCoeff(), 0.05);
 }
 
+// `teach` says why areas failed by kind: the first reason alone had named a cramped listed place
+// where eight of ten attempts failed because the arm was not led to its posture.
+TEST(SimulatedTutor, CountsTheReasonsAreasWereNotTaughtByKindMostFrequentFirst) {
+  std::vector<TutorAreaReport> areas(5);
+  areas[0].failure = "no posture with 3.0 cm clearance (the best found keeps 2.7 cm, l6 to table)";
+  areas[1].failure = "the posture was not reached (timed out in CONFIGURATION/APPROACHING, at path point 2/2)";
+  areas[2].failure = "the posture was not reached (on_converged fired 0.03 rad short of the posture)";
+  areas[3].taught = true;
+  areas[4].failure = "no place of its own found: 200 random points of the evaluation grid were all within 10 cm";
+  EXPECT_EQ(failureKinds(areas),
+            "2 × the posture was not reached, 1 × no posture with 3.0 cm clearance, 1 × no place of its own found");
+  areas.resize(4);
+  areas[0].taught = areas[1].taught = areas[2].taught = true;
+  EXPECT_EQ(failureKinds(areas), "");
+}
+
 // Beyond the scene's list the tutor chooses where to teach: where the learned map fails, and an
 // area that makes the map miss more of its check points than before is taken back (removed from
 // the workflow), so no area it keeps made the map worse on them.

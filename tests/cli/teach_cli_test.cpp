@@ -196,6 +196,11 @@ TEST(TeachCli, FailsWithOneLineWhenNoAreaCouldBeTaughtAndStillWritesTheSession) 
   EXPECT_EQ(result.exit_code, 1) << result.err;
   EXPECT_EQ(result.err.rfind("error: teach: no training area could be taught", 0), 0U) << result.err;
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  // The listed place and the one the tutor looked for itself, each failure by kind.
+  EXPECT_NE(result.err.find("(2 tried: 1 × every posture found that reaches it makes a contact, 1 × no place of its own found; "
+                            "the first: "),
+            std::string::npos)
+      << result.err;
   const auto json = result.json();
   EXPECT_EQ(json.at("areas").get<int>(), 0);
   EXPECT_FALSE(json.at("model_learned").get<bool>());
