@@ -75,6 +75,15 @@ Json runReach(const ReachOptions& options) {
   if (!result.gravity_overload.empty()) {
     std::fprintf(stderr, "warning: the joints cannot hold the arm up: %s (the URDF's <limit effort>)\n", result.gravity_overload.c_str());
   }
+  if (result.status == "reached" && result.collisions > 0) {
+    // The target is reached (within the tolerance), but not as `eval reachable` counts it.
+    std::string touched;
+    for (const auto& event : result.collision_events) {
+      const std::string pair = event.link + " on " + event.other;
+      if (touched.find(pair) == std::string::npos) touched += (touched.empty() ? "" : ", ") + pair;
+    }
+    std::fprintf(stderr, "note: reached, but not free of contacts on the way: %s\n", touched.c_str());
+  }
   Json events = Json::array();
   for (const auto& event : result.collision_events) {
     events.push_back({{"time_s", event.time}, {"link", event.link}, {"other", event.other}, {"self", event.self_collision}});
@@ -83,6 +92,8 @@ Json runReach(const ReachOptions& options) {
           {"scene", scene.name},
           {"status", result.status},
           {"reached", result.status == "reached"},
+          // As `eval reachable` counts a target: reached, and no contact on the way.
+          {"reached_without_contact", result.status == "reached" && result.collisions == 0},
           {"error_m", result.error_m},
           {"best_error_m", result.best_error_m},
           {"steps", result.steps},

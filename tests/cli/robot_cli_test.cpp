@@ -2,6 +2,8 @@
 // real binary as other programs use it.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <Eigen/Geometry>
 #include <numbers>
 #include <unistd.h>
@@ -85,6 +87,26 @@ TEST(RobotCli, ReachWithoutASceneIsReachInTheEmptyScene) {
   EXPECT_EQ(a.at("collisions"), 0) << without.out;
   EXPECT_EQ(a.at("q"), b.at("q"));
   std::filesystem::remove(urdf);
+}
+
+// reach drives the tip straight through what lies in the way (it plans nothing): a target below
+// a slab is reached, but not as `eval reachable` counts it, and reach says so.
+TEST(RobotCli, ReachSaysWhenTheTargetWasReachedOnlyThroughAContact) {
+  const std::filesystem::path scene = std::filesystem::temp_directory_path() / "flexirob-reach-slab.yaml";
+  std::ofstream(scene) << "name: slab\nobstacles:\n  - {name: slab, shape: box, size: [0.3, 0.6, 0.04], position: [0.5, 0, 0.5]}\n";
+  const std::string target = " --robot lwr4 --target 0.5,0,0.3 --scene ";
+  const auto through = runCliBinary("reach" + target + scene.string());
+  const auto free = runCliBinary("reach" + target + "empty");
+  ASSERT_EQ(through.exit_code, 0) << through.err;
+  ASSERT_EQ(free.exit_code, 0) << free.err;
+  EXPECT_TRUE(through.json().at("reached").get<bool>());
+  EXPECT_GT(through.json().at("collisions").get<int>(), 0);
+  EXPECT_FALSE(through.json().at("reached_without_contact").get<bool>());
+  EXPECT_NE(through.err.find("note: reached, but not free of contacts on the way: "), std::string::npos) << through.err;
+  EXPECT_NE(through.err.find(" on slab"), std::string::npos) << through.err;
+  EXPECT_TRUE(free.json().at("reached_without_contact").get<bool>());
+  EXPECT_EQ(free.err.find("not free of contacts"), std::string::npos) << free.err;
+  std::filesystem::remove(scene);
 }
 
 // A 5 kg forearm held out level pulls about 10 Nm on its shoulder: with 2 Nm of effort the
