@@ -52,10 +52,10 @@ osg::ref_ptr<osg::Geometry> makeGeometry(osg::Vec3Array* vertices, const osg::Ve
 
 Eigen::Vector4f OverlayPalette::area(int index) {
   // Eight colours chosen to stay apart in CIELAB (ΔE76 at least 36) from each other and from
-  // every other overlay (reached green, unreached red, ITM orange and brown, path magenta,
-  // trajectories black, purple and blue, the scene model's grey, the force's yellow) and from
-  // the light background, with a lightness L* of 35-70 so that small points show on it. The
-  // first ones are the farthest apart: most sessions have few areas.
+  // every other overlay (reached green, unreached red, ITM orange and brown, path magenta, a
+  // path with a contact wine, trajectories black, purple and blue, the scene model's grey, the
+  // force's yellow) and from the light background, with a lightness L* of 35-70 so that small
+  // points show on it. The first ones are the farthest apart: most sessions have few areas.
   static const std::array<Eigen::Vector4f, 8> kColors = {
       Eigen::Vector4f(0.30F, 0.00F, 1.00F, 1.0F),  // ultramarine
       Eigen::Vector4f(0.15F, 0.75F, 0.60F, 1.0F),  // turquoise

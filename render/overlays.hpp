@@ -45,6 +45,9 @@ struct OverlayPalette {
   static Eigen::Vector4f executedTrajectory() { return {0.05F, 0.55F, 0.75F, 1.0F}; }
   static Eigen::Vector4f reachable() { return {0.10F, 0.70F, 0.15F, 1.0F}; }
   static Eigen::Vector4f unreachable() { return {0.90F, 0.10F, 0.10F, 1.0F}; }
+  /// A planned path whose execution touched something: wine, apart from the unreached targets'
+  /// red it is often drawn with (ΔE76 68) and from the planned paths' magenta.
+  static Eigen::Vector4f collidedPath() { return {0.40F, 0.00F, 0.20F, 1.0F}; }
   static Eigen::Vector4f collision() { return {1.0F, 0.0F, 0.0F, 1.0F}; }
   /// The points of the implicit scene model S (Eq. 4.1, Fig. 4.6).
   static Eigen::Vector4f sceneModel() { return {0.22F, 0.22F, 0.28F, 1.0F}; }

@@ -466,14 +466,14 @@ Json renderPicture(const RenderOptions& options) {
       collided += hit ? 1 : 0;
       overlays.addContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(goal, 0.02));
       overlays.addContent(render::OverlayLayer::kGoalAndPath,
-                          render::makePolyline(path, hit ? render::OverlayPalette::unreachable()
+                          render::makePolyline(path, hit ? render::OverlayPalette::collidedPath()
                                                          : render::OverlayPalette::plannedPath(), 3.0F * scale));
       include(box, path);
       include(box, {goal});
       ++paths;
     }
     legend.push_back({"Goal and planned path", render::OverlayPalette::plannedPath()});
-    if (collided > 0) legend.push_back({"Path with a contact", render::OverlayPalette::unreachable()});
+    if (collided > 0) legend.push_back({"Path with a contact", render::OverlayPalette::collidedPath()});
     drawn["paths"] = paths;
     drawn["paths_with_contact"] = collided;
   }

@@ -102,6 +102,7 @@ TEST(OverlayPalette, AreaColoursDifferFromEachOtherAndFromTheOtherOverlaysAndRep
       {"ITM node", OverlayPalette::itmNode()},
       {"ITM edge", OverlayPalette::itmEdge()},
       {"planned path", OverlayPalette::plannedPath()},
+      {"path with a contact", OverlayPalette::collidedPath()},
       {"target trajectory", OverlayPalette::targetTrajectory()},
       {"teach-in", OverlayPalette::teachInTrajectory()},
       {"executed motion", OverlayPalette::executedTrajectory()},
@@ -115,6 +116,13 @@ TEST(OverlayPalette, AreaColoursDifferFromEachOtherAndFromTheOtherOverlaysAndRep
     const double lightness = cieLab(OverlayPalette::area(a))[0];
     EXPECT_GT(lightness, 35.0) << "area " << a << " is too dark to tell from the black target trajectory";
     EXPECT_LT(lightness, 70.0) << "area " << a << " is too light for the background";
+  }
+  // A path with a contact is drawn with the targets of a reachability run and the graph: it
+  // had been the unreached targets' red.
+  for (const auto& [name, colour] : others) {
+    if (std::string(name) != "path with a contact" && std::string(name) != "background") {
+      EXPECT_GT(deltaE(OverlayPalette::collidedPath(), colour), kApart) << "path with a contact vs " << name;
+    }
   }
   EXPECT_EQ(OverlayPalette::area(9), OverlayPalette::area(1));
   EXPECT_EQ(OverlayPalette::area(-1), OverlayPalette::area(7));
