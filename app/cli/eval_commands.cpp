@@ -443,7 +443,8 @@ namespace {
 Json trajectoryJson(const app::TrajectoryResult& result) {
   Json regions = Json::array();
   for (const auto& region : result.regions) regions.push_back(trajectoryRegionJson(region));
-  return {{"source", result.from_scene ? "scene" : "drawn around the samples"}, {"regions", regions}};
+  // As --source names them.
+  return {{"source", result.from_scene ? "scene" : "training-data"}, {"regions", regions}};
 }
 
 Json runTrajectories(const EvalOptions& options) {

@@ -336,7 +336,7 @@ TEST(EvalTrajectoriesCli, RefusesTheScenesTrajectoriesWhereItListsNoneAndAnUnkno
   EXPECT_EQ(unknown.exit_code, 2) << unknown.err;
   const auto drawn = runCliBinary("eval trajectories --session " + session.string() + " --source training-data --per-area 1");
   ASSERT_EQ(drawn.exit_code, 0) << drawn.err;
-  EXPECT_EQ(drawn.json().at("source"), "drawn around the samples");
+  EXPECT_EQ(drawn.json().at("source"), "training-data");
   std::filesystem::remove(session);
 }
 
@@ -346,7 +346,7 @@ TEST(EvalTrajectoriesCli, DrawsTheRequestedTrajectoriesPerRegion) {
   const auto result = runCliBinary("eval trajectories --session " + session.string() + " --per-area 2 --speed 0.2 --seed 3");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const nlohmann::json json = result.json();
-  EXPECT_EQ(json.at("source"), "drawn around the samples");
+  EXPECT_EQ(json.at("source"), "training-data");
   EXPECT_DOUBLE_EQ(json.at("speed_m_s").get<double>(), 0.2);
   const nlohmann::json& regions = json.at("regions");
   ASSERT_EQ(regions.size(), 3U);
