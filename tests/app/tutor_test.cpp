@@ -23,6 +23,7 @@
 #include "robot/scene.hpp"
 #include "robot/sim/reach.hpp"
 #include "robot/sim/simulation.hpp"
+#include "tests/common/small_light_arm.hpp"
 
 namespace flexirob::app {
 namespace {
@@ -900,39 +901,13 @@ TEST(SimulatedTutor, ChoosesPosturesThatKeepAShortSlideAwayFromItsStops) {
   }
 }
 
-// A 25 cm arm of seven links of 0.3 to 0.05 kg (scaled by `heavier`): solid cylinders.
-std::string smallLightArm(double heavier = 1.0) {
-  const double lengths[] = {0.06, 0.06, 0.05, 0.05, 0.04, 0.04, 0.03};
-  const double masses[] = {0.3, 0.25, 0.2, 0.15, 0.1, 0.07, 0.05};
-  const char* axes[] = {"0 0 1", "0 1 0", "0 0 1", "0 1 0", "0 0 1", "0 1 0", "0 0 1"};
-  std::ostringstream urdf;
-  urdf << "<robot name=\"small\"><link name=\"base\"><collision><origin xyz=\"0 0 0.015\"/><geometry><cylinder radius=\"0.025\" "
-          "length=\"0.03\"/></geometry></collision></link>\n";
-  std::string parent = "base";
-  double offset = 0.03;
-  for (int j = 0; j < 7; ++j) {
-    const std::string child = "l" + std::to_string(j + 1);
-    const double l = lengths[j], m = masses[j] * heavier, r = 0.018 - 0.001 * j;
-    urdf << "<joint name=\"j" << j + 1 << "\" type=\"revolute\"><parent link=\"" << parent << "\"/><child link=\"" << child
-         << "\"/><origin xyz=\"0 0 " << offset << "\"/><axis xyz=\"" << axes[j] << "\"/>"
-         << "<limit lower=\"-2.8\" upper=\"2.8\" velocity=\"3\" effort=\"20\"/></joint>\n"
-         << "<link name=\"" << child << "\"><inertial><origin xyz=\"0 0 " << l / 2 << "\"/><mass value=\"" << m << "\"/><inertia ixx=\""
-         << m * (3 * r * r + l * l) / 12 << "\" ixy=\"0\" ixz=\"0\" iyy=\"" << m * (3 * r * r + l * l) / 12 << "\" iyz=\"0\" izz=\""
-         << m * r * r / 2 << "\"/></inertial><collision><origin xyz=\"0 0 " << l / 2 << "\"/><geometry><cylinder radius=\"" << r
-         << "\" length=\"" << l << "\"/></geometry></collision></link>\n";
-    parent = child;
-    offset = l;
-  }
-  urdf << "</robot>\n";
-  return urdf.str();
-}
 
 // Tab. A.1's gains, the admittance's damping, the simulation's drift damping and the tutor's
 // hands are the LWR IV's. On a 25 cm arm of a few hundred grams the hands' pushes made it ring
 // at up to 100 rad/s, and the drift damping held it like honey: no area could be taught, in an
 // open scene. Scaled to the arm, both areas are taught, and the recording follows the helix.
 TEST(SimulatedTutor, TeachesASmallLightArmAsItTeachesTheLwrIv) {
-  const robot::RobotModel model = robot::RobotModel::fromUrdfString(smallLightArm(), ".");
+  const robot::RobotModel model = robot::RobotModel::fromUrdfString(testing::smallLightArmUrdf(), ".");
   const ArmScale scale = armScale(model);
   ASSERT_LT(scale.inertia, 0.01);
   ASSERT_LT(scale.length, 0.35);
