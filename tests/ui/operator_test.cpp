@@ -59,6 +59,41 @@ void waitRunning(MainWindow& window) {
   QTRY_VERIFY_WITH_TIMEOUT(window.live() != nullptr && window.live()->snapshot().running, 10000);
 }
 
+// Starts configuration, drags `body` in the view 80 px left and 64 px up and holds it there for
+// 1.5 s, then lets go: where its origin was before and at the end of the pull, and the pixel the
+// drag started at. The caller checks QTest::currentTestFailed().
+void pullBody(MainWindow& window, int body, Eigen::Vector3d& before, Eigen::Vector3d& pulled, Eigen::Vector2d& start_pixel) {
+  const auto& s = window.live()->snapshot();
+  QTest::mouseClick(window.stagePanel()->button(Button::kStartConfiguration), Qt::LeftButton);
+  QTRY_COMPARE(s.stage, Stage::kConfiguration);
+  flexirob::ui::OsgView* view = window.view();
+  view->grabFramebuffer();
+  before = bodyOrigin(window, body);
+  const auto pixel = flexirob::render::projectToPixel(view->currentCamera(), view->width(), view->height(), before);
+  QVERIFY(pixel.has_value());
+  start_pixel = *pixel;
+  const auto send = [view](QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons held) {
+    QMouseEvent event(type, at, view->mapToGlobal(at), button, held, Qt::NoModifier);
+    QApplication::sendEvent(view, &event);
+  };
+  const QPointF start(pixel->x(), pixel->y());
+  send(QEvent::MouseButtonPress, start, Qt::LeftButton, Qt::LeftButton);
+  QVERIFY2(window.perturbation()->grabbing(), "the press did not grab the link");
+  // Pull to the upper left (the camera's left and up) and hold.
+  for (int i = 1; i <= 8; ++i) {
+    send(QEvent::MouseMove, start + QPointF(-10.0 * i, -8.0 * i), Qt::NoButton, Qt::LeftButton);
+    QTest::qWait(30);
+  }
+  QTRY_VERIFY(s.hand_active);
+  QTRY_VERIFY(window.forceArrow()->visible());
+  QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);  // the pull is a touch: on_affected
+  QTest::qWait(1500);
+  pulled = bodyOrigin(window, body);
+  send(QEvent::MouseButtonRelease, start + QPointF(-80.0, -64.0), Qt::LeftButton, Qt::NoButton);
+  QVERIFY(!window.perturbation()->grabbing());
+  QTRY_VERIFY(!window.forceArrow()->visible());
+}
+
 // A scene file `name` in `dir` holding `yaml`; its path, empty if it could not be written.
 std::string writeScene(const QTemporaryDir& dir, const QString& name, const QByteArray& yaml) {
   const QString path = dir.filePath(name);
@@ -259,42 +294,19 @@ class OperatorTest : public QObject {
     window.show();
     QVERIFY(QTest::qWaitForWindowExposed(&window));
     waitRunning(window);
-    const auto& s = window.live()->snapshot();
-    QTest::mouseClick(window.stagePanel()->button(Button::kStartConfiguration), Qt::LeftButton);
-    QTRY_COMPARE(s.stage, Stage::kConfiguration);
-    flexirob::ui::OsgView* view = window.view();
-    view->grabFramebuffer();
     const int elbow = 4;
-    const Eigen::Vector3d before = bodyOrigin(window, elbow);
-    const auto pixel = flexirob::render::projectToPixel(view->currentCamera(), view->width(), view->height(), before);
-    QVERIFY(pixel.has_value());
-    const auto send = [view](QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons held) {
-      QMouseEvent event(type, at, view->mapToGlobal(at), button, held, Qt::NoModifier);
-      QApplication::sendEvent(view, &event);
-    };
-    const QPointF start(pixel->x(), pixel->y());
-    send(QEvent::MouseButtonPress, start, Qt::LeftButton, Qt::LeftButton);
-    QVERIFY2(window.perturbation()->grabbing(), "the press did not grab the elbow");
-    // Pull to the upper left (the camera's left and up) and hold.
-    for (int i = 1; i <= 8; ++i) {
-      send(QEvent::MouseMove, start + QPointF(-10.0 * i, -8.0 * i), Qt::NoButton, Qt::LeftButton);
-      QTest::qWait(30);
-    }
-    QTRY_VERIFY(s.hand_active);
-    QTRY_VERIFY(window.forceArrow()->visible());
-    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);  // the pull is a touch: on_affected
-    QTest::qWait(1500);
-    const Eigen::Vector3d pulled = bodyOrigin(window, elbow);
-    send(QEvent::MouseButtonRelease, start + QPointF(-80.0, -64.0), Qt::LeftButton, Qt::NoButton);
-    QVERIFY(!window.perturbation()->grabbing());
-    QTRY_VERIFY(!window.forceArrow()->visible());
+    Eigen::Vector3d before, pulled;
+    Eigen::Vector2d pixel;
+    pullBody(window, elbow, before, pulled, pixel);
+    if (QTest::currentTestFailed()) return;
     QVERIFY2((pulled - before).norm() > 0.03,
              qPrintable(QStringLiteral("the elbow moved %1 m").arg((pulled - before).norm())));
     // It moved towards where the cursor went, in the picture.
+    flexirob::ui::OsgView* view = window.view();
     const auto moved_pixel = flexirob::render::projectToPixel(view->currentCamera(), view->width(), view->height(), pulled);
     QVERIFY(moved_pixel.has_value());
     const Eigen::Vector2d drag(-80.0, -64.0);
-    const double along = (*moved_pixel - *pixel).dot(drag.normalized());
+    const double along = (*moved_pixel - pixel).dot(drag.normalized());
     QVERIFY2(along > 5.0, qPrintable(QStringLiteral("the elbow moved %1 px along the drag").arg(along)));
   }
 
@@ -314,34 +326,15 @@ class OperatorTest : public QObject {
     window.show();
     QVERIFY(QTest::qWaitForWindowExposed(&window));
     waitRunning(window);
-    const auto& s = window.live()->snapshot();
-    QTest::mouseClick(window.stagePanel()->button(Button::kStartConfiguration), Qt::LeftButton);
-    QTRY_COMPARE(s.stage, Stage::kConfiguration);
-    flexirob::ui::OsgView* view = window.view();
-    view->grabFramebuffer();
     const int forearm = 5;
-    const Eigen::Vector3d before = bodyOrigin(window, forearm);
-    const auto pixel = flexirob::render::projectToPixel(view->currentCamera(), view->width(), view->height(), before);
-    QVERIFY(pixel.has_value());
-    const auto send = [view](QEvent::Type type, QPointF at, Qt::MouseButton button, Qt::MouseButtons held) {
-      QMouseEvent event(type, at, view->mapToGlobal(at), button, held, Qt::NoModifier);
-      QApplication::sendEvent(view, &event);
-    };
-    const QPointF start(pixel->x(), pixel->y());
-    send(QEvent::MouseButtonPress, start, Qt::LeftButton, Qt::LeftButton);
-    QVERIFY2(window.perturbation()->grabbing(), "the press did not grab the forearm");
-    for (int i = 1; i <= 8; ++i) {
-      send(QEvent::MouseMove, start + QPointF(-10.0 * i, -8.0 * i), Qt::NoButton, Qt::LeftButton);
-      QTest::qWait(30);
-    }
-    QTRY_VERIFY(s.hand_active);
-    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
-    QTest::qWait(1500);
-    const Eigen::Vector3d pulled = bodyOrigin(window, forearm);
-    send(QEvent::MouseButtonRelease, start + QPointF(-80.0, -64.0), Qt::LeftButton, Qt::NoButton);
+    Eigen::Vector3d before, pulled;
+    Eigen::Vector2d pixel;
+    pullBody(window, forearm, before, pulled, pixel);
+    if (QTest::currentTestFailed()) return;
     QVERIFY2((pulled - before).norm() > 0.02, qPrintable(QStringLiteral("the forearm moved %1 m").arg((pulled - before).norm())));
     // Let go, it comes to rest.
     QTest::qWait(1500);
+    const auto& s = window.live()->snapshot();
     double fastest = 0.0;
     for (int j = 0; j < s.dof; ++j) fastest = std::max(fastest, std::abs(s.qd[static_cast<std::size_t>(j)]));
     QVERIFY2(fastest < 0.1, qPrintable(QStringLiteral("a joint still moves at %1 rad/s").arg(fastest)));
