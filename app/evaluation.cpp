@@ -264,7 +264,7 @@ ArmReach armReach(const robot::RobotModel& model) {
   return result;
 }
 
-double ArmScale::mass() const { return std::min(1.0, inertia / (length * length)); }
+double ArmScale::mass() const { return inertia / (length * length); }
 
 ArmScale armScale(const robot::RobotModel& model) {
   ArmScale scale;

@@ -111,10 +111,12 @@ inline constexpr double kLwrShoulderReach = 0.85;
 struct ArmScale {
   double length = 1.0;   ///< reach from the shoulder / kLwrShoulderReach, at most 1
   double inertia = 1.0;  ///< robot::inertiaScaleToLwr()
-  /// Mass: inertia / length², at most 1 (Cartesian stiffness, damping and virtual mass).
+  /// Mass: inertia / length² (Cartesian stiffness, damping and virtual mass). Above 1 for an
+  /// arm as heavy as the LWR IV but shorter.
   double mass() const;
-  /// Force: mass × length (a hand's push).
-  double force() const { return mass() * length; }
+  /// Force: inertia / length, so that a push at the arm's levers makes torques in proportion to
+  /// its joints' (and to the trigger's threshold, scaled by the inertia).
+  double force() const { return inertia / length; }
 };
 
 ArmScale armScale(const robot::RobotModel& model);

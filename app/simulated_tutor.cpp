@@ -425,12 +425,14 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
   // (joint-space distance, 0.2 per rad: 4 cm less clearance weigh as much as 2.5 rad) wins.
   // Postures near a joint limit are penalized: they would warn, and the hands' deflections
   // under π_rec would run the joint into its stop. Near: within 0.2 rad (a little beyond the
-  // warning's 0.17), a slide as the warning counts it (2 cm, at most a tenth of its travel;
-  // 0.2 m had put every posture of a short slide near, and the slide was parked at its stop).
+  // warning's 0.17), a slide as the warning counts it (2 cm), each at most a tenth of the travel
+  // (0.2 m had put every posture of a short slide near, and the slide was parked at its stop).
   const auto near_limit = [&](const Eigen::VectorXd& q_candidate) {
     for (int j = 0; j < dof; ++j) {
       const robot::Joint& joint = model_->joints()[static_cast<std::size_t>(j)];
-      const double near = joint.type == robot::JointType::kPrismatic ? nearLimitMargin(joint, workflow_->options()) : 0.2;
+      const double near = joint.type == robot::JointType::kPrismatic
+                              ? nearLimitMargin(joint, workflow_->options())
+                              : std::min(0.2, 0.1 * (joint.limits.soft_upper - joint.limits.soft_lower));
       if (std::min(q_candidate[j] - lower[j], upper[j] - q_candidate[j]) < near) return true;
     }
     return false;

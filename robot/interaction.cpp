@@ -74,11 +74,6 @@ InteractionController::InteractionController(const RobotModel& model, const Para
   gains_ = modeGains(mode_);
 }
 
-void InteractionController::setArmScale(double inertia, double mass) {
-  if (inertia > 0.0 && inertia <= 1.0) inertia_scale_ = inertia;
-  if (mass > 0.0 && mass <= 1.0) mass_scale_ = mass;
-}
-
 namespace {
 
 // Tab. A.1 for an arm `inertia` and `mass` times the LWR IV's: the stiffness in Nm/rad scales
@@ -92,6 +87,12 @@ ModeGains scaledGains(InteractionMode mode, double inertia, double mass) {
 }
 
 }  // namespace
+
+void InteractionController::setArmScale(double inertia, double mass) {
+  if (inertia > 0.0 && inertia <= 1.0) inertia_scale_ = inertia;
+  if (mass > 0.0 && std::isfinite(mass)) mass_scale_ = mass;
+  gains_ = scaledGains(mode_, inertia_scale_, mass_scale_);
+}
 
 void InteractionController::start(InteractionMode mode, const RobotState& state) {
   mode_ = mode;

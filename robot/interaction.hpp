@@ -104,7 +104,8 @@ class InteractionController {
   /// gets its joint stiffness, joint-space virtual inertia and damping times `inertia` (of the
   /// arm's joints to the LWR IV's), the Cartesian ones times `mass`, so that it moves as an
   /// LWR IV of its size would (a light arm under the LWR IV's gains rings faster than the
-  /// control cycle samples it). Both in (0, 1]; 1 is the LWR IV. Takes effect at the next start().
+  /// control cycle samples it). `inertia` in (0, 1], `mass` positive; 1 is the LWR IV. Takes
+  /// effect at once.
   void setArmScale(double inertia, double mass);
 
   /// One cycle: writes q_cmd, stiffness and damping for the current mode.

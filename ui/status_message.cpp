@@ -11,6 +11,7 @@ namespace {
 
 constexpr const char* kFullMessage = "flexirobFullMessage";
 constexpr const char* kShownMessage = "flexirobShownMessage";
+constexpr const char* kWatched = "flexirobStatusWatched";
 
 // What QStatusBar leaves for its temporary message: its width less the visible widgets it holds
 // (the permanent fields, the size grip) and the spacing about each.
@@ -32,7 +33,8 @@ void showStatusMessage(QStatusBar* bar, const QString& message, int timeout_ms) 
   QString shown = message;
   const QFontMetrics metrics = bar->fontMetrics();
   const int room = messageRoom(bar);
-  if (bar->isVisible() && metrics.horizontalAdvance(message) > room) {
+  // Without room for a word (a window squeezed to nothing) the message goes as it is.
+  if (bar->isVisible() && room > metrics.horizontalAdvance(QStringLiteral("mmmm …")) && metrics.horizontalAdvance(message) > room) {
     shown = metrics.elidedText(message, Qt::ElideRight, room);
     // Cut at the last word's end that fits, so that no word or number is shown in part.
     const int cut = shown.lastIndexOf(QLatin1Char(' '), shown.size() - 2);
@@ -41,6 +43,13 @@ void showStatusMessage(QStatusBar* bar, const QString& message, int timeout_ms) 
   bar->setProperty(kFullMessage, message);
   bar->setProperty(kShownMessage, shown);
   bar->setToolTip(shown == message ? QString() : message);
+  if (!bar->property(kWatched).toBool()) {
+    // The tooltip goes with the message: when it times out or another replaces it.
+    bar->setProperty(kWatched, true);
+    QObject::connect(bar, &QStatusBar::messageChanged, bar, [bar](const QString& text) {
+      if (text != bar->property(kShownMessage).toString()) bar->setToolTip(QString());
+    });
+  }
   bar->showMessage(shown, timeout_ms);
 }
 

@@ -1,9 +1,12 @@
 // `reach`: drive the tip of a simulated robot to a target with the hierarchical controller
 // (Eq. 2.11), the null space pulled towards a posture, and report accuracy, collisions and
 // clamps (DESIGN §6).
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "app/cli/cli_support.hpp"
 #include "app/evaluation.hpp"
@@ -78,9 +81,12 @@ Json runReach(const ReachOptions& options) {
   if (result.status == "reached" && result.collisions > 0) {
     // The target is reached (within the tolerance), but not as `eval reachable` counts it.
     std::string touched;
+    std::vector<std::string> named;
     for (const auto& event : result.collision_events) {
       const std::string pair = event.link + " on " + event.other;
-      if (touched.find(pair) == std::string::npos) touched += (touched.empty() ? "" : ", ") + pair;
+      if (std::find(named.begin(), named.end(), pair) != named.end()) continue;
+      named.push_back(pair);
+      touched += (touched.empty() ? "" : ", ") + pair;
     }
     std::fprintf(stderr, "note: reached, but not free of contacts on the way: %s\n", touched.c_str());
   }

@@ -34,10 +34,11 @@ ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSe
   CommandLimiter limiter(model, parameters, sim.cycleTime());
   limiter.reset(start);
 
-  // Hierarchical control gains of Tab. A.1: 300 Nm/rad, damping 0.95.
+  // Hierarchical control gains of Tab. A.1: 300 Nm/rad, damping 0.95; for an arm lighter than
+  // the LWR IV in proportion to its joints' inertia, as the workflow scales them.
   JointImpedanceCommand command;
   command.resize(model.dof());
-  command.stiffness.setConstant(300.0);
+  command.stiffness.setConstant(300.0 * inertiaScaleToLwr(model));
   command.damping.setConstant(0.95);
   RobotState state;
   state.resize(model.dof());

@@ -123,7 +123,7 @@ Simulation::Simulation(const RobotModel& model, const Scene* scene, const Parame
   effort_.setZero(n);
   for (int j = 0; j < n; ++j) effort_[j] = model.joints()[static_cast<std::size_t>(j)].limits.effort;
   command_.resize(n);
-  command_.stiffness.setConstant(parameters.get("sim.stiffness"));
+  command_.stiffness.setConstant(parameters.get("sim.stiffness") * inertiaScaleToLwr(model));  // as the drift damping
   command_.damping.setConstant(parameters.get("sim.damping"));
 
   // Each Bullet link frame sits at the body's centre of mass, turned to its principal axes.

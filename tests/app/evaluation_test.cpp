@@ -196,9 +196,6 @@ TEST(Evaluation, TheArmsRoomIsWithinReachAndOffTheColumnAroundItsFirstAxis) {
   EXPECT_NEAR(offset.reach, 0.8, 1e-9);
 }
 
-// A SCARA: a lifting column, three joints about z, a wrist tilting about y at the tip. The first
-// joint not about z is the tilt, at the tip itself: a sphere about it would hold nothing. The
-// reach is then taken from the first joint with every joint free, and holds every tip position.
 // Three links of `length` [m] on joints about y (the first about z), each a point mass `mass`
 // [kg] at its end (a small sphere of inertia), standing upright at zero.
 std::string pointMassArm(double length, double mass) {
@@ -255,8 +252,18 @@ TEST(Evaluation, AnArmIsScaledAgainstTheLwrIvBySizeAndWeight) {
   EXPECT_NEAR(b.inertia / a.inertia, 0.1 * 0.25, 1e-6);
   EXPECT_NEAR(b.mass() / a.mass(), 0.1, 1e-6);
   EXPECT_NEAR(b.force(), b.mass() * b.length, 1e-12);
+  // As heavy as the LWR IV but half as long: its joints' torques are the LWR IV's, so a push
+  // at its shorter levers is harder (force × length ∝ inertia).
+  const ArmScale heavy = armScale(robot::RobotModel::fromUrdfString(pointMassArm(0.2, 20.0), "."));
+  EXPECT_EQ(heavy.inertia, 1.0);
+  EXPECT_LT(heavy.length, 0.5);
+  EXPECT_NEAR(heavy.force() * heavy.length, heavy.inertia, 1e-12);
+  EXPECT_GT(heavy.mass(), 1.0);
 }
 
+// A SCARA: a lifting column, three joints about z, a wrist tilting about y at the tip. The first
+// joint not about z is the tilt, at the tip itself: a sphere about it would hold nothing. The
+// reach is then taken from the first joint with every joint free, and holds every tip position.
 TEST(Evaluation, TheReachOfAScaraHoldsEveryTipPositionWithinItsLimits) {
   const std::string urdf = R"(<robot name="scara"><link name="base"/>
   <joint name="lift" type="prismatic"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.06"/><axis xyz="0 0 1"/>

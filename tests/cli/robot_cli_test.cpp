@@ -92,7 +92,8 @@ TEST(RobotCli, ReachWithoutASceneIsReachInTheEmptyScene) {
 // reach drives the tip straight through what lies in the way (it plans nothing): a target below
 // a slab is reached, but not as `eval reachable` counts it, and reach says so.
 TEST(RobotCli, ReachSaysWhenTheTargetWasReachedOnlyThroughAContact) {
-  const std::filesystem::path scene = std::filesystem::temp_directory_path() / "flexirob-reach-slab.yaml";
+  const std::filesystem::path scene =
+      std::filesystem::temp_directory_path() / ("flexirob-reach-slab-" + std::to_string(::getpid()) + ".yaml");
   std::ofstream(scene) << "name: slab\nobstacles:\n  - {name: slab, shape: box, size: [0.3, 0.6, 0.04], position: [0.5, 0, 0.5]}\n";
   const std::string target = " --robot lwr4 --target 0.5,0,0.3 --scene ";
   const auto through = runCliBinary("reach" + target + scene.string());

@@ -96,6 +96,9 @@ class MainWindowTest : public QObject {
     QVERIFY2(window.statusBar()->fontMetrics().horizontalAdvance(shown) < field->geometry().left(), qPrintable(shown));
     QCOMPARE(flexirob::ui::fullStatusMessage(window.statusBar()), message);
     QCOMPARE(window.statusBar()->toolTip(), message);
+    // Replaced by a message of Qt's own, the tooltip goes with it.
+    window.statusBar()->showMessage(QStringLiteral("a menu's status tip"));
+    QVERIFY(window.statusBar()->toolTip().isEmpty());
     // A message that fits is shown whole, without a tooltip.
     flexirob::ui::showStatusMessage(window.statusBar(), QStringLiteral("Session saved"), 0);
     QCOMPARE(window.statusBar()->currentMessage(), QStringLiteral("Session saved"));
