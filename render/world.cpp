@@ -85,6 +85,12 @@ std::pair<Eigen::Vector3d, double> reachSphere(const robot::RobotModel& model) {
   return {Eigen::Vector3d::Zero(), reach};
 }
 
+double robotSizeScale(const robot::RobotModel& model) {
+  constexpr double kLwrReach = 1.15;  // [m] the LWR IV's reachSphere() radius, 1.18 m, a little less
+  const double reach = reachSphere(model).second;
+  return reach > 0.0 && std::isfinite(reach) ? std::min(1.0, reach / kLwrReach) : 1.0;
+}
+
 std::optional<Box> clipBoxToSphere(const Box& box, const Eigen::Vector3d& center_W, double radius) {
   Box clipped = box;
   for (int axis = 0; axis < 3; ++axis) {

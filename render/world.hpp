@@ -39,6 +39,10 @@ using Box = std::pair<Eigen::Vector3d, Eigen::Vector3d>;
 /// added up.
 std::pair<Eigen::Vector3d, double> reachSphere(const robot::RobotModel& model);
 
+/// What sizes drawn in metres for the LWR IV (goal markers) are multiplied by for a robot: its
+/// reachSphere() radius over the LWR IV's (1.18 m, a little less), at most 1.
+double robotSizeScale(const robot::RobotModel& model);
+
 /// The bounding box of the part of `box` inside the sphere (centre, radius); nothing when they
 /// do not meet. Exact for the intersection of the box with the sphere, computed per axis.
 std::optional<Box> clipBoxToSphere(const Box& box, const Eigen::Vector3d& center_W, double radius);

@@ -1175,13 +1175,18 @@ void MainWindow::clickGoal(const QPointF& position) {
   setGoal(pick->goal_W);
 }
 
+double MainWindow::goalMarkerRadius() const {
+  // 2.5 cm on the LWR IV; a 25 cm arm's goal is no ball as big as its forearm.
+  return 0.025 * (model_ ? render::robotSizeScale(*model_) : 1.0);
+}
+
 bool MainWindow::setGoal(const Eigen::Vector3d& goal_W) {
   if (!live_ || !goal_W.allFinite()) return false;
   const bool executing = live_->snapshot().stage == app::Stage::kExecution;
   if (executing) {
     goal_ = goal_W;
     // The goal shows at once; the path joins it when the workflow has planned it.
-    overlays_->setContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(goal_W));
+    overlays_->setContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(goal_W, goalMarkerRadius()));
     showStatusMessage(statusBar(), tr("Goal (%1, %2, %3) m: planning through the ITM graph")
                                  .arg(goal_W.x(), 0, 'f', 3)
                                  .arg(goal_W.y(), 0, 'f', 3)
@@ -1198,7 +1203,7 @@ void MainWindow::updateGoalAndPath(const LiveSnapshot& s) {
   if (s.path_version == shown_path_version_) return;
   shown_path_version_ = s.path_version;
   overlays_->setContent(render::OverlayLayer::kGoalAndPath, nullptr);
-  if (goal_) overlays_->addContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(*goal_));
+  if (goal_) overlays_->addContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(*goal_, goalMarkerRadius()));
   if (!s.path || !s.path->found) return;
   std::vector<Eigen::Vector3d> waypoints;
   for (Eigen::Index k = 0; k < s.path->waypoints.cols(); ++k) waypoints.emplace_back(s.path->waypoints.col(k));

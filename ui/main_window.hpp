@@ -136,6 +136,8 @@ class MainWindow : public QMainWindow {
   /// the ITM graph and execute (Sect. 7.4). Outside EXECUTION the workflow refuses and the
   /// reason shows as a warning. False if the request could not be posted.
   bool setGoal(const Eigen::Vector3d& goal_W);
+  /// [m] of the goal's marker: 2.5 cm on the LWR IV, less on a smaller robot.
+  double goalMarkerRadius() const;
   /// A Ctrl+click at widget position `position` of the view: the goal under it (ui/goal_picking).
   void clickGoal(const QPointF& position);
   /// The goal set last (none before the first).

@@ -457,6 +457,7 @@ Json renderPicture(const RenderOptions& options) {
     }
     int paths = 0;
     int collided = 0;
+    const double marker_scale = render::robotSizeScale(model);  // 2 cm on the LWR IV
     for (const Json& motion : json.at("motions")) {
       if (options.plan_paths >= 0 && paths >= options.plan_paths) break;
       if (!motion.is_object()) throw InputError("--plan: a motion is not an object");
@@ -464,7 +465,7 @@ Json renderPicture(const RenderOptions& options) {
       const std::vector<Eigen::Vector3d> path = pointList(motion, "path", "--plan");
       const bool hit = motion.contains("collided") && motion.at("collided").is_boolean() && motion.at("collided").get<bool>();
       collided += hit ? 1 : 0;
-      overlays.addContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(goal, 0.02));
+      overlays.addContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(goal, 0.02 * marker_scale));
       overlays.addContent(render::OverlayLayer::kGoalAndPath,
                           render::makePolyline(path, hit ? render::OverlayPalette::collidedPath()
                                                          : render::OverlayPalette::plannedPath(), 3.0F * scale));

@@ -133,6 +133,10 @@ TEST(Framing, TheGroundGridIsDrawnAtTheArmsScale) {
     EXPECT_NEAR(half_width, size.half_extent, 1e-5) << reach;
     EXPECT_FALSE(drawn) << reach << ": a hidden grid stays hidden with the new robot";
   }
+  // Goal markers and the like, sized in metres for the LWR IV, shrink with a smaller robot.
+  EXPECT_EQ(robotSizeScale(lwr4), 1.0);
+  EXPECT_EQ(robotSizeScale(robot::RobotModel::fromUrdfFile(resolveRobotPath("arm9"))), 1.0);
+  EXPECT_NEAR(robotSizeScale(armOfReach(0.2)), 0.2 / 1.15, 1e-9);
   World world;
   world.setRobot(lwr4);
   const auto [half_width, drawn] = groundGridHalfWidth(world);
