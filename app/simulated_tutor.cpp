@@ -93,10 +93,9 @@ SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const
       world_(std::make_unique<robot::CollisionWorld>(sim.model(), scene)),
       kinematics_(sim.model()),
       arm_reach_(armReach(sim.model())),
-      arm_scale_(armScale(sim.model())),
-      length_scale_(arm_scale_.length),
-      min_clearance_(length_scale_ * options_.min_clearance),
-      circle_diameter_(std::max(kSmallestCircleDiameter, length_scale_ * options_.circle_diameter)),
+      arm_scale_(workflow.armScale()),
+      min_clearance_(arm_scale_.length * options_.min_clearance),
+      circle_diameter_(std::max(kSmallestCircleDiameter, arm_scale_.length * options_.circle_diameter)),
       home_(options_.home ? *options_.home : homePosture(sim.model(), scene)),
       random_(options_.seed) {
   if (home_.size() != model_->dof()) throw InputError("tutor: the home posture has the wrong number of joints");

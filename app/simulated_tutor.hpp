@@ -267,12 +267,11 @@ class SimulatedTutor {
   std::unique_ptr<robot::CollisionWorld> world_;
   robot::Kinematics kinematics_;
   ArmReach arm_reach_;  ///< where areas can lie
-  ArmScale arm_scale_;
-  double length_scale_;  ///< arm_scale_.length: the tutor's distances for this arm
+  ArmScale arm_scale_;  ///< the workflow's: the gains, the hands and the distances for this arm
   double min_clearance_;    ///< [m] TutorOptions::min_clearance for this arm
   double circle_diameter_;  ///< [m] TutorOptions::circle_diameter for this arm
   /// [m] a distance chosen for the LWR IV, for this arm.
-  double scaled(double lwr_length) const { return length_scale_ * lwr_length; }
+  double scaled(double lwr_length) const { return arm_scale_.length * lwr_length; }
   Eigen::VectorXd home_;  ///< homePosture: where evaluations of the map start
   learning::UniformRandom random_;
   robot::RobotState state_;
