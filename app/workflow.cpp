@@ -112,6 +112,20 @@ struct Workflow::LearningResult {
 
 namespace {
 
+/// The options' distances are a person's with the LWR IV (the ITM's e_max of Sect. 7.4, the
+/// bootstrapping radius, the goal gap, the OS-ELM's workspace box); an arm of less reach takes
+/// them times ArmScale::length, as its gains and the tutor's distances are scaled. A 17 cm arm's
+/// configuration stage had left an ITM of 3 nodes, and `plan` drew its goals among them. The
+/// LWR IV and arm9 (length 1) keep every value.
+WorkflowOptions optionsForArm(WorkflowOptions options, const ArmScale& scale) {
+  options.itm.e_max *= scale.length;
+  options.itm.d_c_max *= scale.length;
+  options.max_goal_gap *= scale.length;
+  options.workspace_lower *= scale.length;
+  options.workspace_upper *= scale.length;
+  return options;
+}
+
 /// The interaction controllers' and the triggers' parameters: values from `given` where it
 /// declares them (a scene's overrides), the triggers' from the workflow options.
 robot::ParameterSet workflowParameters(const robot::ParameterSet& given, const WorkflowOptions& options, const ArmScale& scale) {
@@ -159,8 +173,8 @@ double Workflow::AreaConfidence::confidence(const Eigen::Vector3d& p_W) const {
 Workflow::Workflow(robot::RobotBackend& backend, const robot::ParameterSet& parameters, WorkflowOptions options)
     : backend_(&backend),
       model_robot_(&backend.model()),
-      options_(std::move(options)),
       arm_scale_(app::armScale(backend.model())),
+      options_(optionsForArm(std::move(options), arm_scale_)),
       parameters_(workflowParameters(parameters, options_, arm_scale_)),
       interaction_(backend.model(), parameters_, backend.cycleTime()),
       triggers_(parameters_),

@@ -226,6 +226,8 @@ class Workflow {
   std::uint64_t itmVersion() const { return itm_version_; }
   std::uint64_t pathVersion() const { return path_version_; }
   const robot::RobotState& state() const { return state_; }
+  /// The options given, with the ITM's, the goal gap's and the OS-ELM box's distances times
+  /// armScale().length.
   const WorkflowOptions& options() const { return options_; }
   /// The arm against the LWR IV (app/evaluation.hpp), which the gains are scaled by.
   const ArmScale& armScale() const { return arm_scale_; }
@@ -297,8 +299,8 @@ class Workflow {
 
   robot::RobotBackend* backend_;
   const robot::RobotModel* model_robot_;
-  WorkflowOptions options_;
   ArmScale arm_scale_;
+  WorkflowOptions options_;  ///< as given, its distances scaled to the arm (arm_scale_)
   robot::ParameterSet parameters_;
   robot::InteractionController interaction_;
   robot::InteractionTriggers triggers_;

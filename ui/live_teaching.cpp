@@ -129,9 +129,14 @@ void LiveTeaching::sendSpring() {
     kinematics_.update(q);
   }
   const Eigen::Vector3d p_W = kinematics_.X_WB(grab_body_) * grab_p_B_;
-  Eigen::Vector3d force = grab_stiffness_ * (grab_target_W_ - p_W);
+  // The spring and its limit are a person's hand on the LWR IV; on a lighter or shorter arm they
+  // are scaled as the tutor's hands are (the stiffness by the mass ratio, the limit by the force
+  // ratio), or a pull would fling a 1 kg arm about. Both ratios are 1 for the LWR IV and arm9.
+  const app::ArmScale& scale = workflow_->armScale();
+  Eigen::Vector3d force = grab_stiffness_ * scale.mass() * (grab_target_W_ - p_W);
+  const double max_force = options_.max_hand_force * scale.force();
   const double newtons = force.norm();
-  if (newtons > options_.max_hand_force) force *= options_.max_hand_force / newtons;
+  if (newtons > max_force) force *= max_force / newtons;
   post(app::WorkflowRequest::handForce(grab_body_, grab_p_B_, force));
 }
 

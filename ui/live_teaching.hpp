@@ -45,7 +45,9 @@ class LiveTeaching {
  public:
   struct Options {
     bool paced = true;             ///< real time; off: as fast as possible (tests)
-    double max_hand_force = 80.0;  ///< [N] the mouse spring's force is clipped to this
+    /// [N] the mouse spring's force is clipped to this on the LWR IV (times the arm's
+    /// ArmScale::force() on another)
+    double max_hand_force = 80.0;
     /// The control thread asks for SCHED_FIFO (granted to root or with an rtprio limit, else it
     /// runs at normal priority): the GUI's rendering must not delay the 1 ms cycle.
     bool realtime_priority = true;
@@ -69,7 +71,8 @@ class LiveTeaching {
   bool press(app::Button button);
   bool fire(app::Trigger trigger);
   /// Grabs `body` (1..dof) at p_B [m, body frame] and pulls it towards target_W [m] with a
-  /// spring of `stiffness` [N/m] (re-sent at each tick()).
+  /// spring of `stiffness` [N/m] on the LWR IV, times the arm's ArmScale::mass() on another
+  /// (re-sent at each tick()).
   bool grab(int body, const Eigen::Vector3d& p_B, const Eigen::Vector3d& target_W, double stiffness);
   /// The hand lets go (mouse spring and forces).
   bool release();
@@ -101,6 +104,8 @@ class LiveTeaching {
 
   const robot::RobotModel& model() const { return *model_; }
   const Options& options() const { return options_; }
+  /// The arm against the LWR IV (fixed for the live robot's lifetime).
+  const app::ArmScale& armScale() const { return workflow_->armScale(); }
 
  private:
   bool post(const app::WorkflowRequest& request) { return thread_->post(request) != 0; }

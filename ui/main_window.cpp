@@ -385,6 +385,7 @@ void MainWindow::startLive() {
   clearProblem(Problem::kRobot);
   clearProblem(Problem::kDeadlines);
   clearProblem(Problem::kStartContact);
+  force_arrow_->setArmScale(live_->armScale());
   start_checked_ = false;
   deadline_clock_.invalidate();
   startRecording();

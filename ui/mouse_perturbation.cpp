@@ -32,19 +32,23 @@ ForceArrow::ForceArrow() : transform_(new osg::MatrixTransform) {
 
 void ForceArrow::show(const Eigen::Vector3d& p_W, const Eigen::Vector3d& F_W) {
   const double newtons = F_W.norm();
-  if (!(newtons >= 0.5) || !p_W.allFinite()) {
+  if (!(newtons / scale_.force() >= 0.5) || !p_W.allFinite()) {
     hide();
     return;
   }
-  const double length = newtons * kMetresPerNewton;
+  const double length = this->length(F_W);
   const osg::Vec3d direction(F_W.x() / newtons, F_W.y() / newtons, F_W.z() / newtons);
   osg::Matrixd rotation;
   rotation.makeRotate(osg::Vec3d(0.0, 0.0, 1.0), direction);
   // The shaft's thickness grows slowly with the length so that short arrows stay visible.
-  const double width = std::max(0.4, std::min(1.0, length / 0.3)) * 0.5;
+  const double width = std::max(0.4, std::min(1.0, length / (0.3 * scale_.length))) * 0.5 * scale_.length;
   transform_->setMatrix(osg::Matrixd::scale(width, width, length) * rotation *
                         osg::Matrixd::translate(p_W.x(), p_W.y(), p_W.z()));
   transform_->setNodeMask(~0U);
+}
+
+double ForceArrow::length(const Eigen::Vector3d& F_W) const {
+  return F_W.norm() / scale_.force() * kMetresPerNewton * scale_.length;
 }
 
 void ForceArrow::hide() { transform_->setNodeMask(0); }

@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <functional>
 
+#include "app/evaluation.hpp"
 #include "ui/osg_view.hpp"
 
 namespace flexirob::render {
@@ -33,13 +34,19 @@ class ForceArrow {
   static constexpr double kMetresPerNewton = 0.005;
   ForceArrow();
   osg::Node* node() const { return transform_.get(); }
-  /// Shows the force F_W [N] applied at p_W [m]; a force below 0.5 N hides the arrow.
+  /// Shows the force F_W [N] applied at p_W [m]; a force below 0.5 N hides the arrow. On an arm
+  /// scaled against the LWR IV (setArmScale) the force counts as F / force() and the length
+  /// shrinks with the arm, so a pull looks alike on every arm.
   void show(const Eigen::Vector3d& p_W, const Eigen::Vector3d& F_W);
+  void setArmScale(const app::ArmScale& scale) { scale_ = scale; }
+  /// The arrow's length for F_W [m].
+  double length(const Eigen::Vector3d& F_W) const;
   void hide();
   bool visible() const;
 
  private:
   osg::ref_ptr<osg::MatrixTransform> transform_;
+  app::ArmScale scale_;
 };
 
 class MousePerturbation final : public ViewMouseGrabber {

@@ -11,6 +11,7 @@
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/sim/reach.hpp"
+#include "tests/common/small_light_arm.hpp"
 
 namespace flexirob::app {
 namespace {
@@ -220,6 +221,46 @@ TEST(Workflow, TheItmLeavesOutWhereTheSimulatedArmOverlapsAnObstacle) {
   EXPECT_LT(nearestNodeTo(tipAt(posture(-1.1))), 0.05);
   EXPECT_LT(nearestNodeTo(tipAt(posture(0.1))), 0.05);
   EXPECT_GT(nearestNodeTo(tipAt(posture(1.3))), 0.3) << "no node where the arm overlapped the obstacle";
+}
+
+// The ITM's e_max (0.1 m, Sect. 7.4) and the goal gap are a person's distances with the LWR IV.
+// A 25 cm arm's configuration stage had left an ITM of 3 nodes, and plans ran between them; its
+// distances are scaled with the arm's reach, so the same motion of either arm leaves about as
+// many nodes. The LWR IV keeps the thesis' values.
+TEST(Workflow, TheItmResolvesASmallArmsMotionAsFinelyAsTheLwrIvs) {
+  const robot::RobotModel small = robot::RobotModel::fromUrdfString(testing::smallLightArmUrdf(), ".");
+  struct Swing {
+    int nodes = 0;
+    double e_max = 0.0, goal_gap = 0.0;
+  };
+  const auto swing = [](const robot::RobotModel& model) {
+    Swing result;
+    ScriptedBackend backend(model);
+    const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+    const robot::ParameterSet parameters(declarations);
+    Workflow workflow(backend, parameters, syncOptions());
+    result.e_max = workflow.options().itm.e_max;
+    result.goal_gap = workflow.options().max_goal_gap;
+    EXPECT_TRUE(workflow.press(Button::kStartConfiguration));
+    // The arm leant out and swung about its vertical axis, 3 rad.
+    Eigen::VectorXd q(7);
+    q << 0.0, 1.0, 0.0, -0.8, 0.0, 0.0, 0.0;
+    for (int i = 0; i <= 300; ++i) {
+      q[0] = -1.5 + 3.0 * i / 300.0;
+      backend.move(q, 0.3);
+      run(workflow, 0.01);
+    }
+    result.nodes = workflow.itm().nodeCount();
+    return result;
+  };
+  const Swing lwr = swing(lwr4());
+  const Swing light = swing(small);
+  EXPECT_EQ(lwr.e_max, WorkflowOptions{}.itm.e_max);
+  EXPECT_EQ(lwr.goal_gap, WorkflowOptions{}.max_goal_gap);
+  EXPECT_NEAR(light.e_max, WorkflowOptions{}.itm.e_max * armScale(small).length, 1e-12);
+  EXPECT_NEAR(light.goal_gap, WorkflowOptions{}.max_goal_gap * armScale(small).length, 1e-12);
+  ASSERT_GE(lwr.nodes, 8);
+  EXPECT_GE(light.nodes, lwr.nodes / 2) << "the LWR IV's swing left " << lwr.nodes << " nodes";
 }
 
 TEST(Workflow, FullSessionCreatesAreasLearnsAndReachesExecution) {

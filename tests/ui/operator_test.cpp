@@ -62,7 +62,10 @@ void waitRunning(MainWindow& window) {
 // Starts configuration, drags `body` in the view 80 px left and 64 px up and holds it there for
 // 1.5 s of the robot's time (a loaded machine runs the paced loop late), then lets go: where its origin was before and at the end of the pull, and the pixel the
 // drag started at. The caller checks QTest::currentTestFailed().
-void pullBody(MainWindow& window, int body, Eigen::Vector3d& before, Eigen::Vector3d& pulled, Eigen::Vector2d& start_pixel) {
+// `hand_force`, when given, receives the hand's force [N, W] the spring pulled with at the end
+// of the hold.
+void pullBody(MainWindow& window, int body, Eigen::Vector3d& before, Eigen::Vector3d& pulled, Eigen::Vector2d& start_pixel,
+              Eigen::Vector3d* hand_force = nullptr) {
   const auto& s = window.live()->snapshot();
   QTest::mouseClick(window.stagePanel()->button(Button::kStartConfiguration), Qt::LeftButton);
   QTRY_COMPARE(s.stage, Stage::kConfiguration);
@@ -90,6 +93,7 @@ void pullBody(MainWindow& window, int body, Eigen::Vector3d& before, Eigen::Vect
   const double pulling_since = s.time;
   QTRY_VERIFY_WITH_TIMEOUT(s.time > pulling_since + 1.5, 15000);
   pulled = bodyOrigin(window, body);
+  if (hand_force != nullptr) *hand_force = Eigen::Vector3d(s.hand_force_W[0], s.hand_force_W[1], s.hand_force_W[2]);
   send(QEvent::MouseButtonRelease, start + QPointF(-80.0, -64.0), Qt::LeftButton, Qt::NoButton);
   QVERIFY(!window.perturbation()->grabbing());
   QTRY_VERIFY(!window.forceArrow()->visible());
@@ -313,7 +317,8 @@ class OperatorTest : public QObject {
 
   // A light arm under the LWR IV's gains and drift damping hardly moved under the mouse (1.2 cm
   // in 1.5 s); scaled to the arm (docs/CONTROL.md), the pull moves it, and let go it comes to
-  // rest.
+  // rest. The spring is scaled too: the LWR IV's 250 N/m and 80 N would pull its 50 g links
+  // with tens of newtons; its arrow is as long, for the arm's size, as the LWR IV's.
   void aMouseDragOnALightArmPullsItAndItComesToRest() {
     if (!canDraw()) QSKIP("no OpenGL on Qt's offscreen platform");
     QTemporaryDir directory;
@@ -330,9 +335,16 @@ class OperatorTest : public QObject {
     const int forearm = 5;
     Eigen::Vector3d before, pulled;
     Eigen::Vector2d pixel;
-    pullBody(window, forearm, before, pulled, pixel);
+    Eigen::Vector3d force;
+    pullBody(window, forearm, before, pulled, pixel, &force);
     if (QTest::currentTestFailed()) return;
     QVERIFY2((pulled - before).norm() > 0.02, qPrintable(QStringLiteral("the forearm moved %1 m").arg((pulled - before).norm())));
+    const flexirob::app::ArmScale& scale = window.live()->armScale();
+    QVERIFY(scale.force() < 0.05);
+    QVERIFY2(force.norm() > 0.0 && force.norm() <= 80.0 * scale.force() + 1e-9,
+             qPrintable(QStringLiteral("the hand pulled with %1 N").arg(force.norm())));
+    const double lwr_arrow = flexirob::ui::ForceArrow::kMetresPerNewton * force.norm() / scale.force();
+    QCOMPARE(window.forceArrow()->length(force), lwr_arrow * scale.length);
     // Let go, it comes to rest within 3 s of the robot's time.
     const auto& s = window.live()->snapshot();
     const auto fastest = [&s] {
