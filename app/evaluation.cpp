@@ -156,7 +156,10 @@ FittedScene fitSceneToRobot(const robot::Scene& scene, const robot::RobotModel& 
       return false;
     }
   };
-  if (scene.home_posture && !fits([&](robot::Scene& single) { single.home_posture = scene.home_posture; })) {
+  if (scene.home_posture && !fits([&](robot::Scene& single) {
+        single.home_posture = scene.home_posture;
+        single.home_posture_in_degrees = scene.home_posture_in_degrees;
+      })) {
     fitted.scene.home_posture.reset();
   }
   for (robot::Area& area : fitted.scene.training_areas) {
@@ -166,6 +169,15 @@ FittedScene fitSceneToRobot(const robot::Scene& scene, const robot::RobotModel& 
     if (area.posture && !fits([&](robot::Scene& single) { single.working_areas = {area}; })) area.posture.reset();
   }
   return fitted;
+}
+
+bool crossesObstacle(const robot::Scene& scene, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const int steps = std::max(1, static_cast<int>(std::ceil((b - a).norm() / 0.005)));
+  for (int i = 0; i <= steps; ++i) {
+    const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(i) / steps);
+    if (robot::obstacleAt(scene, p, 0.0) != nullptr) return true;
+  }
+  return false;
 }
 
 ArmReach armReach(const robot::RobotModel& model) {
@@ -793,6 +805,21 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
       std::vector<Eigen::Vector3d> line = waypoints;
       if (line.size() == 1) {
         line.insert(line.begin(), kinematics.p_WT());
+      } else if ((kinematics.p_WT() - line.front()).norm() > 1e-4 && crossesObstacle(scene, kinematics.p_WT(), line.front())) {
+        // No arm follows the tip through an obstacle: brought there as the region's start is.
+        ++out.starts_placed;
+        q = executeMotion(model, parameters, map, q, [&](double) { return line.front(); }, 0.0, 3.0, nullptr).q;
+        world.update(q);
+        if (!world.contacts().empty()) {
+          const robot::Contact& contact = world.contacts().front();
+          const std::string touching = world.bodyName(contact.body) + "/" + world.otherName(contact);
+          ++out.collisions;
+          ++out.contacts[touching];
+          out.collided.push_back({trajectory_name, touching, 0.0, line.front(), true});
+          q = q_area;
+          if (progress) progress(static_cast<double>(++done) / total);
+          continue;
+        }
       } else if ((kinematics.p_WT() - line.front()).norm() > 1e-4) {
         const auto lead_in = follow(q, {kinematics.p_WT(), waypoints.front()});
         if (lead_in.outcome.collided) {

@@ -106,8 +106,9 @@ inline constexpr double kLwrShoulderReach = 0.85;
 
 /// How much smaller and lighter an arm is than the LWR IV, for what was sized for the LWR IV:
 /// Tab. A.1's gains, the interaction's admittance, and the simulated tutor's hands and
-/// distances. An arm of the LWR IV's size or larger scales nothing (every factor 1); a smaller
-/// or lighter one gets them in proportion, so that it moves as an LWR IV of its size would.
+/// distances. An arm of the LWR IV's size or larger, up to four times its joint inertia, scales
+/// nothing (every factor 1); a smaller or lighter one gets them in proportion, so that it moves
+/// as an LWR IV of its size would; a much heavier one gets stronger gains and hands (inertia).
 struct ArmScale {
   double length = 1.0;   ///< reach from the shoulder / kLwrShoulderReach, at most 1
   double inertia = 1.0;  ///< robot::inertiaScaleToLwr()
@@ -120,6 +121,10 @@ struct ArmScale {
 };
 
 ArmScale armScale(const robot::RobotModel& model);
+
+/// Whether the straight segment a–b [m, W] passes through one of the scene's obstacles (looked
+/// at every 5 mm; the table top is none of them).
+bool crossesObstacle(const robot::Scene& scene, const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 
 /// Drives the command from q_start towards p_des(t) (t in [0, duration], held after) for up to
 /// duration + settle seconds at 1 kHz, feeding the path's velocity forward (Eq. 2.6); ends early
@@ -292,6 +297,12 @@ struct TrajectoryRegionResult {
   /// reach r m" or "name: (x, y, z) m lies inside obstacle" (the first such point, looked at
   /// every 2 cm). They run and count as the others do; a scene's author should know.
   std::vector<std::string> impossible;
+  /// Trajectories whose start the tip's straight way from where the arm stood crossed an
+  /// obstacle (after a collision the arm stands at the region's start again): the arm was
+  /// brought to the start as the region's start is, kinematically, and the trajectory ran from
+  /// there. The straight way through a wall between two scene trajectories had counted as the
+  /// map's collision.
+  int starts_placed = 0;
 };
 struct TrajectoryResult {
   std::vector<TrajectoryRegionResult> regions;

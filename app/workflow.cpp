@@ -717,6 +717,21 @@ void Workflow::collectLearning() {
   }
 }
 
+std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& events) {
+  std::vector<const WorkflowEvent*> standing;
+  for (const WorkflowEvent& event : events) {
+    if (event.kind == WorkflowEvent::Kind::kModelLearned) {
+      std::erase_if(standing, [](const WorkflowEvent* e) { return e->name == "transition_inconsistent"; });
+    }
+    if (event.kind == WorkflowEvent::Kind::kWarning) standing.push_back(&event);
+  }
+  std::vector<std::string> lines;
+  for (const WorkflowEvent* event : standing) {
+    if (std::find(lines.begin(), lines.end(), event->detail) == lines.end()) lines.push_back(event->detail);
+  }
+  return lines;
+}
+
 double Workflow::learningSeconds() const {
   if (learning_result_) return std::chrono::duration<double>(std::chrono::steady_clock::now() - learning_started_).count();
   return learning_seconds_;

@@ -83,6 +83,10 @@ struct WorkflowEvent {
   int area = -1;       ///< area index concerned, or -1
 };
 const char* toString(WorkflowEvent::Kind kind);
+/// The warning lines that still stand at the end of `events`, each distinct line once, in order:
+/// every refit checks the transitions again (OS-ELM refits after each area), and only the last
+/// map's transition warnings stand, as Workflow::transitionChecks() holds only its checks.
+std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& events);
 
 /// A training area D^(k) (Sect. 3.1): the samples recorded in one RECORDING.
 struct TrainingArea {

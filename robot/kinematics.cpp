@@ -111,7 +111,9 @@ double inertiaScaleToLwr(const RobotModel& model) {
   for (int j = 0; j < model.dof(); ++j) {
     if (model.joints()[static_cast<std::size_t>(j)].type != JointType::kPrismatic) largest = std::max(largest, inertia[j]);
   }
-  return largest > 0.0 && std::isfinite(largest) ? std::min(1.0, largest / kLwrLargestJointInertia) : 1.0;
+  if (!(largest > 0.0 && std::isfinite(largest))) return 1.0;
+  const double ratio = largest / kLwrLargestJointInertia;
+  return ratio < 1.0 ? ratio : std::max(1.0, ratio / kLwrClassInertiaRatio);
 }
 
 }  // namespace flexirob::robot

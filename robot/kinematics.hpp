@@ -59,10 +59,15 @@ Eigen::VectorXd jointInertiaDiagonal(const RobotModel& model, const Eigen::Vecto
 /// [kg m²] the LWR IV's largest joint inertia in the posture nearest zero (A2 under the upright
 /// arm, 3.07 kg m²), a little less.
 inline constexpr double kLwrLargestJointInertia = 3.0;
+/// Arms up to this many times the LWR IV's joint inertia are driven with its gains.
+inline constexpr double kLwrClassInertiaRatio = 4.0;
 
-/// The largest joint inertia of the turning joints in the posture nearest zero over the LWR
-/// IV's, at most 1: what the gains and dampings sized for the LWR IV are scaled by on a lighter
-/// arm (1 for the LWR IV, arm9 and anything heavier; 1 without a turning joint or a mass).
+/// What the gains and dampings sized for the LWR IV are scaled by, from the ratio r of the
+/// largest joint inertia of the turning joints in the posture nearest zero to the LWR IV's: r
+/// on a lighter arm; 1 up to four times the LWR IV's (the LWR IV, arm9 at 3.1, arms of its
+/// class are driven with its own gains); r / 4 beyond, continuous there (a 260 kg arm at 86
+/// times could not be led by hands and gains of the LWR IV's strength). 1 without a turning
+/// joint or a mass.
 double inertiaScaleToLwr(const RobotModel& model);
 
 }  // namespace flexirob::robot

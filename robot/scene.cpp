@@ -245,7 +245,10 @@ class SceneReader {
     if (const auto node = root["name"]) scene.name = name(node, "name");
     if (const auto node = root["description"]) scene.description = text(node, "description", kMaxTextLength);
     if (const auto node = root["robot"]) scene.robot = robot(node, "robot");
-    if (const auto node = root["home_posture"]) scene.home_posture = posture(node, "home_posture");
+    if (const auto node = root["home_posture"]) {
+      scene.home_posture = posture(node, "home_posture");
+      scene.home_posture_in_degrees = inDegrees(node);
+    }
     if (const auto node = root["obstacles"]) {
       const auto& items = sequence(node, "obstacles", kMaxObstacles);
       std::set<std::string> names;
@@ -465,6 +468,9 @@ class SceneReader {
     return numbers(node["values"], join(path, "values"), 1, kMaxJoints) * scale;
   }
 
+  // Whether a posture that posture() accepted was written in degrees.
+  static bool inDegrees(const Node& node) { return node.IsMap() && node["unit"].IsScalar() && node["unit"].Scalar() == "deg"; }
+
   Eigen::Matrix3d rotation(const Node& node, const std::string& path) {
     checkKeys(node, path, {"rpy", "quaternion", "unit"});
     const bool has_rpy = static_cast<bool>(node["rpy"]);
@@ -583,7 +589,10 @@ class SceneReader {
       area.p_WA = placeAboveTable(centre, join(item_path, "centre"));
       if (const auto r = item["radius"]) area.radius = length(r, join(item_path, "radius"), false);
       if (const auto b = item["box"]) area.box = positiveSize(b, join(item_path, "box"));
-      if (const auto q = item["posture"]) area.posture = posture(q, join(item_path, "posture"));
+      if (const auto q = item["posture"]) {
+        area.posture = posture(q, join(item_path, "posture"));
+        area.posture_in_degrees = inDegrees(q);
+      }
       if (!names.insert(area.name).second) fail(item, item_path, "duplicate area name '" + printable(area.name) + "'");
       result.push_back(std::move(area));
     }
@@ -745,15 +754,24 @@ void checkPosturesFit(const Scene& scene, int dof, const std::string& robot_name
 void checkPosturesFit(const Scene& scene, const RobotModel& model, const std::string& robot_name) {
   checkPosturesFit(scene, model.dof(), robot_name);
   const std::string prefix = "scene '" + printable(scene.name, 200) + "': ";
-  const auto check = [&](const std::optional<Eigen::VectorXd>& posture, const std::string& what) {
-    if (posture) model.checkWithinLimits(*posture, prefix + what);
+  // A slide's value in a posture written in degrees is a length, which the reader cannot tell
+  // from an angle: 0.2 m had become 3.5 mm without a word.
+  const auto slide = std::find_if(model.joints().begin(), model.joints().end(),
+                                  [](const Joint& joint) { return joint.type == JointType::kPrismatic; });
+  const auto check = [&](const std::optional<Eigen::VectorXd>& posture, const std::string& what, bool in_degrees = false) {
+    if (!posture) return;
+    if (in_degrees && slide != model.joints().end()) {
+      throw InputError(prefix + what + " is written in degrees, but joint '" + printable(slide->name, 100) +
+                       "' slides; write the posture as a plain list in radians and metres");
+    }
+    model.checkWithinLimits(*posture, prefix + what);
   };
-  check(scene.home_posture, "home_posture");
+  check(scene.home_posture, "home_posture", scene.home_posture_in_degrees);
   // An area's posture is a suggestion for holding the tip there: one that puts the tip
   // elsewhere is a slip of the scene's author, which the tutor would silently pass over.
   Kinematics kinematics(model);
   const auto checkArea = [&](const Area& area, const std::string& what) {
-    check(area.posture, what);
+    check(area.posture, what, area.posture_in_degrees);
     if (!area.posture) return;
     kinematics.update(*area.posture);
     const double off = (kinematics.p_WT() - area.p_WA).norm();

@@ -44,6 +44,7 @@ struct Area {
   /// Edge lengths [m] of the axis-aligned box around p_WA that bounds the area (where
   /// evaluations draw their points); unset: the ball of `radius` around p_WA.
   std::optional<Eigen::Vector3d> box;
+  bool posture_in_degrees = false;  ///< `posture` was written {unit: deg} (refused on a robot with a slide)
   /// True if p_W (world frame, metres) lies in the box, or in the ball if there is no box;
   /// the boundary counts as inside.
   bool contains(const Eigen::Vector3d& p_W) const;
@@ -91,6 +92,7 @@ struct Scene {
   std::filesystem::path source;       ///< file it was read from (empty for scenes built in code)
   std::string robot = "lwr4";         ///< robot the scene was made for
   std::optional<Eigen::VectorXd> home_posture;  ///< start posture [rad]
+  bool home_posture_in_degrees = false;         ///< written {unit: deg} (refused on a robot with a slide)
   std::vector<Obstacle> obstacles;
   /// The table top z = 0 the robot stands on is an obstacle below every link but the base (and
   /// links within 1 cm of it at the reference posture): the thesis' q2 ≫ π/2 "would result in

@@ -435,6 +435,7 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region) {
           {"contacts", region.contacts},
           {"collided_trajectories", collided},
           {"start_contact", region.start_contact},
+          {"starts_placed", region.starts_placed},
           {"impossible_trajectories", region.impossible}};
 }
 

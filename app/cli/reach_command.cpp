@@ -69,6 +69,12 @@ Json runReach(const ReachOptions& options) {
   request.max_time = options.max_time;
 
   const robot::ReachResult result = robot::reach(model, &scene, parameters, request);
+  // As `eval` says of a scene target: reached or not, the tip is in the obstacle there.
+  const robot::Obstacle* inside = robot::obstacleAt(scene, target);
+  if (inside != nullptr) {
+    std::fprintf(stderr, "note: the target lies inside obstacle '%s': no posture reaches it without a contact\n",
+                 printable(inside->name, 100).c_str());
+  }
   if (result.status == "unreachable" && !result.joints_at_limits.empty()) {
     std::string joints;
     for (const auto& name : result.joints_at_limits) joints += (joints.empty() ? "" : ", ") + name;
@@ -100,6 +106,7 @@ Json runReach(const ReachOptions& options) {
           {"reached", result.status == "reached"},
           // As `eval reachable` counts a target: reached, and no contact on the way.
           {"reached_without_contact", result.status == "reached" && result.collisions == 0},
+          {"inside_obstacle", inside != nullptr ? Json(inside->name) : Json(nullptr)},
           {"error_m", result.error_m},
           {"best_error_m", result.best_error_m},
           {"steps", result.steps},

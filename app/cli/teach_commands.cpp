@@ -389,18 +389,17 @@ Json runTeach(const TeachOptions& options) {
   }
   // The tutor's feedback (joint limits, transition checks) is what a person would have read on
   // the screen: said on stderr too, each distinct line once, not only counted in the JSON.
-  int warnings = 0;
+  // Only the last map's transition warnings stand (app::standingWarnings): an OS-ELM session had
+  // listed one pair once per refit.
+  const std::vector<std::string> standing = app::standingWarnings(workflow.events());
   Json warning_lines = Json::array();
-  std::set<std::string> said;
-  for (const auto& event : workflow.events()) {
-    if (event.kind != app::WorkflowEvent::Kind::kWarning) continue;
-    ++warnings;
-    if (!said.insert(event.detail).second) continue;
-    warning_lines.push_back(event.detail);
-    if (said.size() <= kWarningsOnStderr) std::fprintf(stderr, "warning: %s\n", event.detail.c_str());
+  for (std::size_t i = 0; i < standing.size(); ++i) {
+    warning_lines.push_back(standing[i]);
+    if (i < kWarningsOnStderr) std::fprintf(stderr, "warning: %s\n", standing[i].c_str());
   }
-  if (said.size() > kWarningsOnStderr) {
-    std::fprintf(stderr, "warning: ... and %zu more (\"warning_lines\" in the JSON)\n", said.size() - kWarningsOnStderr);
+  const std::size_t warnings = standing.size();
+  if (standing.size() > kWarningsOnStderr) {
+    std::fprintf(stderr, "warning: ... and %zu more (\"warning_lines\" in the JSON)\n", standing.size() - kWarningsOnStderr);
   }
   // A place the scene lists and the tutor gave up is the scene's author's to know about (a
   // place inside an obstacle, out of reach, a scene in the wrong units), even where the tutor

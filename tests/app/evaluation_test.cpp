@@ -259,6 +259,16 @@ TEST(Evaluation, AnArmIsScaledAgainstTheLwrIvBySizeAndWeight) {
   EXPECT_LT(heavy.length, 0.5);
   EXPECT_NEAR(heavy.force() * heavy.length, heavy.inertia, 1e-12);
   EXPECT_GT(heavy.mass(), 1.0);
+  // Up to four times the LWR IV's joint inertia (arm9: 3.1) the LWR IV's gains serve; beyond, they
+  // grow with the arm, from 1 at four times. The shoulder's M_jj is m (l² + (2l)² + (3l)²).
+  const double per_kg = 14.0 * 0.2 * 0.2;
+  const auto withRatio = [per_kg](double ratio) {
+    return armScale(robot::RobotModel::fromUrdfString(pointMassArm(0.2, ratio * robot::kLwrLargestJointInertia / per_kg), "."));
+  };
+  EXPECT_NEAR(withRatio(3.9).inertia, 1.0, 1e-12);
+  EXPECT_NEAR(withRatio(4.0).inertia, 1.0, 1e-5);
+  EXPECT_NEAR(withRatio(10.0).inertia, 2.5, 1e-5);
+  EXPECT_NEAR(withRatio(86.0).inertia, 21.5, 1e-4);
 }
 
 // A SCARA: a lifting column, three joints about z, a wrist tilting about y at the tip. The first

@@ -336,6 +336,24 @@ TEST(Experiments, ETaskIsMeasuredAlongTheTrajectoryFromRestAtItsStartNotOnTheWay
 }
 
 TEST(Experiments, AContactOnTheWayToATrajectorysStartCountsAndIsReportedAsSuch) {
+  {
+    // A plate above the straight way, where the wrist (7.8 cm above the tip) passes and the tip
+    // does not: the arm is led along the way and meets it.
+    const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+    robot::Scene scene;
+    scene.obstacles.push_back(boxObstacle("plate", Eigen::Vector3d(0.06, 0.12, 0.02), tip + Eigen::Vector3d(0.0, 0.2, 0.08)));
+    scene.trajectories.push_back({"near", "left", {tip, tip + Eigen::Vector3d(0.0, 0.05, 0.0)}});
+    scene.trajectories.push_back({"beyond", "left", {tip + Eigen::Vector3d(0.0, 0.3, 0.0), tip + Eigen::Vector3d(0.0, 0.35, 0.0)}});
+    const TrajectoryRegionResult left = onlyRegion(scene);
+    EXPECT_EQ(left.starts_placed, 0);
+    ASSERT_EQ(left.collided.size(), 1u);
+    EXPECT_EQ(left.collided[0].name, "beyond");
+    EXPECT_TRUE(left.collided[0].on_way_to_start);
+    EXPECT_TRUE(left.collided[0].contact.ends_with("/plate")) << left.collided[0].contact;
+    // The tip was headed for a point between the first's end and the plate's far edge.
+    EXPECT_GT(left.collided[0].target.y() - tip.y(), 0.05);
+    EXPECT_LT(left.collided[0].target.y() - tip.y(), 0.3);
+  }
   const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
   robot::Scene scene;
   // A thin wall across +y, 0.13-0.17 m beside the tip; "beyond" lies behind it, and only the
@@ -350,9 +368,10 @@ TEST(Experiments, AContactOnTheWayToATrajectorysStartCountsAndIsReportedAsSuch) 
   EXPECT_EQ(left.collided[0].name, "beyond");
   EXPECT_TRUE(left.collided[0].on_way_to_start);
   EXPECT_TRUE(left.collided[0].contact.ends_with("/wall")) << left.collided[0].contact;
-  // The tip was headed for a point between the first's end and the wall's far face.
-  EXPECT_GT(left.collided[0].target.y() - tip.y(), 0.05);
-  EXPECT_LT(left.collided[0].target.y() - tip.y(), 0.17);
+  // The tip's straight way crosses the wall: the arm is brought to the start instead, and the
+  // arm reaching from this side of the wall to beyond it lies in it there.
+  EXPECT_EQ(left.starts_placed, 1);
+  EXPECT_NEAR(left.collided[0].target.y() - tip.y(), 0.3, 1e-9);
   // E_task is over the two trajectories that ran; the third started again in the area.
   EXPECT_EQ(left.e_task_trajectories, 2);
   EXPECT_LT(left.e_task_mean_mm, 2.0);
@@ -444,6 +463,33 @@ TEST(Experiments, ARegionWhoseStartTouchesSomethingStartsInTheAreaInstead) {
   // at its first check as one started in contact would.
   ASSERT_FALSE(between.collided.empty());
   for (const CollidedTrajectory& trajectory : between.collided) EXPECT_GT(trajectory.contact_time, 0.05) << trajectory.name;
+}
+
+// Two trajectories of a region with a small block between them, on the straight way from the
+// first one's end to the second one's start: no arm follows the tip through it. The lead-in had
+// counted the second trajectory as collided on its way; the arm is brought to that start as a
+// region's start is, and the trajectory runs from there.
+TEST(Experiments, ATrajectoryWhoseStraightWayToItsStartCrossesAnObstacleStartsThereInstead) {
+  const Eigen::Vector3d tip = robot::tipPose(lwr4(), ready()).translation();
+  robot::Scene scene;
+  scene.obstacles.push_back(boxObstacle("block", Eigen::Vector3d(0.03, 0.03, 0.03), tip));
+  const Eigen::Vector3d left(0.0, 0.12, 0.0), right(0.0, -0.12, 0.0), step(0.0, 0.04, 0.0);
+  scene.trajectories.push_back({"left", "region", {tip + left + step, tip + left}});
+  scene.trajectories.push_back({"right", "region", {tip + right, tip + right - step}});
+  const std::vector<EvaluatedArea> areas{cubeArea(ready(), tip, 0.02)};
+  const auto map = constantMap();
+  const TrajectoryResult result = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 1, 0.1, 1);
+  ASSERT_EQ(result.regions.size(), 1U);
+  const TrajectoryRegionResult& region = result.regions[0];
+  EXPECT_EQ(region.starts_placed, 1);
+  EXPECT_EQ(region.collisions, 0) << (region.collided.empty() ? "" : region.collided.front().contact);
+  EXPECT_EQ(region.e_task_trajectories, 2);
+  EXPECT_LT(region.e_task_max_mm, 5.0);
+  // Without the block the straight way is taken.
+  scene.obstacles.clear();
+  const TrajectoryResult free = evaluateTrajectories(lwr4(), scene, sceneParameters(scene), *map, areas, 1, 0.1, 1);
+  EXPECT_EQ(free.regions[0].starts_placed, 0);
+  EXPECT_EQ(free.regions[0].collisions, 0);
 }
 
 // Two areas on either side of a board, as on the shelves of a cupboard: the region between them

@@ -23,7 +23,7 @@
 #include "robot/scene.hpp"
 #include "robot/sim/reach.hpp"
 #include "robot/sim/simulation.hpp"
-#include "tests/common/small_light_arm.hpp"
+#include "tests/common/cylinder_arms.hpp"
 
 namespace flexirob::app {
 namespace {
@@ -937,6 +937,36 @@ TEST(SimulatedTutor, TeachesASmallLightArmAsItTeachesTheLwrIv) {
   state.resize(7);
   teaching.sim.readState(state);
   EXPECT_LT(state.qd.cwiseAbs().maxCoeff(), 0.05);
+}
+
+// An arm of 260 kg and 1.85 m, 86 times the LWR IV's largest joint inertia, with the LWR IV's
+// gains and the tutor's hands of an LWR IV's strength: its joints crept at 0.04 rad/s under the
+// approach, and 2 of 20 places were taught. Its gains and the hands grow with it beyond four
+// times the LWR IV's inertia (robot::inertiaScaleToLwr): both listed areas are taught.
+TEST(SimulatedTutor, TeachesAHeavyLongArmWithHandsAndGainsOfItsStrength) {
+  const robot::RobotModel model = robot::RobotModel::fromUrdfString(testing::heavyLongArmUrdf(), ".");
+  const ArmScale scale = armScale(model);
+  ASSERT_GT(scale.inertia, 10.0);
+  ASSERT_EQ(scale.length, 1.0);
+  robot::Scene scene;
+  scene.name = "open";
+  scene.home_posture = Eigen::VectorXd::Zero(7);
+  for (const Eigen::Vector3d& centre : {Eigen::Vector3d(-0.8, -0.4, 0.4), Eigen::Vector3d(-0.4, -0.2, 0.15)}) {
+    robot::Area area;
+    area.name = "place";
+    area.p_WA = centre;
+    area.radius = 0.1;
+    scene.training_areas.push_back(area);
+  }
+  ShortTeaching teaching(scene, model);
+  teaching.tutor_options.check_points = 0;
+  const TutorReport report = teaching.configure(2);
+  ASSERT_EQ(report.areas.size(), 2U);
+  for (const TutorAreaReport& area : report.areas) {
+    EXPECT_TRUE(area.taught) << area.failure;
+    EXPECT_GT(area.span, 0.5 * area.helix_diameter);
+  }
+  EXPECT_EQ(report.collisions, 0U);
 }
 
 // `teach` says why areas failed by kind: the first reason alone had named a cramped listed place

@@ -11,7 +11,7 @@
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/sim/reach.hpp"
-#include "tests/common/small_light_arm.hpp"
+#include "tests/common/cylinder_arms.hpp"
 
 namespace flexirob::app {
 namespace {
@@ -261,6 +261,35 @@ TEST(Workflow, TheItmResolvesASmallArmsMotionAsFinelyAsTheLwrIvs) {
   EXPECT_NEAR(light.goal_gap, WorkflowOptions{}.max_goal_gap * armScale(small).length, 1e-12);
   ASSERT_GE(lwr.nodes, 8);
   EXPECT_GE(light.nodes, lwr.nodes / 2) << "the LWR IV's swing left " << lwr.nodes << " nodes";
+}
+
+// Every refit checks the transitions again: an OS-ELM session's `teach` had listed one pair
+// once per refit (137 and 138 colliding samples) and counted 7 warnings beside 2 lines. The last
+// map's transition warnings stand; a joint-limit warning stands whatever was learned after it.
+TEST(Workflow, OnlyTheLastMapsTransitionWarningsStand) {
+  using Kind = WorkflowEvent::Kind;
+  const auto event = [](Kind kind, const std::string& name, const std::string& detail) {
+    WorkflowEvent e;
+    e.kind = kind;
+    e.name = name;
+    e.detail = detail;
+    return e;
+  };
+  const std::vector<WorkflowEvent> events = {
+      event(Kind::kWarning, "joint_limit", "posture near the joint limit at area 'a'"),
+      event(Kind::kModelLearned, "oselm", "from 2 areas"),
+      event(Kind::kWarning, "transition_inconsistent", "a -> b: colliding samples 137"),
+      event(Kind::kWarning, "joint_limit", "posture near the joint limit at area 'a'"),
+      event(Kind::kModelLearned, "oselm", "from 3 areas"),
+      event(Kind::kWarning, "transition_inconsistent", "a -> b: colliding samples 138"),
+      event(Kind::kCheck, "transition_ok", "b -> c: fine"),
+  };
+  EXPECT_EQ(standingWarnings(events),
+            (std::vector<std::string>{"posture near the joint limit at area 'a'", "a -> b: colliding samples 138"}));
+  // Without a refit after them, transition warnings stand.
+  const std::vector<WorkflowEvent> once(events.begin(), events.begin() + 4);
+  EXPECT_EQ(standingWarnings(once),
+            (std::vector<std::string>{"posture near the joint limit at area 'a'", "a -> b: colliding samples 137"}));
 }
 
 TEST(Workflow, FullSessionCreatesAreasLearnsAndReachesExecution) {

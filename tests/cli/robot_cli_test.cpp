@@ -107,6 +107,13 @@ TEST(RobotCli, ReachSaysWhenTheTargetWasReachedOnlyThroughAContact) {
   EXPECT_NE(through.err.find(" on slab"), std::string::npos) << through.err;
   EXPECT_TRUE(free.json().at("reached_without_contact").get<bool>());
   EXPECT_EQ(free.err.find("not free of contacts"), std::string::npos) << free.err;
+  EXPECT_TRUE(through.json().at("inside_obstacle").is_null());
+  // A target inside the slab: reached, and said to lie in it, as `eval` says of scene targets.
+  const auto inside = runCliBinary("reach --robot lwr4 --target 0.5,0,0.5 --scene " + scene.string());
+  ASSERT_EQ(inside.exit_code, 0) << inside.err;
+  EXPECT_EQ(inside.json().at("inside_obstacle"), "slab");
+  EXPECT_NE(inside.err.find("note: the target lies inside obstacle 'slab'"), std::string::npos) << inside.err;
+  EXPECT_TRUE(free.json().at("inside_obstacle").is_null());
   std::filesystem::remove(scene);
 }
 

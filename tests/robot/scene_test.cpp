@@ -1151,5 +1151,46 @@ TEST(ScenePostures, MustLieWithinTheRobotsJointLimits) {
   }
 }
 
+// `unit: deg` turns every value of a posture into radians, and a slide's value is a length: a
+// rail at 0.2 m had become 3.5 mm without a word. Such a posture is refused on a robot with a
+// slide, naming it; in radians and metres it is taken.
+TEST_F(SceneFileTest, RefusesAPostureInDegreesOnARobotWithASlide) {
+  const RobotModel rail = RobotModel::fromUrdfString(
+      "<robot name='rail'><link name='base'/>"
+      "<joint name='carriage' type='prismatic'><parent link='base'/><child link='cart'/><axis xyz='0 1 0'/>"
+      "<limit lower='-0.5' upper='0.5' velocity='1' effort='100'/></joint>"
+      "<link name='cart'><inertial><mass value='5'/><inertia ixx='0.1' ixy='0' ixz='0' iyy='0.1' iyz='0' izz='0.1'/></inertial></link>"
+      "<joint name='shoulder' type='revolute'><parent link='cart'/><child link='arm'/><origin xyz='0 0 0.1'/><axis xyz='0 1 0'/>"
+      "<limit lower='-2' upper='2' velocity='1' effort='100'/></joint>"
+      "<link name='arm'><inertial><origin xyz='0 0 0.3'/><mass value='2'/>"
+      "<inertia ixx='0.01' ixy='0' ixz='0' iyy='0.01' iyz='0' izz='0.01'/></inertial></link></robot>",
+      ".");
+  const Scene in_degrees = loadSceneFile(write("rail.yaml", "name: rail\nhome_posture: {unit: deg, values: [0.2, 30]}\n"));
+  try {
+    checkPosturesFit(in_degrees, rail, "rail");
+    ADD_FAILURE() << "took a slide's 0.2 as degrees";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("scene 'rail': home_posture is written in degrees, but joint 'carriage' slides"),
+              std::string::npos)
+        << error.what();
+  }
+  const Scene area_in_degrees = loadSceneFile(write(
+      "rail_area.yaml", "name: rail\ntraining_areas:\n  - {name: a, centre: [0.3, 0.2, 0.1], posture: {unit: deg, values: [0.2, 90]}}\n"));
+  try {
+    checkPosturesFit(area_in_degrees, rail, "rail");
+    ADD_FAILURE() << "took an area posture's slide in degrees";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("training area 'a' posture is written in degrees"), std::string::npos) << error.what();
+  }
+  const Scene in_radians = loadSceneFile(write("rail_rad.yaml", "name: rail\nhome_posture: [0.2, 0.5]\n"));
+  EXPECT_NO_THROW(checkPosturesFit(in_radians, rail, "rail"));
+  EXPECT_DOUBLE_EQ((*in_radians.home_posture)[0], 0.2);
+  // A robot that only turns takes degrees.
+  const RobotModel lwr4 = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
+  const Scene lwr_in_degrees =
+      loadSceneFile(write("lwr.yaml", "name: cell\nhome_posture: {unit: deg, values: [0, 34.4, 0, -91.7, 0, 51.6, 0]}\n"));
+  EXPECT_NO_THROW(checkPosturesFit(lwr_in_degrees, lwr4, "lwr4"));
+}
+
 }  // namespace
 }  // namespace flexirob::robot

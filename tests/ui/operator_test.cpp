@@ -24,7 +24,7 @@
 #include "ui/joint_panel.hpp"
 #include "ui/live_teaching.hpp"
 #include "ui/main_window.hpp"
-#include "tests/common/small_light_arm.hpp"
+#include "tests/common/cylinder_arms.hpp"
 #include "tests/ui/ui_test_support.hpp"
 #include "ui/mouse_perturbation.hpp"
 #include "ui/osg_view.hpp"
