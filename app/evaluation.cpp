@@ -171,9 +171,17 @@ FittedScene fitSceneToRobot(const robot::Scene& scene, const robot::RobotModel& 
   return fitted;
 }
 
+planning::ItmParameters itmParametersForArm(planning::ItmParameters parameters, const ArmScale& scale) {
+  if (scale.length >= 1.0) return parameters;
+  parameters.e_max *= scale.length;
+  parameters.d_c_max *= scale.length;
+  return parameters;
+}
+
 bool crossesObstacle(const robot::Scene& scene, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const int steps = std::max(1, static_cast<int>(std::ceil((b - a).norm() / 0.005)));
-  for (int i = 0; i <= steps; ++i) {
+  // Between the ends: a way from or to a point inside an obstacle is another matter (`impossible`).
+  const int steps = std::max(2, static_cast<int>(std::ceil((b - a).norm() / 0.005)));
+  for (int i = 1; i < steps; ++i) {
     const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(i) / steps);
     if (robot::obstacleAt(scene, p, 0.0) != nullptr) return true;
   }

@@ -108,7 +108,8 @@ inline constexpr double kLwrShoulderReach = 0.85;
 /// Tab. A.1's gains, the interaction's admittance, and the simulated tutor's hands and
 /// distances. An arm of the LWR IV's size or larger, up to four times its joint inertia, scales
 /// nothing (every factor 1); a smaller or lighter one gets them in proportion, so that it moves
-/// as an LWR IV of its size would; a much heavier one gets stronger gains and hands (inertia).
+/// as an LWR IV of its size would; a much heavier one stronger hands, triggers and damping
+/// (inertia above 1; the workflow keeps the LWR IV's joint gains then).
 struct ArmScale {
   double length = 1.0;   ///< reach from the shoulder / kLwrShoulderReach, at most 1
   double inertia = 1.0;  ///< robot::inertiaScaleToLwr()
@@ -122,8 +123,12 @@ struct ArmScale {
 
 ArmScale armScale(const robot::RobotModel& model);
 
-/// Whether the straight segment a–b [m, W] passes through one of the scene's obstacles (looked
-/// at every 5 mm; the table top is none of them).
+/// The ITM's distances (e_max, d_Cmax: Sect. 7.4's, on the LWR IV) times the arm's length scale.
+planning::ItmParameters itmParametersForArm(planning::ItmParameters parameters, const ArmScale& scale);
+
+/// Whether the straight segment a–b [m, W] passes through one of the scene's obstacles between
+/// its ends (looked at every 5 mm: a sheet thinner than that may be missed; the table top is none
+/// of them).
 bool crossesObstacle(const robot::Scene& scene, const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 
 /// Drives the command from q_start towards p_des(t) (t in [0, duration], held after) for up to

@@ -1037,25 +1037,41 @@ std::optional<Eigen::Vector3d> SimulatedTutor::nextAutomaticTarget(const robot::
   const Eigen::Vector3d within_lower = grid.lower.cwiseMax(arm_reach_.shoulder - reach);
   const Eigen::Vector3d within_upper = grid.upper.cwiseMin(arm_reach_.shoulder + reach);
   const bool box_reaches = (within_lower.array() <= within_upper.array()).all();
+  places_passed_over_.clear();
   for (int tries = 0; tries < 200; ++tries) {
     const bool within = tries >= 100 && box_reaches;
     target = within ? random_.uniform(within_lower, within_upper) : random_.uniform(grid.lower, grid.upper);
-    if (roomyForAnArea(target) && !near_tried(target) &&
-        accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds)) {
+    if (const char* why = whyNoRoom(target)) {
+      ++places_passed_over_[why];
+    } else if (near_tried(target)) {
+      ++places_passed_over_["near a place tried before"];
+    } else if (!accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds)) {
+      ++places_passed_over_["without a collision-free posture"];
+    } else {
       return target;
     }
   }
   return std::nullopt;
 }
 
-bool SimulatedTutor::roomyForAnArea(const Eigen::Vector3d& p_W) const {
+std::string SimulatedTutor::placesPassedOver() const {
+  std::vector<std::pair<std::string, int>> reasons(places_passed_over_.begin(), places_passed_over_.end());
+  std::stable_sort(reasons.begin(), reasons.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+  std::string text;
+  for (const auto& [reason, count] : reasons) text += (text.empty() ? "" : ", ") + std::to_string(count) + " " + reason;
+  return text;
+}
+
+const char* SimulatedTutor::whyNoRoom(const Eigen::Vector3d& p_W) const {
   // Room for the arm around the tip: 0.1 m from every obstacle, off the robot's own base and
   // the table it stands on, where the hands cannot lead the arm through a helix, and 5 cm inside
   // the arm's reach (the workspace box reaches beyond it, and a person does not pick a place the
   // arm cannot get to).
-  if (robot::obstacleAt(*scene_, p_W, scaled(0.1)) != nullptr) return false;
-  if (scene_->grid && scene_->grid->excludes(p_W)) return false;
-  return p_W.z() >= scaled(0.08) && arm_reach_.roomFor(p_W, scaled(0.05));
+  if (robot::obstacleAt(*scene_, p_W, scaled(0.1)) != nullptr) return "near an obstacle";
+  if (scene_->grid && scene_->grid->excludes(p_W)) return "in an excluded box";
+  if (p_W.z() < scaled(0.08)) return "too near the table";
+  if (!arm_reach_.roomFor(p_W, scaled(0.05))) return "beyond the arm's reach or at its base";
+  return nullptr;
 }
 
 TutorReport SimulatedTutor::configure(int area_count) {
@@ -1134,9 +1150,9 @@ TutorReport SimulatedTutor::configureAreas(int area_count) {
         // Every place drawn was near an obstacle, excluded, beyond the arm or without a free
         // posture: a person would not teach the arm just anywhere.
         std::ostringstream failure;
-        failure << std::fixed << std::setprecision(1) << "no place of its own found: 200 random points of the evaluation grid were all within "
-                << 100.0 * scaled(0.1) << " cm of an obstacle or of a place tried before, lower than " << 100.0 * scaled(0.08)
-                << " cm, in an excluded box, beyond the arm's reach or without a collision-free posture";
+        failure << std::fixed << std::setprecision(1) << "no place of its own found: of 200 random points of the evaluation grid, "
+                << placesPassedOver() << " (near: within " << 100.0 * scaled(0.1) << " cm; too near the table: under "
+                << 100.0 * scaled(0.08) << " cm)";
         area.failure = failure.str();
         report_.areas.push_back(area);
         break;

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -236,16 +237,23 @@ class SimulatedTutor {
   int mapFailures();
   /// Whether an area centred at p_W leaves the arm room: 0.1 m to the obstacles, off the base
   /// and the table, outside the grid's excluded boxes.
-  bool roomyForAnArea(const Eigen::Vector3d& p_W) const;
+  bool roomyForAnArea(const Eigen::Vector3d& p_W) const { return whyNoRoom(p_W) == nullptr; }
+  /// Why an area centred at p_W leaves the arm no room (a short phrase), or null.
+  const char* whyNoRoom(const Eigen::Vector3d& p_W) const;
   /// Where to teach next automatically: with `where_it_fails`, the failing check point with the
   /// most failing neighbours within 0.2 m that is roomy and 0.1 m from earlier attempts;
   /// otherwise, or before any map, or when none is left, a random roomy point of the workspace box
   /// that some collision-free IK posture reaches; none when 200 random points were not.
   std::optional<Eigen::Vector3d> nextAutomaticTarget(const robot::EvaluationGrid& grid, const std::vector<Eigen::Vector3d>& tried,
                                       bool where_it_fails);
+  /// Why the random points of the last nextAutomaticTarget() that found none were passed over:
+  /// "180 beyond the arm's reach or at its base, 20 near an obstacle", most frequent first.
+  std::string placesPassedOver() const;
 
   /// The arm held under TutorOptions::arm_mutex (if set) for one full expression,
   /// `arm()->time()`; never two in one expression.
+  std::map<std::string, int> places_passed_over_;  // reason -> random points, in nextAutomaticTarget()
+
   class LockedArm {
    public:
     LockedArm(robot::Simulation* sim, std::mutex* mutex)

@@ -117,12 +117,15 @@ namespace {
 /// them times ArmScale::length, as its gains and the tutor's distances are scaled. A 17 cm arm's
 /// configuration stage had left an ITM of 3 nodes, and `plan` drew its goals among them. The
 /// LWR IV and arm9 (length 1) keep every value.
-WorkflowOptions optionsForArm(WorkflowOptions options, const ArmScale& scale) {
-  options.itm.e_max *= scale.length;
-  options.itm.d_c_max *= scale.length;
+WorkflowOptions optionsForArm(WorkflowOptions options, const robot::RobotModel& model, const ArmScale& scale) {
+  if (scale.length >= 1.0) return options;
+  options.itm = itmParametersForArm(options.itm, scale);
   options.max_goal_gap *= scale.length;
-  options.workspace_lower *= scale.length;
-  options.workspace_upper *= scale.length;
+  // The box about the shoulder as far as the arm reaches (on a pedestal too): scaled about the
+  // world's origin it had ended under a pedestal arm's shoulder.
+  const ArmReach reach = armReach(model);
+  options.workspace_lower = reach.shoulder - Eigen::Vector3d::Constant(reach.reach);
+  options.workspace_upper = reach.shoulder + Eigen::Vector3d::Constant(reach.reach);
   return options;
 }
 
@@ -174,7 +177,7 @@ Workflow::Workflow(robot::RobotBackend& backend, const robot::ParameterSet& para
     : backend_(&backend),
       model_robot_(&backend.model()),
       arm_scale_(app::armScale(backend.model())),
-      options_(optionsForArm(std::move(options), arm_scale_)),
+      options_(optionsForArm(std::move(options), backend.model(), arm_scale_)),
       parameters_(workflowParameters(parameters, options_, arm_scale_)),
       interaction_(backend.model(), parameters_, backend.cycleTime()),
       triggers_(parameters_),
@@ -194,7 +197,10 @@ Workflow::Workflow(robot::RobotBackend& backend, const robot::ParameterSet& para
   hold_q_ = state_.q;
   q_fixed_ = state_.q;
   interaction_.setConfidence(&area_confidence_);
-  interaction_.setArmScale(arm_scale_.inertia, arm_scale_.mass());
+  // The joint gains of an arm much heavier than the LWR IV stay the LWR IV's: scaled with it
+  // (21.5 times on a 260 kg arm), its joints held against the tutor's hands, which grow as much,
+  // and 3 of 9 areas were taught with 5 contacts; with the LWR IV's, 3 of 3 without one.
+  interaction_.setArmScale(std::min(1.0, arm_scale_.inertia), arm_scale_.mass());
   setState(Stage::kIdle, SubStage::kNone);
   events_.clear();  // the initial state is no event
   command();

@@ -89,7 +89,7 @@ ModeGains scaledGains(InteractionMode mode, double inertia, double mass) {
 }  // namespace
 
 void InteractionController::setArmScale(double inertia, double mass) {
-  if (inertia > 0.0 && inertia <= 1.0) inertia_scale_ = inertia;
+  if (inertia > 0.0 && std::isfinite(inertia)) inertia_scale_ = inertia;
   if (mass > 0.0 && std::isfinite(mass)) mass_scale_ = mass;
   gains_ = scaledGains(mode_, inertia_scale_, mass_scale_);
 }

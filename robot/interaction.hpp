@@ -100,12 +100,12 @@ class InteractionController {
   /// Keyboard mode: the tutor commands x_des and q_c by steps instead of pushing the arm
   /// (the simulated 9-DoF arm of Sect. 8.1 has no hand to feel).
   void setKeyboardMode(bool keyboard) { keyboard_ = keyboard; }
-  /// Tab. A.1's gains and the admittances' damping are the LWR IV's. An arm lighter than it
-  /// gets its joint stiffness, joint-space virtual inertia and damping times `inertia` (of the
-  /// arm's joints to the LWR IV's), the Cartesian ones times `mass`, so that it moves as an
-  /// LWR IV of its size would (a light arm under the LWR IV's gains rings faster than the
-  /// control cycle samples it). `inertia` in (0, 1], `mass` positive; 1 is the LWR IV. Takes
-  /// effect at once.
+  /// Tab. A.1's gains and the admittances' damping are the LWR IV's. An arm lighter or much
+  /// heavier than it gets its joint stiffness, joint-space virtual inertia and damping times
+  /// `inertia` (robot::inertiaScaleToLwr), the Cartesian ones times `mass`, so that it moves as
+  /// an LWR IV of its size would (a light arm under the LWR IV's gains rings faster than the
+  /// control cycle samples it; a 260 kg arm crept). Both positive and finite (others are
+  /// ignored); 1 is the LWR IV. Takes effect at once.
   void setArmScale(double inertia, double mass);
 
   /// One cycle: writes q_cmd, stiffness and damping for the current mode.

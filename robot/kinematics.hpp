@@ -66,8 +66,8 @@ inline constexpr double kLwrClassInertiaRatio = 4.0;
 /// largest joint inertia of the turning joints in the posture nearest zero to the LWR IV's: r
 /// on a lighter arm; 1 up to four times the LWR IV's (the LWR IV, arm9 at 3.1, arms of its
 /// class are driven with its own gains); r / 4 beyond, continuous there (a 260 kg arm at 86
-/// times could not be led by hands and gains of the LWR IV's strength). 1 without a turning
-/// joint or a mass.
+/// times could not be led by hands of the LWR IV's strength). 1 without a turning joint or a
+/// mass. The workflow keeps the LWR IV's joint gains above 1 (docs/CONTROL.md).
 double inertiaScaleToLwr(const RobotModel& model);
 
 }  // namespace flexirob::robot

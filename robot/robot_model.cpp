@@ -449,9 +449,16 @@ RobotModel RobotModel::fromUrdfFile(const fs::path& urdf_file, const std::string
   if (!stream) throw InputError("cannot open URDF '" + urdf_file.string() + "'");
   std::ostringstream buffer;
   buffer << stream.rdbuf();
-  RobotModel model = fromUrdfString(buffer.str(), fs::absolute(urdf_file).parent_path(), tip_link);
-  model.urdf_path_ = fs::weakly_canonical(fs::absolute(urdf_file));
-  return model;
+  try {
+    RobotModel model = fromUrdfString(buffer.str(), fs::absolute(urdf_file).parent_path(), tip_link);
+    model.urdf_path_ = fs::weakly_canonical(fs::absolute(urdf_file));
+    return model;
+  } catch (const InputError& refused) {
+    // A scene's `robot:` may name any file: the message says which one did not read.
+    const std::string what = refused.what();
+    if (what.find(urdf_file.string()) != std::string::npos) throw;
+    throw InputError(printable(urdf_file.string(), 200) + ": " + what);
+  }
 }
 
 RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& base_dir,

@@ -7,7 +7,8 @@
 // On top of the worker's requests this class keeps what belongs to the GUI side:
 //  - the mouse spring (issue #7 item 3; MuJoCo's and Gazebo's perturbation): F = k (p_cursor −
 //    p_grab) with p_grab fixed to the link, re-evaluated at every display tick from the newest
-//    posture and sent as the simulation's hand force, clipped to max_hand_force;
+//    posture and sent as the simulation's hand force; k and the clip (max_hand_force) are the
+//    LWR IV's, times the arm's ArmScale::mass() and force();
 //  - the workflow's events, read from the snapshot's ring once each (sequence numbers);
 //  - the link status of the backend.
 #include <Eigen/Core>

@@ -34,9 +34,9 @@ class ForceArrow {
   static constexpr double kMetresPerNewton = 0.005;
   ForceArrow();
   osg::Node* node() const { return transform_.get(); }
-  /// Shows the force F_W [N] applied at p_W [m]; a force below 0.5 N hides the arrow. On an arm
-  /// scaled against the LWR IV (setArmScale) the force counts as F / force() and the length
-  /// shrinks with the arm, so a pull looks alike on every arm.
+  /// Shows the force F_W [N] applied at p_W [m]; a force below 0.5 N (0.5 force() on an arm
+  /// scaled against the LWR IV, setArmScale) hides the arrow. The force counts as F / force()
+  /// and the length shrinks with the arm, so a pull looks alike on every arm.
   void show(const Eigen::Vector3d& p_W, const Eigen::Vector3d& F_W);
   void setArmScale(const app::ArmScale& scale) { scale_ = scale; }
   /// The arrow's length for F_W [m].
@@ -51,7 +51,7 @@ class ForceArrow {
 
 class MousePerturbation final : public ViewMouseGrabber {
  public:
-  static constexpr double kStiffness = 250.0;  ///< [N/m] of the mouse spring
+  static constexpr double kStiffness = 250.0;  ///< [N/m] of the mouse spring on the LWR IV (times ArmScale::mass())
 
   /// live() and kinematics() give the current live robot and the GUI's mirror kinematics (at
   /// the snapshot's posture); either may return null (then nothing is grabbed).

@@ -215,7 +215,8 @@ Session loadSession(const std::string& file) {
       session.data.X.col(static_cast<Eigen::Index>(l)) = xs[l];
       session.data.Y.col(static_cast<Eigen::Index>(l)) = qs[l];
     }
-    session.itm = std::make_unique<planning::Itm>(planning::ItmParameters{}, n);
+    // As the workflow that recorded it: the ITM's distances are the arm's.
+    session.itm = std::make_unique<planning::Itm>(app::itmParametersForArm({}, app::armScale(*session.model)), n);
     const Json& nodes = json.at("itm").at("nodes");
     for (const Json& node : nodes) session.itm->addNode(vectorOf(node.at("x"), 3, "itm x"), vectorOf(node.at("q"), n, "itm q"));
     for (const Json& edge : json.at("itm").at("edges")) {

@@ -72,7 +72,7 @@ Json runReach(const ReachOptions& options) {
   // As `eval` says of a scene target: reached or not, the tip is in the obstacle there.
   const robot::Obstacle* inside = robot::obstacleAt(scene, target);
   if (inside != nullptr) {
-    std::fprintf(stderr, "note: the target lies inside obstacle '%s': no posture reaches it without a contact\n",
+    std::fprintf(stderr, "note: the target lies inside obstacle '%s': the tip cannot get there without touching it\n",
                  printable(inside->name, 100).c_str());
   }
   if (result.status == "unreachable" && !result.joints_at_limits.empty()) {

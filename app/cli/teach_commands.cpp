@@ -13,7 +13,6 @@
 #include <optional>
 #include <iostream>
 #include <mutex>
-#include <set>
 #include <sstream>
 #include <unistd.h>
 

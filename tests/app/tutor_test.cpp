@@ -939,11 +939,13 @@ TEST(SimulatedTutor, TeachesASmallLightArmAsItTeachesTheLwrIv) {
   EXPECT_LT(state.qd.cwiseAbs().maxCoeff(), 0.05);
 }
 
-// An arm of 260 kg and 1.85 m, 86 times the LWR IV's largest joint inertia, with the LWR IV's
-// gains and the tutor's hands of an LWR IV's strength: its joints crept at 0.04 rad/s under the
-// approach, and 2 of 20 places were taught. Its gains and the hands grow with it beyond four
-// times the LWR IV's inertia (robot::inertiaScaleToLwr): both listed areas are taught.
-TEST(SimulatedTutor, TeachesAHeavyLongArmWithHandsAndGainsOfItsStrength) {
+// An arm of 260 kg and 1.85 m, 86 times the LWR IV's largest joint inertia, with the tutor's
+// hands of an LWR IV's strength: its joints crept at 0.04 rad/s under the approach, and 2 of 20
+// places were taught. The hands grow with it beyond four times the LWR IV's inertia
+// (robot::inertiaScaleToLwr) and its joint gains stay the LWR IV's (grown as well, the joints
+// held against the hands and the approaches touched the table): both listed areas are taught
+// without a contact.
+TEST(SimulatedTutor, TeachesAHeavyLongArmWithHandsOfItsStrength) {
   const robot::RobotModel model = robot::RobotModel::fromUrdfString(testing::heavyLongArmUrdf(), ".");
   const ArmScale scale = armScale(model);
   ASSERT_GT(scale.inertia, 10.0);

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "app/workflow.hpp"
+#include "learning/learner.hpp"
 #include "robot/collision.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
@@ -224,14 +225,14 @@ TEST(Workflow, TheItmLeavesOutWhereTheSimulatedArmOverlapsAnObstacle) {
 }
 
 // The ITM's e_max (0.1 m, Sect. 7.4) and the goal gap are a person's distances with the LWR IV.
-// A 25 cm arm's configuration stage had left an ITM of 3 nodes, and plans ran between them; its
-// distances are scaled with the arm's reach, so the same motion of either arm leaves about as
-// many nodes. The LWR IV keeps the thesis' values.
+// A 17 cm arm's configuration stage had left an ITM of 3 nodes, and plans ran between them; its
+// distances are scaled with the arm's reach, so the same motion of either arm (here a 25 cm one)
+// leaves about as many nodes. The LWR IV keeps the thesis' values.
 TEST(Workflow, TheItmResolvesASmallArmsMotionAsFinelyAsTheLwrIvs) {
   const robot::RobotModel small = robot::RobotModel::fromUrdfString(testing::smallLightArmUrdf(), ".");
   struct Swing {
     int nodes = 0;
-    double e_max = 0.0, goal_gap = 0.0;
+    double e_max = 0.0, goal_gap = 0.0, d_c_max = 0.0;
   };
   const auto swing = [](const robot::RobotModel& model) {
     Swing result;
@@ -241,6 +242,7 @@ TEST(Workflow, TheItmResolvesASmallArmsMotionAsFinelyAsTheLwrIvs) {
     Workflow workflow(backend, parameters, syncOptions());
     result.e_max = workflow.options().itm.e_max;
     result.goal_gap = workflow.options().max_goal_gap;
+    result.d_c_max = workflow.options().itm.d_c_max;
     EXPECT_TRUE(workflow.press(Button::kStartConfiguration));
     // The arm leant out and swung about its vertical axis, 3 rad.
     Eigen::VectorXd q(7);
@@ -259,8 +261,35 @@ TEST(Workflow, TheItmResolvesASmallArmsMotionAsFinelyAsTheLwrIvs) {
   EXPECT_EQ(lwr.goal_gap, WorkflowOptions{}.max_goal_gap);
   EXPECT_NEAR(light.e_max, WorkflowOptions{}.itm.e_max * armScale(small).length, 1e-12);
   EXPECT_NEAR(light.goal_gap, WorkflowOptions{}.max_goal_gap * armScale(small).length, 1e-12);
+  EXPECT_NEAR(light.d_c_max, WorkflowOptions{}.itm.d_c_max * armScale(small).length, 1e-12);
   ASSERT_GE(lwr.nodes, 8);
   EXPECT_GE(light.nodes, lwr.nodes / 2) << "the LWR IV's swing left " << lwr.nodes << " nodes";
+}
+
+// The OS-ELM normalizes its input over a fixed box, the LWR IV's workspace; a shorter arm's is
+// the box about its shoulder as far as it reaches, so that it holds every tip position (the LWR
+// IV's box shrunk about the world's origin had ended under a pedestal arm's shoulder).
+TEST(Workflow, TheOnlineLearnersBoxHoldsWhereASmallArmOnAPedestalReaches) {
+  const robot::RobotModel tall = robot::RobotModel::fromUrdfString(
+      testing::cylinderArmUrdf("tall", {0.06, 0.06, 0.05, 0.05, 0.04, 0.04, 0.03}, {0.3, 0.25, 0.2, 0.15, 0.1, 0.07, 0.05}, 0.018,
+                               0.001, 0.025, 1.0, 20.0),
+      ".");
+  ASSERT_LT(armScale(tall).length, 0.5);
+  ScriptedBackend backend(tall);
+  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  const robot::ParameterSet parameters(declarations);
+  Workflow workflow(backend, parameters, syncOptions());
+  const Eigen::Vector3d lower = workflow.options().workspace_lower, upper = workflow.options().workspace_upper;
+  learning::UniformRandom random(3);
+  robot::Kinematics kinematics(tall);
+  for (int i = 0; i < 200; ++i) {
+    kinematics.update(random.uniform(tall.softLowerLimits(), tall.softUpperLimits()));
+    const Eigen::Vector3d tip = kinematics.p_WT();
+    EXPECT_TRUE((tip.array() >= lower.array()).all() && (tip.array() <= upper.array()).all())
+        << tip.transpose() << " outside [" << lower.transpose() << "] [" << upper.transpose() << "]";
+  }
+  // No larger than the arm needs: its reach about the shoulder.
+  EXPECT_LT((upper - lower).maxCoeff(), 2.5 * 0.3);
 }
 
 // Every refit checks the transitions again: an OS-ELM session's `teach` had listed one pair

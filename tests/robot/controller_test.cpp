@@ -401,6 +401,26 @@ Eigen::VectorXd restPosture() {
   return q;
 }
 
+// Tab. A.1's stiffness is the LWR IV's; a lighter arm gets it times its inertia ratio, and so
+// does a much heavier one (a factor above 1 had been ignored: a 260 kg arm kept 300 Nm/rad in
+// HIERARCHICAL CONTROL and crept). Values that are no scale leave it as it was.
+TEST(InteractionControllers, TheJointStiffnessScalesWithTheArmBothWays) {
+  InteractionRig rig(restPosture(), InteractionMode::kHierarchicalControl);
+  rig.run(1);
+  const double lwr = rig.command.stiffness[0];
+  ASSERT_GT(lwr, 0.0);
+  for (const double inertia : {0.01, 21.5}) {
+    rig.controller.setArmScale(inertia, 1.0);
+    rig.run(1);
+    EXPECT_NEAR(rig.command.stiffness[0], lwr * inertia, 1e-9 * lwr * inertia) << inertia;
+  }
+  for (const double no_scale : {0.0, -1.0, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    rig.controller.setArmScale(no_scale, 1.0);
+    rig.run(1);
+    EXPECT_NEAR(rig.command.stiffness[0], lwr * 21.5, 1e-9 * lwr * 21.5) << no_scale;
+  }
+}
+
 TEST(InteractionControllers, GravityCompensationFollowsTheHandAndStopsWhenReleased) {
   InteractionRig rig(restPosture(), InteractionMode::kGravityCompensation);
   EXPECT_EQ(rig.command.stiffness.size(), 0);

@@ -254,6 +254,8 @@ TEST(ThirdPartyUrdf, LoadsColladaObjAndStlMeshesInMetres) {
 TEST(ThirdPartyUrdf, BrokenVariantsFailWithOneLineInputError) {
   const fs::path broken = kPackage / "urdf" / "broken";
   expectOneLineInputError([&] { RobotModel::fromUrdfFile(broken / "malformed.urdf"); }, "invalid URDF");
+  // The file that did not read is named (a scene's `robot:` may point anywhere).
+  expectOneLineInputError([&] { RobotModel::fromUrdfFile(broken / "malformed.urdf"); }, "broken/malformed.urdf: invalid URDF");
   expectOneLineInputError([&] { RobotModel::fromUrdfFile(broken / "missing_link.urdf"); }, "iiwa_link_2");
   expectOneLineInputError([&] { RobotModel::fromUrdfFile(broken / "missing_mesh.urdf"); }, "link_1_missing.dae' not found");
   expectOneLineInputError([&] { RobotModel::fromUrdfFile(broken / "floating_joint.urdf"); }, "floating");

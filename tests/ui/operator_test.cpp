@@ -343,8 +343,12 @@ class OperatorTest : public QObject {
     QVERIFY(scale.force() < 0.05);
     QVERIFY2(force.norm() > 0.0 && force.norm() <= 80.0 * scale.force() + 1e-9,
              qPrintable(QStringLiteral("the hand pulled with %1 N").arg(force.norm())));
-    const double lwr_arrow = flexirob::ui::ForceArrow::kMetresPerNewton * force.norm() / scale.force();
-    QCOMPARE(window.forceArrow()->length(force), lwr_arrow * scale.length);
+    // The arrow of the spring's largest pull is as long, for the arm's size, as the LWR IV's of
+    // 80 N (0.4 m); a pull of 0.4 N on the LWR IV, scaled, hides it.
+    const Eigen::Vector3d largest = Eigen::Vector3d::UnitX() * 80.0 * scale.force();
+    QVERIFY(std::abs(window.forceArrow()->length(largest) - 0.4 * scale.length) < 1e-9);
+    window.forceArrow()->show(pulled, Eigen::Vector3d::UnitX() * 0.4 * scale.force());
+    QVERIFY(!window.forceArrow()->visible());
     // Let go, it comes to rest within 3 s of the robot's time.
     const auto& s = window.live()->snapshot();
     const auto fastest = [&s] {
@@ -355,6 +359,18 @@ class OperatorTest : public QObject {
     const double let_go = s.time;
     QTRY_VERIFY_WITH_TIMEOUT(fastest() < 0.1 || s.time > let_go + 3.0, 30000);
     QVERIFY2(fastest() < 0.1, qPrintable(QStringLiteral("a joint still moves at %1 rad/s").arg(fastest())));
+    // Grabbed 1 cm from where the forearm rests, unclipped: the spring is 250 N/m times the arm's
+    // mass ratio (the LWR IV's 250 N/m would pull with 2.5 N).
+    const Eigen::Vector3d at = bodyOrigin(window, forearm);
+    QVERIFY(window.live()->grab(forearm, Eigen::Vector3d::Zero(), at + Eigen::Vector3d(0.0, 0.0, 0.01),
+                                flexirob::ui::MousePerturbation::kStiffness));
+    const double expected = flexirob::ui::MousePerturbation::kStiffness * scale.mass() * 0.01;
+    QVERIFY(expected < 80.0 * scale.force());
+    QTRY_VERIFY(s.hand_active);
+    const double pulling = Eigen::Vector3d(s.hand_force_W[0], s.hand_force_W[1], s.hand_force_W[2]).norm();
+    window.live()->release();
+    QVERIFY2(pulling > 0.5 * expected && pulling < 1.1 * expected,
+             qPrintable(QStringLiteral("the spring pulled with %1 N, %2 N expected").arg(pulling).arg(expected)));
   }
 
   void theForceArrowAndTheKeyMapShowInTheWindow() {
