@@ -902,6 +902,22 @@ TEST(SimulatedTutor, ChoosesPosturesThatKeepAShortSlideAwayFromItsStops) {
 }
 
 
+// A scene with nothing but the table, a 7-joint arm straight up at the start, and two listed
+// places without postures.
+robot::Scene openSceneWithTwoPlaces(const Eigen::Vector3d& first, const Eigen::Vector3d& second, double radius) {
+  robot::Scene scene;
+  scene.name = "open";
+  scene.home_posture = Eigen::VectorXd::Zero(7);
+  for (const Eigen::Vector3d& centre : {first, second}) {
+    robot::Area area;
+    area.name = "place";
+    area.p_WA = centre;
+    area.radius = radius;
+    scene.training_areas.push_back(area);
+  }
+  return scene;
+}
+
 // Tab. A.1's gains, the admittance's damping, the simulation's drift damping and the tutor's
 // hands are the LWR IV's. On a 25 cm arm of a few hundred grams the hands' pushes made it ring
 // at up to 100 rad/s, and the drift damping held it like honey: no area could be taught, in an
@@ -911,17 +927,7 @@ TEST(SimulatedTutor, TeachesASmallLightArmAsItTeachesTheLwrIv) {
   const ArmScale scale = armScale(model);
   ASSERT_LT(scale.inertia, 0.01);
   ASSERT_LT(scale.length, 0.35);
-  robot::Scene scene;
-  scene.name = "open";
-  scene.home_posture = Eigen::VectorXd::Zero(7);
-  for (const Eigen::Vector3d& centre : {Eigen::Vector3d(-0.15, 0.0, 0.15), Eigen::Vector3d(-0.1, -0.12, 0.12)}) {
-    robot::Area area;
-    area.name = "place";
-    area.p_WA = centre;
-    area.radius = 0.03;
-    scene.training_areas.push_back(area);
-  }
-  ShortTeaching teaching(scene, model);
+  ShortTeaching teaching(openSceneWithTwoPlaces(Eigen::Vector3d(-0.15, 0.0, 0.15), Eigen::Vector3d(-0.1, -0.12, 0.12), 0.03), model);
   teaching.tutor_options.check_points = 0;
   const TutorReport report = teaching.configure(2);
   ASSERT_EQ(report.areas.size(), 2U);
@@ -950,17 +956,7 @@ TEST(SimulatedTutor, TeachesAHeavyLongArmWithHandsOfItsStrength) {
   const ArmScale scale = armScale(model);
   ASSERT_GT(scale.inertia, 10.0);
   ASSERT_EQ(scale.length, 1.0);
-  robot::Scene scene;
-  scene.name = "open";
-  scene.home_posture = Eigen::VectorXd::Zero(7);
-  for (const Eigen::Vector3d& centre : {Eigen::Vector3d(-0.8, -0.4, 0.4), Eigen::Vector3d(-0.4, -0.2, 0.15)}) {
-    robot::Area area;
-    area.name = "place";
-    area.p_WA = centre;
-    area.radius = 0.1;
-    scene.training_areas.push_back(area);
-  }
-  ShortTeaching teaching(scene, model);
+  ShortTeaching teaching(openSceneWithTwoPlaces(Eigen::Vector3d(-0.8, -0.4, 0.4), Eigen::Vector3d(-0.4, -0.2, 0.15), 0.1), model);
   teaching.tutor_options.check_points = 0;
   const TutorReport report = teaching.configure(2);
   ASSERT_EQ(report.areas.size(), 2U);
