@@ -319,7 +319,8 @@ void armPoints(robot::Kinematics& kinematics, int dof, std::vector<Eigen::Vector
 
 bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::ParameterSet& parameters,
                                 robot::CollisionWorld& world, const Eigen::Vector3d& p_W,
-                                const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random) {
+                                const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random,
+                                Eigen::VectorXd* posture_found) {
   const int dof = model.dof();
   const Eigen::VectorXd lower = model.softLowerLimits();
   const Eigen::VectorXd upper = model.softUpperLimits();
@@ -344,7 +345,10 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
     kinematics.update(q);
     if ((kinematics.p_WT() - p_W).norm() > 1e-3) continue;
     world.update(q);
-    if (world.contacts().empty()) return true;
+    if (world.contacts().empty()) {
+      if (posture_found != nullptr) *posture_found = q;
+      return true;
+    }
   }
   return false;
 }

@@ -178,9 +178,11 @@ struct ReachableResult {
 /// hierarchical controller from `seeds` null-space targets (q_start first, then seeded random
 /// postures). Sect. 3.3.2 keeps in T only the targets "theoretically accessible without
 /// colliding" (for setup I it names those above the board); this is the scene-independent test.
+/// `posture_found`, if given, receives the collision-free posture that reaches p_W.
 bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::ParameterSet& parameters,
                                 robot::CollisionWorld& world, const Eigen::Vector3d& p_W,
-                                const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random);
+                                const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random,
+                                Eigen::VectorXd* posture_found = nullptr);
 
 /// Where the arm starts when the reachability evaluation commands it to a target. Sect. 3.3.2
 /// evaluates the learned map as "the inverse kinematic mapping from 3-D task-space to 7-D

@@ -97,7 +97,8 @@ SimulatedTutor::SimulatedTutor(robot::Simulation& sim, Workflow& workflow, const
       min_clearance_(arm_scale_.length * options_.min_clearance),
       circle_diameter_(std::max(kSmallestCircleDiameter, arm_scale_.length * options_.circle_diameter)),
       home_(options_.home ? *options_.home : homePosture(sim.model(), scene)),
-      random_(options_.seed) {
+      random_(options_.seed),
+      second_round_random_(options_.seed + 0x5ec0d) {
   if (home_.size() != model_->dof()) throw InputError("tutor: the home posture has the wrong number of joints");
   if (!(options_.circle_diameter >= kSmallestCircleDiameter) || options_.circle_diameter > kLargestCircleDiameter) {
     std::ostringstream message;
@@ -382,7 +383,7 @@ std::vector<Eigen::VectorXd> SimulatedTutor::planWay(const Eigen::VectorXd& from
 }
 
 std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested,
-                                                          int* reaching, bool push_links_clear) {
+                                                          int* reaching, bool push_links_clear, const Eigen::VectorXd& known_to_reach) {
   if (reaching != nullptr) *reaching = 0;
   too_heavy_candidates_ = 0;
   lightest_rejected_ = {};
@@ -439,9 +440,16 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
   const auto score = [&](const Eigen::VectorXd& q_candidate, double clearance) {
     return std::min(clearance, scaled(0.08)) / scaled(0.08) - 0.2 * (q_candidate - q_reference).norm() - (near_limit(q_candidate) ? 0.5 : 0.0);
   };
-  for (int c = 0; c < options_.posture_candidates; ++c) {
+  // A second round of draws over the joints' whole range where the first found no posture
+  // that reaches the place without a contact: a place near the edge of the arm's reach may take
+  // a joint beyond the middle of its range, and the places the tutor chooses itself were found
+  // reachable from the start posture or over the whole range (accessibleWithoutCollision).
+  const int draws = options_.posture_candidates;
+  for (int c = 0; c < 2 * draws; ++c) {
+    if (c == draws && !candidates.empty()) break;
     // Null-space targets: the scene's suggestion, the reference posture, the current posture,
-    // then random postures drawn inside the limits (kept away from them by a fifth of the range).
+    // then random postures drawn inside the limits (kept away from them by a fifth of the range
+    // in the first round).
     Eigen::VectorXd q_null(dof);
     if (c == 0 && suggested && suggested->size() == dof) {
       q_null = *suggested;
@@ -449,9 +457,15 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
       q_null = q_reference;
     } else if (c == 2) {
       q_null = state_.q.size() == dof ? state_.q : model_->midPosture();
-    } else {
+    } else if (c < draws) {
       const Eigen::VectorXd margin = 0.2 * (sample_upper - sample_lower);
       q_null = random_.uniform(sample_lower + margin, sample_upper - margin);
+    } else if (c == draws && known_to_reach.size() == dof) {
+      q_null = known_to_reach;
+    } else if (c == draws + 1 && home_.size() == dof) {
+      q_null = home_;
+    } else {
+      q_null = second_round_random_.uniform(sample_lower, sample_upper);
     }
     // Kinematic IK with the hierarchical controller (Eq. 2.11), started at the null target.
     q = q_null.cwiseMax(lower).cwiseMin(upper);
@@ -807,10 +821,10 @@ bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen:
     return false;
   }
   int reaching = 0;
-  const std::vector<PostureChoice> postures = choosePostures(area.target, suggested, &reaching, !area.automatic);
+  const std::vector<PostureChoice> postures = choosePostures(area.target, suggested, &reaching, !area.automatic, place_posture_);
   if (postures.empty()) {
     if (reaching == 0) {
-      area.failure = "no posture within the joint limits puts the tip there (" + std::to_string(options_.posture_candidates) + " IK searches)";
+      area.failure = "no posture within the joint limits puts the tip there (" + std::to_string(2 * options_.posture_candidates) + " IK searches)";
     } else if (too_heavy_candidates_ > 0) {
       area.failure = "the joints cannot hold the arm up there (a posture may take at most " +
                      std::to_string(static_cast<int>(std::lround(100.0 * kHoldableLoad))) +
@@ -972,12 +986,15 @@ void SimulatedTutor::drawCheckPoints() {
   learning::UniformRandom draw(options_.seed + 0x5eed);
   const Eigen::VectorXd& q_start = home_;
   check_points_.clear();
+  check_postures_.clear();
+  Eigen::VectorXd q_found;
   for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < 100 * options_.check_points; ++k) {
     const Eigen::Vector3d x = draw.uniform(grid.lower, grid.upper);
     if (arm_reach_.fromShoulder(x) > arm_reach_.reach || grid.excludes(x)) continue;
     // Only where some posture reaches without a contact (a person sees the arm cannot get there).
-    if (robot::obstacleAt(*scene_, x, scaled(0.05)) == nullptr && accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw)) {
+    if (robot::obstacleAt(*scene_, x, scaled(0.05)) == nullptr && accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw, &q_found)) {
       check_points_.push_back(x);
+      check_postures_.push_back(q_found);
     }
   }
   check_failed_.assign(check_points_.size(), true);
@@ -1025,7 +1042,10 @@ std::optional<Eigen::Vector3d> SimulatedTutor::nextAutomaticTarget(const robot::
       }
     }
   }
-  if (best >= 0) return check_points_[static_cast<std::size_t>(best)];
+  if (best >= 0) {
+    place_posture_ = check_postures_[static_cast<std::size_t>(best)];
+    return check_points_[static_cast<std::size_t>(best)];
+  }
   // A point of the workspace box away from the obstacles that some collision-free posture
   // reaches (near the base the joint limits leave holes a person would not ask the arm into).
   Eigen::Vector3d target = Eigen::Vector3d::Zero();
@@ -1045,7 +1065,7 @@ std::optional<Eigen::Vector3d> SimulatedTutor::nextAutomaticTarget(const robot::
       ++places_passed_over_[why];
     } else if (near_tried(target)) {
       ++places_passed_over_["near a place tried before"];
-    } else if (!accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds)) {
+    } else if (!accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds, &place_posture_)) {
       ++places_passed_over_["without a collision-free posture"];
     } else {
       return target;
@@ -1126,6 +1146,7 @@ TutorReport SimulatedTutor::configureAreas(int area_count) {
     workflow_->waitForLearning();
     TutorAreaReport area;
     std::optional<Eigen::VectorXd> suggested;
+    place_posture_.resize(0);
     const bool automatic = listed >= static_cast<int>(scene_->training_areas.size());
     if (!automatic) {
       const robot::Area& scene_area = scene_->training_areas[static_cast<std::size_t>(listed++)];

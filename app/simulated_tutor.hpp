@@ -154,8 +154,12 @@ class SimulatedTutor {
   /// candidate keeps the clearance, the best ones are pushed clear (TutorOptions::clearing_candidates).
   /// A posture whose gravity load exceeds kHoldableLoad of a joint's effort is left out (the arm
   /// would sag out of it); lightest_rejected_ keeps the least such load of the last call.
+  /// Where the TutorOptions::posture_candidates searches find no posture, as many more start
+  /// from `known_to_reach` (the posture that showed an automatic place reachable; may be
+  /// empty), the home posture and draws over the joints' whole range.
   std::vector<PostureChoice> choosePostures(const Eigen::Vector3d& p_W, const std::optional<Eigen::VectorXd>& suggested,
-                                            int* reaching = nullptr, bool push_links_clear = false);
+                                            int* reaching = nullptr, bool push_links_clear = false,
+                                            const Eigen::VectorXd& known_to_reach = Eigen::VectorXd());
 
   /// IK from q_start that holds the tip on p_W while the null space moves the link point
   /// nearest an obstacle away from it (from 8 cm in), within the soft limits. The result need
@@ -282,6 +286,9 @@ class SimulatedTutor {
   double scaled(double lwr_length) const { return arm_scale_.length * lwr_length; }
   Eigen::VectorXd home_;  ///< homePosture: where evaluations of the map start
   learning::UniformRandom random_;
+  /// The draws of choosePostures()'s second round: its own, so that a round that finds nothing
+  /// leaves every later choice as it was without it.
+  learning::UniformRandom second_round_random_;
   robot::RobotState state_;
   TutorReport report_;
   std::uint64_t ticks_ = 0;
@@ -295,7 +302,11 @@ class SimulatedTutor {
   /// rest moves the arm and holds it against the hand.
   static constexpr double kHoldableLoad = 0.9;
   std::vector<Eigen::Vector3d> check_points_;
+  std::vector<Eigen::VectorXd> check_postures_;  ///< a collision-free posture reaching each check point
   std::vector<bool> check_failed_;
+  /// The posture that showed the last automatic place reachable without a contact (empty for a
+  /// listed area): choosePostures() starts from it where its first searches found none.
+  Eigen::VectorXd place_posture_;
 };
 
 }  // namespace flexirob::app

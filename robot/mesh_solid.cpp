@@ -146,7 +146,10 @@ MeshSolid::MeshSolid(const TriangleMesh& mesh, const Eigen::Vector3d& scale, std
   };
 
   // Walk each connected piece from one triangle, turning every neighbour to run a shared edge
-  // the other way (as two faces of one consistently wound surface do).
+  // the other way (as two faces of one consistently wound surface do). Only across an edge two
+  // triangles share: where more meet (parts of an assembly touching along an edge, a wall flush
+  // on a plate's rim), which of them belong to one surface is not known, and agreeing with the
+  // wrong one turns a part inside out. Each part stays a piece of its own, judged below.
   constexpr std::uint32_t kUnvisited = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> piece(triangles.size(), kUnvisited);
   std::vector<std::uint32_t> queue;
@@ -161,6 +164,7 @@ MeshSolid::MeshSolid(const TriangleMesh& mesh, const Eigen::Vector3d& scale, std
       for (int i = 0; i < 3; ++i) {
         const std::uint32_t from = triangles[t][i], to = triangles[t][(i + 1) % 3];
         const auto [first, last] = neighboursAcross(from, to);
+        if (last - first != 2) continue;
         for (auto it = first; it != last; ++it) {
           const std::uint32_t n = it->second;
           if (piece[n] != kUnvisited) continue;

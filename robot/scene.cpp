@@ -1053,6 +1053,16 @@ std::vector<std::string> sceneNotes(const Scene& scene) {
          << 1000.0 * solid->deviation() << " mm";
     notes.push_back(note.str());
   }
+  // An open mesh is read as the solid it mostly surrounds; one around the robot (a housing open
+  // at the floor) holds the whole workspace as inside, while the simulation collides only with
+  // its sheets: every area and target would be refused as inside it, with no word of why.
+  for (const Obstacle& obstacle : scene.obstacles) {
+    if (obstacle.shape != Obstacle::Shape::kMesh || !obstacleContains(obstacle, Eigen::Vector3d(0.0, 0.0, 0.01))) continue;
+    notes.push_back("obstacle '" + obstacle.name +
+                    "' holds the robot's base inside it: an open mesh counts as the solid it surrounds, so every point "
+                    "it surrounds is inside it for areas, targets and evaluations (the simulation touches only its "
+                    "surface); model its walls as closed solids");
+  }
   // An obstacle wholly under the table top is one no link can touch: most likely a sign slip.
   if (scene.table) {
     for (const Obstacle& obstacle : scene.obstacles) {

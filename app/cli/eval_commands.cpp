@@ -274,6 +274,14 @@ std::string learnerOf(const EvalOptions& options, const Session& session) {
   return options.learner.empty() ? session.learner : options.learner;
 }
 
+// Which session, robot and scene a result belongs to: `render` draws a result over a session
+// and says so where they differ.
+void nameTheSession(Json& json, const EvalOptions& options, const Session& session) {
+  json["session"] = options.session;
+  json["robot"] = session.model->name();
+  json["scene"] = session.scene_data.name;
+}
+
 // A grid without targets has no reachability to report (0 of 0 is not 0 %): `command` fails
 // saying why each point was left out, with `json` as its result.
 void requireTargets(const std::string& command, const app::ReachableResult& result, Json json) {
@@ -350,6 +358,7 @@ Json runReachable(const EvalOptions& options) {
   }
   json["scene_targets"] = scene_targets;
   json["scene_targets_reached"] = scene_targets_reached;
+  nameTheSession(json, options, session);
   requireTargets("eval reachable", result, json);
   return json;
 }
@@ -396,7 +405,7 @@ Json runSceneModel(const EvalOptions& options) {
                   {"learner", learnerOf(options, session)},
                   {"areas", session.q_fixed.size()}});
   const app::SceneModelResult model = app::evaluateSceneModel(*session.model, session.scene_data, grid, reachable.final_postures);
-  return {{"workspace_points", model.workspace_points},
+  Json json = {{"workspace_points", model.workspace_points},
           {"model_points", model.model_points},
           {"obstacle_points", model.obstacle_points},
           {"obstacle_points_enclosed", model.obstacle_points_enclosed},
@@ -409,6 +418,8 @@ Json runSceneModel(const EvalOptions& options) {
           {"learner", learnerOf(options, session)},
           {"areas", session.q_fixed.size()},
           {"model", pointsJson(model.model)}};
+  nameTheSession(json, options, session);
+  return json;
 }
 
 }  // namespace
@@ -475,6 +486,7 @@ Json runTrajectories(const EvalOptions& options) {
   out["learner"] = learnerOf(options, session);
   out["speed_m_s"] = options.speed;
   out["areas"] = session.q_fixed.size();
+  nameTheSession(out, options, session);
   return out;
 }
 
@@ -500,7 +512,7 @@ Json runPlan(const EvalOptions& options) {
                        {"final", toJson(motion.final_W)},
                        {"path", pointsJson(motion.planned_W)}});
   }
-  return {{"goals", result.goals},
+  Json json = {{"goals", result.goals},
           {"postures", options.postures},
           {"found", result.found},
           {"collision_free", result.collision_free},
@@ -511,6 +523,8 @@ Json runPlan(const EvalOptions& options) {
           {"disconnected_nodes", result.disconnected_nodes},
           {"learner", learnerOf(options, session)},
           {"motions", motions}};
+  nameTheSession(json, options, session);
+  return json;
 }
 
 }  // namespace

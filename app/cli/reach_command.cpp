@@ -71,7 +71,13 @@ Json runReach(const ReachOptions& options) {
   const robot::ReachResult result = robot::reach(model, &scene, parameters, request);
   // As `eval` says of a scene target: reached or not, the tip is in the obstacle there.
   const robot::Obstacle* inside = robot::obstacleAt(scene, target);
-  if (inside != nullptr) {
+  if (inside != nullptr && inside->shape == robot::Obstacle::Shape::kMesh && result.collisions == 0) {
+    // An open mesh's inside is free air to the simulation: say what the run showed.
+    std::fprintf(stderr,
+                 "note: the target lies inside obstacle '%s' as areas and evaluations read it (an open mesh counts as the "
+                 "solid it surrounds), though the simulated tip met none of its surface on the way\n",
+                 printable(inside->name, 100).c_str());
+  } else if (inside != nullptr) {
     std::fprintf(stderr, "note: the target lies inside obstacle '%s': the tip cannot get there without touching it\n",
                  printable(inside->name, 100).c_str());
   }

@@ -77,6 +77,24 @@ Json readJsonFile(const std::string& file, const std::string& option) {
   }
 }
 
+// A result of eval or plan names the robot and scene it was measured in; drawn over another
+// scene or arm its points mean nothing there, which the picture alone would not show. Returns
+// whether it belongs (true where the file does not say).
+bool belongsToTheDrawing(const Json& result, const std::string& option, const std::string& file, const robot::Scene& scene,
+                         const robot::RobotModel& model) {
+  if (!result.is_object()) return true;
+  const auto named = [&result](const char* key) {
+    return result.contains(key) && result.at(key).is_string() ? result.at(key).get<std::string>() : std::string();
+  };
+  const std::string robot = named("robot"), scene_name = named("scene"), session = named("session");
+  if ((scene_name.empty() || scene_name == scene.name) && (robot.empty() || robot == model.name())) return true;
+  const auto said = [](const std::string& name) { return name.empty() ? std::string("?") : "'" + printable(name, 80) + "'"; };
+  std::cerr << "note: " << option << " '" << printable(file, 200) << "' was measured with robot " << said(robot) << " in scene "
+            << said(scene_name) << (session.empty() ? "" : " (session '" + printable(session, 200) + "')")
+            << ", not with the robot " << said(model.name()) << " in the scene " << said(scene.name) << " drawn\n";
+  return false;
+}
+
 double finiteNumber(const Json& value, const std::string& what) {
   if (!value.is_number()) throw InputError(what + ": expected a number");
   const double v = value.get<double>();
@@ -424,6 +442,7 @@ Json renderPicture(const RenderOptions& options) {
 
   if (!options.reachable.empty() && shown(render::OverlayLayer::kReachability)) {
     const Json json = readJsonFile(options.reachable, "--reachable");
+    drawn["reachable_matches"] = belongsToTheDrawing(json, "--reachable", options.reachable, scene, model);
     const std::vector<Eigen::Vector3d> points = pointList(json, "target_points", "--reachable");
     if (!json.contains("target_reached") || !json.at("target_reached").is_array() ||
         json.at("target_reached").size() != points.size()) {
@@ -444,6 +463,7 @@ Json renderPicture(const RenderOptions& options) {
   }
   if (!options.scene_model.empty() && shown(render::OverlayLayer::kReachability)) {
     const Json json = readJsonFile(options.scene_model, "--scene-model");
+    drawn["scene_model_matches"] = belongsToTheDrawing(json, "--scene-model", options.scene_model, scene, model);
     const std::vector<Eigen::Vector3d> points = pointList(json, "model", "--scene-model");
     overlays.addContent(render::OverlayLayer::kReachability, render::makePoints(points, render::OverlayPalette::sceneModel(), size));
     include(box, points);
@@ -452,6 +472,7 @@ Json renderPicture(const RenderOptions& options) {
   }
   if (!options.plan.empty() && shown(render::OverlayLayer::kGoalAndPath)) {
     const Json json = readJsonFile(options.plan, "--plan");
+    drawn["plan_matches"] = belongsToTheDrawing(json, "--plan", options.plan, scene, model);
     if (!json.is_object() || !json.contains("motions") || !json.at("motions").is_array()) {
       throw InputError("--plan: no 'motions' array (written by a current flexirob-cli plan)");
     }

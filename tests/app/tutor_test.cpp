@@ -922,6 +922,25 @@ robot::Scene openSceneWithTwoPlaces(const Eigen::Vector3d& first, const Eigen::V
 // hands are the LWR IV's. On a 25 cm arm of a few hundred grams the hands' pushes made it ring
 // at up to 100 rad/s, and the drift damping held it like honey: no area could be taught, in an
 // open scene. Scaled to the arm, both areas are taught, and the recording follows the helix.
+// The places the tutor chooses itself are found reachable from IK starts over the joints' whole
+// range; its own posture searches start in the middle of the ranges. A place only an unusual
+// posture reaches (A3 and A6 near their stops) was given up as having "no posture within the
+// joint limits" although the posture that showed it reachable was at hand.
+TEST(SimulatedTutor, FindsAPostureForAPlaceFromThePostureThatShowedItReachable) {
+  robot::Scene scene;
+  scene.name = "open";
+  scene.home_posture = Eigen::VectorXd::Zero(7);
+  ShortTeaching teaching(scene);
+  teaching.tutor_options.posture_candidates = 3;  // no random starts before the second round
+  SimulatedTutor tutor(teaching.sim, *teaching.workflow, scene, teaching.parameters, teaching.tutor_options);
+  Eigen::VectorXd shown(7);
+  shown << -1.72, 0.22, -2.85, 1.99, 0.34, -1.95, 1.91;
+  const Eigen::Vector3d place = robot::tipPose(lwr4(), shown).translation();
+  const std::vector<PostureChoice> choices = tutor.choosePostures(place, std::nullopt, nullptr, false, shown);
+  ASSERT_FALSE(choices.empty());
+  EXPECT_LT((robot::tipPose(lwr4(), choices.front().q).translation() - place).norm(), 1e-3);
+}
+
 TEST(SimulatedTutor, TeachesASmallLightArmAsItTeachesTheLwrIv) {
   const robot::RobotModel model = robot::RobotModel::fromUrdfString(testing::smallLightArmUrdf(), ".");
   const ArmScale scale = armScale(model);

@@ -189,6 +189,21 @@ TEST(EvalReachableCli, UsesTheLearnerTheSessionWasTaughtWithUnlessAskedForAnothe
   std::filesystem::remove(session);
 }
 
+// A result is drawn over a session's picture later (render --reachable, --scene-model, --plan):
+// it says which session, robot and scene it was measured in.
+TEST(EvalCli, EveryResultNamesTheSessionRobotAndSceneItWasMeasuredIn) {
+  const auto session = tinySession("setup_I", "named-results.json");
+  for (const std::string& command : {"eval reachable --spacing 0.4", "eval scene-model --spacing 0.4", "plan --goals 1"}) {
+    const auto result = runCliBinary(command + " --session " + session.string());
+    ASSERT_EQ(result.exit_code, 0) << command << ": " << result.err;
+    const nlohmann::json json = result.json();
+    EXPECT_EQ(json.value("session", ""), session.string()) << command;
+    EXPECT_EQ(json.value("robot", ""), "lwr4") << command;
+    EXPECT_EQ(json.value("scene", ""), "setup_I") << command;
+  }
+  std::filesystem::remove(session);
+}
+
 TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   // One target where the first area's posture puts the tip, one far beyond the arm's reach.
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");

@@ -252,6 +252,32 @@ TEST(RenderCommandOverlays, DrawsReachedTargetsGreenUnreachedRedAndTheSceneModel
   for (const auto& f : {reachable, model, file}) std::filesystem::remove(f);
 }
 
+// A result measured in another scene or with another arm is drawn as asked, and said: its
+// points mean nothing in this picture, which the picture alone would not show.
+TEST(RenderCommandOverlays, SaysWhenAResultWasMeasuredInAnotherSceneOrWithAnotherRobot) {
+  const auto reachable = tempPng("other-scene.json");
+  const auto file = tempPng("other-scene.png");
+  const auto drawWith = [&](const std::string& robot, const std::string& scene) {
+    writeText(reachable, R"({"target_points": [[-0.6, -0.3, 0.3]], "target_reached": [true], "session": "taught.db", "robot": ")" +
+                             robot + R"(", "scene": ")" + scene + R"("})");
+    return run({"render", "--scene", "setup_I", "--reachable", reachable.string(), "--out", file.string(), "--width", "64",
+                "--height", "48", "--supersample", "1"});
+  };
+  const Result same = drawWith("lwr4", "setup_I");
+  ASSERT_EQ(same.exit_code, 0) << same.err;
+  EXPECT_TRUE(nlohmann::json::parse(same.out).at("overlays").at("reachable_matches").get<bool>());
+  EXPECT_EQ(same.err.find("was measured"), std::string::npos) << same.err;
+  for (const auto& [robot, scene] : {std::pair{"lwr4", "setup_II"}, std::pair{"arm9", "setup_I"}}) {
+    const Result other = drawWith(robot, scene);
+    ASSERT_EQ(other.exit_code, 0) << other.err;
+    EXPECT_FALSE(nlohmann::json::parse(other.out).at("overlays").at("reachable_matches").get<bool>());
+    EXPECT_NE(other.err.find(std::string("was measured with robot '") + robot + "' in scene '" + scene + "' (session 'taught.db')"),
+              std::string::npos)
+        << other.err;
+  }
+  for (const auto& f : {reachable, file}) std::filesystem::remove(f);
+}
+
 TEST(RenderCommandOverlays, DrawsGoalsAndPlannedPathsWhereTheyProject) {
   const auto plan = tempPng("plan.json");
   const auto file = tempPng("plan.png");

@@ -112,6 +112,43 @@ TEST(MeshSolid, TurnsTrianglesOutwardsWhateverWayTheFileWindsThem) {
   }
 }
 
+// A closed box [lower, upper] appended to `mesh`, wound outwards or (inward) the other way.
+void appendBox(TriangleMesh& mesh, const Eigen::Vector3f& lower, const Eigen::Vector3f& upper, bool inward = false) {
+  const Eigen::Vector3f size = upper - lower;
+  TriangleMesh box = prism({{0, 0}, {size.x(), 0}, {size.x(), size.y()}, {0, size.y()}}, size.z());
+  const auto offset = static_cast<std::uint32_t>(mesh.vertices.size());
+  for (const Eigen::Vector3f& v : box.vertices) mesh.vertices.push_back(v + lower);
+  mesh.normals.insert(mesh.normals.end(), box.normals.begin(), box.normals.end());
+  for (std::size_t t = 0; t < box.indices.size(); t += 3) {
+    mesh.indices.push_back(offset + box.indices[t]);
+    mesh.indices.push_back(offset + box.indices[t + (inward ? 2 : 1)]);
+    mesh.indices.push_back(offset + box.indices[t + (inward ? 1 : 2)]);
+  }
+}
+
+// A CAD export of a fixture: a plate and two walls, each a closed box, the walls standing flush
+// on the plate's edges. Four faces meet at each such edge; turning the triangles to agree across
+// it had turned a whole wall inside out, and its inside read as outside.
+TEST(MeshSolid, PartsThatTouchAlongAnEdgeAreEachInside) {
+  for (const bool second_wall_inward : {false, true}) {
+    TriangleMesh fixture;
+    appendBox(fixture, {0.0F, 0.0F, 0.0F}, {0.3F, 0.3F, 0.02F});
+    appendBox(fixture, {0.0F, 0.0F, 0.02F}, {0.3F, 0.03F, 0.27F});
+    appendBox(fixture, {0.0F, 0.27F, 0.02F}, {0.3F, 0.3F, 0.27F}, second_wall_inward);
+    const MeshSolid solid(fixture);
+    for (const Eigen::Vector3d& inside : {Eigen::Vector3d(0.15, 0.15, 0.01), Eigen::Vector3d(0.15, 0.015, 0.15),
+                                          Eigen::Vector3d(0.15, 0.285, 0.15), Eigen::Vector3d(0.29, 0.29, 0.01)}) {
+      EXPECT_NEAR(solid.windingNumber(inside), 1.0, 1e-9) << inside.transpose() << (second_wall_inward ? " (wall wound inwards)" : "");
+      EXPECT_TRUE(solid.contains(inside)) << inside.transpose();
+    }
+    for (const Eigen::Vector3d& outside : {Eigen::Vector3d(0.15, 0.15, 0.15), Eigen::Vector3d(0.15, -0.05, 0.15),
+                                           Eigen::Vector3d(0.15, 0.35, 0.15), Eigen::Vector3d(0.15, 0.15, -0.05)}) {
+      EXPECT_NEAR(solid.windingNumber(outside), 0.0, 1e-9) << outside.transpose();
+      EXPECT_FALSE(solid.contains(outside)) << outside.transpose();
+    }
+  }
+}
+
 TEST(MeshSolid, WeldsCornersThatTheLoaderKeptApartPerFace) {
   // One vertex per triangle corner, as the loader leaves a box with flat faces; the second
   // face winds the other way, so only welding lets the triangles agree.

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include <numbers>
 #include <random>
 #include <set>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -385,6 +387,39 @@ TEST(SceneNotes, ATargetInsideAnObstacleIsNamedWithTheObstacle) {
   const std::vector<std::string> notes = sceneNotes(inside);
   ASSERT_EQ(notes.size(), 1U);
   EXPECT_EQ(notes[0], "targets[1] (-0.450, 0.050, 0.300) m lies inside obstacle 'box': no posture reaches it");
+}
+
+// An open mesh counts as the solid it surrounds. A sheet-metal housing open at the floor,
+// around the robot, would hold every area and target inside it without a word of why.
+TEST(SceneNotes, AnOpenMeshAroundTheRobotsBaseIsNoted) {
+  const fs::path dir = fs::temp_directory_path() / ("flexirob_hood_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  // Four walls and a roof over [-1, 1]^2 x [0, 1.5] m, no floor; each quad two triangles.
+  std::ostringstream stl;
+  stl << "solid hood\n";
+  const auto quad = [&stl](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
+    for (const auto& t : {std::array<Eigen::Vector3d, 3>{a, b, c}, std::array<Eigen::Vector3d, 3>{a, c, d}}) {
+      stl << " facet normal 0 0 0\n  outer loop\n";
+      for (const Eigen::Vector3d& v : t) stl << "   vertex " << v.x() << " " << v.y() << " " << v.z() << "\n";
+      stl << "  endloop\n endfacet\n";
+    }
+  };
+  const double h = 1.5;
+  quad({-1, -1, 0}, {1, -1, 0}, {1, -1, h}, {-1, -1, h});
+  quad({1, -1, 0}, {1, 1, 0}, {1, 1, h}, {1, -1, h});
+  quad({1, 1, 0}, {-1, 1, 0}, {-1, 1, h}, {1, 1, h});
+  quad({-1, 1, 0}, {-1, -1, 0}, {-1, -1, h}, {-1, 1, h});
+  quad({-1, -1, h}, {1, -1, h}, {1, 1, h}, {-1, 1, h});
+  stl << "endsolid hood\n";
+  std::ofstream(dir / "hood.stl") << stl.str();
+  const std::string hood = "obstacles:\n  - {name: hood, shape: mesh, file: hood.stl, position: [";
+  const Scene around = parseScene(hood + "0, 0, 0]}\n", dir, "around");
+  const std::vector<std::string> notes = sceneNotes(around);
+  ASSERT_EQ(notes.size(), 1U);
+  EXPECT_NE(notes[0].find("obstacle 'hood' holds the robot's base inside it"), std::string::npos) << notes[0];
+  // The same housing beside the robot holds nothing of it.
+  EXPECT_TRUE(sceneNotes(parseScene(hood + "-3, 0, 0]}\n", dir, "beside")).empty());
+  fs::remove_all(dir);
 }
 
 TEST(EvaluationGrid, SpansTheThesisGridWithItsUpperBoundsIncluded) {
