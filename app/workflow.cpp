@@ -724,15 +724,23 @@ void Workflow::collectLearning() {
 }
 
 std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& events) {
-  std::vector<const WorkflowEvent*> standing;
+  // Each warning with the index its area has now: a removal takes the removed area's joint-limit
+  // warning with it (the posture is no longer taught) and moves the later areas down by one.
+  std::vector<std::pair<const WorkflowEvent*, int>> standing;
   for (const WorkflowEvent& event : events) {
     if (event.kind == WorkflowEvent::Kind::kModelLearned) {
-      std::erase_if(standing, [](const WorkflowEvent* e) { return e->name == "transition_inconsistent"; });
+      std::erase_if(standing, [](const auto& e) { return e.first->name == "transition_inconsistent"; });
     }
-    if (event.kind == WorkflowEvent::Kind::kWarning) standing.push_back(&event);
+    if (event.kind == WorkflowEvent::Kind::kAreaRemoved && event.area >= 0) {
+      std::erase_if(standing, [&event](const auto& e) { return e.first->name == "joint_limit" && e.second == event.area; });
+      for (auto& e : standing) {
+        if (e.second > event.area) --e.second;
+      }
+    }
+    if (event.kind == WorkflowEvent::Kind::kWarning) standing.emplace_back(&event, event.area);
   }
   std::vector<std::string> lines;
-  for (const WorkflowEvent* event : standing) {
+  for (const auto& [event, area] : standing) {
     if (std::find(lines.begin(), lines.end(), event->detail) == lines.end()) lines.push_back(event->detail);
   }
   return lines;

@@ -85,7 +85,8 @@ struct WorkflowEvent {
 const char* toString(WorkflowEvent::Kind kind);
 /// The warning lines that still stand at the end of `events`, each distinct line once, in order:
 /// every refit checks the transitions again (OS-ELM refits after each area), and only the last
-/// map's transition warnings stand, as Workflow::transitionChecks() holds only its checks.
+/// map's transition warnings stand, as Workflow::transitionChecks() holds only its checks; an
+/// area removed takes its joint-limit warning with it.
 std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& events);
 
 /// A training area D^(k) (Sect. 3.1): the samples recorded in one RECORDING.

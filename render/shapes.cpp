@@ -109,7 +109,11 @@ osg::ref_ptr<osg::Node> makeVisual(const robot::Geometry& geometry) {
   osg::ref_ptr<osg::Geode> shape;
   switch (geometry.kind) {
     case robot::Geometry::Kind::kMesh:
-      shape = makeMesh(geometry.mesh_file, geometry.mesh_scale, geometry.rgba);
+      try {
+        shape = makeMesh(geometry.mesh_file, geometry.mesh_scale, geometry.rgba);
+      } catch (const InputError& error) {
+        throw InputError("link '" + geometry.source_link + "': " + error.what());
+      }
       break;
     case robot::Geometry::Kind::kBox:
       shape = makePrimitive(PrimitiveShape::kBox, geometry.size, geometry.rgba);

@@ -209,8 +209,14 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
     auto* compound = impl.make<btCompoundShape>();
     std::string source = "urdf";
     for (const Geometry& geometry : body.collisions) {
-      btCollisionShape* child = geometry.kind == Geometry::Kind::kMesh ? impl.convexHull(geometry.mesh_file, geometry.mesh_scale)
-                                                                       : impl.primitive(geometry.kind, geometry.size);
+      btCollisionShape* child = nullptr;
+      try {
+        child = geometry.kind == Geometry::Kind::kMesh ? impl.convexHull(geometry.mesh_file, geometry.mesh_scale)
+                                                       : impl.primitive(geometry.kind, geometry.size);
+      } catch (const InputError& error) {
+        // The importer's words name a file; which link of the robot it belongs to is ours to say.
+        throw InputError("link '" + geometry.source_link + "' of robot '" + model.name() + "': " + error.what());
+      }
       if (child != nullptr) compound->addChildShape(toBt(geometry.X_BG), child);
     }
     if (compound->getNumChildShapes() == 0) {

@@ -4,6 +4,7 @@
 #include <urdf_parser/urdf_parser.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -187,7 +188,27 @@ fs::path resolveMeshUri(const std::string& uri, const fs::path& base_dir, const 
     looked = std::string(" (looked for its package folder among the URDF's parent folders and in $ROS_PACKAGE_PATH") +
              (ros_path == nullptr ? ", which is not set)" : ")");
   } else if (uri.rfind(file_prefix, 0) == 0) {
-    candidates.emplace_back(uri.substr(file_prefix.size()));
+    // RFC 8089 as exporters write it: file:///abs, file://localhost/abs, %20 for a space; a
+    // relative path (file://meshes/x.stl, not in the RFC) from the URDF's folder as a plain one.
+    std::string path = uri.substr(file_prefix.size());
+    if (path.rfind("localhost/", 0) == 0) path = path.substr(std::string("localhost").size());
+    std::string decoded;
+    for (std::size_t i = 0; i < path.size(); ++i) {
+      if (path[i] == '%' && i + 2 < path.size() && std::isxdigit(static_cast<unsigned char>(path[i + 1])) &&
+          std::isxdigit(static_cast<unsigned char>(path[i + 2]))) {
+        decoded += static_cast<char>(std::stoi(path.substr(i + 1, 2), nullptr, 16));
+        i += 2;
+      } else {
+        decoded += path[i];
+      }
+    }
+    const fs::path file(decoded);
+    candidates.push_back(file.is_absolute() ? file : base_dir / file);
+    if (decoded != path) {  // a file whose name holds a literal %
+      const fs::path literal(path);
+      candidates.push_back(literal.is_absolute() ? literal : base_dir / literal);
+    }
+    if (!file.is_absolute()) looked = " (relative to the URDF's folder " + base_dir.lexically_normal().string() + ")";
   } else if (uri.find("://") != std::string::npos) {
     throw InputError("link '" + link + "': unsupported mesh URI scheme in '" + uri + "'");
   } else {
@@ -238,6 +259,10 @@ Geometry toGeometry(const urdf::GeometrySharedPtr& geometry, const urdf::Pose& o
     case urdf::Geometry::MESH: {
       const auto& mesh = dynamic_cast<const urdf::Mesh&>(*geometry);
       result.kind = Geometry::Kind::kMesh;
+      // A zero flattens the mesh into a sheet (a negative one mirrors it, which is a shape).
+      if (mesh.scale.x == 0.0 || mesh.scale.y == 0.0 || mesh.scale.z == 0.0) {
+        throw InputError("link '" + link + "': mesh '" + mesh.filename + "' has a scale with a zero component");
+      }
       result.mesh_file = resolveMeshUri(mesh.filename, base_dir, link);
       result.mesh_scale = Eigen::Vector3d(mesh.scale.x, mesh.scale.y, mesh.scale.z);
       break;
@@ -558,7 +583,10 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
         throw InputError("joint '" + joint.name + "': planar joints are not supported on the chain");
       default: throw InputError("joint '" + joint.name + "': unknown joint type");
     }
-    if (joint.mimic) throw InputError("joint '" + joint.name + "': mimic joints are not supported on the chain");
+    if (joint.mimic) {
+      throw InputError("joint '" + joint.name + "': mimic joints are not supported on the chain to the tip '" + tip +
+                       "' (a gripper's finger?); name the arm's last link with --tip, e.g. --tip " + joint.parent_link_name);
+    }
     const Eigen::Vector3d axis(joint.axis.x, joint.axis.y, joint.axis.z);
     if (!axis.allFinite() || axis.norm() < 1e-9) throw InputError("joint '" + joint.name + "': zero or non-finite axis");
     model_joint.axis_J = axis.normalized();
@@ -624,6 +652,28 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
   foldSubtree(model.bodies_.back(), *path.back(), X_BL, nullptr, meshes);
   model.X_last_body_tip_ = X_BL;
   if (model.joints_.empty()) throw InputError("no movable joint between root '" + root->name + "' and tip '" + tip + "'");
+  // The longest chain of an arm with a gripper can end in a finger: its slide would become a
+  // joint of the arm, redundant to the tip task, without a word.
+  if (tip_link.empty() && model.joints_.back().type == JointType::kPrismatic) {
+    const urdf::Joint* last_movable = nullptr;
+    for (std::size_t i = path.size() - 1; i > 0 && last_movable == nullptr; --i) {
+      if (path[i]->parent_joint->type != urdf::Joint::FIXED) last_movable = path[i]->parent_joint.get();
+    }
+    const urdf::Link* hand = last_movable != nullptr ? urdf_model->getLink(last_movable->parent_link_name).get() : nullptr;
+    if (hand != nullptr && hand->child_links.size() > 1) {
+      model.notes_.push_back("the tip is '" + tip + "', the end of the longest chain, past the slide '" + last_movable->name +
+                                "' where '" + hand->name + "' branches (a gripper's finger?): the slide is a joint of the arm; " +
+                                "--tip " + hand->name + " ends the arm before it");
+    }
+  }
+  // A link drawn but given no collision element is often meant to touch nothing; the collision
+  // world stands a capsule between its joints in for it, and contacts then name it.
+  for (std::size_t b = 1; b < model.bodies_.size(); ++b) {
+    const Body& body = model.bodies_[b];
+    if (!body.collisions.empty() || body.visuals.empty()) continue;
+    model.notes_.push_back("link '" + body.name + "' has a visual but no collision element: a capsule along it stands in " +
+                           "for it in contacts and clearances");
+  }
   assumeInertiaOfMasslessBodies(model.bodies_, model.joints_, model.X_last_body_tip_);
   return model;
 }

@@ -93,6 +93,9 @@ class RobotModel {
   const std::filesystem::path& urdfPath() const { return urdf_path_; }
   const std::string& baseLink() const { return bodies_.front().name; }
   const std::string& tipLink() const { return tip_link_; }
+  /// What a user should know of how the description was read, one line each (e.g. a default tip
+  /// past a gripper's finger); the tools print them as notes.
+  const std::vector<std::string>& notes() const { return notes_; }
   int dof() const { return static_cast<int>(joints_.size()); }
   const std::vector<Joint>& joints() const { return joints_; }
   const std::vector<Body>& bodies() const { return bodies_; }
@@ -127,6 +130,7 @@ class RobotModel {
   std::string name_;
   std::filesystem::path urdf_path_;
   std::string tip_link_;
+  std::vector<std::string> notes_;
   std::vector<Joint> joints_;
   std::vector<Body> bodies_;
   Eigen::Isometry3d X_last_body_tip_ = Eigen::Isometry3d::Identity();

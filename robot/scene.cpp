@@ -752,7 +752,14 @@ void checkPosturesFit(const Scene& scene, int dof, const std::string& robot_name
 }
 
 void checkPosturesFit(const Scene& scene, const RobotModel& model, const std::string& robot_name) {
-  checkPosturesFit(scene, model.dof(), robot_name);
+  try {
+    checkPosturesFit(scene, model.dof(), robot_name);
+  } catch (const InputError& error) {
+    // The joint count is that of the chain to the tip: a tip named (or chosen) past a gripper's
+    // finger adds its slide to the arm, which the robot's file name alone does not say.
+    throw InputError(std::string(error.what()) + "; the robot's chain runs from '" + printable(model.baseLink(), 100) +
+                     "' to the tip '" + printable(model.tipLink(), 100) + "' (--tip chooses another tip)");
+  }
   const std::string prefix = "scene '" + printable(scene.name, 200) + "': ";
   // A slide's value in a posture written in degrees is a length, which the reader cannot tell
   // from an angle: 0.2 m had become 3.5 mm without a word.

@@ -110,6 +110,15 @@ robot::Scene loadSceneNoting(const std::string& name_or_path) {
   return scene;
 }
 
+robot::RobotModel loadRobotNoting(const std::string& name_or_path, const std::string& tip) {
+  robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(name_or_path), tip);
+  static std::set<std::string> noted;
+  if (noted.insert(name_or_path + '\n' + tip).second) {
+    for (const std::string& note : model.notes()) std::fprintf(stderr, "note: %s\n", printable(note, 400).c_str());
+  }
+  return model;
+}
+
 namespace {
 
 // The whole file, or nullopt when it cannot be read (moved or deleted since teaching).
@@ -124,7 +133,7 @@ std::optional<std::string> fileText(const std::filesystem::path& file) {
 }  // namespace
 
 robot::RobotModel loadSessionRobot(const std::string& reference, const std::string& stored_urdf, const std::string& tip) {
-  if (stored_urdf.empty()) return robot::RobotModel::fromUrdfFile(resolveRobotPath(reference), tip);
+  if (stored_urdf.empty()) return loadRobotNoting(reference, tip);
   const auto& builtins = builtinRobotNames();
   const bool builtin = std::find(builtins.begin(), builtins.end(), reference) != builtins.end();
   // A session stores a file robot by its absolute path (portableReference), so its folder is known

@@ -114,6 +114,9 @@ void checkOutputPath(const std::string& option, const std::string& path,
 
 /// robot::loadScene, and its sceneNotes on stderr ("note: ..."), once per scene and process.
 robot::Scene loadSceneNoting(const std::string& name_or_path);
+/// robot::RobotModel::fromUrdfFile of a built-in name or a file (resolveRobotPath), and its
+/// notes on stderr ("note: ..."), once per robot and tip and process.
+robot::RobotModel loadRobotNoting(const std::string& name_or_path, const std::string& tip = "");
 
 /// The robot and the scene a session was taught with, parsed from the copies the session stores
 /// (`stored_urdf`, `stored_scene_text`) so that editing or moving their files after teaching does

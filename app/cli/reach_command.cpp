@@ -35,7 +35,7 @@ Json runReach(const ReachOptions& options) {
   // free start as `--scene empty`.
   const robot::Scene scene = loadSceneNoting(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene);
-  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
+  const auto model = loadRobotNoting(robot_name, options.tip);
   robot::checkPosturesFit(scene, model, robot_name);
   const Eigen::Vector3d target = parseNumberList(options.target, "--target", 3);
   // As scene files: a coordinate beyond 1 km is a mistake (units, a missing decimal point).

@@ -279,7 +279,7 @@ Json renderPicture(const RenderOptions& options) {
   }
   const std::string tip = !options.tip.empty() ? options.tip : session && options.robot.empty() ? session->tip : "";
   const robot::RobotModel model = options.robot.empty() && session ? loadSessionRobot(session->robot, session->robot_urdf, tip)
-                                                                   : robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), tip);
+                                                                   : loadRobotNoting(robot_name, tip);
   robot::checkPosturesFit(scene, model, robot_name);
 
   // Posture: --q, else where teaching starts (the scene's home posture, else a free one).

@@ -24,7 +24,7 @@ void addRobotOptions(CLI::App& command, RobotOptions& options) {
 }
 
 robot::RobotModel loadRobot(const RobotOptions& options) {
-  return robot::RobotModel::fromUrdfFile(resolveRobotPath(options.robot), options.tip);
+  return loadRobotNoting(options.robot, options.tip);
 }
 
 Json limitValue(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }

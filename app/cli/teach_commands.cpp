@@ -132,7 +132,7 @@ Json runTeach(const TeachOptions& options) {
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);
   const robot::Scene scene = loadSceneNoting(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene);
-  const auto model = robot::RobotModel::fromUrdfFile(resolveRobotPath(robot_name), options.tip);
+  const auto model = loadRobotNoting(robot_name, options.tip);
   checkNothingIsOverwritten(options, scene, model);
   robot::checkPosturesFit(scene, model, robot_name);
   // The session names robot and scene so that they resolve from any working directory.
@@ -396,7 +396,6 @@ Json runTeach(const TeachOptions& options) {
     warning_lines.push_back(standing[i]);
     if (i < kWarningsOnStderr) std::fprintf(stderr, "warning: %s\n", standing[i].c_str());
   }
-  const std::size_t warnings = standing.size();
   if (standing.size() > kWarningsOnStderr) {
     std::fprintf(stderr, "warning: ... and %zu more (\"warning_lines\" in the JSON)\n", standing.size() - kWarningsOnStderr);
   }
@@ -407,12 +406,13 @@ Json runTeach(const TeachOptions& options) {
   std::size_t given_up = 0;
   for (const auto& area : report.areas) {
     if (area.automatic || area.taught || workflow.areas().empty()) continue;
-    if (++given_up <= kWarningsOnStderr) {
-      std::fprintf(stderr, "warning: the scene's area '%s' was not taught: %s\n", printable(area.name).c_str(), area.failure.c_str());
-    }
+    const std::string line = "the scene's area '" + printable(area.name) + "' was not taught: " + area.failure;
+    warning_lines.push_back(line);
+    if (++given_up <= kWarningsOnStderr) std::fprintf(stderr, "warning: %s\n", line.c_str());
   }
+  const std::size_t warnings = warning_lines.size();
   if (given_up > kWarningsOnStderr) {
-    std::fprintf(stderr, "warning: ... and %zu more of the scene's areas not taught (\"tutor\" in the JSON)\n", given_up - kWarningsOnStderr);
+    std::fprintf(stderr, "warning: ... and %zu more of the scene's areas not taught (\"warning_lines\" in the JSON)\n", given_up - kWarningsOnStderr);
   }
   // An arm so light that even the most physics steps per cycle do not keep its impedance law
   // stable shakes in the simulation: what was taught with it is not what a robot would do.

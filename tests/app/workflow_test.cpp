@@ -321,6 +321,33 @@ TEST(Workflow, OnlyTheLastMapsTransitionWarningsStand) {
             (std::vector<std::string>{"posture near the joint limit at area 'a'", "a -> b: colliding samples 137"}));
 }
 
+// The tutor takes back an area that made the map worse; `teach` had still warned of its posture
+// near a joint limit. A removal takes the removed area's warning with it, and the later areas'
+// indices move down as the workflow's do.
+TEST(Workflow, AnAreaRemovedTakesItsJointLimitWarningWithIt) {
+  using Kind = WorkflowEvent::Kind;
+  const auto event = [](Kind kind, const std::string& name, const std::string& detail, int area) {
+    WorkflowEvent e;
+    e.kind = kind;
+    e.name = name;
+    e.detail = detail;
+    e.area = area;
+    return e;
+  };
+  std::vector<WorkflowEvent> events = {
+      event(Kind::kWarning, "joint_limit", "near the limit at area 'a'", 0),
+      event(Kind::kAreaCreated, "area_created", "a", 0),
+      event(Kind::kWarning, "joint_limit", "near the limit at area 'b'", 1),
+      event(Kind::kAreaCreated, "area_created", "b", 1),
+      event(Kind::kWarning, "joint_limit", "near the limit at area 'c'", 2),
+      event(Kind::kAreaCreated, "area_created", "c", 2),
+      event(Kind::kAreaRemoved, "area_removed", "b", 1),
+  };
+  EXPECT_EQ(standingWarnings(events), (std::vector<std::string>{"near the limit at area 'a'", "near the limit at area 'c'"}));
+  events.push_back(event(Kind::kAreaRemoved, "area_removed", "c", 1));  // 'c' is area 1 now
+  EXPECT_EQ(standingWarnings(events), (std::vector<std::string>{"near the limit at area 'a'"}));
+}
+
 TEST(Workflow, FullSessionCreatesAreasLearnsAndReachesExecution) {
   Fixture f;
   Workflow workflow(f.backend, f.parameters, syncOptions());

@@ -279,6 +279,10 @@ TEST(TeachCli, SaysWhetherAnAreaIsBeyondTheJointsOrOnlyReachedWithAContact) {
   const auto lines = result.json().at("warning_lines");
   ASSERT_FALSE(lines.empty()) << "the replacement areas lie near a joint limit";
   EXPECT_EQ(lines.size(), result.json().at("warnings").get<std::size_t>());
+  // The scene's areas given up are among the lines the count counts.
+  EXPECT_EQ(std::count_if(lines.begin(), lines.end(),
+                          [](const auto& line) { return line.template get<std::string>().rfind("the scene's area '", 0) == 0; }),
+            2);
   for (const auto& line : lines) {
     EXPECT_NE(result.err.find("warning: " + line.get<std::string>() + "\n"), std::string::npos) << result.err;
   }
@@ -363,6 +367,9 @@ TEST(TeachCli, RefusesASceneWhosePosturesBelongToAnotherRobotWithOneLine) {
   EXPECT_EQ(result.exit_code, 2) << result.err;
   EXPECT_EQ(result.err.rfind("error: ", 0), 0U) << result.err;
   EXPECT_NE(result.err.find("home_posture has 9 joint values, the robot 'lwr4' has 7 joints"), std::string::npos) << result.err;
+  // The joint count is the chain's to the tip, which --tip can change: both ends said.
+  EXPECT_NE(result.err.find("the robot's chain runs from 'base_link' to the tip 'flange' (--tip chooses another tip)"), std::string::npos)
+      << result.err;
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
   EXPECT_FALSE(fs::exists(scratch("mismatch.json")));
 }

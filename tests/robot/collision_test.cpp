@@ -10,6 +10,7 @@
 #include <string>
 
 #include "robot/collision.hpp"
+#include "robot/errors.hpp"
 #include "robot/controllers.hpp"
 #include "robot/mesh_solid.hpp"
 #include "robot/resources.hpp"
@@ -483,6 +484,26 @@ TEST(CollisionWorld, LeavesPairsAroundShoulderElbowAndWristToTheJointLimits) {
   world.update(q);
   for (const auto& contact : world.contacts()) {
     EXPECT_FALSE(contact.isSelfCollision()) << world.bodyName(contact.body) << " / " << world.otherName(contact);
+  }
+}
+
+// A mesh the importer cannot read is found when the collision model is built: the importer's
+// words name a file, the message also the link and the robot it belongs to.
+TEST(CollisionWorld, AnUnreadableLinkMeshIsNamedWithItsLinkAndRobot) {
+  flexirob::testing::TempDir dir;
+  dir.write("meshes/hand.stl", "solid x\nendsolid x\n");
+  const auto urdf = dir.write("arm.urdf", R"(<robot name="meshy"><link name="base"/>
+    <joint name="j" type="revolute"><parent link="base"/><child link="hand"/><origin xyz="0 0 0.3"/>
+      <axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="1" effort="10"/></joint>
+    <link name="hand"><collision><geometry><mesh filename="meshes/hand.stl"/></geometry></collision></link></robot>)");
+  const RobotModel model = RobotModel::fromUrdfFile(urdf);
+  try {
+    CollisionWorld world(model, Scene{});
+    FAIL() << "an unreadable mesh was accepted";
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_EQ(message.rfind("link 'hand' of robot 'meshy': cannot load mesh '", 0), 0U) << message;
+    EXPECT_NE(message.find("hand.stl"), std::string::npos) << message;
   }
 }
 

@@ -286,6 +286,11 @@ INSTANTIATE_TEST_SUITE_P(
                    "<axis xyz='0 0 1'/><limit lower='0' upper='1000' velocity='1' effort='1'/></joint><link name='b'/></robot>",
                    "", "limits [0, 1000] beyond ±100 m"},
         BrokenUrdf{"missing tip link", twoJointArm(), "nonexistent", "tip link 'nonexistent'"},
+        BrokenUrdf{"a mesh scaled flat",
+                   "<robot name='x'><link name='a'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/>"
+                   "<axis xyz='0 0 1'/></joint><link name='b'><visual><geometry><mesh filename='b.stl' scale='0 0.001 0.001'/>"
+                   "</geometry></visual></link></robot>",
+                   "", "link 'b': mesh 'b.stl' has a scale with a zero component"},
         BrokenUrdf{"joint to a missing link",
                    "<robot name='x'><link name='a'/><joint name='j' type='revolute'><parent link='a'/>"
                    "<child link='ghost'/><axis xyz='0 0 1'/><limit lower='-1' upper='1' velocity='1' effort='1'/></joint></robot>",
@@ -404,6 +409,24 @@ TEST(RobotModel, ResolvesPackageAndRelativeMeshUris) {
   EXPECT_DOUBLE_EQ(last.collisions[0].mesh_scale.x(), 0.001);
 }
 
+// file:// URIs as exporters write them (RFC 8089): absolute, with the host 'localhost', with a
+// space as %20, and (not in the RFC, but written) relative to the URDF's folder.
+TEST(RobotModel, ResolvesFileUrisWithAHostEscapesOrARelativePath) {
+  TempDir dir;
+  const auto part = dir.write("my robot/meshes/part.stl", "solid x\nendsolid x\n");
+  const std::string absolute = part.string();
+  std::string escaped;
+  for (const char c : absolute) escaped += c == ' ' ? std::string("%20") : std::string(1, c);
+  for (const std::string& uri : {"file://" + absolute, "file://" + escaped, "file://localhost" + escaped, std::string("file://meshes/part.stl")}) {
+    const auto urdf = dir.write("my robot/robot.urdf", twoJointArm("<link name='deco'><visual><geometry><mesh filename='" + uri +
+                                                                    "'/></geometry></visual></link><joint name='d' type='fixed'>"
+                                                                    "<parent link='tool'/><child link='deco'/></joint>"));
+    const auto model = RobotModel::fromUrdfFile(urdf);
+    ASSERT_EQ(model.bodies().back().visuals.size(), 1U) << uri;
+    EXPECT_TRUE(std::filesystem::equivalent(model.bodies().back().visuals[0].mesh_file, part)) << uri;
+  }
+}
+
 TEST(RobotModel, RefusesANonexistentFileAndUnknownRobotName) {
   EXPECT_THROW(RobotModel::fromUrdfFile("/nonexistent/robot.urdf"), InputError);
   EXPECT_THROW(resolveRobotPath("not_a_robot"), InputError);
@@ -416,6 +439,78 @@ TEST(RobotModel, ChecksPostureSizeAndFiniteness) {
   EXPECT_NO_THROW(model.checkPosture(q));
   q[3] = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(model.checkPosture(q), InputError);
+}
+
+// A 2-joint arm whose hand carries two fingers: the left one slides, the right one slides as its
+// mimic (or is fixed), with a fingertip link on the right where `tip_on_right`.
+std::string armWithAGripper(bool right_finger_moves, bool tip_on_right) {
+  std::string urdf = R"(<robot name="gripper_arm">
+    <link name="base"/>
+    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/>
+      <axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l1"/>
+    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/>
+      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
+    <link name="l2"/>
+    <joint name="hand_mount" type="fixed"><parent link="l2"/><child link="hand"/><origin xyz="0.3 0 0"/></joint>
+    <link name="hand"/>
+    <joint name="left_finger" type="prismatic"><parent link="hand"/><child link="finger_l"/><origin xyz="0.05 0.02 0"/>
+      <axis xyz="0 1 0"/><limit lower="0" upper="0.04" velocity="0.1" effort="20"/></joint>
+    <link name="finger_l"/>)";
+  urdf += right_finger_moves ? R"(
+    <joint name="right_finger" type="prismatic"><parent link="hand"/><child link="finger_r"/><origin xyz="0.05 -0.02 0"/>
+      <axis xyz="0 -1 0"/><limit lower="0" upper="0.04" velocity="0.1" effort="20"/><mimic joint="left_finger"/></joint>)"
+                             : R"(
+    <joint name="right_finger" type="fixed"><parent link="hand"/><child link="finger_r"/><origin xyz="0.05 -0.02 0"/></joint>)";
+  urdf += R"(
+    <link name="finger_r"/>)";
+  if (tip_on_right) {
+    urdf += R"(
+    <joint name="right_tip" type="fixed"><parent link="finger_r"/><child link="fingertip_r"/><origin xyz="0.02 0 0"/></joint>
+    <link name="fingertip_r"/>)";
+  }
+  return urdf + "\n  </robot>";
+}
+
+// Most arms' descriptions carry a gripper. Where the longest chain ends in its one moving finger,
+// the slide becomes the arm's last joint; it is said, with the tip that ends the arm before it.
+TEST(RobotModel, SaysWhenTheDefaultTipIsPastAGrippersSlide) {
+  const RobotModel one_finger = RobotModel::fromUrdfString(armWithAGripper(false, false), ".");
+  EXPECT_EQ(one_finger.tipLink(), "finger_l");
+  EXPECT_EQ(one_finger.dof(), 3);
+  ASSERT_EQ(one_finger.notes().size(), 1U);
+  EXPECT_NE(one_finger.notes()[0].find("past the slide 'left_finger' where 'hand' branches"), std::string::npos) << one_finger.notes()[0];
+  EXPECT_NE(one_finger.notes()[0].find("--tip hand"), std::string::npos) << one_finger.notes()[0];
+  // Named, the tip is the user's choice; an arm without a gripper has nothing to say.
+  EXPECT_TRUE(RobotModel::fromUrdfString(armWithAGripper(false, false), ".", "finger_l").notes().empty());
+  EXPECT_EQ(RobotModel::fromUrdfString(armWithAGripper(false, false), ".", "hand").dof(), 2);
+  EXPECT_TRUE(RobotModel::fromUrdfString(flexirob::testing::masslessArm(), ".").notes().empty());
+}
+
+// A link drawn but without a collision element touches through a capsule all the same.
+TEST(RobotModel, SaysWhichDrawnLinkHasNoCollisionElement) {
+  const std::string drawn_only = twoJointArm(
+      "<link name='cover'><visual><geometry><box size='0.1 0.1 0.1'/></geometry></visual></link>"
+      "<joint name='c' type='fixed'><parent link='tool'/><child link='cover'/></joint>");
+  const RobotModel model = RobotModel::fromUrdfString(drawn_only, ".");
+  const std::string last = model.bodies().back().name;
+  ASSERT_TRUE(model.bodies().back().collisions.empty());
+  ASSERT_EQ(model.notes().size(), 1U);
+  EXPECT_EQ(model.notes()[0], "link '" + last + "' has a visual but no collision element: a capsule along it stands in for it in contacts and clearances");
+  EXPECT_TRUE(RobotModel::fromUrdfFile(resolveRobotPath("lwr4")).notes().empty());
+}
+
+TEST(RobotModel, RefusesAMimicFingerOnTheChainNamingATipBeforeIt) {
+  try {
+    RobotModel::fromUrdfString(armWithAGripper(true, true), ".");
+    FAIL() << "a mimic joint on the chain was accepted";
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("joint 'right_finger': mimic joints are not supported on the chain to the tip 'fingertip_r'"), std::string::npos)
+        << message;
+    EXPECT_NE(message.find("--tip hand"), std::string::npos) << message;
+  }
+  EXPECT_EQ(RobotModel::fromUrdfString(armWithAGripper(true, true), ".", "hand").dof(), 2);
 }
 
 }  // namespace
