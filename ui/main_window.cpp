@@ -443,6 +443,15 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
     return false;
   }
   coloured_links_.clear();
+  // What the CLI notes about a robot description (a default tip past a gripper's slide, a drawn
+  // link without a collision element).
+  QStringList notes;
+  for (const std::string& note : model_->notes()) notes << tr("note: %1").arg(QString::fromStdString(note));
+  if (notes.isEmpty()) {
+    clearProblem(Problem::kRobotNotes);
+  } else {
+    reportProblem(Problem::kRobotNotes, notes.join(QLatin1Char('\n')));
+  }
   // Start posture: the scene's, if it was made for a robot with this many joints, else a free one.
   const Eigen::VectorXd q = shownHomePosture(*model_, scene_);
   joint_panel_->setRobot(*model_, q);

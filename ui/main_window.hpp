@@ -163,7 +163,7 @@ class MainWindow : public QMainWindow {
   void reportError(const QString& what, const std::exception& error);
   /// What keeps the window from doing what was asked: a robot, a scene or a backend that could
   /// not be used. Shown whole in the view until that kind of thing is next loaded.
-  enum class Problem { kRobot, kScene, kSceneNotes, kPostures, kStartContact, kBackend, kDeadlines };
+  enum class Problem { kRobot, kRobotNotes, kScene, kSceneNotes, kPostures, kStartContact, kBackend, kDeadlines };
   void reportProblem(Problem kind, const QString& message);
   void clearProblem(Problem kind);
   void showProblems();

@@ -206,6 +206,30 @@ class OperatorTest : public QObject {
     QVERIFY(window.problemLabel()->isHidden());
   }
 
+  // What the CLI notes about a robot description is said in the view, as a scene's notes are.
+  void aRobotsNotesAreSaidInTheViewUntilAnotherLoads() {
+    QTemporaryDir directory;
+    std::string urdf = flexirob::testing::smallLightArmUrdf();
+    const auto link = urdf.find("<link name=\"l3\">");
+    const auto open = urdf.find("<collision>", link);
+    const auto close = urdf.find("</collision>", link);
+    QVERIFY(link != std::string::npos && open != std::string::npos && close != std::string::npos);
+    urdf.replace(close, std::string("</collision>").size(), "</visual>");
+    urdf.replace(open, std::string("<collision>").size(), "<visual>");
+    const QString file = directory.filePath(QStringLiteral("drawn_only.urdf"));
+    {
+      QFile out(file);
+      QVERIFY(out.open(QIODevice::WriteOnly));
+      out.write(urdf.c_str());
+    }
+    MainWindow window(file.toStdString(), "empty", quietOptions());
+    waitRunning(window);
+    QVERIFY2(window.problemLabel()->text().contains(QStringLiteral("note: link 'l3' has a visual but no collision element")),
+             qPrintable(window.problemLabel()->text()));
+    QVERIFY(window.loadRobot("lwr4"));
+    QVERIFY(window.problemLabel()->isHidden());
+  }
+
   void aScenesHomePostureBeyondTheLimitsIsLeftOutAndTheArmRuns() {
     QTemporaryDir dir;
     const std::string file = writeScene(dir, QStringLiteral("beyond.yaml"), "name: beyond\nrobot: lwr4\nhome_posture: [0, 3.0, 0, 0, 0, 0, 0]\n");
