@@ -451,21 +451,23 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
     // then random postures drawn inside the limits (kept away from them by a fifth of the range
     // in the first round).
     Eigen::VectorXd q_null(dof);
-    if (c == 0 && suggested && suggested->size() == dof) {
+    if (c >= draws) {
+      if (c == draws && known_to_reach.size() == dof) {
+        q_null = known_to_reach;
+      } else if (c == draws + 1 && home_.size() == dof) {
+        q_null = home_;
+      } else {
+        q_null = second_round_random_.uniform(sample_lower, sample_upper);
+      }
+    } else if (c == 0 && suggested && suggested->size() == dof) {
       q_null = *suggested;
     } else if (c <= 1) {
       q_null = q_reference;
     } else if (c == 2) {
       q_null = state_.q.size() == dof ? state_.q : model_->midPosture();
-    } else if (c < draws) {
+    } else {
       const Eigen::VectorXd margin = 0.2 * (sample_upper - sample_lower);
       q_null = random_.uniform(sample_lower + margin, sample_upper - margin);
-    } else if (c == draws && known_to_reach.size() == dof) {
-      q_null = known_to_reach;
-    } else if (c == draws + 1 && home_.size() == dof) {
-      q_null = home_;
-    } else {
-      q_null = second_round_random_.uniform(sample_lower, sample_upper);
     }
     // Kinematic IK with the hierarchical controller (Eq. 2.11), started at the null target.
     q = q_null.cwiseMax(lower).cwiseMin(upper);

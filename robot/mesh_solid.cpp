@@ -146,16 +146,16 @@ MeshSolid::MeshSolid(const TriangleMesh& mesh, const Eigen::Vector3d& scale, std
   };
 
   // Walk each connected piece from one triangle, turning every neighbour to run a shared edge
-  // the other way (as two faces of one consistently wound surface do). Only across an edge two
-  // triangles share: where more meet (parts of an assembly touching along an edge, a wall flush
-  // on a plate's rim), which of them belong to one surface is not known, and agreeing with the
-  // wrong one turns a part inside out. Each part stays a piece of its own, judged below.
+  // the other way (as two faces of one consistently wound surface do). First only across an
+  // edge two triangles share: where more meet (parts of an assembly touching along an edge, a
+  // wall flush on a plate's rim), which of them belong to one surface is not known, and agreeing
+  // with the wrong one turned a part inside out. Each part that comes out mostly closed is a
+  // piece of its own, judged below.
   constexpr std::uint32_t kUnvisited = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> piece(triangles.size(), kUnvisited);
   std::vector<std::uint32_t> queue;
   std::uint32_t piece_count = 0;
-  for (std::uint32_t seed = 0; seed < triangles.size(); ++seed) {
-    if (piece[seed] != kUnvisited) continue;
+  const auto walk = [&](std::uint32_t seed, bool across_shared_edges_only, const std::vector<bool>& walkable) {
     piece[seed] = piece_count;
     queue.assign(1, seed);
     while (!queue.empty()) {
@@ -164,10 +164,10 @@ MeshSolid::MeshSolid(const TriangleMesh& mesh, const Eigen::Vector3d& scale, std
       for (int i = 0; i < 3; ++i) {
         const std::uint32_t from = triangles[t][i], to = triangles[t][(i + 1) % 3];
         const auto [first, last] = neighboursAcross(from, to);
-        if (last - first != 2) continue;
+        if (across_shared_edges_only && last - first != 2) continue;
         for (auto it = first; it != last; ++it) {
           const std::uint32_t n = it->second;
-          if (piece[n] != kUnvisited) continue;
+          if (piece[n] != kUnvisited || !walkable[n]) continue;
           if (hasDirectedEdge(triangles[n], from, to)) triangles[n] = flipped(triangles[n]);
           piece[n] = piece_count;
           queue.push_back(n);
@@ -175,16 +175,81 @@ MeshSolid::MeshSolid(const TriangleMesh& mesh, const Eigen::Vector3d& scale, std
       }
     }
     ++piece_count;
+  };
+  const std::vector<bool> every_triangle(triangles.size(), true);
+  for (std::uint32_t seed = 0; seed < triangles.size(); ++seed) {
+    if (piece[seed] == kUnvisited) walk(seed, true, every_triangle);
+  }
+  // A piece whose edges are mostly shared within it encloses something. The rest (a lone
+  // triangle, a face written twice with both windings as "two-sided" exports do, the faces two
+  // parts share) has no volume of its own to tell its outside by: those triangles are walked
+  // again across any edge, among themselves, as the whole surface was before (a two-sided
+  // closed mesh then winds twice round its inside, and a shared face's two copies cancel).
+  std::vector<int> piece_triangles(piece_count, 0), piece_edges_within(piece_count, 0), piece_edges(piece_count, 0);
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    ++piece_triangles[piece[t]];
+    for (int i = 0; i < 3; ++i) {
+      const auto [first, last] = neighboursAcross(triangles[t][i], triangles[t][(i + 1) % 3]);
+      const bool within = last - first == 2 && piece[first->second] == piece[(first + 1)->second];
+      // An edge within the piece is seen from both its triangles: each sees half of it.
+      piece_edges[piece[t]] += within ? 1 : 2;
+      piece_edges_within[piece[t]] += within ? 1 : 0;
+    }
+  }
+  std::vector<bool> without_volume(triangles.size(), false);
+  bool any_without_volume = false;
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    const std::uint32_t p = piece[t];
+    without_volume[t] = piece_triangles[p] < 4 || 2 * piece_edges_within[p] < piece_edges[p];
+    any_without_volume = any_without_volume || without_volume[t];
+  }
+  // A face written twice (same corners) counts once: between two parts (a block standing on
+  // another, each exported closed) the two copies face away from each other and cancel, so
+  // both go; elsewhere (a two-sided export) one stays, to be turned as the rest.
+  std::vector<bool> dropped(triangles.size(), false);
+  if (any_without_volume) {
+    std::map<std::array<std::uint32_t, 3>, std::vector<std::uint32_t>> copies;
+    for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+      if (!without_volume[t]) continue;
+      std::array<std::uint32_t, 3> corners = triangles[t];
+      std::sort(corners.begin(), corners.end());
+      copies[corners].push_back(t);
+    }
+    const auto touchesAPart = [&](std::uint32_t t) {
+      for (int i = 0; i < 3; ++i) {
+        const auto [first, last] = neighboursAcross(triangles[t][i], triangles[t][(i + 1) % 3]);
+        for (auto it = first; it != last; ++it) {
+          if (!without_volume[it->second]) return true;
+        }
+      }
+      return false;
+    };
+    for (const auto& [corners, same] : copies) {
+      if (same.size() < 2) continue;
+      const bool between_parts = same.size() == 2 && !hasDirectedEdge(triangles[same[1]], triangles[same[0]][0], triangles[same[0]][1]) &&
+                                 touchesAPart(same[0]);
+      for (std::size_t k = between_parts ? 0 : 1; k < same.size(); ++k) dropped[same[k]] = true;
+    }
+    std::vector<bool> walkable(triangles.size(), false);
+    for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+      walkable[t] = without_volume[t] && !dropped[t];
+      if (without_volume[t]) piece[t] = kUnvisited;
+    }
+    for (std::uint32_t seed = 0; seed < triangles.size(); ++seed) {
+      if (walkable[seed] && piece[seed] == kUnvisited) walk(seed, false, walkable);
+    }
   }
 
   // Each piece faces outwards if the volume it encloses is positive (divergence theorem, taken
   // about the piece's own centre so that an open piece is judged by its own shape).
   std::vector<Eigen::AlignedBox3d> piece_bounds(piece_count);
   for (std::size_t t = 0; t < triangles.size(); ++t) {
+    if (dropped[t]) continue;
     for (const std::uint32_t v : triangles[t]) piece_bounds[piece[t]].extend(positions[v]);
   }
   std::vector<double> piece_volume(piece_count, 0.0);
   for (std::size_t t = 0; t < triangles.size(); ++t) {
+    if (dropped[t]) continue;
     const Eigen::Vector3d centre = piece_bounds[piece[t]].center();
     const Eigen::Vector3d a = positions[triangles[t][0]] - centre;
     const Eigen::Vector3d b = positions[triangles[t][1]] - centre;
@@ -193,6 +258,7 @@ MeshSolid::MeshSolid(const TriangleMesh& mesh, const Eigen::Vector3d& scale, std
   }
   triangles_.reserve(triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {
+    if (dropped[t]) continue;
     const Triangle triangle = piece_volume[piece[t]] < 0.0 ? flipped(triangles[t]) : triangles[t];
     triangles_.push_back({positions[triangle[0]], positions[triangle[1]], positions[triangle[2]]});
     for (const std::uint32_t v : triangle) bounds_.extend(positions[v]);

@@ -196,7 +196,10 @@ fs::path resolveMeshUri(const std::string& uri, const fs::path& base_dir, const 
     for (std::size_t i = 0; i < path.size(); ++i) {
       if (path[i] == '%' && i + 2 < path.size() && std::isxdigit(static_cast<unsigned char>(path[i + 1])) &&
           std::isxdigit(static_cast<unsigned char>(path[i + 2]))) {
-        decoded += static_cast<char>(std::stoi(path.substr(i + 1, 2), nullptr, 16));
+        const int byte = std::stoi(path.substr(i + 1, 2), nullptr, 16);
+        // A NUL would end the path where the system reads it (x.stl%00.dae opening x.stl).
+        if (byte < 0x20 || byte == 0x7f) throw InputError("link '" + link + "': mesh URI '" + printable(uri) + "' escapes a control byte");
+        decoded += static_cast<char>(byte);
         i += 2;
       } else {
         decoded += path[i];
@@ -671,8 +674,12 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
   for (std::size_t b = 1; b < model.bodies_.size(); ++b) {
     const Body& body = model.bodies_[b];
     if (!body.collisions.empty() || body.visuals.empty()) continue;
-    model.notes_.push_back("link '" + body.name + "' has a visual but no collision element: a capsule along it stands in " +
-                           "for it in contacts and clearances");
+    std::string drawn;  // the links whose visuals the body carries
+    for (const Geometry& visual : body.visuals) {
+      if (drawn.find("'" + visual.source_link + "'") == std::string::npos) drawn += (drawn.empty() ? "'" : ", '") + visual.source_link + "'";
+    }
+    model.notes_.push_back("link " + drawn + " has a visual but no collision element: a capsule along '" + body.name +
+                           "' stands in for it in contacts and clearances");
   }
   assumeInertiaOfMasslessBodies(model.bodies_, model.joints_, model.X_last_body_tip_);
   return model;

@@ -71,7 +71,7 @@ Json runReach(const ReachOptions& options) {
   const robot::ReachResult result = robot::reach(model, &scene, parameters, request);
   // As `eval` says of a scene target: reached or not, the tip is in the obstacle there.
   const robot::Obstacle* inside = robot::obstacleAt(scene, target);
-  if (inside != nullptr && inside->shape == robot::Obstacle::Shape::kMesh && result.collisions == 0) {
+  if (inside != nullptr && inside->shape == robot::Obstacle::Shape::kMesh && result.status == "reached" && result.collisions == 0) {
     // An open mesh's inside is free air to the simulation: say what the run showed.
     std::fprintf(stderr,
                  "note: the target lies inside obstacle '%s' as areas and evaluations read it (an open mesh counts as the "

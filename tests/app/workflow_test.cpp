@@ -295,15 +295,18 @@ TEST(Workflow, TheOnlineLearnersBoxHoldsWhereASmallArmOnAPedestalReaches) {
 // Every refit checks the transitions again: an OS-ELM session's `teach` had listed one pair
 // once per refit (137 and 138 colliding samples) and counted 7 warnings beside 2 lines. The last
 // map's transition warnings stand; a joint-limit warning stands whatever was learned after it.
+// An event as the workflow emits it, for standingWarnings().
+WorkflowEvent event(WorkflowEvent::Kind kind, const std::string& name, const std::string& detail, int area = -1) {
+  WorkflowEvent e;
+  e.kind = kind;
+  e.name = name;
+  e.detail = detail;
+  e.area = area;
+  return e;
+}
+
 TEST(Workflow, OnlyTheLastMapsTransitionWarningsStand) {
   using Kind = WorkflowEvent::Kind;
-  const auto event = [](Kind kind, const std::string& name, const std::string& detail) {
-    WorkflowEvent e;
-    e.kind = kind;
-    e.name = name;
-    e.detail = detail;
-    return e;
-  };
   const std::vector<WorkflowEvent> events = {
       event(Kind::kWarning, "joint_limit", "posture near the joint limit at area 'a'"),
       event(Kind::kModelLearned, "oselm", "from 2 areas"),
@@ -326,14 +329,6 @@ TEST(Workflow, OnlyTheLastMapsTransitionWarningsStand) {
 // indices move down as the workflow's do.
 TEST(Workflow, AnAreaRemovedTakesItsJointLimitWarningWithIt) {
   using Kind = WorkflowEvent::Kind;
-  const auto event = [](Kind kind, const std::string& name, const std::string& detail, int area) {
-    WorkflowEvent e;
-    e.kind = kind;
-    e.name = name;
-    e.detail = detail;
-    e.area = area;
-    return e;
-  };
   std::vector<WorkflowEvent> events = {
       event(Kind::kWarning, "joint_limit", "near the limit at area 'a'", 0),
       event(Kind::kAreaCreated, "area_created", "a", 0),

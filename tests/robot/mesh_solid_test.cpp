@@ -149,6 +149,63 @@ TEST(MeshSolid, PartsThatTouchAlongAnEdgeAreEachInside) {
   }
 }
 
+// `mesh` turned by `rotation` about the origin (vertices in float, as a file holds them).
+TriangleMesh rotated(TriangleMesh mesh, const Eigen::Matrix3d& rotation) {
+  for (Eigen::Vector3f& v : mesh.vertices) v = (rotation * v.cast<double>()).cast<float>();
+  return mesh;
+}
+
+Eigen::Matrix3d someRotation() {
+  return (Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX())).toRotationMatrix();
+}
+
+// Whether `solid` holds exactly the points of `inside` and none of `outside`, each turned by
+// `rotation`; winding numbers to 1e-5 (float corners).
+void expectHolds(const MeshSolid& solid, const Eigen::Matrix3d& rotation, const std::vector<Eigen::Vector3d>& inside,
+                 const std::vector<Eigen::Vector3d>& outside, double inside_winding, const std::string& what) {
+  for (const Eigen::Vector3d& p : inside) {
+    EXPECT_NEAR(solid.windingNumber(rotation * p), inside_winding, 1e-5) << what << " at " << p.transpose();
+    EXPECT_TRUE(solid.contains(rotation * p)) << what << " at " << p.transpose();
+  }
+  for (const Eigen::Vector3d& p : outside) {
+    EXPECT_NEAR(solid.windingNumber(rotation * p), 0.0, 1e-5) << what << " at " << p.transpose();
+    EXPECT_FALSE(solid.contains(rotation * p)) << what << " at " << p.transpose();
+  }
+}
+
+// A "two-sided" export writes every face twice, once each way round: no edge joins just two
+// triangles. Its inside is still inside, however the mesh lies in space.
+TEST(MeshSolid, ATwoSidedExportHoldsItsInsideHoweverItIsTurned) {
+  TriangleMesh two_sided = unitCube();
+  const std::size_t count = two_sided.indices.size();
+  for (std::size_t t = 0; t < count; t += 3) {
+    two_sided.indices.insert(two_sided.indices.end(), {two_sided.indices[t], two_sided.indices[t + 2], two_sided.indices[t + 1]});
+  }
+  for (const Eigen::Matrix3d& rotation : {Eigen::Matrix3d(Eigen::Matrix3d::Identity()), someRotation()}) {
+    const MeshSolid solid(rotated(two_sided, rotation));
+    // A face written twice counts once.
+    expectHolds(solid, rotation, {{0.5, 0.5, 0.5}, {0.1, 0.9, 0.2}}, {{1.5, 0.5, 0.5}, {0.5, -0.3, 0.5}}, 1.0, "two-sided cube");
+  }
+}
+
+// Parts exported as closed bodies of their own that share a face (a block standing on another,
+// the shared face written once per part), and parts touching along an edge, turned in space.
+TEST(MeshSolid, PartsSharingAFaceOrAnEdgeAreInsideHoweverTheyAreTurned) {
+  TriangleMesh stacked;
+  appendBox(stacked, {0.0F, 0.0F, 0.0F}, {1.0F, 1.0F, 0.5F});
+  appendBox(stacked, {0.0F, 0.0F, 0.5F}, {1.0F, 1.0F, 1.0F});
+  TriangleMesh fixture;
+  appendBox(fixture, {0.0F, 0.0F, 0.0F}, {0.3F, 0.3F, 0.02F});
+  appendBox(fixture, {0.0F, 0.0F, 0.02F}, {0.3F, 0.03F, 0.27F});
+  appendBox(fixture, {0.0F, 0.27F, 0.02F}, {0.3F, 0.3F, 0.27F}, true);
+  for (const Eigen::Matrix3d& rotation : {Eigen::Matrix3d(Eigen::Matrix3d::Identity()), someRotation()}) {
+    expectHolds(MeshSolid(rotated(stacked, rotation)), rotation, {{0.5, 0.5, 0.25}, {0.5, 0.5, 0.45}, {0.5, 0.5, 0.55}, {0.2, 0.8, 0.9}},
+                {{0.5, 0.5, 1.2}, {1.3, 0.5, 0.5}, {0.5, 0.5, -0.2}}, 1.0, "stacked blocks");
+    expectHolds(MeshSolid(rotated(fixture, rotation)), rotation, {{0.15, 0.15, 0.01}, {0.15, 0.015, 0.15}, {0.15, 0.285, 0.15}},
+                {{0.15, 0.15, 0.15}, {0.15, -0.05, 0.15}, {0.15, 0.35, 0.15}}, 1.0, "fixture");
+  }
+}
+
 TEST(MeshSolid, WeldsCornersThatTheLoaderKeptApartPerFace) {
   // One vertex per triangle corner, as the loader leaves a box with flat faces; the second
   // face winds the other way, so only welding lets the triangles agree.

@@ -425,6 +425,16 @@ TEST(RobotModel, ResolvesFileUrisWithAHostEscapesOrARelativePath) {
     ASSERT_EQ(model.bodies().back().visuals.size(), 1U) << uri;
     EXPECT_TRUE(std::filesystem::equivalent(model.bodies().back().visuals[0].mesh_file, part)) << uri;
   }
+  // An escaped NUL would end the path where the system reads it: part.stl%00.dae opening part.stl.
+  const auto nul = dir.write("my robot/nul.urdf", twoJointArm("<link name='deco'><visual><geometry><mesh filename='file://" + escaped +
+                                                               "%00.dae'/></geometry></visual></link><joint name='d' type='fixed'>"
+                                                               "<parent link='tool'/><child link='deco'/></joint>"));
+  try {
+    RobotModel::fromUrdfFile(nul);
+    FAIL() << "a URI escaping a NUL was read";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("escapes a control byte"), std::string::npos) << error.what();
+  }
 }
 
 TEST(RobotModel, RefusesANonexistentFileAndUnknownRobotName) {
@@ -444,14 +454,7 @@ TEST(RobotModel, ChecksPostureSizeAndFiniteness) {
 // A 2-joint arm whose hand carries two fingers: the left one slides, the right one slides as its
 // mimic (or is fixed), with a fingertip link on the right where `tip_on_right`.
 std::string armWithAGripper(bool right_finger_moves, bool tip_on_right) {
-  std::string urdf = R"(<robot name="gripper_arm">
-    <link name="base"/>
-    <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/>
-      <axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
-    <link name="l1"/>
-    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/>
-      <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
-    <link name="l2"/>
+  std::string urdf = R"(<robot name="gripper_arm">)" + flexirob::testing::twoMasslessJointsToL2() + R"(
     <joint name="hand_mount" type="fixed"><parent link="l2"/><child link="hand"/><origin xyz="0.3 0 0"/></joint>
     <link name="hand"/>
     <joint name="left_finger" type="prismatic"><parent link="hand"/><child link="finger_l"/><origin xyz="0.05 0.02 0"/>
@@ -496,7 +499,8 @@ TEST(RobotModel, SaysWhichDrawnLinkHasNoCollisionElement) {
   const std::string last = model.bodies().back().name;
   ASSERT_TRUE(model.bodies().back().collisions.empty());
   ASSERT_EQ(model.notes().size(), 1U);
-  EXPECT_EQ(model.notes()[0], "link '" + last + "' has a visual but no collision element: a capsule along it stands in for it in contacts and clearances");
+  EXPECT_EQ(model.notes()[0], "link 'cover' has a visual but no collision element: a capsule along '" + last +
+                                  "' stands in for it in contacts and clearances");
   EXPECT_TRUE(RobotModel::fromUrdfFile(resolveRobotPath("lwr4")).notes().empty());
 }
 

@@ -37,15 +37,21 @@ class TempDir {
 
 /// A kinematics-only 3-joint arm: no link says what it weighs. Link l1 spans 0.4 m, l2 only
 /// 4 cm, l3 0.3 m to the tool; every joint turns within +-2 rad.
-inline std::string masslessArm() {
-  return R"(<robot name="bare">
+/// The first two joints of the small arms below: from link `base` about z at 0.1 m, to link
+/// `l2` about y 0.4 m higher, both within +-2 rad. Without mass.
+inline std::string twoMasslessJointsToL2() {
+  return R"(
     <link name="base"/>
     <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/>
       <axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
     <link name="l1"/>
     <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/>
       <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
-    <link name="l2"/>
+    <link name="l2"/>)";
+}
+
+inline std::string masslessArm() {
+  return R"(<robot name="bare">)" + twoMasslessJointsToL2() + R"(
     <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.04"/>
       <axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2" effort="100"/></joint>
     <link name="l3"/>
