@@ -183,8 +183,7 @@ MeshSolid::MeshSolid(const TriangleMesh& mesh, const Eigen::Vector3d& scale, std
   // A piece whose edges are mostly shared within it encloses something. The rest (a lone
   // triangle, a face written twice with both windings as "two-sided" exports do, the faces two
   // parts share) has no volume of its own to tell its outside by: those triangles are walked
-  // again across any edge, among themselves, as the whole surface was before (a two-sided
-  // closed mesh then winds twice round its inside, and a shared face's two copies cancel).
+  // again across any edge, among themselves, once their copies are sorted out (below).
   std::vector<int> piece_triangles(piece_count, 0), piece_edges_within(piece_count, 0), piece_edges(piece_count, 0);
   for (std::uint32_t t = 0; t < triangles.size(); ++t) {
     ++piece_triangles[piece[t]];
