@@ -201,6 +201,16 @@ void MainWindow::clearProblem(Problem kind) {
   if (problems_.erase(kind) > 0) showProblems();
 }
 
+void MainWindow::showNotes(Problem kind, const std::vector<std::string>& notes) {
+  QStringList lines;
+  for (const std::string& note : notes) lines << tr("note: %1").arg(QString::fromStdString(note));
+  if (lines.isEmpty()) {
+    clearProblem(kind);
+  } else {
+    reportProblem(kind, lines.join(QLatin1Char('\n')));
+  }
+}
+
 void MainWindow::showProblems() {
   QStringList lines;
   for (const auto& [which, text] : problems_) lines << text;
@@ -445,13 +455,7 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
   coloured_links_.clear();
   // What the CLI notes about a robot description (a default tip past a gripper's slide, a drawn
   // link without a collision element).
-  QStringList notes;
-  for (const std::string& note : model_->notes()) notes << tr("note: %1").arg(QString::fromStdString(note));
-  if (notes.isEmpty()) {
-    clearProblem(Problem::kRobotNotes);
-  } else {
-    reportProblem(Problem::kRobotNotes, notes.join(QLatin1Char('\n')));
-  }
+  showNotes(Problem::kRobotNotes, model_->notes());
   // Start posture: the scene's, if it was made for a robot with this many joints, else a free one.
   const Eigen::VectorXd q = shownHomePosture(*model_, scene_);
   joint_panel_->setRobot(*model_, q);
@@ -503,13 +507,7 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
   }
   clearProblem(Problem::kScene);
   // What the CLI notes about a scene (places tens of metres away: a scene in millimetres?).
-  QStringList notes;
-  for (const std::string& note : robot::sceneNotes(scene_)) notes << tr("note: %1").arg(QString::fromStdString(note));
-  if (notes.isEmpty()) {
-    clearProblem(Problem::kSceneNotes);
-  } else {
-    reportProblem(Problem::kSceneNotes, notes.join(QLatin1Char('\n')));
-  }
+  showNotes(Problem::kSceneNotes, robot::sceneNotes(scene_));
   if (model_) {
     const Eigen::VectorXd home = shownHomePosture(*model_, scene_);
     joint_panel_->setPosture(home);

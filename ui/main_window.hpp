@@ -166,6 +166,8 @@ class MainWindow : public QMainWindow {
   enum class Problem { kRobot, kRobotNotes, kScene, kSceneNotes, kPostures, kStartContact, kBackend, kDeadlines };
   void reportProblem(Problem kind, const QString& message);
   void clearProblem(Problem kind);
+  /// The notes the CLI prints on stderr, shown in the view under `kind` (cleared when none).
+  void showNotes(Problem kind, const std::vector<std::string>& notes);
   void showProblems();
   void refuseScene(const std::string& name_or_path, const std::exception& error);
   /// Points the home camera at the robot from a side obstacles do not hide it from, or draws
