@@ -103,7 +103,7 @@ MotionOutcome approachTarget(const robot::RobotModel& model, const robot::Parame
 }
 
 Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& scene) {
-  if (scene.home_posture && scene.home_posture->size() == model.dof()) return *scene.home_posture;
+  if (scene.home_posture && scene.home_posture->size() == model.dof()) return model.withinOneTurn(*scene.home_posture);
   const Eigen::VectorXd mid = model.midPosture();
   robot::CollisionWorld world(model, scene);
   world.update(mid);
@@ -530,6 +530,7 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
     result.target_points.push_back(p);
     result.target_reached.push_back(reached);
     result.final_postures.push_back(outcome.q);
+    result.target_contact.push_back(outcome.collided ? outcome.contact : std::string());
     if (progress && i % 20 == 0) {
       progress(kFindingShare + (1.0 - kFindingShare) * static_cast<double>(i) / static_cast<double>(targets.size()));
     }

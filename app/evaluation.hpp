@@ -172,6 +172,7 @@ struct ReachableResult {
   std::vector<bool> target_reached;           ///< per target of T
   std::vector<bool> target_resolved_free;     ///< per target of T: counted in resolved_free
   std::vector<Eigen::VectorXd> final_postures; ///< per target of T: where the arm ended [rad]
+  std::vector<std::string> target_contact;     ///< per target of T: its first contact "body/other", "" if none
 };
 
 /// Whether some collision-free posture puts the tip on p_W (within 1 mm): IK with the

@@ -11,7 +11,7 @@
 namespace flexirob::app {
 
 robot::ParameterSet sceneParameters(const robot::Scene& scene) {
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
+  const std::vector<robot::ParameterDeclaration> declarations = robot::sceneTunableParameters();
   robot::ParameterSet parameters(declarations);
   parameters.applyOverrides(scene.parameters, robot::sceneOrigin(scene));
   return parameters;

@@ -39,7 +39,7 @@ struct TaughtSystem {
   int areas_given_up = 0;
 };
 
-/// The scene's parameters (robot/sim/reach.hpp declarations with the scene's overrides).
+/// The parameters a scene sets (robot::sceneTunableParameters()) with its overrides applied.
 robot::ParameterSet sceneParameters(const robot::Scene& scene);
 
 /// Runs the tutor on a fresh simulation of `model` in `scene`.

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <numbers>
 #include <cmath>
@@ -76,9 +77,14 @@ const char* toString(WorkflowEvent::Kind kind) {
 }
 
 LearnerKind learnerKindFromString(const std::string& name) {
-  if (name == "elm") return LearnerKind::kElm;
-  if (name == "oselm") return LearnerKind::kOsElm;
-  if (name == "llm") return LearnerKind::kLlm;
+  // The thesis writes ELM, OS-ELM and LLM; any case and a hyphen name the same learner.
+  std::string key;
+  for (const char c : name) {
+    if (c != '-') key += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  }
+  if (key == "elm") return LearnerKind::kElm;
+  if (key == "oselm") return LearnerKind::kOsElm;
+  if (key == "llm") return LearnerKind::kLlm;
   throw InputError("learner: expected elm, oselm or llm, got '" + name + "'");
 }
 
@@ -724,20 +730,35 @@ void Workflow::collectLearning() {
 }
 
 std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& events) {
-  // Each warning with the index its area has now: a removal takes the removed area's joint-limit
-  // warning with it (the posture is no longer taught) and moves the later areas down by one.
+  // Each warning with the index its area has now. A joint-limit warning is said when a recording
+  // starts and stands once the recording has made its area: a recording that makes none takes it
+  // back, a re-taught area's replaces the old posture's, and a removal takes the removed area's
+  // with it (the posture is no longer taught) and moves the later areas down by one.
   std::vector<std::pair<const WorkflowEvent*, int>> standing;
+  std::vector<const WorkflowEvent*> this_recordings_limits;
+  const auto isJointLimit = [](const auto& e) { return e.first->name == "joint_limit"; };
   for (const WorkflowEvent& event : events) {
     if (event.kind == WorkflowEvent::Kind::kModelLearned) {
       std::erase_if(standing, [](const auto& e) { return e.first->name == "transition_inconsistent"; });
     }
     if (event.kind == WorkflowEvent::Kind::kAreaRemoved && event.area >= 0) {
-      std::erase_if(standing, [&event](const auto& e) { return e.first->name == "joint_limit" && e.second == event.area; });
+      std::erase_if(standing, [&](const auto& e) { return isJointLimit(e) && e.second == event.area; });
       for (auto& e : standing) {
         if (e.second > event.area) --e.second;
       }
     }
-    if (event.kind == WorkflowEvent::Kind::kWarning) standing.emplace_back(&event, event.area);
+    if (event.kind == WorkflowEvent::Kind::kAreaCreated && event.area >= 0) {
+      std::erase_if(standing, [&](const auto& e) { return isJointLimit(e) && e.second == event.area; });
+      for (const WorkflowEvent* limit : this_recordings_limits) standing.emplace_back(limit, event.area);
+      this_recordings_limits.clear();
+    }
+    if (event.kind != WorkflowEvent::Kind::kWarning) continue;
+    if (event.name == "joint_limit") {
+      this_recordings_limits.push_back(&event);
+    } else {
+      if (event.name == "empty_recording") this_recordings_limits.clear();
+      standing.emplace_back(&event, event.area);
+    }
   }
   std::vector<std::string> lines;
   for (const auto& [event, area] : standing) {

@@ -70,7 +70,7 @@ const char* toString(Button button);
 /// ...) and triggers ("on_affected", "on_converged"), also as app::toString.
 using robot::toString;
 const char* toString(LearnerKind kind);
-/// "elm", "oselm", "llm"; throws InputError otherwise.
+/// "elm", "oselm", "llm" in any case, "OS-ELM" too; throws InputError otherwise.
 LearnerKind learnerKindFromString(const std::string& name);
 
 /// One record of what happened, for the session recorder and the GUI.
@@ -85,8 +85,9 @@ struct WorkflowEvent {
 const char* toString(WorkflowEvent::Kind kind);
 /// The warning lines that still stand at the end of `events`, each distinct line once, in order:
 /// every refit checks the transitions again (OS-ELM refits after each area), and only the last
-/// map's transition warnings stand, as Workflow::transitionChecks() holds only its checks; an
-/// area removed takes its joint-limit warning with it.
+/// map's transition warnings stand, as Workflow::transitionChecks() holds only its checks; a
+/// joint-limit warning stands once its recording made an area, until the area is re-taught or
+/// removed.
 std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& events);
 
 /// A training area D^(k) (Sect. 3.1): the samples recorded in one RECORDING.

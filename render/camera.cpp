@@ -83,16 +83,18 @@ void namedView(const std::string& name, Eigen::Vector3d& direction_W, Eigen::Vec
   } else if (name == "back-right") {
     direction_W = Eigen::Vector3d(1.0, 0.62, 0.42);
   } else if (name == "front-right") {
-    // Lower than front-left: shows what stands behind obstacles on the robot's left (+y).
+    // Lower than front-left: shows what stands behind obstacles on the robot's right (+y).
     direction_W = Eigen::Vector3d(-1.0, 0.62, 0.30);
   } else if (name == "front") {
     direction_W = Eigen::Vector3d(-1.0, -0.12, 0.45);
   } else if (name == "back") {
     direction_W = Eigen::Vector3d(1.0, 0.12, 0.45);
   } else if (name == "left") {
-    direction_W = Eigen::Vector3d(-0.25, 1.0, 0.45);
-  } else if (name == "right") {
+    // The robot's sides, as in every other name: it works towards -x, so its left is -y (a
+    // tutor facing it has them mirrored).
     direction_W = Eigen::Vector3d(-0.25, -1.0, 0.45);
+  } else if (name == "right") {
+    direction_W = Eigen::Vector3d(-0.25, 1.0, 0.45);
   } else if (name == "top") {
     // Looking straight down with +x up in the image: the front (-x) at the bottom.
     direction_W = Eigen::Vector3d::UnitZ();

@@ -1,9 +1,12 @@
 #pragma once
 // Errors that stem from the user's input (files, command-line values). Programs report them
 // as a one-line message and exit code 2; they are never a crash.
+#include <algorithm>
 #include <cstddef>
+#include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace flexirob {
 
@@ -25,6 +28,33 @@ inline std::string printable(const std::string& text, std::size_t max_length = 6
     out += (byte < 0x20 || byte == 0x7F) ? '?' : c;
   }
   return out;
+}
+
+/// The name among `names` that `given` most likely meant: the nearest by edit distance (letters
+/// inserted, dropped or changed), if that is a slip of at most a third of its letters (at least
+/// two); "" otherwise. For "did you mean ...?" in a one-line error.
+inline std::string closestName(const std::string& given, const std::vector<std::string>& names) {
+  std::string closest;
+  std::size_t closest_distance = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> row;
+  for (const std::string& name : names) {
+    row.resize(name.size() + 1);
+    for (std::size_t j = 0; j <= name.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= given.size(); ++i) {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= name.size(); ++j) {
+        const std::size_t above = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (given[i - 1] == name[j - 1] ? 0 : 1)});
+        diagonal = above;
+      }
+    }
+    if (row[name.size()] < closest_distance) {
+      closest_distance = row[name.size()];
+      closest = name;
+    }
+  }
+  return closest_distance <= std::max<std::size_t>(2, given.size() / 3) ? closest : std::string();
 }
 
 }  // namespace flexirob

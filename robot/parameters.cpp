@@ -1,6 +1,10 @@
 #include "robot/parameters.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
 #include <sstream>
 
 #include "robot/errors.hpp"
@@ -48,6 +52,35 @@ int ParameterSet::applyOverrides(const std::map<std::string, double>& overrides,
     ++applied;
   }
   return applied;
+}
+
+std::string undeclaredParameterReason(const std::string& name, std::span<const ParameterDeclaration> known) {
+  std::vector<std::string> declared;
+  for (const auto& declaration : known) {
+    if (name == declaration.name) return "";
+    declared.emplace_back(declaration.name);
+  }
+  const std::string reason = "unknown parameter '" + name + "'";
+  // A slip of a few letters (a doubled, dropped or swapped letter, a wrong separator) is taken as meant.
+  if (const std::string meant = closestName(name, declared); !meant.empty()) return reason + " (did you mean '" + meant + "'?)";
+  // Otherwise the names there are, by component: "sim.{substeps, gravity}".
+  std::string names;
+  std::string component;
+  for (const auto& declaration : known) {
+    const std::string full = declaration.name;
+    const std::size_t dot = full.find('.');
+    const std::string prefix = dot == std::string::npos ? "" : full.substr(0, dot + 1);
+    if (prefix != component || names.empty()) {
+      if (!names.empty()) names += component.empty() ? ", " : "}, ";
+      names += prefix.empty() ? "" : prefix + "{";
+      component = prefix;
+    } else {
+      names += ", ";
+    }
+    names += full.substr(prefix.size());
+  }
+  if (!component.empty()) names += "}";
+  return reason + "; the parameters are " + names;
 }
 
 }  // namespace flexirob::robot

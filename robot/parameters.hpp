@@ -26,8 +26,9 @@ class ParameterSet {
   double get(const std::string& name) const;
   bool has(const std::string& name) const { return values_.count(name) != 0; }
   void set(const std::string& name, double value);
-  /// Applies the entries of `overrides` whose names are declared here; other names are ignored
-  /// (a scene overrides parameters of several components at once). Returns how many applied.
+  /// Applies the entries of `overrides` whose names are declared here; other names are left to
+  /// the other components (a scene overrides parameters of several at once; the scene reader
+  /// refuses names none declares). Returns how many applied.
   /// A value out of range throws InputError, prefixed with `origin` (a scene file) if given.
   int applyOverrides(const std::map<std::string, double>& overrides, const std::string& origin = "");
   const std::vector<ParameterDeclaration>& declarations() const { return declarations_; }
@@ -37,5 +38,10 @@ class ParameterSet {
   std::vector<ParameterDeclaration> declarations_;
   std::map<std::string, double> values_;
 };
+
+/// "" when `name` is declared in `known`; otherwise why not, naming the closest declared name
+/// when a slip of a few letters explains it ("did you mean 'hierarchical.kappa_q'?") and the
+/// names there are.
+std::string undeclaredParameterReason(const std::string& name, std::span<const ParameterDeclaration> known);
 
 }  // namespace flexirob::robot

@@ -1,5 +1,6 @@
 #include "robot/robot_model.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
@@ -211,7 +212,13 @@ fs::path resolveMeshUri(const std::string& uri, const fs::path& base_dir, const 
       const fs::path literal(path);
       candidates.push_back(literal.is_absolute() ? literal : base_dir / literal);
     }
-    if (!file.is_absolute()) looked = " (relative to the URDF's folder " + base_dir.lexically_normal().string() + ")";
+    // file://host/x.stl names a file on another machine, which cannot be read here; it and a
+    // relative path look alike, so where the relative one is missing the message says both.
+    if (!file.is_absolute()) {
+      const std::string first = decoded.substr(0, decoded.find('/'));
+      looked = " (relative to the URDF's folder " + base_dir.lexically_normal().string() +
+               "; if '" + printable(first) + "' is a host name: only files on this machine are read, write file:///path or file://localhost/path)";
+    }
   } else if (uri.find("://") != std::string::npos) {
     throw InputError("link '" + link + "': unsupported mesh URI scheme in '" + uri + "'");
   } else {
@@ -395,14 +402,15 @@ int countDepth(const urdf::Link* link) {
 }
 
 // The default tip: the leaf with the most movable joints above it; among equals the deepest
-// (so a flange or tool frame after the last joint wins). Two different chains of equal
-// length are ambiguous: the description is not a serial arm unless a tip is named.
-std::string defaultTip(const urdf::ModelInterface& model) {
+// (so a flange or tool frame after the last joint wins). Equally long chains that part only
+// for a joint or two at their ends, below an arm of more joints, are a hand's fingers: the tip
+// is the link they branch from, said in `note`. Other chains of equal length are ambiguous (two
+// arms on a torso): the description is not a serial arm unless a tip is named.
+std::string defaultTip(const urdf::ModelInterface& model, std::string& note) {
   const urdf::Link* best = nullptr;
   int best_movable = -1;
   int best_depth = -1;
-  bool ambiguous = false;
-  std::string rival;
+  std::vector<const urdf::Link*> tied;
   for (const auto& [name, link] : model.links_) {
     if (!link->child_links.empty()) continue;
     const int movable = countMovable(link.get());
@@ -411,19 +419,36 @@ std::string defaultTip(const urdf::ModelInterface& model) {
       best = link.get();
       best_movable = movable;
       best_depth = depth;
-      ambiguous = false;
+      tied = {best};
     } else if (movable == best_movable && depth == best_depth && movable > 0) {
-      ambiguous = true;
-      rival = name;
+      tied.push_back(link.get());
     }
   }
   if (best == nullptr) throw InputError("the URDF has no links");
   if (best_movable <= 0) throw InputError("the URDF has no movable joint between its root and any leaf");
-  if (ambiguous) {
-    throw InputError("not a serial chain: the chains to '" + best->name + "' and '" + rival +
-                     "' are equally long; choose the tip with --tip");
+  if (tied.size() == 1) return best->name;
+  const auto below = [](const urdf::Link* ancestor, const urdf::Link* link) {
+    for (; link != nullptr; link = link->getParent().get()) {
+      if (link == ancestor) return true;
+    }
+    return false;
+  };
+  const urdf::Link* branch = best->getParent().get();
+  while (branch != nullptr && !std::all_of(tied.begin(), tied.end(), [&](const urdf::Link* leaf) { return below(branch, leaf); })) {
+    branch = branch->getParent().get();
   }
-  return best->name;
+  constexpr int kMaxFingerJoints = 2;
+  const int arm_joints = countMovable(branch);
+  const int finger_joints = best_movable - arm_joints;
+  if (branch != nullptr && finger_joints <= kMaxFingerJoints && arm_joints > finger_joints) {
+    std::string fingers;
+    for (const urdf::Link* leaf : tied) fingers += (fingers.empty() ? "'" : ", '") + leaf->name + "'";
+    note = "the longest chains end in " + fingers + ", which branch at '" + branch->name +
+           "' (a gripper's fingers?): the tip is '" + branch->name + "', the fingers move with it (--tip names another tip)";
+    return branch->name;
+  }
+  throw InputError("not a serial chain: the chains to '" + tied[0]->name + "' and '" + tied[1]->name +
+                   "' are equally long; choose the tip with --tip");
 }
 
 // The motion of an off-chain joint held still: at 0, or at the limit nearest to 0 when 0 lies
@@ -533,7 +558,8 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
   if (!root) throw InputError("invalid URDF: no root link");
 
   // The chain, from the tip up to the root.
-  const std::string tip = tip_link.empty() ? defaultTip(*urdf_model) : tip_link;
+  std::string tip_note;
+  const std::string tip = tip_link.empty() ? defaultTip(*urdf_model, tip_note) : tip_link;
   const urdf::LinkConstSharedPtr tip_ptr = urdf_model->getLink(tip);
   if (!tip_ptr) throw InputError("tip link '" + tip + "' is not in the URDF");
   std::vector<const urdf::Link*> path;  // root ... tip
@@ -547,6 +573,7 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
   RobotModel model;
   model.name_ = urdf_model->getName();
   model.tip_link_ = tip;
+  if (!tip_note.empty()) model.notes_.push_back(tip_note);
   model.bodies_.emplace_back();
   model.bodies_.back().name = root->name;
   foldLinkInto(model.bodies_.back(), *root, Eigen::Isometry3d::Identity(), meshes);
@@ -681,6 +708,86 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
     model.notes_.push_back("link " + drawn + " has a visual but no collision element: a capsule along '" + body.name +
                            "' stands in for it in contacts and clearances");
   }
+  // Scenes put the URDF's root at their origin and the table top at its z = 0. A cell's URDF
+  // often mounts the arm on a stand from a bare `world` root: the arm then stands that high
+  // over the table, which is right for a pedestal and a surprise otherwise.
+  {
+    Eigen::Isometry3d X_RL = Eigen::Isometry3d::Identity();
+    for (std::size_t i = 0; i < path.size(); ++i) {
+      const urdf::Link* link = path[i];
+      if (i > 0) {
+        if (link->parent_joint->type != urdf::Joint::FIXED) break;
+        X_RL = X_RL * toIsometry(link->parent_joint->parent_to_joint_origin_transform);
+      }
+      if (link->visual_array.empty() && link->collision_array.empty() && !link->visual && !link->collision) continue;
+      if (i > 0 && std::abs(X_RL.translation().z()) > 0.05) {
+        std::ostringstream line;
+        line << std::fixed << std::setprecision(2) << "the URDF's root '" << root->name << "' holds '" << link->name << "' "
+             << std::abs(X_RL.translation().z()) << " m " << (X_RL.translation().z() > 0.0 ? "above" : "below")
+             << " its origin, where a scene's table top (z = 0) lies: the arm is mounted there in every scene "
+                "(a scene's `table: false` where nothing stands at z = 0)";
+        model.notes_.push_back(line.str());
+      }
+      break;
+    }
+  }
+  // URDFs written for kinematics give 0 where they mean "not given"; a robot would not move at
+  // all with those limits, so 0 is read as none, and the author should know that.
+  std::string no_effort;
+  std::string no_velocity;
+  for (const Joint& joint : model.joints_) {
+    const urdf::JointConstSharedPtr urdf_joint = urdf_model->getJoint(joint.name);
+    if (!urdf_joint || !urdf_joint->limits) continue;
+    if (urdf_joint->limits->effort == 0.0) no_effort += (no_effort.empty() ? "'" : ", '") + joint.name + "'";
+    if (urdf_joint->limits->velocity == 0.0) no_velocity += (no_velocity.empty() ? "'" : ", '") + joint.name + "'";
+  }
+  const auto joints = [](const std::string& names) {
+    return names.find(',') == std::string::npos ? "joint " + names + " gives" : "joints " + names + " give";
+  };
+  // A revolute joint turning more than two turns each way is rare (multi-turn wrists allow ±2π);
+  // ±110 is a range in degrees read as radians, which lets the arm through itself.
+  std::string beyond_turns;
+  for (const Joint& joint : model.joints_) {
+    if (joint.type != JointType::kRevolute) continue;
+    if (std::max(std::abs(joint.limits.lower), std::abs(joint.limits.upper)) > 4.0 * std::numbers::pi + 1e-6) {
+      std::ostringstream range;
+      range << "'" << joint.name << "' [" << joint.limits.lower << ", " << joint.limits.upper << "]";
+      beyond_turns += (beyond_turns.empty() ? "" : ", ") + range.str();
+    }
+  }
+  if (!beyond_turns.empty()) {
+    model.notes_.push_back("revolute joint limits beyond two turns either way, " + beyond_turns +
+                           " rad: URDF limits are radians (written in degrees?)");
+  }
+  if (!no_effort.empty()) {
+    model.notes_.push_back(joints(no_effort) + " <limit effort=\"0\">: read as no effort limit (the simulated joint "
+                           "is not saturated, and no posture counts as too heavy for it)");
+  }
+  if (!no_velocity.empty()) {
+    std::ostringstream assumed;
+    assumed << kUnspecifiedVelocityLimit;
+    model.notes_.push_back(joints(no_velocity) + " <limit velocity=\"0\">: read as not given, " + assumed.str() +
+                           " rad/s (m/s for a slide)");
+  }
+  // Bullet takes a link's principal moments as they are; a set no solid body has (one larger than
+  // the other two together, or one below zero, which the simulation clamps) moves unlike any link.
+  for (const auto& [name, link] : urdf_model->links_) {
+    if (!link || !link->inertial || !(link->inertial->mass > 0.0)) continue;
+    const urdf::Inertial& inertial = *link->inertial;
+    Eigen::Matrix3d I_C;
+    I_C << inertial.ixx, inertial.ixy, inertial.ixz, inertial.ixy, inertial.iyy, inertial.iyz, inertial.ixz, inertial.iyz,
+        inertial.izz;
+    if (!I_C.allFinite()) continue;
+    const Eigen::Vector3d moments = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I_C, Eigen::EigenvaluesOnly).eigenvalues();
+    const double slack = 1e-6 * moments.cwiseAbs().maxCoeff();
+    if (moments.minCoeff() >= -slack && moments(0) + moments(1) >= moments(2) - slack) continue;
+    std::ostringstream line;
+    line << "link '" << name << "' has an inertia no solid body has (principal moments " << std::setprecision(3)
+         << moments(0) << ", " << moments(1) << ", " << moments(2) << " kg m^2: "
+         << (moments.minCoeff() < -slack ? "one below zero" : "the largest above the sum of the other two")
+         << "); the simulated link may move unlike a real one, its <inertia> is worth a check";
+    model.notes_.push_back(line.str());
+  }
   assumeInertiaOfMasslessBodies(model.bodies_, model.joints_, model.X_last_body_tip_);
   return model;
 }
@@ -721,6 +828,14 @@ Eigen::VectorXd RobotModel::postureDifference(const Eigen::VectorXd& to, const E
   Eigen::VectorXd difference(dof());
   postureDifference(to, from, difference);
   return difference;
+}
+
+Eigen::VectorXd RobotModel::withinOneTurn(Eigen::VectorXd q) const {
+  for (std::size_t j = 0; j < joints_.size() && static_cast<Eigen::Index>(j) < q.size(); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    if (joints_[j].type == JointType::kContinuous && std::isfinite(q[i])) q[i] = std::remainder(q[i], 2.0 * std::numbers::pi);
+  }
+  return q;
 }
 
 void RobotModel::checkWithinLimits(const Eigen::VectorXd& q, const std::string& what, double overshoot_rad,

@@ -113,6 +113,9 @@ class RobotModel {
   /// `difference` must have dof() entries; does not allocate.
   void postureDifference(const Eigen::VectorXd& to, const Eigen::VectorXd& from, Eigen::VectorXd& difference) const;
   Eigen::VectorXd postureDifference(const Eigen::VectorXd& to, const Eigen::VectorXd& from) const;
+  /// `q` with each continuous joint taken into [−π, π] (the same posture): a start many turns
+  /// round would cost the single-precision simulation its resolution.
+  Eigen::VectorXd withinOneTurn(Eigen::VectorXd q) const;
   /// The software limits with an unbounded (continuous) joint given one turn, [−π, π]: the
   /// range to draw random postures from, which ±inf cannot be.
   Eigen::VectorXd sampleLowerLimits() const;

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <string_view>
@@ -21,6 +22,7 @@
 #include "robot/mesh_solid.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
+#include "robot/sim/reach.hpp"
 
 namespace flexirob::robot {
 namespace fs = std::filesystem;
@@ -248,6 +250,7 @@ class SceneReader {
     if (const auto node = root["home_posture"]) {
       scene.home_posture = posture(node, "home_posture");
       scene.home_posture_in_degrees = inDegrees(node);
+      scene.home_posture_line = node.line() + 1;
     }
     if (const auto node = root["obstacles"]) {
       const auto& items = sequence(node, "obstacles", kMaxObstacles);
@@ -399,7 +402,7 @@ class SceneReader {
     if (p.z() < 0.0) {
       std::ostringstream z;
       z << p.z();
-      fail(node, path, "lies below the table top (z = " + z.str() + " m); the robot stands on z = 0");
+      fail(node, path, "lies below the table top or mount the robot stands on, z = 0 (z = " + z.str() + " m); places to reach lie at z >= 0");
     }
     return p;
   }
@@ -488,6 +491,11 @@ class SceneReader {
     }
     const double scale = node["unit"] ? angleUnit(node["unit"], join(path, "unit")) : 1.0;
     const Eigen::VectorXd rpy = numbers(node["rpy"], join(path, "rpy"), 3, 3) * scale;
+    // No rotation needs an angle beyond a turn; in radians that is 6.28, in degrees a slip of
+    // the unit (rpy: [0, 0, 45]).
+    if (!node["unit"] && rpy.cwiseAbs().maxCoeff() > 2.0 * std::numbers::pi + 1e-6) {
+      fail(node["rpy"], join(path, "rpy"), "angles are read in radians and one exceeds a turn; for degrees add 'unit: deg'");
+    }
     return rotationFromRpy(rpy[0], rpy[1], rpy[2]);
   }
 
@@ -592,6 +600,7 @@ class SceneReader {
       if (const auto q = item["posture"]) {
         area.posture = posture(q, join(item_path, "posture"));
         area.posture_in_degrees = inDegrees(q);
+        area.posture_line = q.line() + 1;
       }
       if (!names.insert(area.name).second) fail(item, item_path, "duplicate area name '" + printable(area.name) + "'");
       result.push_back(std::move(area));
@@ -666,6 +675,7 @@ class SceneReader {
     if (!node.IsMap()) fail(node, path, "expected a mapping of parameter names to numbers, got " + kind(node));
     if (node.size() > kMaxParameters) fail(node, path, "more than " + std::to_string(kMaxParameters) + " parameters");
     std::map<std::string, double> result;
+    const std::vector<ParameterDeclaration> tunable = sceneTunableParameters();
     for (std::size_t i = 0; i < node.size(); ++i) {
       const Node key_node = node.key(i);
       visit(key_node, path);
@@ -677,8 +687,21 @@ class SceneReader {
                            return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '.';
                          });
       if (!valid) fail(key_node, path, "'" + printable(key) + "' is not a parameter name (letters, digits, '_' and '.')");
+      // A misspelt name would otherwise tune nothing without a word.
+      const std::string undeclared = undeclaredParameterReason(key, tunable);
+      if (!undeclared.empty()) fail(key_node, path, undeclared);
       if (result.count(key) != 0) fail(key_node, path, "parameter '" + key + "' appears twice");
-      result[key] = number(node.value(i), join(path, key));
+      const double value = number(node.value(i), join(path, key));
+      // Out of its range, every program that applies it refuses it; render would draw the scene
+      // without a word, so the reader says it where it is written.
+      const auto declared = std::find_if(tunable.begin(), tunable.end(), [&](const ParameterDeclaration& d) { return key == d.name; });
+      if (value < declared->min_value || value > declared->max_value) {
+        std::ostringstream range;
+        range << "expected a value in [" << declared->min_value << ", " << declared->max_value << "]"
+              << (declared->unit[0] == '\0' ? "" : " ") << declared->unit << ", got " << value;
+        fail(node.value(i), join(path, key), range.str());
+      }
+      result[key] = value;
     }
     return result;
   }
@@ -738,17 +761,28 @@ std::string robotFor(const std::string& robot_option, const Scene& scene) {
   return scene.robot.empty() ? std::string("lwr4") : scene.robot;
 }
 
+namespace {
+
+// Where a posture of the scene is written, as the reader names a place: "<file>:<line>: " (the
+// scene's name where it was not read from a file).
+std::string postureOrigin(const Scene& scene, int line) {
+  if (scene.source.empty() || line <= 0) return "scene '" + printable(scene.name, 200) + "': ";
+  return scene.source.string() + ":" + std::to_string(line) + ": ";
+}
+
+}  // namespace
+
 void checkPosturesFit(const Scene& scene, int dof, const std::string& robot_name) {
-  const auto check = [&](const std::optional<Eigen::VectorXd>& posture, const std::string& what) {
+  const auto check = [&](const std::optional<Eigen::VectorXd>& posture, const std::string& what, int line) {
     if (posture && posture->size() != dof) {
-      throw InputError("scene '" + printable(scene.name, 200) + "': " + what + " has " + std::to_string(posture->size()) +
+      throw InputError(postureOrigin(scene, line) + what + " has " + std::to_string(posture->size()) +
                        " joint values, the robot '" + printable(robot_name, 200) + "' has " + std::to_string(dof) +
                        " joints (the scene was made for '" + printable(scene.robot, 200) + "')");
     }
   };
-  check(scene.home_posture, "home_posture");
-  for (const Area& area : scene.training_areas) check(area.posture, "training area '" + area.name + "' posture");
-  for (const Area& area : scene.working_areas) check(area.posture, "working area '" + area.name + "' posture");
+  check(scene.home_posture, "home_posture", scene.home_posture_line);
+  for (const Area& area : scene.training_areas) check(area.posture, "training area '" + area.name + "' posture", area.posture_line);
+  for (const Area& area : scene.working_areas) check(area.posture, "working area '" + area.name + "' posture", area.posture_line);
 }
 
 void checkPosturesFit(const Scene& scene, const RobotModel& model, const std::string& robot_name) {
@@ -760,33 +794,35 @@ void checkPosturesFit(const Scene& scene, const RobotModel& model, const std::st
     throw InputError(std::string(error.what()) + "; the robot's chain runs from '" + printable(model.baseLink(), 100) +
                      "' to the tip '" + printable(model.tipLink(), 100) + "' (--tip chooses another tip)");
   }
-  const std::string prefix = "scene '" + printable(scene.name, 200) + "': ";
   // A slide's value in a posture written in degrees is a length, which the reader cannot tell
   // from an angle: 0.2 m had become 3.5 mm without a word.
   const auto slide = std::find_if(model.joints().begin(), model.joints().end(),
                                   [](const Joint& joint) { return joint.type == JointType::kPrismatic; });
-  const auto check = [&](const std::optional<Eigen::VectorXd>& posture, const std::string& what, bool in_degrees = false) {
+  const auto check = [&](const std::optional<Eigen::VectorXd>& posture, const std::string& what, int line, bool in_degrees) {
     if (!posture) return;
+    const std::string prefix = postureOrigin(scene, line);
     if (in_degrees && slide != model.joints().end()) {
       throw InputError(prefix + what + " is written in degrees, but joint '" + printable(slide->name, 100) +
                        "' slides; write the posture as a plain list in radians and metres");
     }
     model.checkWithinLimits(*posture, prefix + what);
   };
-  check(scene.home_posture, "home_posture", scene.home_posture_in_degrees);
+  check(scene.home_posture, "home_posture", scene.home_posture_line, scene.home_posture_in_degrees);
   // An area's posture is a suggestion for holding the tip there: one that puts the tip
   // elsewhere is a slip of the scene's author, which the tutor would silently pass over.
   Kinematics kinematics(model);
   const auto checkArea = [&](const Area& area, const std::string& what) {
-    check(area.posture, what, area.posture_in_degrees);
+    check(area.posture, what, area.posture_line, area.posture_in_degrees);
     if (!area.posture) return;
     kinematics.update(*area.posture);
     const double off = (kinematics.p_WT() - area.p_WA).norm();
     const double extent = area.box ? 0.5 * area.box->norm() : area.radius;
     if (off > extent + 0.01) {
       std::ostringstream message;
-      message << std::fixed << std::setprecision(3) << prefix << what << " puts the tip " << off
-              << " m from the area's centre (the area extends " << extent << " m)";
+      message << std::fixed << std::setprecision(3) << postureOrigin(scene, area.posture_line) << what << " puts the tip "
+              << off << " m from the area's centre (the area extends " << extent
+              << " m); an area's posture holds the tip in the area (reach --target with the centre finds one), or leave it out "
+                 "and the tutor finds one";
       throw InputError(message.str());
     }
   };
@@ -1127,16 +1163,26 @@ std::vector<std::string> sceneNotes(const Scene& scene) {
          << " m from the robot's base; lengths are read in metres (was the scene written in millimetres?)";
     notes.push_back(note.str());
   }
-  // An area as wide as that, wherever its centre, hides the arm in the view and holds the
-  // whole workspace.
+  // An area reaching farther than any arm this tool drives, wherever its centre, hides the arm
+  // in the view and holds the whole workspace: centimetres or millimetres read as metres.
+  constexpr double kWiderThanAnyArm = 3.0;
   const auto noteWide = [&](const Area& area, const char* kind) {
     const double extent = area.box ? 0.5 * area.box->norm() : area.radius;
-    if (!(extent > kFar)) return;
+    if (!(extent > kWiderThanAnyArm)) return;
     std::ostringstream note;
-    note << std::fixed << std::setprecision(0) << kind << " '" << area.name << "' reaches " << extent
-         << " m from its centre; lengths are read in metres (was the scene written in millimetres?)";
+    note << std::fixed << std::setprecision(extent < 10.0 ? 1 : 0) << kind << " '" << area.name << "' reaches " << extent
+         << " m from its centre; lengths are read in metres (was the scene written in "
+         << (extent > kFar ? "millimetres" : "centimetres or millimetres") << "?)";
     notes.push_back(note.str());
   };
+  // A spacing as wide as the grid leaves a handful of targets: `eval reachable` would measure
+  // little, or refuse for want of a target, long after the scene was written.
+  if (scene.grid && scene.grid->pointCount() < 8.0) {
+    std::ostringstream note;
+    note << "the grid holds " << scene.grid->pointCount() << (scene.grid->pointCount() == 1.0 ? " point" : " points")
+         << " (spacing " << scene.grid->spacing << " m); lengths are read in metres (was 'spacing' written in centimetres?)";
+    notes.push_back(note.str());
+  }
   for (const Area& area : scene.training_areas) noteWide(area, "training area");
   for (const Area& area : scene.working_areas) noteWide(area, "working area");
   return notes;

@@ -41,10 +41,11 @@ struct Area {
   Eigen::Vector3d p_WA = Eigen::Vector3d::Zero();  ///< centre [m]
   double radius = 0.05;                            ///< extent of the area as drawn and framed [m] (the tutor sizes its helix itself)
   std::optional<Eigen::VectorXd> posture;          ///< suggested q_fixed [rad], if the scene gives one
-  /// Edge lengths [m] of the axis-aligned box around p_WA that bounds the area (where
-  /// evaluations draw their points); unset: the ball of `radius` around p_WA.
+  /// Edge lengths [m] of the axis-aligned box around p_WA that bounds the area (as drawn, and
+  /// for the check of its posture); unset: the ball of `radius` around p_WA.
   std::optional<Eigen::Vector3d> box;
   bool posture_in_degrees = false;  ///< `posture` was written {unit: deg} (refused on a robot with a slide)
+  int posture_line = 0;             ///< line of `posture` in the scene file (1-based; 0: not read from a file)
   /// True if p_W (world frame, metres) lies in the box, or in the ball if there is no box;
   /// the boundary counts as inside.
   bool contains(const Eigen::Vector3d& p_W) const;
@@ -100,11 +101,12 @@ struct Scene {
   /// a pedestal.
   bool table = true;
   std::vector<Area> training_areas;
-  std::vector<Area> working_areas;    ///< where programming / evaluation happens
+  std::vector<Area> working_areas;    ///< where programming is meant to happen: drawn, not taught or evaluated
   std::optional<EvaluationGrid> grid;
   std::vector<Eigen::Vector3d> targets;
   std::vector<Trajectory> trajectories;
   std::map<std::string, double> parameters;  ///< overrides of declared parameters, by name
+  int home_posture_line = 0;                 ///< line of `home_posture` in the file (1-based; 0: not from a file)
 };
 
 /// True if p_W (world frame, metres) lies inside the obstacle or within `margin` [m] of its

@@ -96,7 +96,7 @@ MainWindow::MainWindow(const std::string& robot, const std::string& scene, QWidg
     : MainWindow(robot, scene, Options{}, parent) {}
 
 MainWindow::MainWindow(const std::string& robot, const std::string& scene, const Options& options, QWidget* parent)
-    : QMainWindow(parent), options_(options), declarations_(robot::reachParameters()) {
+    : QMainWindow(parent), options_(options), declarations_(robot::sceneTunableParameters()) {
   setWindowTitle(tr("FlexIRob"));
   view_ = new OsgView(this);
   setCentralWidget(view_);

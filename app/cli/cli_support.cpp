@@ -110,13 +110,22 @@ robot::Scene loadSceneNoting(const std::string& name_or_path) {
   return scene;
 }
 
-robot::RobotModel loadRobotNoting(const std::string& name_or_path, const std::string& tip) {
-  robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(name_or_path), tip);
-  static std::set<std::string> noted;
-  if (noted.insert(name_or_path + '\n' + tip).second) {
+namespace {
+
+// A robot's notes on stderr, once per robot and tip and process (eval and plan read a session's
+// robot more than once).
+robot::RobotModel noted(robot::RobotModel model, const std::string& name_or_path, const std::string& tip) {
+  static std::set<std::string> said;
+  if (said.insert(name_or_path + '\n' + tip).second) {
     for (const std::string& note : model.notes()) std::fprintf(stderr, "note: %s\n", printable(note, 400).c_str());
   }
   return model;
+}
+
+}  // namespace
+
+robot::RobotModel loadRobotNoting(const std::string& name_or_path, const std::string& tip) {
+  return noted(robot::RobotModel::fromUrdfFile(resolveRobotPath(name_or_path), tip), name_or_path, tip);
 }
 
 namespace {
@@ -146,13 +155,13 @@ robot::RobotModel loadSessionRobot(const std::string& reference, const std::stri
       std::fprintf(stderr, "note: the robot '%s' is not the one the session was taught with (changed or missing); the session's stored copy is used\n",
                    reference.c_str());
     }
-    return stored;
+    return noted(std::move(stored), reference, tip);
   } catch (const InputError& damaged) {
     // A damaged session file: the robot's own file, where it still reads, is the next best.
     if (!on_disk) throw InputError(std::string("robot stored in the session: ") + damaged.what() + ", and '" + reference + "' cannot be read");
     std::fprintf(stderr, "note: the robot stored in the session does not read (%s); '%s' is used instead\n", damaged.what(),
                  reference.c_str());
-    return robot::RobotModel::fromUrdfString(*on_disk, file.parent_path(), tip);
+    return noted(robot::RobotModel::fromUrdfString(*on_disk, file.parent_path(), tip), reference, tip);
   }
 }
 
@@ -214,6 +223,33 @@ void reportStatus(const std::string& status, bool done) {
   std::fflush(stderr);
 }
 
+namespace {
+
+// " (did you mean --areas?)" where an argument left over names an option of the command given
+// with a slip of a letter or two (`teach --area 2`); CLI11 names only what it did not expect.
+std::string optionMeant(const CLI::App& app) {
+  const CLI::App* command = &app;
+  for (std::vector<const CLI::App*> parsed = command->get_subcommands({}); !parsed.empty();) {
+    const auto given = std::find_if(parsed.begin(), parsed.end(), [](const CLI::App* sub) { return sub->parsed(); });
+    if (given == parsed.end()) break;
+    command = *given;
+    parsed = command->get_subcommands({});
+  }
+  std::vector<std::string> names;
+  for (const CLI::Option* option : command->get_options()) {
+    for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
+  }
+  std::string meant;
+  for (const std::string& extra : app.remaining(true)) {
+    if (extra.rfind("--", 0) != 0) continue;
+    const std::string guess = closestName(extra.substr(0, extra.find('=')), names);
+    if (!guess.empty()) meant += (meant.empty() ? " (did you mean " : ", ") + guess;
+  }
+  return meant.empty() ? "" : meant + "?)";
+}
+
+}  // namespace
+
 int runCli(int argc, const char* const* argv) {
   CLI::App app{"FlexIRob headless tools: every command prints one JSON object on stdout", "flexirob-cli"};
   app.require_subcommand(1);
@@ -244,7 +280,7 @@ int runCli(int argc, const char* const* argv) {
     // --help and --version: CLI11 prints them itself.
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "error: " << e.what() << std::endl;
+    std::cerr << "error: " << e.what() << optionMeant(app) << std::endl;
     return 2;
   } catch (const std::bad_alloc&) {
     std::cerr << "error: out of memory (the input is too large)" << std::endl;

@@ -325,7 +325,8 @@ Json runReachable(const EvalOptions& options) {
                {"approach", options.approach},
                {"target_points", pointsJson(result.target_points)},
                {"target_reached", result.target_reached},
-               {"target_resolved_free", result.target_resolved_free}};
+               {"target_resolved_free", result.target_resolved_free},
+               {"target_contact", result.target_contact}};
   // The scene's single targets, reached within the grid's tolerance without a contact on the
   // way, each started as the grid's targets are: `visited` from the demonstrated posture nearest
   // it, `learned` from q_c(x), `start` from the start posture; `nearest` and `previous`, whose
@@ -560,8 +561,8 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
 
   CLI::App* plan = app.add_subcommand("plan", "plan to random ITM nodes and execute (Sect. 8.3)");
   plan->add_option("--session", options->session, "session file written by teach")->required();
-  plan->add_option("--goals", options->goals, "number of goals")->check(finiteRange(1, 10000));
-  plan->add_option("--seed", options->seed, "random seed")->check(seedValidator());
+  plan->add_option("--goals", options->goals, "number of goals")->check(finiteRange(1, 10000))->capture_default_str();
+  plan->add_option("--seed", options->seed, "random seed")->check(seedValidator())->capture_default_str();
   plan->add_option("--learner", options->learner, "elm, oselm or llm (default: the one the session was taught with)");
   plan->add_option("--postures", options->postures,
                    "null-space posture along a path: the postures shown along it in CONFIGURATION (demonstrated) "

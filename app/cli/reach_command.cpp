@@ -45,7 +45,7 @@ Json runReach(const ReachOptions& options) {
   if (target.z() < 0.0) {
     std::ostringstream z;
     z << target.z();
-    throw InputError("--target: lies below the table top (z = " + z.str() + " m); the robot stands on z = 0");
+    throw InputError("--target: lies below the table top or mount the robot stands on, z = 0 (z = " + z.str() + " m)");
   }
   const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
   robot::ParameterSet parameters(declarations);
@@ -68,6 +68,14 @@ Json runReach(const ReachOptions& options) {
   request.tolerance = options.tolerance;
   request.max_time = options.max_time;
 
+  // Scene files say when their places lie tens of metres away; a target typed in millimetres
+  // would otherwise end as "unreachable" with an error of hundreds of metres and no word why.
+  const app::ArmReach arm = app::armReach(model);
+  const double from_shoulder = (target - arm.shoulder).norm();
+  if (arm.reach > 0.0 && from_shoulder > 10.0 * arm.reach) {
+    std::fprintf(stderr, "note: the target lies %.0f m from the arm's shoulder, %.0f times its reach of %.2f m; --target is read in metres (millimetres?)\n",
+                 from_shoulder, from_shoulder / arm.reach, arm.reach);
+  }
   const robot::ReachResult result = robot::reach(model, &scene, parameters, request);
   // As `eval` says of a scene target: reached or not, the tip is in the obstacle there.
   const robot::Obstacle* inside = robot::obstacleAt(scene, target);

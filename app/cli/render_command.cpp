@@ -580,7 +580,8 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
                       "[deg]: ex,ey,ez,cx,cy,cz[,fovy] (default: the first side of --view's order from which obstacles do not hide the arm)");
   command->add_option("--view", options->view,
                       "front-left, front-left-low, front-right, front, back, back-left, back-right, left, right or top: frames "
-                      "robot, scene and overlays from that side (default: front-left, or another side where obstacles hide the arm)");
+                      "robot, scene and overlays from that side of the robot (it works towards -x; its left is -y) (default: front-left, or "
+                      "another side where obstacles hide the arm)");
   command->add_option("--supersample", options->supersampling, "anti-aliasing: render at this multiple and average")
       ->capture_default_str()
       ->check(finiteRange(1, 4));

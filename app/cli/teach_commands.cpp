@@ -18,6 +18,7 @@
 
 #include "app/backend_factory.hpp"
 #include "app/evaluation.hpp"
+#include "app/experiments.hpp"
 #include "app/cli/cli_support.hpp"
 #include "app/session_recorder.hpp"
 #include "app/session_write_lock.hpp"
@@ -123,13 +124,14 @@ class StopOnSignal {
   void (*previous_term_)(int) = SIG_DFL;
 };
 
-Json runTeach(const TeachOptions& options) {
+Json runTeach(TeachOptions options) {
   // From the start: a signal before the tutor's first cycle stops it there.
   const StopOnSignal stop_on_signal;
   checkOutputPath("--out", options.out, {}, true);
   // Held to the end of the run: a second teach into the same file is refused at its start.
   const app::SessionWriteLock out_lock(options.out, "--out");
   const app::LearnerKind learner = app::learnerKindFromString(options.learner);
+  options.learner = app::toString(learner);  // as the session records it and eval reads it
   const robot::Scene scene = loadSceneNoting(options.scene);
   const std::string robot_name = robot::robotFor(options.robot, scene);
   const auto model = loadRobotNoting(robot_name, options.tip);
@@ -138,9 +140,7 @@ Json runTeach(const TeachOptions& options) {
   // The session names robot and scene so that they resolve from any working directory.
   const std::string robot_reference = portableReference(robot_name, builtinRobotNames());
   const std::string scene_reference = portableReference(options.scene, robot::builtinSceneNames());
-  const std::vector<robot::ParameterDeclaration> declarations = robot::reachParameters();
-  robot::ParameterSet parameters(declarations);
-  parameters.applyOverrides(scene.parameters, robot::sceneOrigin(scene));
+  const robot::ParameterSet parameters = app::sceneParameters(scene);
 
   if (options.backend != "sim" && options.backend != "fri-sim") {
     throw InputError("--backend: expected sim or fri-sim, got '" + options.backend + "'");
@@ -392,6 +392,7 @@ Json runTeach(const TeachOptions& options) {
   // listed one pair once per refit.
   const std::vector<std::string> standing = app::standingWarnings(workflow.events());
   Json warning_lines = Json::array();
+  if (!start_sags.empty()) warning_lines.push_back(start_sags);  // said on stderr at the start
   for (std::size_t i = 0; i < standing.size(); ++i) {
     warning_lines.push_back(standing[i]);
     if (i < kWarningsOnStderr) std::fprintf(stderr, "warning: %s\n", standing[i].c_str());
@@ -410,7 +411,6 @@ Json runTeach(const TeachOptions& options) {
     warning_lines.push_back(line);
     if (++given_up <= kWarningsOnStderr) std::fprintf(stderr, "warning: %s\n", line.c_str());
   }
-  const std::size_t warnings = warning_lines.size();
   if (given_up > kWarningsOnStderr) {
     std::fprintf(stderr, "warning: ... and %zu more of the scene's areas not taught (\"warning_lines\" in the JSON)\n", given_up - kWarningsOnStderr);
   }
@@ -418,11 +418,13 @@ Json runTeach(const TeachOptions& options) {
   // stable shakes in the simulation: what was taught with it is not what a robot would do.
   const int max_substeps = sim.maxSubsteps();
   if (sim.substepCapReached()) {
-    std::fprintf(stderr,
-                 "warning: the arm's links are too light for the simulation: even %d physics steps per 1 ms cycle did not keep "
-                 "its joint impedance stable, so it may have shaken; its masses and inertias are worth a check\n",
-                 max_substeps);
+    const std::string too_light = "the arm's links are too light for the simulation: even " + std::to_string(max_substeps) +
+                                  " physics steps per 1 ms cycle did not keep its joint impedance stable, so it may have "
+                                  "shaken; its masses and inertias are worth a check";
+    warning_lines.push_back(too_light);
+    std::fprintf(stderr, "warning: %s\n", too_light.c_str());
   }
+  const std::size_t warnings = warning_lines.size();
   if (static_cast<int>(workflow.areas().size()) < options.areas && !workflow.areas().empty() && !report.interrupted) {
     std::fprintf(stderr, "note: %zu of the %d areas asked for %s taught; \"tutor\" in the JSON says why the others were not\n",
                  workflow.areas().size(), options.areas, workflow.areas().size() == 1 ? "was" : "were");
@@ -506,25 +508,29 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   CLI::App* teach = app.add_subcommand("teach", "simulated tutor teaches the robot in a scene; writes a session");
   teach->add_option("--robot", options->robot, "lwr4, arm9 or a URDF path (default: the scene's robot)");
   teach->add_option("--tip", options->tip, "tip link");
-  teach->add_option("--scene", options->scene, "built-in scene name or scene file");
-  teach->add_option("--areas", options->areas, "number of training areas")->check(finiteRange(1, 200));
-  teach->add_option("--seed", options->seed, "random seed")->check(seedValidator());
+  teach->add_option("--scene", options->scene, "built-in scene name or scene file")->capture_default_str();
+  teach->add_option("--areas", options->areas, "number of training areas: the scene's first ones, then places of the tutor's own")
+      ->check(finiteRange(1, 200))
+      ->capture_default_str();
+  teach->add_option("--seed", options->seed, "random seed")->check(seedValidator())->capture_default_str();
   teach->add_option("--out", options->out, "session file (SQLite; JSON if it ends in .json)")->required();
   teach->add_flag("--realtime", options->realtime, "pace the simulation at wall-clock speed");
   teach->add_flag("--overwrite", options->overwrite, "replace an existing --out file (without it, an existing file is refused)");
-  teach->add_option("--learner", options->learner, "elm, oselm or llm");
+  teach->add_option("--learner", options->learner, "elm, oselm or llm")->capture_default_str();
   // Below 1 cm even the fastest turns leave the joints under the still speed: on_converged would
   // end the recording within 2 s (a 5 mm helix recorded 101 samples).
   teach->add_option("--diameter", options->diameter, "largest diameter of the deflection helix [m], 0.01-0.5")
-      ->check(finiteRange(app::kSmallestCircleDiameter, app::kLargestCircleDiameter));
-  teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(finiteRange(1, 1000));
+      ->check(finiteRange(app::kSmallestCircleDiameter, app::kLargestCircleDiameter))
+      ->capture_default_str();
+  teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(finiteRange(1, 1000))->capture_default_str();
   teach->add_option("--check-points", options->check_points,
                     "points on which areas beyond the scene's list are checked and taken back if the map got worse (0: random places, kept)")
       ->check(finiteRange(0, 10000))
       ->capture_default_str();
   teach->add_option("--backend", options->backend,
                     "sim (the Bullet simulation) or fri-sim (the same arm behind the FRI controller stand-in, "
-                    "driven over UDP loopback through the FRI backend)");
+                    "driven over UDP loopback through the FRI backend)")
+      ->capture_default_str();
   teach->callback([&runner, options] { runner.select([options] { return runTeach(*options); }); });
 }
 

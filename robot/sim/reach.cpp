@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "robot/errors.hpp"
+#include "robot/interaction.hpp"
 #include "robot/sim/simulation.hpp"
 
 namespace flexirob::robot {
@@ -17,12 +18,19 @@ std::vector<ParameterDeclaration> reachParameters() {
   return all;
 }
 
+std::vector<ParameterDeclaration> sceneTunableParameters() {
+  std::vector<ParameterDeclaration> all = reachParameters();
+  const auto interaction = interactionParameters();
+  all.insert(all.end(), interaction.begin(), interaction.end());
+  return all;
+}
+
 ReachResult reach(const RobotModel& model, const Scene* scene, const ParameterSet& parameters,
                   const ReachRequest& request) {
   if (!request.target.allFinite()) throw InputError("target: expected three finite numbers");
-  const Eigen::VectorXd start = request.start.size() == 0 ? model.midPosture() : request.start;
+  const Eigen::VectorXd start = model.withinOneTurn(request.start.size() == 0 ? model.midPosture() : request.start);
   model.checkPosture(start);
-  const Eigen::VectorXd posture = request.posture.size() == 0 ? start : request.posture;
+  const Eigen::VectorXd posture = model.withinOneTurn(request.posture.size() == 0 ? start : request.posture);
   model.checkPosture(posture);
   if (!(request.tolerance > 0.0) || !(request.max_time > 0.0) || !(request.stall_time > 0.0)) {
     throw InputError("reach: tolerance, max_time and stall_time must be positive");

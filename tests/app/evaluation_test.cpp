@@ -619,6 +619,10 @@ TEST(Evaluation, ResolvedPostureIsJudgedWhereTheArmEndsNotOnTheWayThere) {
   EXPECT_EQ(result.resolved_free, 1);
   EXPECT_EQ(result.target_resolved_free, std::vector<bool>{true});
   EXPECT_EQ(result.target_reached, std::vector<bool>{false});
+  // The target's own first contact, as the count by pair has it.
+  ASSERT_EQ(result.target_contact.size(), 1U);
+  EXPECT_NE(result.target_contact[0].find("/box"), std::string::npos) << result.target_contact[0];
+  EXPECT_EQ(result.contacts.count(result.target_contact[0]), 1U);
   // Where the arm ends: tip on the target, no contact.
   const MotionOutcome resolved = approachTarget(lwr4(), s.parameters, *map, ready(), target, nullptr);
   EXPECT_LT(resolved.final_error_m, 0.01);

@@ -145,6 +145,16 @@ TEST(Experiments, SceneModelEnclosesAnObstacleTheArmNeverComesNear) {
   EXPECT_EQ(evaluateSceneModel(lwr4(), scene, grid, {}).model_points, result.workspace_points);
 }
 
+TEST(Experiments, AScenesOverridesReachTheRecordingControllersAsWellAsTheSimulation) {
+  robot::Scene scene;
+  scene.parameters = {{"interaction.cartesian_damping", 80.0}, {"sim.gravity", 9.0}, {"hierarchical.kappa_q", 3.0}};
+  const robot::ParameterSet parameters = sceneParameters(scene);
+  EXPECT_DOUBLE_EQ(parameters.get("interaction.cartesian_damping"), 80.0);
+  EXPECT_DOUBLE_EQ(parameters.get("sim.gravity"), 9.0);
+  EXPECT_DOUBLE_EQ(parameters.get("hierarchical.kappa_q"), 3.0);
+  EXPECT_DOUBLE_EQ(sceneParameters(robot::Scene{}).get("interaction.cartesian_damping"), 60.0);
+}
+
 TEST(Experiments, TrajectoriesBetweenTwoAreasAreAccurateAndCountedPerRegion) {
   robot::Scene empty;
   const robot::ParameterSet parameters = sceneParameters(empty);

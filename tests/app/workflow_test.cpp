@@ -8,6 +8,7 @@
 #include "app/workflow.hpp"
 #include "learning/learner.hpp"
 #include "robot/collision.hpp"
+#include "robot/errors.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
@@ -305,19 +306,33 @@ WorkflowEvent event(WorkflowEvent::Kind kind, const std::string& name, const std
   return e;
 }
 
+// `--learner ELM`, as the thesis writes it, had been refused.
+TEST(Workflow, NamesALearnerInAnyCaseWithOrWithoutAHyphen) {
+  EXPECT_EQ(learnerKindFromString("elm"), LearnerKind::kElm);
+  EXPECT_EQ(learnerKindFromString("ELM"), LearnerKind::kElm);
+  EXPECT_EQ(learnerKindFromString("OS-ELM"), LearnerKind::kOsElm);
+  EXPECT_EQ(learnerKindFromString("oselm"), LearnerKind::kOsElm);
+  EXPECT_EQ(learnerKindFromString("Llm"), LearnerKind::kLlm);
+  EXPECT_THROW(learnerKindFromString("bpdc"), InputError);
+  EXPECT_THROW(learnerKindFromString(""), InputError);
+}
+
 TEST(Workflow, OnlyTheLastMapsTransitionWarningsStand) {
   using Kind = WorkflowEvent::Kind;
   const std::vector<WorkflowEvent> events = {
-      event(Kind::kWarning, "joint_limit", "posture near the joint limit at area 'a'"),
+      event(Kind::kWarning, "joint_limit", "posture near the joint limit at area 'a'", 0),
+      event(Kind::kAreaCreated, "a", "a", 0),
       event(Kind::kModelLearned, "oselm", "from 2 areas"),
       event(Kind::kWarning, "transition_inconsistent", "a -> b: colliding samples 137"),
-      event(Kind::kWarning, "joint_limit", "posture near the joint limit at area 'a'"),
+      event(Kind::kWarning, "joint_limit", "posture near the joint limit at area 'c'", 2),
+      event(Kind::kAreaCreated, "c", "c", 2),
       event(Kind::kModelLearned, "oselm", "from 3 areas"),
       event(Kind::kWarning, "transition_inconsistent", "a -> b: colliding samples 138"),
       event(Kind::kCheck, "transition_ok", "b -> c: fine"),
   };
   EXPECT_EQ(standingWarnings(events),
-            (std::vector<std::string>{"posture near the joint limit at area 'a'", "a -> b: colliding samples 138"}));
+            (std::vector<std::string>{"posture near the joint limit at area 'a'", "posture near the joint limit at area 'c'",
+                                      "a -> b: colliding samples 138"}));
   // Without a refit after them, transition warnings stand.
   const std::vector<WorkflowEvent> once(events.begin(), events.begin() + 4);
   EXPECT_EQ(standingWarnings(once),
@@ -341,6 +356,33 @@ TEST(Workflow, AnAreaRemovedTakesItsJointLimitWarningWithIt) {
   EXPECT_EQ(standingWarnings(events), (std::vector<std::string>{"near the limit at area 'a'", "near the limit at area 'c'"}));
   events.push_back(event(Kind::kAreaRemoved, "area_removed", "c", 1));  // 'c' is area 1 now
   EXPECT_EQ(standingWarnings(events), (std::vector<std::string>{"near the limit at area 'a'"}));
+}
+
+// A joint-limit warning is said as the recording starts, before the recording has made an area.
+// `teach` had kept the warning of a recording that made none, and of an area's posture that a
+// re-teaching had replaced.
+TEST(Workflow, AJointLimitWarningStandsOnlyForThePostureAnAreaHoldsNow) {
+  using Kind = WorkflowEvent::Kind;
+  std::vector<WorkflowEvent> events = {
+      event(Kind::kWarning, "joint_limit", "a: joint 2 at 3 deg", 0),
+      event(Kind::kAreaCreated, "a", "a", 0),
+      event(Kind::kWarning, "joint_limit", "b: joint 4 at 1 deg", 1),
+      event(Kind::kWarning, "empty_recording", "the recording held no sample; no area created"),
+  };
+  EXPECT_EQ(standingWarnings(events),
+            (std::vector<std::string>{"a: joint 2 at 3 deg", "the recording held no sample; no area created"}));
+  // Area a re-taught in another posture near a limit: only the new posture's warning stands.
+  events.push_back(event(Kind::kButton, "reteach_area", "a", 0));
+  events.push_back(event(Kind::kWarning, "joint_limit", "a: joint 6 at 2 deg", 0));
+  events.push_back(event(Kind::kAreaCreated, "a", "a", 0));
+  EXPECT_EQ(standingWarnings(events),
+            (std::vector<std::string>{"the recording held no sample; no area created", "a: joint 6 at 2 deg"}));
+  // Re-taught once more, away from every limit: no joint-limit warning stands for it.
+  events.push_back(event(Kind::kAreaCreated, "a", "a", 0));
+  EXPECT_EQ(standingWarnings(events), (std::vector<std::string>{"the recording held no sample; no area created"}));
+  // A recording still running has made no area yet.
+  events.push_back(event(Kind::kWarning, "joint_limit", "b: joint 1 at 0.5 deg", 1));
+  EXPECT_EQ(standingWarnings(events), (std::vector<std::string>{"the recording held no sample; no area created"}));
 }
 
 TEST(Workflow, FullSessionCreatesAreasLearnsAndReachesExecution) {

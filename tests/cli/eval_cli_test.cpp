@@ -261,6 +261,14 @@ TEST(EvalReachableCli, EvaluatesTheRobotAndSceneTheSessionStoresNotTheFilesChang
   std::filesystem::remove_all(robot_dir.parent_path());
   std::filesystem::create_directories(robot_dir.parent_path());
   std::filesystem::copy(resolveRobotPath("lwr4").parent_path(), robot_dir, std::filesystem::copy_options::recursive);
+  // Taught with link1 drawn only: the stored copy's notes are said as a file's are.
+  std::ostringstream urdf_text;
+  urdf_text << std::ifstream(robot_dir / "lwr4.urdf").rdbuf();
+  std::string drawn_only = urdf_text.str();
+  const std::size_t collision = drawn_only.find("<collision><geometry><mesh filename=\"package://lwr4/meshes/link1_collision.stl\"/></geometry></collision>");
+  ASSERT_NE(collision, std::string::npos);
+  drawn_only.erase(collision, drawn_only.find("</collision>", collision) + 12 - collision);
+  writeText(robot_dir / "lwr4.urdf", drawn_only);
   const auto session = tinySession(scene.string(), "edited-after-teaching.json");
   storeTaughtCopies(session, robot_dir / "lwr4.urdf", scene.string());
 
@@ -275,6 +283,7 @@ TEST(EvalReachableCli, EvaluatesTheRobotAndSceneTheSessionStoresNotTheFilesChang
   EXPECT_NE(result.err.find("note: the scene '" + scene.string() + "' is not the one the session was taught with"), std::string::npos)
       << result.err;
   EXPECT_NE(result.err.find("note: the robot '"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("note: link 'link1' has a visual but no collision element"), std::string::npos) << result.err;
   std::filesystem::remove(session);
   std::filesystem::remove(scene);
   std::filesystem::remove_all(robot_dir.parent_path());

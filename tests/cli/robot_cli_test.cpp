@@ -91,6 +91,19 @@ TEST(RobotCli, ReachWithoutASceneIsReachInTheEmptyScene) {
 
 // reach drives the tip straight through what lies in the way (it plans nothing): a target below
 // a slab is reached, but not as `eval reachable` counts it, and reach says so.
+// -500,200,300 was meant in millimetres: "unreachable", 615 m short, had said nothing more.
+TEST(RobotCli, ReachSaysATargetHundredsOfReachesAwayMayBeInMillimetres) {
+  const auto millimetres = runCliBinary("reach --robot lwr4 --target -500,200,300 --max-time 5");
+  ASSERT_EQ(millimetres.exit_code, 0) << millimetres.err;
+  EXPECT_EQ(millimetres.json().at("status"), "unreachable");
+  EXPECT_NE(millimetres.err.find("note: the target lies 616 m from the arm's shoulder"), std::string::npos) << millimetres.err;
+  EXPECT_NE(millimetres.err.find("--target is read in metres (millimetres?)"), std::string::npos) << millimetres.err;
+  // Out of reach, but in metres: nothing about units.
+  const auto metres = runCliBinary("reach --robot lwr4 --target -1.5,0,0.3 --max-time 5");
+  ASSERT_EQ(metres.exit_code, 0) << metres.err;
+  EXPECT_EQ(metres.err.find("millimetres"), std::string::npos) << metres.err;
+}
+
 TEST(RobotCli, ReachSaysWhenTheTargetWasReachedOnlyThroughAContact) {
   const std::filesystem::path scene =
       std::filesystem::temp_directory_path() / ("flexirob-reach-slab-" + std::to_string(::getpid()) + ".yaml");
@@ -203,7 +216,10 @@ INSTANTIATE_TEST_SUITE_P(
                       BadInvocation{"fk --robot /etc/hostname --q 0", "invalid URDF"},
                       BadInvocation{"robot info --robot lwr4 --tip nowhere", "tip link 'nowhere'"},
                       BadInvocation{"fk --robot lwr4", "--q is required"},
-                      BadInvocation{"no-such-command", "error"}),
+                      BadInvocation{"no-such-command", "error"},
+                      // A slip in an option's name: the option meant is named.
+                      BadInvocation{"teach --area 2 --out x.db", "(did you mean --areas?)"},
+                      BadInvocation{"reach --robot lwr4 --taget=0,0,1", "(did you mean --target?)"}),
     [](const ::testing::TestParamInfo<BadInvocation>& param_info) { return "Case" + std::to_string(param_info.index); });
 
 }  // namespace

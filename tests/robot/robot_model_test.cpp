@@ -174,6 +174,60 @@ TEST(RobotModel, AJointWithoutAVelocityLimitGetsTheDocumentedOneInsteadOfStandin
   EXPECT_DOUBLE_EQ(model.velocityLimits()[0], 2.0);
   EXPECT_FALSE(model.joints()[1].limits.velocity_from_urdf);
   EXPECT_DOUBLE_EQ(model.velocityLimits()[1], kUnspecifiedVelocityLimit);
+  ASSERT_EQ(model.notes().size(), 1U);
+  EXPECT_NE(model.notes()[0].find("joint 'j2' gives <limit velocity=\"0\">: read as not given, 1 rad/s"), std::string::npos)
+      << model.notes()[0];
+}
+
+// A URDF written for kinematics often gives effort="0"; read as no limit, which is said.
+TEST(RobotModel, SaysWhichJointsGiveAZeroEffortLimit) {
+  std::string urdf = twoJointArm();
+  for (const std::string given : {R"(effort="10")", R"(effort="5")"}) urdf.replace(urdf.find(given), given.size(), R"(effort="0")");
+  const RobotModel model = RobotModel::fromUrdfString(urdf, ".");
+  EXPECT_DOUBLE_EQ(model.joints()[0].limits.effort, 0.0);
+  ASSERT_EQ(model.notes().size(), 1U);
+  EXPECT_NE(model.notes()[0].find("joints 'j1', 'j2' give <limit effort=\"0\">: read as no effort limit"), std::string::npos)
+      << model.notes()[0];
+  EXPECT_TRUE(RobotModel::fromUrdfString(twoJointArm(), ".").notes().empty());
+}
+
+// lower="-110" upper="110" was meant in degrees; read as radians the joint turns 35 times round.
+TEST(RobotModel, SaysWhichRevoluteLimitsLookWrittenInDegrees) {
+  std::string urdf = twoJointArm();
+  const std::string given = R"(lower="-2" upper="2")";
+  urdf.replace(urdf.find(given), given.size(), R"(lower="-110" upper="110")");
+  const RobotModel degrees = RobotModel::fromUrdfString(urdf, ".");
+  ASSERT_EQ(degrees.notes().size(), 1U);
+  EXPECT_EQ(degrees.notes()[0], "revolute joint limits beyond two turns either way, 'j2' [-110, 110] rad: URDF limits are radians (written in degrees?)");
+  // A multi-turn wrist of two turns each way is a real joint.
+  std::string two_turns = twoJointArm();
+  two_turns.replace(two_turns.find(given), given.size(), R"(lower="-12.566" upper="12.566")");
+  EXPECT_TRUE(RobotModel::fromUrdfString(two_turns, ".").notes().empty());
+}
+
+// Principal moments of a solid body satisfy the triangle inequality (I1 + I2 >= I3) and are
+// not negative; Bullet takes them as given, so a set that breaks either is said.
+TEST(RobotModel, SaysWhichLinkHasAnInertiaNoSolidBodyHas) {
+  const std::string thin_rod = R"(ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.01")";
+  for (const auto& [inertia, reason] : std::vector<std::pair<std::string, std::string>>{
+           {R"(ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.3")", "the largest above the sum of the other two"},
+           {R"(ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="-0.01")", "one below zero"},
+           // Diagonal moments that look fine, products that make one principal moment negative.
+           {R"(ixx="0.1" ixy="0.2" ixz="0" iyy="0.1" iyz="0" izz="0.1")", "one below zero"}}) {
+    std::string urdf = twoJointArm();
+    urdf.replace(urdf.find(thin_rod), thin_rod.size(), inertia);
+    const RobotModel model = RobotModel::fromUrdfString(urdf, ".");
+    ASSERT_EQ(model.notes().size(), 1U) << inertia;
+    EXPECT_NE(model.notes()[0].find("link 'l1' has an inertia no solid body has"), std::string::npos) << model.notes()[0];
+    EXPECT_NE(model.notes()[0].find(reason), std::string::npos) << model.notes()[0];
+  }
+  // A thin rod (I3 near 0, I1 = I2) and a flat plate (I1 + I2 = I3 exactly) are solid bodies.
+  for (const std::string inertia : {R"(ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0")",
+                                    R"(ixx="0.1" ixy="0" ixz="0" iyy="0.2" iyz="0" izz="0.3")"}) {
+    std::string urdf = twoJointArm();
+    urdf.replace(urdf.find(thin_rod), thin_rod.size(), inertia);
+    EXPECT_TRUE(RobotModel::fromUrdfString(urdf, ".").notes().empty()) << inertia;
+  }
 }
 
 TEST(RobotModel, AcceptsAnExplicitTipInsideTheChain) {
@@ -435,6 +489,19 @@ TEST(RobotModel, ResolvesFileUrisWithAHostEscapesOrARelativePath) {
   } catch (const InputError& error) {
     EXPECT_NE(std::string(error.what()).find("escapes a control byte"), std::string::npos) << error.what();
   }
+  // Another machine's file cannot be read; the message says how to name one on this machine.
+  const auto remote = dir.write("my robot/remote.urdf", twoJointArm("<link name='deco'><visual><geometry><mesh filename='file://cadserver/parts/part.stl"
+                                                                     "'/></geometry></visual></link><joint name='d' type='fixed'>"
+                                                                     "<parent link='tool'/><child link='deco'/></joint>"));
+  try {
+    RobotModel::fromUrdfFile(remote);
+    FAIL() << "a file on another host was read";
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("if 'cadserver' is a host name"), std::string::npos) << message;
+    EXPECT_NE(message.find("file:///path"), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
 }
 
 TEST(RobotModel, RefusesANonexistentFileAndUnknownRobotName) {
@@ -488,6 +555,46 @@ TEST(RobotModel, SaysWhenTheDefaultTipIsPastAGrippersSlide) {
   EXPECT_TRUE(RobotModel::fromUrdfString(armWithAGripper(false, false), ".", "finger_l").notes().empty());
   EXPECT_EQ(RobotModel::fromUrdfString(armWithAGripper(false, false), ".", "hand").dof(), 2);
   EXPECT_TRUE(RobotModel::fromUrdfString(flexirob::testing::masslessArm(), ".").notes().empty());
+}
+
+// The usual gripper: two fingers of one joint each, equally long. Every command had refused the
+// arm ("not a serial chain") unless told --tip; the tip is the hand they branch from, said.
+TEST(RobotModel, TakesTheHandTwoEquallyLongFingersBranchFromAsTheTip) {
+  std::string two_fingers = armWithAGripper(true, false);
+  const std::string mimic = R"(<mimic joint="left_finger"/>)";
+  for (const bool mimicked : {true, false}) {
+    std::string urdf = two_fingers;
+    if (!mimicked) urdf.erase(urdf.find(mimic), mimic.size());
+    const RobotModel model = RobotModel::fromUrdfString(urdf, ".");
+    EXPECT_EQ(model.tipLink(), "hand") << mimicked;
+    EXPECT_EQ(model.dof(), 2);
+    ASSERT_EQ(model.notes().size(), 1U);
+    EXPECT_NE(model.notes()[0].find("the longest chains end in 'finger_l', 'finger_r', which branch at 'hand'"), std::string::npos)
+        << model.notes()[0];
+  }
+  // Named, a finger is the tip.
+  EXPECT_EQ(RobotModel::fromUrdfString(armWithAGripper(true, false), ".", "finger_l").dof(), 3);
+}
+
+// A cell's URDF mounting the arm on a stand from a bare `world` root: the arm stands that high
+// over every scene's table top, which was drawn without a word.
+TEST(RobotModel, SaysWhenTheRootHoldsTheArmAboveTheTableTop) {
+  const auto mounted = [](const std::string& xyz) {
+    return std::string("<robot name='cell'><link name='world'/><joint name='mount' type='fixed'><parent link='world'/>"
+                       "<child link='base'/><origin xyz='") + xyz + "'/></joint>"
+                       "<link name='base'><visual><geometry><cylinder radius='0.1' length='0.1'/></geometry></visual>"
+                       "<collision><geometry><cylinder radius='0.1' length='0.1'/></geometry></collision></link>"
+                       "<joint name='j1' type='revolute'><parent link='base'/><child link='l1'/><origin xyz='0 0 0.1'/>"
+                       "<axis xyz='0 0 1'/><limit lower='-1' upper='1' velocity='1' effort='10'/></joint>"
+                       "<link name='l1'><collision><geometry><box size='0.1 0.1 0.3'/></geometry></collision></link></robot>";
+  };
+  const RobotModel raised = RobotModel::fromUrdfString(mounted("0.1 0 0.8"), ".");
+  ASSERT_EQ(raised.notes().size(), 1U);
+  EXPECT_NE(raised.notes()[0].find("the URDF's root 'world' holds 'base' 0.80 m above its origin"), std::string::npos) << raised.notes()[0];
+  // On the table top (and 2 cm of a base plate's thickness) there is nothing to say.
+  EXPECT_TRUE(RobotModel::fromUrdfString(mounted("0.3 0 0"), ".").notes().empty());
+  EXPECT_TRUE(RobotModel::fromUrdfString(mounted("0 0 0.02"), ".").notes().empty());
+  EXPECT_TRUE(RobotModel::fromUrdfFile(resolveRobotPath("arm9")).notes().empty());
 }
 
 // A link drawn but without a collision element touches through a capsule all the same.

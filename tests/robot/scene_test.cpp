@@ -327,7 +327,7 @@ TEST_F(SceneFileTest, RandomScenesSurviveAWriteReadCycleExactly) {
     scene.training_areas.push_back(area);
     scene.targets.emplace_back(coordinate(rng), coordinate(rng), height(rng));
     scene.trajectories.push_back({"t", "g", {scene.targets.front(), area.p_WA}});
-    scene.parameters["sim.gravity"] = coordinate(rng);
+    scene.parameters["sim.gravity"] = 10.0 * height(rng);  // within its declared range [0, 20]
     const Scene again = parseScene(sceneToYaml(scene), dir_, "generated");
     expectScenesEqual(scene, again);
   }
@@ -363,6 +363,33 @@ TEST(SceneNotes, AnAreaTensOfMetresWideIsNotedAsPerhapsWrittenInMillimetres) {
   ASSERT_EQ(sceneNotes(wide).size(), 1U);
   EXPECT_EQ(sceneNotes(wide)[0],
             "training area 'a' reaches 999 m from its centre; lengths are read in metres (was the scene written in millimetres?)");
+  // Wider than any arm reaches, though not tens of metres: centimetres, most likely.
+  const Scene centimetres = parseScene("working_areas:\n  - {name: w, centre: [-0.5, 0.3, 0.4], radius: 8}\n", ".", "cm");
+  ASSERT_EQ(sceneNotes(centimetres).size(), 1U);
+  EXPECT_EQ(sceneNotes(centimetres)[0],
+            "working area 'w' reaches 8.0 m from its centre; lengths are read in metres (was the scene written in centimetres or "
+            "millimetres?)");
+  EXPECT_TRUE(sceneNotes(parseScene("working_areas:\n  - {name: w, centre: [-0.5, 0.3, 0.4], radius: 2.5}\n", ".", "m")).empty());
+}
+
+// A grid spacing in centimetres leaves one point; eval said so only when run, as "no target".
+TEST(SceneNotes, AGridOfAHandfulOfPointsIsNotedAsPerhapsSpacedInCentimetres) {
+  const Scene coarse = parseScene("grid: {spacing: 5}\n", ".", "coarse");
+  ASSERT_EQ(sceneNotes(coarse).size(), 1U);
+  EXPECT_EQ(sceneNotes(coarse)[0],
+            "the grid holds 1 point (spacing 5 m); lengths are read in metres (was 'spacing' written in centimetres?)");
+  EXPECT_TRUE(sceneNotes(parseScene("grid: {spacing: 0.05}\n", ".", "fine")).empty());
+  EXPECT_TRUE(sceneNotes(parseScene("grid: {spacing: 0.4}\n", ".", "coarse but whole")).empty());  // 3 x 3 x 2 points
+}
+
+// rpy: [0, 0, 45] meant 45 degrees; read as 45 rad it turned the fixture by 58.3 degrees.
+TEST_F(SceneFileTest, RefusesAnRpyAngleBeyondATurnInRadiansAsDegreesWithoutTheirUnit) {
+  const std::string message = refusal("obstacles:\n  - {shape: box, size: [0.1, 0.1, 0.1], rotation: {rpy: [0, 0, 45]}}\n");
+  expectOneLineNamingFile(message, "broken.yaml:2");
+  EXPECT_NE(message.find("rotation.rpy: angles are read in radians and one exceeds a turn; for degrees add 'unit: deg'"), std::string::npos)
+      << message;
+  EXPECT_NO_THROW(loadSceneFile(write("deg.yaml", "obstacles:\n  - {shape: box, size: [0.1, 0.1, 0.1], rotation: {rpy: [0, 0, 45], unit: deg}}\n")));
+  EXPECT_NO_THROW(loadSceneFile(write("rad.yaml", "obstacles:\n  - {shape: box, size: [0.1, 0.1, 0.1], rotation: {rpy: [0, 0, -6.28]}}\n")));
 }
 
 TEST(SceneNotes, AnObstacleWhollyUnderTheTableTopIsNotedUnlessThereIsNoTable) {
@@ -635,6 +662,28 @@ TEST_F(SceneFileTest, CountsTheLengthOfANameInCharactersNotBytes) {
   EXPECT_EQ(loadSceneFile(write("umlauts.yaml", "name: \"" + umlauts + "\"\n")).name, umlauts);
   expectOneLineNamingFile(refusal("name: \"" + umlauts + "\u00e4\"\n"), "broken.yaml:1");
   EXPECT_NE(refusal("name: " + std::string(201, 'a') + "\n").find("text longer than 200 characters"), std::string::npos);
+}
+
+TEST_F(SceneFileTest, RefusesAParameterNoComponentDeclaresNamingTheOneMeant) {
+  const std::string slip = refusal("name: cell\nparameters:\n  sim.gravity: 9.81\n  hierarchical.kapa_q: 4\n");
+  expectOneLineNamingFile(slip, "broken.yaml:4");
+  EXPECT_NE(slip.find("unknown parameter 'hierarchical.kapa_q' (did you mean 'hierarchical.kappa_q'?)"), std::string::npos) << slip;
+  EXPECT_NE(refusal("parameters: {sim_gravity: 9}\n").find("did you mean 'sim.gravity'?"), std::string::npos);
+  // Nothing near: no guess, but the names there are.
+  const std::string stranger = refusal("parameters: {itm.e_max: 0.05}\n");
+  EXPECT_EQ(stranger.find("did you mean"), std::string::npos) << stranger;
+  expectOneLineNamingFile(stranger, "broken.yaml:1");
+  EXPECT_NE(stranger.find("the parameters are hierarchical.{kappa_x, kappa_q, "), std::string::npos) << stranger;
+  EXPECT_NE(stranger.find(", interaction.{joint_damping, "), std::string::npos) << stranger;
+  // The triggers follow the workflow's options, so a scene cannot set them.
+  EXPECT_NE(refusal("parameters: {triggers.converged_time: 3}\n").find("unknown parameter"), std::string::npos);
+  // Out of its declared range, said where it is written (render applies no parameter at all).
+  const std::string range = refusal("parameters:\n  hierarchical.kappa_q: 1000\n");
+  expectOneLineNamingFile(range, "broken.yaml:2");
+  EXPECT_NE(range.find("parameters.hierarchical.kappa_q: expected a value in [0, 100] 1/s, got 1000"), std::string::npos) << range;
+  const Scene scene = loadSceneFile(write("tuned.yaml", "parameters: {interaction.joint_damping: 7, limits.acceleration: 3}\n"));
+  EXPECT_DOUBLE_EQ(scene.parameters.at("interaction.joint_damping"), 7.0);
+  EXPECT_DOUBLE_EQ(scene.parameters.at("limits.acceleration"), 3.0);
 }
 
 TEST_F(SceneFileTest, RefusesNonFiniteNumbers) {
@@ -1184,6 +1233,43 @@ TEST(ScenePostures, MustLieWithinTheRobotsJointLimits) {
               std::string::npos)
         << error.what();
   }
+  // Read from a file, the refusal names the file and the posture's line, as the reader's do.
+  scene.source = "/cells/shelf.yaml";
+  scene.training_areas[0].posture_line = 12;
+  try {
+    checkPosturesFit(scene, lwr4, "lwr4");
+    ADD_FAILURE() << "accepted a posture 0.3 m off its area";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()).rfind("/cells/shelf.yaml:12: training area 'shelf' posture puts the tip", 0), 0U) << error.what();
+  }
+}
+
+// The example a reader of docs/SCENES.md copies first: its area posture had put the tip 0.32 m
+// from its area, and every program refused the file.
+TEST_F(SceneFileTest, TheExampleInTheDocsLoadsAndItsPosturesFitTheRobot) {
+  std::ifstream in(fs::path(FLEXIROB_TEST_DATA_DIR) / ".." / ".." / "docs" / "SCENES.md");
+  ASSERT_TRUE(in) << "docs/SCENES.md";
+  const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string opening = "## Example\n\n```yaml\n";
+  const std::size_t begin = doc.find(opening);
+  ASSERT_NE(begin, std::string::npos);
+  const std::size_t end = doc.find("\n```", begin + opening.size());
+  ASSERT_NE(end, std::string::npos);
+  write("meshes/fixture.stl", kOneTriangleStl);
+  const Scene scene = loadSceneFile(write("example.yaml", doc.substr(begin + opening.size(), end - begin - opening.size() + 1)));
+  EXPECT_EQ(scene.name, "shelf_cell");
+  ASSERT_EQ(scene.training_areas.size(), 2U);
+  ASSERT_TRUE(scene.training_areas[1].posture.has_value());
+  const RobotModel lwr4 = RobotModel::fromUrdfFile(resolveRobotPath(scene.robot));
+  EXPECT_NO_THROW(checkPosturesFit(scene, lwr4, scene.robot));
+}
+
+TEST_F(SceneFileTest, KnowsTheLinesItsPosturesAreWrittenOn) {
+  const Scene scene = loadSceneFile(write("lines.yaml", "name: lines\nhome_posture: [0, 0.5, 0, -1, 0, 0.5, 0]\ntraining_areas:\n"
+                                                       "  - name: a\n    centre: [-0.5, 0, 0.3]\n    posture: [0, 1, 0, -1, 0, 0.5, 0]\n"));
+  EXPECT_EQ(scene.home_posture_line, 2);
+  ASSERT_EQ(scene.training_areas.size(), 1U);
+  EXPECT_EQ(scene.training_areas[0].posture_line, 6);
 }
 
 // `unit: deg` turns every value of a posture into radians, and a slide's value is a length: a
@@ -1205,7 +1291,7 @@ TEST_F(SceneFileTest, RefusesAPostureInDegreesOnARobotWithASlide) {
     checkPosturesFit(in_degrees, rail, "rail");
     ADD_FAILURE() << "took a slide's 0.2 as degrees";
   } catch (const InputError& error) {
-    EXPECT_NE(std::string(error.what()).find("scene 'rail': home_posture is written in degrees, but joint 'carriage' slides"),
+    EXPECT_NE(std::string(error.what()).find("rail.yaml:2: home_posture is written in degrees, but joint 'carriage' slides"),
               std::string::npos)
         << error.what();
   }

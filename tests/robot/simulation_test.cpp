@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <numbers>
 #include <regex>
 #include <utility>
 
@@ -498,6 +499,35 @@ TEST(Reach, ASlowArmIsGivenTheTimeItNeedsInsteadOfCalledOutOfReach) {
   const ReachResult result = reach(slow, nullptr, parameters, request);
   EXPECT_EQ(result.status, "reached") << "after " << result.time_s << " s, " << result.error_m << " m short";
   EXPECT_GT(result.time_s, 10.0) << "slowly";
+}
+
+// A continuous joint ten turns round is the same posture; the single-precision simulation had
+// lost the resolution to reach from there (a timeout 0.45 mm short).
+TEST(Reach, AContinuousJointManyTurnsRoundReachesAsFromWithinOneTurn) {
+  const std::filesystem::path file = resolveRobotPath("lwr4");
+  std::ifstream in(file);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string a1 = R"(<joint name="A1" type="revolute">)";
+  ASSERT_NE(text.find(a1), std::string::npos);
+  text.replace(text.find(a1), a1.size(), R"(<joint name="A1" type="continuous">)");
+  const RobotModel turning = RobotModel::fromUrdfString(text, file.parent_path());
+  const std::vector<ParameterDeclaration> declarations = reachParameters();
+  const ParameterSet parameters(declarations);
+  ReachRequest request;
+  request.start = Eigen::VectorXd(7);
+  request.start << 0.2, 0.5, 0.0, -1.2, 0.0, 0.6, 0.0;
+  request.target = Eigen::Vector3d(-0.45, 0.25, 0.45);
+  const ReachResult within = reach(turning, nullptr, parameters, request);
+  ASSERT_EQ(within.status, "reached");
+  request.start[0] += 20.0 * std::numbers::pi;
+  request.posture = request.start;
+  const ReachResult round = reach(turning, nullptr, parameters, request);
+  EXPECT_EQ(round.status, "reached");
+  EXPECT_EQ(round.steps, within.steps);
+  EXPECT_NEAR(round.error_m, within.error_m, 1e-9);
+  EXPECT_LE(std::abs(round.q[0]), std::numbers::pi);
+  EXPECT_NEAR(turning.withinOneTurn(Eigen::VectorXd::Constant(7, 3.0 * std::numbers::pi + 0.1))[0], -std::numbers::pi + 0.1, 1e-12);
+  EXPECT_DOUBLE_EQ(turning.withinOneTurn(Eigen::VectorXd::Constant(7, 2.5))[1], 2.5) << "a revolute joint stays";
 }
 
 TEST(Reach, StartsFromMidRangeWhenNoStartIsGiven) {
