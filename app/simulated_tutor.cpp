@@ -1154,7 +1154,7 @@ TutorReport SimulatedTutor::configureAreas(int area_count) {
       const robot::Area& scene_area = scene_->training_areas[static_cast<std::size_t>(listed++)];
       area.name = scene_area.name;
       area.target = scene_area.p_WA;
-      suggested = scene_area.posture;
+      if (scene_area.posture) suggested = model_->withinOneTurn(*scene_area.posture);  // as the start is
     } else {
       // Sect. 3.3.2: the tutor taught the areas "he found to be relevant", looking at where the
       // robot failed; a place taught for its own sake can bend the map into an obstacle for

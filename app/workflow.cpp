@@ -747,6 +747,11 @@ std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& even
         if (e.second > event.area) --e.second;
       }
     }
+    // A pose given up (a button pressed in POSED: configuration finished, an area to re-teach)
+    // or taken anew makes no area of the pose warned about.
+    const bool new_pose = event.kind == WorkflowEvent::Kind::kTrigger && event.name == toString(Trigger::kOnConverged) &&
+                          event.detail.find("/APPROACHING") != std::string::npos;
+    if (event.kind == WorkflowEvent::Kind::kButton || new_pose) this_recordings_limits.clear();
     if (event.kind == WorkflowEvent::Kind::kAreaCreated && event.area >= 0) {
       std::erase_if(standing, [&](const auto& e) { return isJointLimit(e) && e.second == event.area; });
       for (const WorkflowEvent* limit : this_recordings_limits) standing.emplace_back(limit, event.area);

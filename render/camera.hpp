@@ -33,11 +33,12 @@ CameraPose frameBox(const Eigen::Vector3d& lower_W, const Eigen::Vector3d& upper
 CameraPose frameBoxFrom(const Eigen::Vector3d& lower_W, const Eigen::Vector3d& upper_W, double aspect,
                         const Eigen::Vector3d& direction_W, const Eigen::Vector3d& up_W, double margin = 0.05);
 
-/// A named viewing direction for figures: "front-left" (frameSphere's, the default),
-/// "front-left-low" (the same side, about 5 degrees above the horizon), "front-right" (from -x,
-/// +y, lower), "front" (from -x, the tutor's side, slightly above), "back", "back-left" and
-/// "back-right" (from +x, mirroring the front views), "left" (+y), "right" (-y), "top"
-/// (straight down, the front at the bottom of the image). Sets direction_W (centre to eye) and
+/// A named viewing direction for figures, named by the robot's sides (it works towards -x, so
+/// its left is -y): "front-left" (from -x, -y; frameSphere's, the default), "front-left-low"
+/// (the same side, about 5 degrees above the horizon), "front-right" (from -x, +y, lower),
+/// "front" (from -x, the tutor's side, slightly above), "back", "back-left" and "back-right"
+/// (from +x, mirroring the front views), "left" (-y), "right" (+y), "top" (straight down, the
+/// front at the bottom of the image). Sets direction_W (centre to eye) and
 /// up_W. Throws InputError naming the valid names otherwise.
 void namedView(const std::string& name, Eigen::Vector3d& direction_W, Eigen::Vector3d& up_W);
 

@@ -30,12 +30,25 @@ inline std::string printable(const std::string& text, std::size_t max_length = 6
   return out;
 }
 
-/// The name among `names` that `given` most likely meant: the nearest by edit distance (letters
-/// inserted, dropped or changed), if that is a slip of at most a third of its letters (at least
-/// two); "" otherwise. For "did you mean ...?" in a one-line error.
-inline std::string closestName(const std::string& given, const std::vector<std::string>& names) {
+/// The name among `names` that `given` most likely meant, for "did you mean ...?" in a one-line
+/// error: the one `given` is the start of, else the nearest by edit distance (letters inserted,
+/// dropped or changed) if at most `max_slip` edits away; "" where none is, or where two are
+/// equally likely (no guess between kappa_x and kappa_q).
+inline std::string closestName(const std::string& given, const std::vector<std::string>& names, std::size_t max_slip) {
+  std::string started;
+  int starts = 0;
+  for (const std::string& name : names) {
+    if (name == given) return name;
+    if (!given.empty() && name.rfind(given, 0) == 0) {
+      started = name;
+      ++starts;
+    }
+  }
+  if (starts == 1) return started;
+  if (starts > 1) return "";
   std::string closest;
   std::size_t closest_distance = std::numeric_limits<std::size_t>::max();
+  bool tied = false;
   std::vector<std::size_t> row;
   for (const std::string& name : names) {
     row.resize(name.size() + 1);
@@ -52,9 +65,12 @@ inline std::string closestName(const std::string& given, const std::vector<std::
     if (row[name.size()] < closest_distance) {
       closest_distance = row[name.size()];
       closest = name;
+      tied = false;
+    } else if (row[name.size()] == closest_distance) {
+      tied = true;
     }
   }
-  return closest_distance <= std::max<std::size_t>(2, given.size() / 3) ? closest : std::string();
+  return closest_distance <= max_slip && !tied ? closest : std::string();
 }
 
 }  // namespace flexirob

@@ -55,32 +55,51 @@ int ParameterSet::applyOverrides(const std::map<std::string, double>& overrides,
 }
 
 std::string undeclaredParameterReason(const std::string& name, std::span<const ParameterDeclaration> known) {
-  std::vector<std::string> declared;
   for (const auto& declaration : known) {
     if (name == declaration.name) return "";
-    declared.emplace_back(declaration.name);
   }
-  const std::string reason = "unknown parameter '" + name + "'";
-  // A slip of a few letters (a doubled, dropped or swapped letter, a wrong separator) is taken as meant.
-  if (const std::string meant = closestName(name, declared); !meant.empty()) return reason + " (did you mean '" + meant + "'?)";
-  // Otherwise the names there are, by component: "sim.{substeps, gravity}".
-  std::string names;
-  std::string component;
+  // Names are "component.name": a slip is looked for among the named component's parameters,
+  // where its prefix is one (the shared prefix would pay for a wholly different suffix), and
+  // among all names otherwise ("sim_gravity").
+  const auto componentOf = [](const std::string& full) {
+    const std::size_t dot = full.find('.');
+    return dot == std::string::npos ? std::string() : full.substr(0, dot + 1);
+  };
+  const std::string component = componentOf(name);
+  std::vector<std::string> suffixes;
+  std::vector<std::string> all;
+  std::string listed;  // the component's names, or all of them by component: "sim.{substeps, gravity}"
+  std::string listing;
   for (const auto& declaration : known) {
     const std::string full = declaration.name;
-    const std::size_t dot = full.find('.');
-    const std::string prefix = dot == std::string::npos ? "" : full.substr(0, dot + 1);
-    if (prefix != component || names.empty()) {
-      if (!names.empty()) names += component.empty() ? ", " : "}, ";
-      names += prefix.empty() ? "" : prefix + "{";
-      component = prefix;
-    } else {
-      names += ", ";
-    }
-    names += full.substr(prefix.size());
+    const std::string prefix = componentOf(full);
+    all.push_back(full);
+    if (!component.empty() && prefix == component) suffixes.push_back(full.substr(prefix.size()));
   }
-  if (!component.empty()) names += "}";
-  return reason + "; the parameters are " + names;
+  std::string meant;
+  if (!suffixes.empty()) {
+    const std::string suffix = name.substr(component.size());
+    const std::string guess = closestName(suffix, suffixes, std::max<std::size_t>(1, suffix.size() / 3));
+    if (!guess.empty()) meant = component + guess;
+    for (const std::string& s : suffixes) listed += (listed.empty() ? "" : ", ") + s;
+    listed = component + "{" + listed + "}";
+  } else {
+    meant = closestName(name, all, std::max<std::size_t>(1, name.size() / 4));
+    for (const auto& declaration : known) {
+      const std::string full = declaration.name;
+      const std::string prefix = componentOf(full);
+      if (prefix != listing || listed.empty()) {
+        if (!listed.empty()) listed += listing.empty() ? ", " : "}, ";
+        listed += prefix.empty() ? "" : prefix + "{";
+        listing = prefix;
+      } else {
+        listed += ", ";
+      }
+      listed += full.substr(prefix.size());
+    }
+    if (!listing.empty()) listed += "}";
+  }
+  return "unknown parameter '" + name + "'" + (meant.empty() ? "" : " (did you mean '" + meant + "'?)") + "; the parameters are " + listed;
 }
 
 }  // namespace flexirob::robot

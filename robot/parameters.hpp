@@ -39,6 +39,11 @@ class ParameterSet {
   std::map<std::string, double> values_;
 };
 
+/// Every parameter a scene's `parameters` may set: the hierarchical controller's, the limiter's,
+/// the simulation's (robot/sim/reach.hpp reachParameters()) and interaction.* (the recording
+/// and teach-in controllers). The triggers' are the workflow's options, not a scene's.
+std::vector<ParameterDeclaration> sceneTunableParameters();
+
 /// "" when `name` is declared in `known`; otherwise why not, naming the closest declared name
 /// when a slip of a few letters explains it ("did you mean 'hierarchical.kappa_q'?") and the
 /// names there are.

@@ -403,8 +403,8 @@ int countDepth(const urdf::Link* link) {
 
 // The default tip: the leaf with the most movable joints above it; among equals the deepest
 // (so a flange or tool frame after the last joint wins). Equally long chains that part only
-// for a joint or two at their ends, below an arm of more joints, are a hand's fingers: the tip
-// is the link they branch from, said in `note`. Other chains of equal length are ambiguous (two
+// for up to three joints at their ends (a knuckle, a finger, a pad), below an arm of more joints,
+// are a hand's fingers: the tip is the link they branch from, said in `note`. Other chains of equal length are ambiguous (two
 // arms on a torso): the description is not a serial arm unless a tip is named.
 std::string defaultTip(const urdf::ModelInterface& model, std::string& note) {
   const urdf::Link* best = nullptr;
@@ -437,7 +437,7 @@ std::string defaultTip(const urdf::ModelInterface& model, std::string& note) {
   while (branch != nullptr && !std::all_of(tied.begin(), tied.end(), [&](const urdf::Link* leaf) { return below(branch, leaf); })) {
     branch = branch->getParent().get();
   }
-  constexpr int kMaxFingerJoints = 2;
+  constexpr int kMaxFingerJoints = 3;
   const int arm_joints = countMovable(branch);
   const int finger_joints = best_movable - arm_joints;
   if (branch != nullptr && finger_joints <= kMaxFingerJoints && arm_joints > finger_joints) {
@@ -447,8 +447,10 @@ std::string defaultTip(const urdf::ModelInterface& model, std::string& note) {
            "' (a gripper's fingers?): the tip is '" + branch->name + "', the fingers move with it (--tip names another tip)";
     return branch->name;
   }
+  // A hand of longer fingers still ends the arm where they part, which the user may name.
+  const std::string hand = branch != nullptr && arm_joints > 0 ? " (--tip " + branch->name + " ends the chain where they part)" : "";
   throw InputError("not a serial chain: the chains to '" + tied[0]->name + "' and '" + tied[1]->name +
-                   "' are equally long; choose the tip with --tip");
+                   "' are equally long; choose the tip with --tip" + hand);
 }
 
 // The motion of an off-chain joint held still: at 0, or at the limit nearest to 0 when 0 lies
@@ -779,7 +781,9 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
         inertial.izz;
     if (!I_C.allFinite()) continue;
     const Eigen::Vector3d moments = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I_C, Eigen::EigenvaluesOnly).eigenvalues();
-    const double slack = 1e-6 * moments.cwiseAbs().maxCoeff();
+    // 1 % of the largest moment: CAD exports round to a few digits, and a flat plate's moments
+    // meet the inequality exactly.
+    const double slack = 1e-2 * moments.cwiseAbs().maxCoeff();
     if (moments.minCoeff() >= -slack && moments(0) + moments(1) >= moments(2) - slack) continue;
     std::ostringstream line;
     line << "link '" << name << "' has an inertia no solid body has (principal moments " << std::setprecision(3)

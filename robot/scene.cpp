@@ -22,7 +22,7 @@
 #include "robot/mesh_solid.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
-#include "robot/sim/reach.hpp"
+#include "robot/parameters.hpp"
 
 namespace flexirob::robot {
 namespace fs = std::filesystem;
@@ -230,8 +230,8 @@ class Node {
 // InputError "<origin>:<line>: <key path>: <reason>".
 class SceneReader {
  public:
-  SceneReader(std::string origin, fs::path base_dir)
-      : origin_(std::move(origin)), base_dir_(std::move(base_dir)) {}
+  SceneReader(std::string origin, fs::path base_dir, UnknownParameters unknown = UnknownParameters::kRefuse)
+      : origin_(std::move(origin)), base_dir_(std::move(base_dir)), unknown_(unknown) {}
 
   Scene read(const Node& root) {
     if (!root.IsDefined() || root.IsNull()) fail(root, "", "the file holds no scene (it is empty)");
@@ -275,6 +275,7 @@ class SceneReader {
     }
     if (const auto node = root["trajectories"]) scene.trajectories = trajectories(node, "trajectories");
     if (const auto node = root["parameters"]) scene.parameters = parameters(node, "parameters");
+    scene.ignored_parameters = ignored_parameters_;
     return scene;
   }
 
@@ -493,7 +494,7 @@ class SceneReader {
     const Eigen::VectorXd rpy = numbers(node["rpy"], join(path, "rpy"), 3, 3) * scale;
     // No rotation needs an angle beyond a turn; in radians that is 6.28, in degrees a slip of
     // the unit (rpy: [0, 0, 45]).
-    if (!node["unit"] && rpy.cwiseAbs().maxCoeff() > 2.0 * std::numbers::pi + 1e-6) {
+    if (scale == 1.0 && rpy.cwiseAbs().maxCoeff() > 2.0 * std::numbers::pi + 1e-6) {
       fail(node["rpy"], join(path, "rpy"), "angles are read in radians and one exceeds a turn; for degrees add 'unit: deg'");
     }
     return rotationFromRpy(rpy[0], rpy[1], rpy[2]);
@@ -676,6 +677,7 @@ class SceneReader {
     if (node.size() > kMaxParameters) fail(node, path, "more than " + std::to_string(kMaxParameters) + " parameters");
     std::map<std::string, double> result;
     const std::vector<ParameterDeclaration> tunable = sceneTunableParameters();
+    ParameterSet in_range(tunable);
     for (std::size_t i = 0; i < node.size(); ++i) {
       const Node key_node = node.key(i);
       visit(key_node, path);
@@ -689,17 +691,19 @@ class SceneReader {
       if (!valid) fail(key_node, path, "'" + printable(key) + "' is not a parameter name (letters, digits, '_' and '.')");
       // A misspelt name would otherwise tune nothing without a word.
       const std::string undeclared = undeclaredParameterReason(key, tunable);
+      if (!undeclared.empty() && unknown_ == UnknownParameters::kIgnore) {
+        ignored_parameters_.push_back(key);
+        continue;
+      }
       if (!undeclared.empty()) fail(key_node, path, undeclared);
       if (result.count(key) != 0) fail(key_node, path, "parameter '" + key + "' appears twice");
       const double value = number(node.value(i), join(path, key));
       // Out of its range, every program that applies it refuses it; render would draw the scene
       // without a word, so the reader says it where it is written.
-      const auto declared = std::find_if(tunable.begin(), tunable.end(), [&](const ParameterDeclaration& d) { return key == d.name; });
-      if (value < declared->min_value || value > declared->max_value) {
-        std::ostringstream range;
-        range << "expected a value in [" << declared->min_value << ", " << declared->max_value << "]"
-              << (declared->unit[0] == '\0' ? "" : " ") << declared->unit << ", got " << value;
-        fail(node.value(i), join(path, key), range.str());
+      try {
+        in_range.set(key, value);
+      } catch (const InputError& error) {
+        fail(node.value(i), path, error.what());
       }
       result[key] = value;
     }
@@ -708,6 +712,8 @@ class SceneReader {
 
   std::string origin_;
   fs::path base_dir_;
+  UnknownParameters unknown_ = UnknownParameters::kRefuse;
+  std::vector<std::string> ignored_parameters_;
   std::size_t visited_ = 0;
   std::size_t waypoint_count_ = 0;
 };
@@ -876,7 +882,7 @@ const std::vector<std::string>& builtinSceneNames() {
   return names;
 }
 
-Scene parseScene(const std::string& yaml_text, const fs::path& base_dir, const std::string& origin) {
+Scene parseScene(const std::string& yaml_text, const fs::path& base_dir, const std::string& origin, UnknownParameters unknown) {
   if (yaml_text.find('\0') != std::string::npos || !isValidUtf8(yaml_text)) {
     throw InputError(origin + ": not a text file (binary data or invalid UTF-8)");
   }
@@ -894,7 +900,7 @@ Scene parseScene(const std::string& yaml_text, const fs::path& base_dir, const s
     if (!error.mark.is_null()) where += ":" + std::to_string(error.mark.line + 1);
     throw InputError(where + ": malformed YAML: " + printable(error.msg, 200));
   }
-  SceneReader reader(origin, base_dir);
+  SceneReader reader(origin, base_dir, unknown);
   return reader.read(Node(&document, document.root));
 }
 
@@ -1182,6 +1188,12 @@ std::vector<std::string> sceneNotes(const Scene& scene) {
     note << "the grid holds " << scene.grid->pointCount() << (scene.grid->pointCount() == 1.0 ? " point" : " points")
          << " (spacing " << scene.grid->spacing << " m); lengths are read in metres (was 'spacing' written in centimetres?)";
     notes.push_back(note.str());
+  }
+  if (!scene.ignored_parameters.empty()) {
+    std::string names;
+    for (const std::string& name : scene.ignored_parameters) names += (names.empty() ? "'" : ", '") + printable(name) + "'";
+    notes.push_back((scene.ignored_parameters.size() == 1 ? "parameter " + names + " is not one" : "parameters " + names + " are not ones") +
+                    " a scene sets; left out, as programs did when this copy was stored");
   }
   for (const Area& area : scene.training_areas) noteWide(area, "training area");
   for (const Area& area : scene.working_areas) noteWide(area, "working area");

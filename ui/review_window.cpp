@@ -278,7 +278,8 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     robot::Scene scene;
     if (!reader->metadata().scene_text.empty()) {
       // Lines are counted in the stored scene text, not in the session file.
-      scene = robot::parseScene(reader->metadata().scene_text, resourceDir() / "scenes", "the scene stored in " + name);
+      scene = robot::parseScene(reader->metadata().scene_text, resourceDir() / "scenes", "the scene stored in " + name,
+                                robot::UnknownParameters::kIgnore);
     }
     // States of another arm would be replayed as nothing at all.
     if (reader->stateCount() > 0) {

@@ -182,7 +182,7 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
   const std::filesystem::path base_dir = file.empty() ? std::filesystem::current_path() : file.parent_path();
   robot::Scene scene;
   try {
-    scene = robot::parseScene(stored_scene_text, base_dir, "scene stored in the session");
+    scene = robot::parseScene(stored_scene_text, base_dir, "scene stored in the session", robot::UnknownParameters::kIgnore);
   } catch (const InputError& damaged) {
     // A damaged session file: the scene file, where it still reads, is the next best.
     if (!on_disk) throw InputError(std::string(damaged.what()) + ", and '" + reference + "' cannot be read either");
@@ -237,15 +237,16 @@ std::string optionMeant(const CLI::App& app) {
   }
   std::vector<std::string> names;
   for (const CLI::Option* option : command->get_options()) {
-    for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
+    for (const std::string& name : option->get_lnames()) names.push_back(name);
   }
   std::string meant;
   for (const std::string& extra : app.remaining(true)) {
     if (extra.rfind("--", 0) != 0) continue;
-    const std::string guess = closestName(extra.substr(0, extra.find('=')), names);
-    if (!guess.empty()) meant += (meant.empty() ? " (did you mean " : ", ") + guess;
+    const std::string typed = extra.substr(2, extra.find('=') == std::string::npos ? std::string::npos : extra.find('=') - 2);
+    const std::string guess = closestName(typed, names, std::max<std::size_t>(1, typed.size() / 3));
+    if (!guess.empty()) meant += (meant.empty() ? " (" : "; ") + printable("--" + typed) + ": did you mean --" + guess + "?";
   }
-  return meant.empty() ? "" : meant + "?)";
+  return meant.empty() ? "" : meant + ")";
 }
 
 }  // namespace

@@ -116,6 +116,10 @@ void checkOutputPath(const std::string& option, const std::string& path,
 robot::Scene loadSceneNoting(const std::string& name_or_path);
 /// robot::RobotModel::fromUrdfFile of a built-in name or a file (resolveRobotPath), and its
 /// notes on stderr ("note: ..."), once per robot and tip and process.
+/// --tip's help, as robot::RobotModel chooses the tip when none is named.
+inline constexpr const char* kTipHelp =
+    "tip link (default: the last link of the longest chain, or the link equally long fingers of a gripper branch from)";
+
 robot::RobotModel loadRobotNoting(const std::string& name_or_path, const std::string& tip = "");
 
 /// The robot and the scene a session was taught with, parsed from the copies the session stores

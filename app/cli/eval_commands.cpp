@@ -271,7 +271,7 @@ struct EvalOptions {
 
 // The learner asked for, else the one the session was taught with.
 std::string learnerOf(const EvalOptions& options, const Session& session) {
-  return options.learner.empty() ? session.learner : options.learner;
+  return options.learner.empty() ? session.learner : app::toString(app::learnerKindFromString(options.learner));
 }
 
 // Which session, robot and scene a result belongs to: `render` draws a result over a session

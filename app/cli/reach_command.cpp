@@ -73,8 +73,8 @@ Json runReach(const ReachOptions& options) {
   const app::ArmReach arm = app::armReach(model);
   const double from_shoulder = (target - arm.shoulder).norm();
   if (arm.reach > 0.0 && from_shoulder > 10.0 * arm.reach) {
-    std::fprintf(stderr, "note: the target lies %.0f m from the arm's shoulder, %.0f times its reach of %.2f m; --target is read in metres (millimetres?)\n",
-                 from_shoulder, from_shoulder / arm.reach, arm.reach);
+    std::fprintf(stderr, "note: the target lies %.0f m from the arm's shoulder, %.0f times its reach of %.2f m; --target is read in metres (%s?)\n",
+                 from_shoulder, from_shoulder / arm.reach, arm.reach, from_shoulder > 100.0 * arm.reach ? "millimetres" : "centimetres");
   }
   const robot::ReachResult result = robot::reach(model, &scene, parameters, request);
   // As `eval` says of a scene target: reached or not, the tip is in the obstacle there.
@@ -152,7 +152,7 @@ void registerReachCommand(CLI::App& app, CommandRunner& runner) {
   auto* command = app.add_subcommand("reach", "drive the simulated tip to a target with the hierarchical controller");
   auto options = std::make_shared<ReachOptions>();
   command->add_option("--robot", options->robot, "built-in robot (lwr4, arm9) or a URDF file (default: the scene's, else lwr4)");
-  command->add_option("--tip", options->tip, "tip link (default: the last link of the longest serial chain)");
+  command->add_option("--tip", options->tip, kTipHelp);
   command->add_option("--scene", options->scene, "built-in scene name or a scene file (default: empty)");
   command->add_option("--target", options->target, "tip target x,y,z [m] in the base frame")->required();
   command->add_option("--posture", options->posture, "null-space posture q1,...,qN [rad] (default: the start)");

@@ -569,7 +569,7 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
   auto options = std::make_shared<RenderOptions>();
   auto* command = app.add_subcommand("render", "render a robot posture in a scene to a PNG file, offscreen");
   command->add_option("--robot", options->robot, "built-in robot (lwr4, arm9) or a URDF file (default: the session's, else the scene's)");
-  command->add_option("--tip", options->tip, "tip link (default: the last link of the longest serial chain)");
+  command->add_option("--tip", options->tip, kTipHelp);
   command->add_option("--scene", options->scene, "built-in scene name or a scene file (default: the session's, else empty)");
   command->add_option("--out", options->out, "PNG file to write")->required();
   command->add_option("--q", options->q, "joint values q1,...,qN [rad] (default: the scene's home posture, else the free posture nearest mid-range)");

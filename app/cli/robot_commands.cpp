@@ -20,7 +20,7 @@ struct RobotOptions {
 
 void addRobotOptions(CLI::App& command, RobotOptions& options) {
   command.add_option("--robot", options.robot, "built-in robot (lwr4, arm9) or a URDF file")->capture_default_str();
-  command.add_option("--tip", options.tip, "tip link (default: the last link of the longest serial chain)");
+  command.add_option("--tip", options.tip, kTipHelp);
 }
 
 robot::RobotModel loadRobot(const RobotOptions& options) {

@@ -507,7 +507,7 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
   auto options = std::make_shared<TeachOptions>();
   CLI::App* teach = app.add_subcommand("teach", "simulated tutor teaches the robot in a scene; writes a session");
   teach->add_option("--robot", options->robot, "lwr4, arm9 or a URDF path (default: the scene's robot)");
-  teach->add_option("--tip", options->tip, "tip link");
+  teach->add_option("--tip", options->tip, kTipHelp);
   teach->add_option("--scene", options->scene, "built-in scene name or scene file")->capture_default_str();
   teach->add_option("--areas", options->areas, "number of training areas: the scene's first ones, then places of the tutor's own")
       ->check(finiteRange(1, 200))

@@ -16,10 +16,6 @@ namespace flexirob::robot {
 /// Every parameter reach() reads: hierarchical.*, limits.* and sim.*.
 std::vector<ParameterDeclaration> reachParameters();
 
-/// Every parameter a scene's `parameters` may set: reachParameters() and interaction.* (the
-/// recording and teach-in controllers). The triggers' are the workflow's options, not a scene's.
-std::vector<ParameterDeclaration> sceneTunableParameters();
-
 struct ReachRequest {
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  ///< p_des [m, W]
   Eigen::VectorXd start;     ///< q at t = 0 [rad]; empty: the model's midPosture()

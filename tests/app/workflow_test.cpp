@@ -383,6 +383,21 @@ TEST(Workflow, AJointLimitWarningStandsOnlyForThePostureAnAreaHoldsNow) {
   // A recording still running has made no area yet.
   events.push_back(event(Kind::kWarning, "joint_limit", "b: joint 1 at 0.5 deg", 1));
   EXPECT_EQ(standingWarnings(events), (std::vector<std::string>{"the recording held no sample; no area created"}));
+  // That pose given up (configuration finished in POSED), the next area, posed away from every
+  // limit, carries no warning of it.
+  events.push_back(event(Kind::kButton, "finished_configuration", ""));
+  events.push_back(event(Kind::kButton, "start_configuration", ""));
+  events.push_back(event(Kind::kTrigger, "on_converged", "CONFIGURATION/APPROACHING"));
+  events.push_back(event(Kind::kAreaCreated, "b", "b", 1));
+  EXPECT_EQ(standingWarnings(events), (std::vector<std::string>{"the recording held no sample; no area created"}));
+  // The events of a whole recording, as the workflow emits them: the pose's warning stands.
+  events.push_back(event(Kind::kTrigger, "on_converged", "CONFIGURATION/APPROACHING"));
+  events.push_back(event(Kind::kWarning, "joint_limit", "c: joint 5 at 2 deg", 2));
+  events.push_back(event(Kind::kTrigger, "on_affected", "CONFIGURATION/POSED"));
+  events.push_back(event(Kind::kTrigger, "on_converged", "CONFIGURATION/RECORDING"));
+  events.push_back(event(Kind::kAreaCreated, "c", "c", 2));
+  EXPECT_EQ(standingWarnings(events),
+            (std::vector<std::string>{"the recording held no sample; no area created", "c: joint 5 at 2 deg"}));
 }
 
 TEST(Workflow, FullSessionCreatesAreasLearnsAndReachesExecution) {

@@ -89,8 +89,6 @@ TEST(RobotCli, ReachWithoutASceneIsReachInTheEmptyScene) {
   std::filesystem::remove(urdf);
 }
 
-// reach drives the tip straight through what lies in the way (it plans nothing): a target below
-// a slab is reached, but not as `eval reachable` counts it, and reach says so.
 // -500,200,300 was meant in millimetres: "unreachable", 615 m short, had said nothing more.
 TEST(RobotCli, ReachSaysATargetHundredsOfReachesAwayMayBeInMillimetres) {
   const auto millimetres = runCliBinary("reach --robot lwr4 --target -500,200,300 --max-time 5");
@@ -104,6 +102,8 @@ TEST(RobotCli, ReachSaysATargetHundredsOfReachesAwayMayBeInMillimetres) {
   EXPECT_EQ(metres.err.find("millimetres"), std::string::npos) << metres.err;
 }
 
+// reach drives the tip straight through what lies in the way (it plans nothing): a target below
+// a slab is reached, but not as `eval reachable` counts it, and reach says so.
 TEST(RobotCli, ReachSaysWhenTheTargetWasReachedOnlyThroughAContact) {
   const std::filesystem::path scene =
       std::filesystem::temp_directory_path() / ("flexirob-reach-slab-" + std::to_string(::getpid()) + ".yaml");
@@ -218,8 +218,8 @@ INSTANTIATE_TEST_SUITE_P(
                       BadInvocation{"fk --robot lwr4", "--q is required"},
                       BadInvocation{"no-such-command", "error"},
                       // A slip in an option's name: the option meant is named.
-                      BadInvocation{"teach --area 2 --out x.db", "(did you mean --areas?)"},
-                      BadInvocation{"reach --robot lwr4 --taget=0,0,1", "(did you mean --target?)"}),
+                      BadInvocation{"teach --area 2 --out x.db", "(--area: did you mean --areas?)"},
+                      BadInvocation{"reach --robot lwr4 --taget=0,0,1", "(--taget: did you mean --target?)"}),
     [](const ::testing::TestParamInfo<BadInvocation>& param_info) { return "Case" + std::to_string(param_info.index); });
 
 }  // namespace

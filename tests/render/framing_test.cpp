@@ -112,6 +112,25 @@ std::pair<double, bool> groundGridHalfWidth(World& world) {
 
 // A 20 cm arm on 10 cm squares, or a 4 m arm on a grid smaller than its reach, hides its size;
 // the LWR IV keeps the grid of the thesis' pictures (0.1 m squares, 1.5 m out).
+// View names are the robot's sides (it works towards -x, so its left is -y): `left` had looked
+// from +y while `front-left` looked from -y.
+TEST(Framing, ViewNamesAreTheRobotsSides) {
+  Eigen::Vector3d direction;
+  Eigen::Vector3d up;
+  for (const char* name : {"front-left", "front-left-low", "back-left", "left"}) {
+    namedView(name, direction, up);
+    EXPECT_LT(direction.y(), 0.0) << name << " looks from the robot's left, -y";
+  }
+  for (const char* name : {"front-right", "back-right", "right"}) {
+    namedView(name, direction, up);
+    EXPECT_GT(direction.y(), 0.0) << name << " looks from the robot's right, +y";
+  }
+  for (const char* name : {"front-left", "front-right", "front", "left", "right"}) {
+    namedView(name, direction, up);
+    EXPECT_LT(direction.x(), 0.0) << name << " looks from the front, -x, or beside it";
+  }
+}
+
 TEST(Framing, TheGroundGridIsDrawnAtTheArmsScale) {
   const robot::RobotModel lwr4 = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
   const GroundGridSize thesis = groundGridSize(reachSphere(lwr4).second);

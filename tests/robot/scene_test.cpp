@@ -389,6 +389,8 @@ TEST_F(SceneFileTest, RefusesAnRpyAngleBeyondATurnInRadiansAsDegreesWithoutTheir
   EXPECT_NE(message.find("rotation.rpy: angles are read in radians and one exceeds a turn; for degrees add 'unit: deg'"), std::string::npos)
       << message;
   EXPECT_NO_THROW(loadSceneFile(write("deg.yaml", "obstacles:\n  - {shape: box, size: [0.1, 0.1, 0.1], rotation: {rpy: [0, 0, 45], unit: deg}}\n")));
+  EXPECT_NE(refusal("obstacles:\n  - {shape: box, size: [0.1, 0.1, 0.1], rotation: {rpy: [0, 90, 0], unit: rad}}\n").find("exceeds a turn"),
+            std::string::npos);
   EXPECT_NO_THROW(loadSceneFile(write("rad.yaml", "obstacles:\n  - {shape: box, size: [0.1, 0.1, 0.1], rotation: {rpy: [0, 0, -6.28]}}\n")));
 }
 
@@ -675,12 +677,25 @@ TEST_F(SceneFileTest, RefusesAParameterNoComponentDeclaresNamingTheOneMeant) {
   expectOneLineNamingFile(stranger, "broken.yaml:1");
   EXPECT_NE(stranger.find("the parameters are hierarchical.{kappa_x, kappa_q, "), std::string::npos) << stranger;
   EXPECT_NE(stranger.find(", interaction.{joint_damping, "), std::string::npos) << stranger;
+  // A guess only where one name is meant: the start of a name, or a slip within the component.
+  EXPECT_NE(refusal("parameters: {hierarchical.sigma: 0.1}\n").find("(did you mean 'hierarchical.sigma_threshold'?)"), std::string::npos);
+  const std::string two = refusal("parameters: {hierarchical.kappa: 3}\n");
+  EXPECT_EQ(two.find("did you mean"), std::string::npos) << two;
+  EXPECT_NE(two.find("the parameters are hierarchical.{kappa_x, kappa_q, sigma_threshold, damping_max}"), std::string::npos) << two;
+  EXPECT_EQ(refusal("parameters: {interaction.joint_stiffness: 3}\n").find("did you mean"), std::string::npos);
   // The triggers follow the workflow's options, so a scene cannot set them.
   EXPECT_NE(refusal("parameters: {triggers.converged_time: 3}\n").find("unknown parameter"), std::string::npos);
   // Out of its declared range, said where it is written (render applies no parameter at all).
   const std::string range = refusal("parameters:\n  hierarchical.kappa_q: 1000\n");
   expectOneLineNamingFile(range, "broken.yaml:2");
-  EXPECT_NE(range.find("parameters.hierarchical.kappa_q: expected a value in [0, 100] 1/s, got 1000"), std::string::npos) << range;
+  EXPECT_NE(range.find("parameters: parameter 'hierarchical.kappa_q': expected a value in [0, 100] 1/s, got 1000"), std::string::npos) << range;
+  // A copy a session stored before names were checked still reads: the name is left out and said.
+  const Scene stored = parseScene("parameters: {hierarchical.kapa_q: 4, sim.gravity: 9}\n", dir_, "stored", UnknownParameters::kIgnore);
+  EXPECT_EQ(stored.ignored_parameters, std::vector<std::string>{"hierarchical.kapa_q"});
+  EXPECT_EQ(stored.parameters.count("hierarchical.kapa_q"), 0U);
+  EXPECT_DOUBLE_EQ(stored.parameters.at("sim.gravity"), 9.0);
+  ASSERT_EQ(sceneNotes(stored).size(), 1U);
+  EXPECT_NE(sceneNotes(stored)[0].find("parameter 'hierarchical.kapa_q' is not one a scene sets; left out"), std::string::npos) << sceneNotes(stored)[0];
   const Scene scene = loadSceneFile(write("tuned.yaml", "parameters: {interaction.joint_damping: 7, limits.acceleration: 3}\n"));
   EXPECT_DOUBLE_EQ(scene.parameters.at("interaction.joint_damping"), 7.0);
   EXPECT_DOUBLE_EQ(scene.parameters.at("limits.acceleration"), 3.0);

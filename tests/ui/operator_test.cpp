@@ -262,7 +262,7 @@ class OperatorTest : public QObject {
     QVERIFY(!block.empty());
     QVERIFY(window.loadScene(block));
     waitRunning(window);
-    QTRY_VERIFY_WITH_TIMEOUT((window.mirror(), window.problemLabel()->text().contains(QStringLiteral("The arm starts in contact"))), 5000);
+    QTRY_VERIFY_WITH_TIMEOUT((window.mirror(), window.problemLabel()->text().contains(QStringLiteral("The arm starts in contact"))), 20000);  // an upper bound: a loaded CI machine draws slowly
     QVERIFY(window.problemLabel()->text().contains(QStringLiteral("the scene's home_posture touches the scene")));
   }
 
@@ -560,7 +560,7 @@ class OperatorTest : public QObject {
       for (int j = 0; j < 7; ++j) largest = std::max(largest, std::abs(snapshot.q[static_cast<std::size_t>(j)] - real[j]));
       return largest;
     };
-    QTRY_VERIFY_WITH_TIMEOUT(mirrored() < 0.01, 5000);
+    QTRY_VERIFY_WITH_TIMEOUT(mirrored() < 0.01, 20000);  // an upper bound: a loaded CI machine draws slowly
     flexirob::robot::Kinematics kinematics(model);
     kinematics.update(controller.stats().q);
     QTRY_VERIFY((window.kinematics()->p_WT() - kinematics.p_WT()).norm() < 0.01);
@@ -568,7 +568,7 @@ class OperatorTest : public QObject {
     // A burst of lost measurements: the watchdog stops commanding, the link turns red and the
     // operator is asked to confirm a reconnect.
     controller.dropNextMeasurements(200);
-    QTRY_VERIFY_WITH_TIMEOUT(window.live()->linkStatus().fault, 5000);
+    QTRY_VERIFY_WITH_TIMEOUT(window.live()->linkStatus().fault, 20000);  // an upper bound: a loaded CI machine draws slowly
     QTRY_VERIFY(window.reconnectAction()->isEnabled());
     QVERIFY(window.linkLabel()->styleSheet().contains(QStringLiteral("#c00000")));
 
