@@ -267,6 +267,7 @@ int runCli(int argc, const char* const* argv) {
   registerTeachCommands(app, runner);
   registerEvalCommands(app, runner);
   registerSweepCommand(app, runner);
+  registerExportCommand(app, runner);
   try {
     app.parse(argc, argv);
     if (!runner.hasAction()) throw InputError("no command given; see --help");

@@ -66,6 +66,7 @@ void registerReviewCommands(CLI::App& app, CommandRunner& runner);  // review
 void registerTeachCommands(CLI::App& app, CommandRunner& runner);   // teach
 void registerEvalCommands(CLI::App& app, CommandRunner& runner);    // eval reachable, plan
 void registerSweepCommand(CLI::App& app, CommandRunner& runner);    // sweep
+void registerExportCommand(CLI::App& app, CommandRunner& runner);   // export
 
 /// CLI::Range lets "nan" through (every comparison with NaN is false), and an option left at
 /// its default then meant "the scene's value": the range of every numeric option also refuses

@@ -220,7 +220,7 @@ Json runTeach(TeachOptions options) {
     metadata.software_version = FLEXIROB_VERSION_STRING;
     metadata.scene_text = robot::sceneToYaml(scene);
     metadata.parameters = Json{{"seed", options.seed}, {"learner", options.learner}, {"areas", options.areas},
-                               {"diameter_m", options.diameter}}.dump();
+                               {"diameter_m", options.diameter}, {"backend", options.backend}}.dump();
     app::RecorderOptions recorder_options;
     recorder_options.overwrite = true;
     recorder = std::make_unique<app::SessionRecorder>(options.out, metadata, recorder_options);
@@ -242,6 +242,15 @@ Json runTeach(TeachOptions options) {
         }
       }
     };
+  }
+  if (recorder) {
+    // The state the workflow reads in its first cycle: the tutor records each state after a
+    // cycle, and without this one the session would lack the posture its stage starts in (the
+    // ITM's first input, which export --stream replays).
+    robot::RobotState first;
+    first.resize(model.dof());
+    backend->readState(first);
+    recorder->recordState(first);
   }
   app::SimulatedTutor tutor(sim, workflow, scene, parameters, tutor_options);
 

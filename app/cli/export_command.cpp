@@ -1,0 +1,163 @@
+// `export --session F`: a recorded session as the files the offline tools read (docs/SESSIONS.md):
+// --samples (learn fit), --stream (itm build), --model (learn predict), --graph (itm path).
+#include <fstream>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/cli/cli_support.hpp"
+#include "app/session_export.hpp"
+#include "app/session_reader.hpp"
+#include "app/session_teaching.hpp"
+#include "planning/itm_file.hpp"
+#include "robot/collision.hpp"
+#include "robot/errors.hpp"
+
+namespace flexirob::cli {
+namespace {
+
+struct ExportOptions {
+  std::string session;
+  std::string samples, stream, model, graph;
+  double sample_period = 0.02;
+};
+
+// A session driven over FRI (the real robot, or teach --backend fri-sim): the workflow saw no
+// contacts and fed its ITM every position. The GUI records its backend as "sim" or
+// "fri://HOST:PORT", teach as "sim" or "fri-sim".
+bool drivenOverFri(const app::SessionReader& reader) {
+  const Json parameters = Json::parse(reader.metadata().parameters, nullptr, false);
+  if (!parameters.is_object() || !parameters.contains("backend") || !parameters.at("backend").is_string()) return false;
+  return parameters.at("backend").get<std::string>().rfind("fri", 0) == 0;
+}
+
+std::string bytesText(const std::vector<std::uint8_t>& bytes) { return std::string(bytes.begin(), bytes.end()); }
+
+Json exportSession(const ExportOptions& options) {
+  const std::vector<std::pair<std::string, std::string>> outputs = {
+      {"--samples", options.samples}, {"--stream", options.stream}, {"--model", options.model}, {"--graph", options.graph}};
+  std::map<std::string, std::string> chosen;
+  for (const auto& [option, path] : outputs) {
+    if (path.empty()) continue;
+    checkOutputPath(option, path, {{"--session", options.session}}, true);
+    const std::string key = std::filesystem::weakly_canonical(path).string();
+    if (const auto [where, added] = chosen.emplace(key, option); !added) {
+      throw InputError(option + ": '" + path + "' is the file " + where->second + " names; give each output its own file");
+    }
+  }
+  if (chosen.empty()) throw InputError("export: nothing to write; give --samples, --stream, --model or --graph");
+  {
+    std::ifstream in(options.session);
+    if (!in) throw InputError("--session: cannot read '" + options.session + "'");
+    if (startsAsJson(in)) {
+      throw InputError("--session: '" + options.session +
+                       "' is a JSON session, which holds its areas as text already; export reads the sessions teach and the GUI record");
+    }
+  }
+  const app::SessionReader reader(options.session);
+  const app::RecordedTeaching teaching = app::readRecordedTeaching(reader);
+  Json result;
+  result["session"] = options.session;
+  result["robot"] = teaching.robot;
+  result["scene"] = teaching.scene;
+  if (!teaching.closed_cleanly) {
+    std::fprintf(stderr, "note: the session '%s' was not closed cleanly (interrupted, or still being written); export writes what was recorded\n",
+                 options.session.c_str());
+  }
+
+  // Every output is prepared before the first is written: a session that lacks one writes none.
+  struct Output {
+    std::string option, path, content;
+  };
+  std::vector<Output> files;
+
+  if (!options.samples.empty()) {
+    std::string csv = app::trainingSamplesCsv(teaching);
+    Json areas = Json::array();
+    std::int64_t rows = 0;
+    for (const app::RecordedArea& area : teaching.areas) {
+      if (!area.complete || area.X.cols() == 0) continue;
+      areas.push_back({{"area", area.index}, {"name", area.name}, {"samples", area.X.cols()}});
+      rows += area.X.cols();
+    }
+    result["samples"] = {{"file", options.samples}, {"rows", rows}, {"areas", areas}};
+    files.push_back({"--samples", options.samples, std::move(csv)});
+  }
+
+  if (!options.stream.empty()) {
+    std::unique_ptr<robot::RobotModel> model;
+    std::unique_ptr<robot::Scene> scene;
+    std::unique_ptr<robot::CollisionWorld> world;
+    const bool over_fri = drivenOverFri(reader);
+    if (!over_fri) {
+      model = std::make_unique<robot::RobotModel>(loadSessionRobot(teaching.robot, teaching.robot_urdf, teaching.tip));
+      scene = std::make_unique<robot::Scene>(loadSessionScene(teaching.scene, teaching.scene_text));
+      world = std::make_unique<robot::CollisionWorld>(*model, *scene);
+    }
+    const app::ConfigurationStream stream = app::configurationStream(
+        reader, options.sample_period, world.get(), [](double fraction) { reportProgress("export: replaying the configuration stage", fraction); });
+    reportStatus("export: replaying the configuration stage", true);
+    if (stream.X.cols() == 0) throw InputError("--stream: the session recorded no position in CONFIGURATION");
+    Json entry = {{"file", options.stream},
+                  {"rows", stream.X.cols()},
+                  {"sample_period_s", options.sample_period},
+                  {"states_read", stream.states_read},
+                  {"left_out_in_contact", stream.left_out_in_contact},
+                  {"contacts_checked", !over_fri}};
+    if (teaching.itm) {
+      // What itm build needs to map the stream as the session did.
+      const planning::ItmParameters& parameters = teaching.itm->parameters();
+      entry["session_graph"] = {{"nodes", teaching.itm->nodeCount()},
+                                {"edges", teaching.itm->edgeCount()},
+                                {"parameters",
+                                 {{"e_max", parameters.e_max},
+                                  {"delta", parameters.delta},
+                                  {"d_theta_max", parameters.d_theta_max},
+                                  {"d_c_max", parameters.d_c_max},
+                                  {"eta", parameters.eta},
+                                  {"alpha", parameters.alpha}}}};
+    }
+    result["stream"] = entry;
+    files.push_back({"--stream", options.stream, app::configurationStreamCsv(stream)});
+  }
+
+  if (!options.model.empty()) {
+    const std::vector<app::ModelRecord> models = reader.models();
+    if (models.empty()) throw InputError("--model: the session recorded no learned model (learning runs after finished_configuration)");
+    const app::ModelRecord& last = models.back();
+    result["model"] = {{"file", options.model}, {"learner", last.learner_kind}, {"samples", last.samples}, {"time_s", last.time}};
+    files.push_back({"--model", options.model, bytesText(last.bytes)});
+  }
+
+  if (!options.graph.empty()) {
+    const std::optional<app::ItmRecord> snapshot = reader.lastItmSnapshot();
+    if (!snapshot) throw InputError("--graph: the session recorded no ITM graph");
+    // The snapshot is checked as itm path will read it; a damaged one is not handed on.
+    const planning::Itm graph = planning::itmFromBytes(snapshot->bytes.data(), snapshot->bytes.size(), options.session + " (ITM snapshot)");
+    result["graph"] = {{"file", options.graph}, {"nodes", graph.nodeCount()}, {"edges", graph.edgeCount()}, {"time_s", snapshot->time}};
+    files.push_back({"--graph", options.graph, bytesText(snapshot->bytes)});
+  }
+
+  for (const Output& file : files) app::writeFileReplacing(file.path, file.content, file.option);
+  return result;
+}
+
+}  // namespace
+
+void registerExportCommand(CLI::App& app, CommandRunner& runner) {
+  auto* command = app.add_subcommand(
+      "export", "Write a recorded session's training samples, configuration stream, model or ITM graph as the files learn and itm read");
+  auto options = std::make_shared<ExportOptions>();
+  command->add_option("--session", options->session, "session database written by teach or the GUI")->required();
+  command->add_option("--samples", options->samples, "training samples CSV (area,x,y,z,q1..qN) for learn fit");
+  command->add_option("--stream", options->stream, "positions the configuration stage fed the ITM, CSV (x,y,z,q1..qN) for itm build");
+  command->add_option("--model", options->model, "the last learned model, for learn predict");
+  command->add_option("--graph", options->graph, "the last ITM graph, for itm path");
+  command->add_option("--sample-period", options->sample_period, "with --stream: seconds between positions (the workflow's sample period)")
+      ->check(finiteRange(1e-4, 10.0))
+      ->capture_default_str();
+  command->callback([&runner, options] { runner.select([options] { return exportSession(*options); }); });
+}
+
+}  // namespace flexirob::cli

@@ -1,0 +1,55 @@
+#pragma once
+// What a recorded session holds, as the files the offline tools read (docs/SESSIONS.md): the
+// training samples of its areas as `learn fit` reads them, the positions its configuration
+// stage fed the ITM as `itm build` reads them, so that a teaching can be learned, mapped and
+// compared again with other parameters without teaching it again.
+#include <Eigen/Core>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "app/session_reader.hpp"
+#include "app/session_teaching.hpp"
+#include "robot/collision.hpp"
+
+namespace flexirob::app {
+
+/// The positions a workflow fed its ITM during a recorded session (Chap. 7), in time order.
+struct ConfigurationStream {
+  std::vector<double> times;  ///< [s] session time of each position
+  Eigen::MatrixXd X;          ///< 3 x K tip positions [m, W]
+  Eigen::MatrixXd Q;          ///< N x K postures [rad]
+  int left_out_in_contact = 0;  ///< positions taken but left out: the arm touched something
+  std::int64_t states_read = 0; ///< recorded states replayed
+};
+
+/// Replays the session's recorded states with its stage and trigger records as
+/// Workflow::recordSample takes positions: every `sample_period` [s] while in CONFIGURATION or
+/// PROGRAMMING, the period restarted where a RECORDING or TEACH-IN begins, kept while in
+/// CONFIGURATION. A stage entered by a trigger counts from the state the trigger fired at, one
+/// entered by a button from the state after it (buttons act between control cycles). With a
+/// collision world of the session's robot and scene, positions where the arm touches anything
+/// are left out, as the workflow leaves out a simulated arm that sank into an obstacle; without
+/// one (a real robot's session) every position is kept. States are read in windows, so a long
+/// session needs no more memory than its stream. `progress` (may be empty) gets the fraction of
+/// the configuration time replayed. Throws InputError for sample_period <= 0, for recorded
+/// postures of varying size or with non-finite values.
+ConfigurationStream configurationStream(const SessionReader& reader, double sample_period, robot::CollisionWorld* world,
+                                        const std::function<void(double)>& progress = {});
+
+/// The complete areas' training samples (their latest takes) as CSV: header
+/// `area,x,y,z,q1,…,qN`, one sample per row, numbers with 17 significant digits (read back
+/// exactly). Areas are numbered by their index in the session. Throws InputError when no area
+/// is complete.
+std::string trainingSamplesCsv(const RecordedTeaching& teaching);
+
+/// The stream as CSV: header `x,y,z,q1,…,qN`, one position per row in time order.
+std::string configurationStreamCsv(const ConfigurationStream& stream);
+
+/// Writes `text` to a temporary file beside `file` and renames it into place, so that a reader
+/// never sees half a file and a failed write leaves what was there. Throws InputError naming
+/// `option` when the file cannot be written.
+void writeFileReplacing(const std::filesystem::path& file, const std::string& text, const std::string& option);
+
+}  // namespace flexirob::app

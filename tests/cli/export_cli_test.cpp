@@ -1,0 +1,197 @@
+// `flexirob-cli export`: a session taught by `teach` handed to the offline tools. The exported
+// configuration stream maps to the session's own ITM graph under `itm build`, the training
+// samples fit under `learn fit` with the session's sample count and are the forward kinematics
+// of their postures, the model and graph files are read by `learn predict` and `itm path`; bad
+// requests are refused with one line and write nothing.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "app/session_recorder.hpp"
+#include "app/table_text.hpp"
+#include "cli_test_support.hpp"
+#include "robot/kinematics.hpp"
+#include "robot/resources.hpp"
+#include "robot/robot_model.hpp"
+
+namespace flexirob {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::runCliBinary;
+
+fs::path scratchDir() { return testing::scratchDir("export-cli-test"); }
+
+std::vector<std::string> lines(const fs::path& file) {
+  std::ifstream in(file);
+  std::vector<std::string> out;
+  for (std::string line; std::getline(in, line);) out.push_back(line);
+  return out;
+}
+
+std::string fileBytes(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
+// One area of setup_A, taught once for the whole suite.
+class ExportCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    session_ = new fs::path(scratchDir() / "taught.flexirob");
+    const auto taught = runCliBinary("teach --scene setup_A --areas 1 --seed 3 --check-points 0 --out " + session_->string());
+    ASSERT_EQ(taught.exit_code, 0) << taught.err;
+    taught_ = new nlohmann::json(taught.json());
+  }
+  static void TearDownTestSuite() {
+    delete session_;
+    delete taught_;
+  }
+  static fs::path* session_;
+  static nlohmann::json* taught_;
+};
+fs::path* ExportCli::session_ = nullptr;
+nlohmann::json* ExportCli::taught_ = nullptr;
+
+TEST_F(ExportCli, TheStreamMapsToTheSessionsOwnGraphUnderItmBuild) {
+  const fs::path stream = scratchDir() / "stream.csv";
+  const fs::path graph_file = scratchDir() / "as-taught.itm";
+  const auto exported = runCliBinary("export --session " + session_->string() + " --stream " + stream.string() + " --graph " +
+                                     graph_file.string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  const nlohmann::json entry = exported.json().at("stream");
+  EXPECT_EQ(lines(stream).front(), "x,y,z,q1,q2,q3,q4,q5,q6,q7");
+  EXPECT_EQ(static_cast<int>(lines(stream).size()) - 1, entry.at("rows").get<int>());
+  EXPECT_GT(entry.at("rows").get<int>(), 100);
+
+  const nlohmann::json graph = entry.at("session_graph");
+  const nlohmann::json p = graph.at("parameters");
+  std::ostringstream build;
+  build << "itm build --data " << stream.string() << " --out " << (scratchDir() / "rebuilt.itm").string() << " --emax "
+        << p.at("e_max").get<double>() << " --delta " << p.at("delta").get<int>() << " --dthetamax "
+        << p.at("d_theta_max").get<double>() << " --dcmax " << p.at("d_c_max").get<double>() << " --alpha "
+        << p.at("alpha").get<double>();
+  const auto rebuilt = runCliBinary(build.str());
+  ASSERT_EQ(rebuilt.exit_code, 0) << rebuilt.err;
+  // The workflow inserted exactly these positions, in this order, into its graph.
+  EXPECT_EQ(rebuilt.json().at("samples").get<int>(), entry.at("rows").get<int>());
+  EXPECT_EQ(rebuilt.json().at("nodes").get<int>(), graph.at("nodes").get<int>());
+  EXPECT_EQ(rebuilt.json().at("edges").get<int>(), graph.at("edges").get<int>());
+  // Node for node, posture for posture: the same file as the graph the session recorded.
+  EXPECT_EQ(fileBytes(scratchDir() / "rebuilt.itm"), fileBytes(graph_file));
+}
+
+TEST_F(ExportCli, TheSamplesAreTheTaughtOnesAndFitUnderLearnFit) {
+  const fs::path samples = scratchDir() / "samples.csv";
+  const auto exported = runCliBinary("export --session " + session_->string() + " --samples " + samples.string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  const int taught_samples = taught_->at("samples").get<int>();
+  EXPECT_EQ(exported.json().at("samples").at("rows").get<int>(), taught_samples);
+
+  // Each row's position is where its posture puts the tip of the LWR IV.
+  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
+  robot::Kinematics kinematics(model);
+  const std::vector<std::string> rows = lines(samples);
+  ASSERT_EQ(rows.front(), "area,x,y,z,q1,q2,q3,q4,q5,q6,q7");
+  ASSERT_EQ(static_cast<int>(rows.size()) - 1, taught_samples);
+  for (std::size_t r = 1; r < rows.size(); r += 97) {
+    const std::vector<std::string> fields = app::splitCommaFields(rows[r]);
+    ASSERT_EQ(fields.size(), 11u) << rows[r];
+    EXPECT_EQ(fields[0], "0");
+    Eigen::VectorXd q(7);
+    for (int j = 0; j < 7; ++j) q[j] = std::stod(fields[static_cast<std::size_t>(4 + j)]);
+    kinematics.update(q);
+    const Eigen::Vector3d x(std::stod(fields[1]), std::stod(fields[2]), std::stod(fields[3]));
+    EXPECT_LT((kinematics.p_WT() - x).norm(), 1e-9) << rows[r];
+  }
+
+  const fs::path model_file = scratchDir() / "refit.flm";
+  const auto fit = runCliBinary("learn fit --learner elm --data " + samples.string() + " --out " + model_file.string());
+  ASSERT_EQ(fit.exit_code, 0) << fit.err;
+  EXPECT_EQ(fit.json().at("samples").get<int>(), taught_samples);
+  EXPECT_EQ(fit.json().at("areas").get<int>(), 1);
+  EXPECT_FALSE(fit.json().at("areas_inferred").get<bool>());
+}
+
+TEST_F(ExportCli, TheModelAndGraphAreReadByLearnPredictAndItmPath) {
+  const fs::path model = scratchDir() / "session.flm";
+  const fs::path graph = scratchDir() / "session.itm";
+  const fs::path samples = scratchDir() / "for-predict.csv";
+  const auto exported = runCliBinary("export --session " + session_->string() + " --model " + model.string() + " --graph " +
+                                     graph.string() + " --samples " + samples.string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  const nlohmann::json result = exported.json();
+  EXPECT_EQ(result.at("model").at("learner").get<std::string>(), "elm");
+  EXPECT_EQ(result.at("model").at("samples").get<int>(), taught_->at("samples").get<int>());
+
+  const auto predicted = runCliBinary("learn predict --model " + model.string() + " --data " + samples.string());
+  ASSERT_EQ(predicted.exit_code, 0) << predicted.err;
+  // The session's own model on its own training data: within a few hundredths of a radian.
+  EXPECT_LT(predicted.json().at("rmse_rad").get<double>(), 0.05);
+
+  // A path between two positions the stream passed through, through the exported graph.
+  const std::vector<std::string> rows = lines(samples);
+  const std::vector<std::string> a = app::splitCommaFields(rows[1]);
+  const std::vector<std::string> b = app::splitCommaFields(rows.back());
+  const auto path = runCliBinary("itm path --graph " + graph.string() + " --from " + a[1] + "," + a[2] + "," + a[3] + " --to " +
+                                 b[1] + "," + b[2] + "," + b[3]);
+  ASSERT_EQ(path.exit_code, 0) << path.err;
+  EXPECT_EQ(path.json().at("graph_nodes").get<int>(), result.at("graph").at("nodes").get<int>());
+  EXPECT_TRUE(path.json().at("found").get<bool>()) << path.out;
+}
+
+TEST_F(ExportCli, BadRequestsAreRefusedWithOneLineAndWriteNothing) {
+  const fs::path out = scratchDir() / "refused.csv";
+  const fs::path json_session = scratchDir() / "hand.json";
+  testing::writeText(json_session, R"({"format": "flexirob-session-json", "version": 1})");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"export --session " + session_->string(), "nothing to write"},
+      {"export --session " + session_->string() + " --samples " + out.string() + " --stream " + out.string(), "its own file"},
+      {"export --session " + session_->string() + " --samples " + session_->string(), "--session file"},
+      {"export --session " + json_session.string() + " --samples " + out.string(), "JSON session"},
+      {"export --session " + (scratchDir() / "missing.flexirob").string() + " --samples " + out.string(), "missing.flexirob"},
+      {"export --session " + session_->string() + " --samples " + (scratchDir() / "no" / "x.csv").string(), "does not exist"},
+      {"export --session " + session_->string() + " --stream " + out.string() + " --sample-period 0", "--sample-period"},
+  };
+  for (const auto& [arguments, reason] : cases) {
+    const auto result = runCliBinary(arguments);
+    EXPECT_EQ(result.exit_code, 2) << arguments;
+    EXPECT_NE(result.err.find(reason), std::string::npos) << arguments << "\n" << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_FALSE(fs::exists(out)) << arguments;
+  }
+  EXPECT_TRUE(fs::exists(*session_));
+}
+
+TEST(ExportCliWithoutModel, ASessionLackingOneRequestedOutputWritesNoneOfThem) {
+  const fs::path session = scratchDir() / "no-model.flexirob";
+  {
+    app::SessionMetadata metadata;
+    metadata.robot_name = "lwr4";
+    metadata.scene_name = "empty";
+    app::SessionRecorder recorder(session, metadata);
+    ASSERT_TRUE(recorder.recordSample({1.0, 0, Eigen::Vector3d(0.5, 0.0, 0.5), Eigen::VectorXd::Zero(7)}));
+    ASSERT_TRUE(recorder.recordArea({0, 1.1, Eigen::Vector3d(0.5, 0.0, 0.5), Eigen::VectorXd::Zero(7), ""}));
+  }
+  const fs::path samples = scratchDir() / "lonely.csv";
+  const fs::path model = scratchDir() / "absent.flm";
+  const auto result = runCliBinary("export --session " + session.string() + " --samples " + samples.string() + " --model " + model.string());
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--model: the session recorded no learned model"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(samples));
+  EXPECT_FALSE(fs::exists(model));
+  const auto alone = runCliBinary("export --session " + session.string() + " --samples " + samples.string());
+  ASSERT_EQ(alone.exit_code, 0) << alone.err;
+  EXPECT_EQ(lines(samples).size(), 2u);
+}
+
+}  // namespace
+}  // namespace flexirob
