@@ -10,10 +10,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <vector>
 
 #include "app/session_write_lock.hpp"
 #include "cli_test_support.hpp"
+#include "robot/resources.hpp"
 #include "robot/scene.hpp"
 
 namespace flexirob {
@@ -421,6 +423,33 @@ TEST(TeachCli, RefusesASessionFileInAMissingFolderBeforeTeaching) {
   EXPECT_EQ(under_file.exit_code, 2) << under_file.err;
   EXPECT_NE(under_file.err.find("'" + file.string() + "' is a file, not a folder"), std::string::npos) << under_file.err;
   fs::remove(file);
+}
+
+
+TEST(TeachCli, CountsAnArmThatCannotHoldItselfUpAtItsStartAmongItsWarnings) {
+  // The LWR IV with every joint limited to 3 Nm, drawn as capsules (no meshes to resolve): its
+  // shoulder needs about 32 Nm to hold setup_A's start posture, which leans forward.
+  std::ifstream in(resolveRobotPath("lwr4"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string urdf = std::regex_replace(text.str(), std::regex(R"(<visual>[\s\S]*?</visual>|<collision>[\s\S]*?</collision>)"), "");
+  urdf = std::regex_replace(urdf, std::regex(R"(effort="[0-9.]+")"), "effort=\"3\"");
+  const fs::path robot = scratch("weak-lwr4.urdf");
+  flexirob::testing::writeText(robot, urdf);
+  const fs::path out = scratch("weak.flexirob");
+  const auto result = runCliBinary("teach --robot " + robot.string() + " --scene setup_A --areas 1 --seed 1 --check-points 0 --out " +
+                                   out.string());
+  fs::remove(robot);
+  fs::remove(out);
+  // Nothing can be taught with it (exit 1), and the JSON still counts what the tutor was told.
+  EXPECT_EQ(result.exit_code, 1) << result.err;
+  const nlohmann::json json = result.json();
+  const nlohmann::json lines = json.at("warning_lines");
+  ASSERT_FALSE(lines.empty()) << result.out;
+  EXPECT_EQ(json.at("warnings").get<std::size_t>(), lines.size());
+  EXPECT_NE(lines.front().get<std::string>().find("cannot hold itself up at its start posture"), std::string::npos) << lines.front();
+  EXPECT_NE(lines.front().get<std::string>().find("of its effort limit of 3.0 Nm"), std::string::npos) << lines.front();
+  EXPECT_NE(result.err.find("warning: the arm cannot hold itself up"), std::string::npos) << result.err;
 }
 
 }  // namespace
