@@ -737,6 +737,7 @@ std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& even
   std::vector<std::pair<const WorkflowEvent*, int>> standing;
   std::vector<const WorkflowEvent*> this_recordings_limits;
   const auto isJointLimit = [](const auto& e) { return e.first->name == "joint_limit"; };
+  const std::string posed = std::string(toString(Stage::kConfiguration)) + "/" + toString(SubStage::kPosed);
   for (const WorkflowEvent& event : events) {
     if (event.kind == WorkflowEvent::Kind::kModelLearned) {
       std::erase_if(standing, [](const auto& e) { return e.first->name == "transition_inconsistent"; });
@@ -748,9 +749,9 @@ std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& even
       }
     }
     // A pose given up (a button pressed in POSED: configuration finished, an area to re-teach)
-    // or taken anew makes no area of the pose warned about.
-    const bool new_pose = event.kind == WorkflowEvent::Kind::kTrigger && event.name == toString(Trigger::kOnConverged) &&
-                          event.detail.find("/APPROACHING") != std::string::npos;
+    // or taken anew (POSED entered; its joint-limit check follows) makes no area of the pose
+    // warned about.
+    const bool new_pose = event.kind == WorkflowEvent::Kind::kStage && event.name == posed;
     if (event.kind == WorkflowEvent::Kind::kButton || new_pose) this_recordings_limits.clear();
     if (event.kind == WorkflowEvent::Kind::kAreaCreated && event.area >= 0) {
       std::erase_if(standing, [&](const auto& e) { return isJointLimit(e) && e.second == event.area; });

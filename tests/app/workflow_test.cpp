@@ -392,10 +392,21 @@ TEST(Workflow, AJointLimitWarningStandsOnlyForThePostureAnAreaHoldsNow) {
   EXPECT_EQ(standingWarnings(events), (std::vector<std::string>{"the recording held no sample; no area created"}));
   // The events of a whole recording, as the workflow emits them: the pose's warning stands.
   events.push_back(event(Kind::kTrigger, "on_converged", "CONFIGURATION/APPROACHING"));
+  events.push_back(event(Kind::kStage, "CONFIGURATION/POSED", "controller joint impedance"));
   events.push_back(event(Kind::kWarning, "joint_limit", "c: joint 5 at 2 deg", 2));
   events.push_back(event(Kind::kTrigger, "on_affected", "CONFIGURATION/POSED"));
+  events.push_back(event(Kind::kStage, "CONFIGURATION/RECORDING", "controller recording"));
   events.push_back(event(Kind::kTrigger, "on_converged", "CONFIGURATION/RECORDING"));
   events.push_back(event(Kind::kAreaCreated, "c", "c", 2));
+  EXPECT_EQ(standingWarnings(events),
+            (std::vector<std::string>{"the recording held no sample; no area created", "c: joint 5 at 2 deg"}));
+  // A pose near a limit, then POSED entered anew before any area was made (its own check found
+  // nothing): the area then made holds the new pose, and the old pose's warning does not stand.
+  events.push_back(event(Kind::kStage, "CONFIGURATION/POSED", "controller joint impedance"));
+  events.push_back(event(Kind::kWarning, "joint_limit", "d: joint 3 at 1 deg", 3));
+  events.push_back(event(Kind::kStage, "CONFIGURATION/APPROACHING", "controller gravity compensation"));
+  events.push_back(event(Kind::kStage, "CONFIGURATION/POSED", "controller joint impedance"));
+  events.push_back(event(Kind::kAreaCreated, "d", "d", 3));
   EXPECT_EQ(standingWarnings(events),
             (std::vector<std::string>{"the recording held no sample; no area created", "c: joint 5 at 2 deg"}));
 }
