@@ -69,6 +69,11 @@ Json toJson(const Eigen::VectorXd& v) {
   return array;
 }
 
+Json itmParametersJson(const planning::ItmParameters& parameters) {
+  return {{"e_max", parameters.e_max},           {"delta", parameters.delta}, {"d_theta_max", parameters.d_theta_max},
+          {"d_c_max", parameters.d_c_max},       {"eta", parameters.eta},     {"alpha", parameters.alpha}};
+}
+
 Json toJsonRows(const Eigen::MatrixXd& m) {
   Json rows = Json::array();
   for (Eigen::Index r = 0; r < m.rows(); ++r) rows.push_back(toJson(m.row(r).transpose()));

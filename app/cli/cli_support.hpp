@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "app/cli/number_list.hpp"
+#include "planning/itm.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/scene.hpp"
 
@@ -104,6 +105,9 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region);
 
 Json toJson(const Eigen::VectorXd& v);
 Json toJsonRows(const Eigen::MatrixXd& m);
+/// The parameters of an ITM graph by the names itm build prints (its options: --emax, --delta,
+/// --dthetamax, --dcmax, --eta, --alpha).
+Json itmParametersJson(const planning::ItmParameters& parameters);
 
 /// Refuses (InputError naming `option`) an output path that is a directory, that is one of the
 /// run's `inputs` ({option, path}: writing would destroy what is being read), or whose folder

@@ -110,13 +110,8 @@ Json exportSession(const ExportOptions& options) {
       const planning::ItmParameters& parameters = teaching.itm->parameters();
       entry["session_graph"] = {{"nodes", teaching.itm->nodeCount()},
                                 {"edges", teaching.itm->edgeCount()},
-                                {"parameters",
-                                 {{"e_max", parameters.e_max},
-                                  {"delta", parameters.delta},
-                                  {"d_theta_max", parameters.d_theta_max},
-                                  {"d_c_max", parameters.d_c_max},
-                                  {"eta", parameters.eta},
-                                  {"alpha", parameters.alpha}}}};
+                                {"variant", parameters.variant == planning::ItmVariant::kPlain ? "plain" : "hybrid"},
+                                {"parameters", itmParametersJson(parameters)}};
     }
     result["stream"] = entry;
     files.push_back({"--stream", options.stream, app::configurationStreamCsv(stream)});

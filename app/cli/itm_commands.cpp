@@ -178,13 +178,7 @@ Json buildMap(const BuildOptions& options) {
           {"variant", options.variant},
           {"task_space", reader.space() == TaskSpace::kPose ? "pose" : "position"},
           {"joints", reader.joints()},
-          {"parameters",
-           {{"e_max", parameters.e_max},
-            {"delta", parameters.delta},
-            {"d_theta_max", parameters.d_theta_max},
-            {"d_c_max", parameters.d_c_max},
-            {"eta", parameters.eta},
-            {"alpha", parameters.alpha}}},
+          {"parameters", itmParametersJson(parameters)},
           {"out", options.out},
           {"seconds", total_seconds}};
 }
