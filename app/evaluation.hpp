@@ -235,24 +235,28 @@ struct PlannedMotion {
   Eigen::Vector3d goal_W = Eigen::Vector3d::Zero();   ///< the goal node's position [m]
   bool found = false;
   bool collided = false;
-  bool reached_1cm = false;
+  bool reached_1cm = false;  ///< ended within 1 cm of the goal, with or without a contact on the way
   std::vector<Eigen::Vector3d> planned_W;  ///< the planned spline sampled every 50 ms (empty if not found)
   Eigen::Vector3d final_W = Eigen::Vector3d::Zero();  ///< tip where the executed motion ended [m]
   std::string contact;  ///< the first contact "body/other" (empty without one)
   double contact_time = 0.0;  ///< [s] into the motion when it happened
   double contact_path_error = 0.0;  ///< [m] |x_des − x| of the tip at the contact
+  double final_error_m = 0.0;  ///< [m] |goal − final| (found paths)
+  double tracking_error_max_m = 0.0;  ///< [m] largest |x_des − x| along the motion, every 10 ms
 };
 
 struct PlanningResult {
   int goals = 0;
   int found = 0;          ///< paths the planner found
   int collision_free = 0; ///< executed without contact
-  int reached_1cm = 0;    ///< ended within 1 cm of the goal node
+  int reached_1cm = 0;    ///< ended within 1 cm of the goal node (a contact on the way or not)
   double mean_plan_ms = 0.0;
   /// Nodes no edge path connects to the start's nearest node; goals are drawn from the others.
   int disconnected_nodes = 0;
   std::map<std::string, int> contacts;  ///< collided motions per first contact "body/other"
   std::vector<PlannedMotion> motions;  ///< per goal, in the order visited
+  double final_error_max_m = 0.0;     ///< [m] the largest |goal − final| of the found paths
+  double tracking_error_max_m = 0.0;  ///< [m] the largest |x_des − x| along them
 };
 
 /// Eq. 4.1: the implicit scene model S = {x ∈ T : d(x, M) > 0.1 m}, with T the grid points

@@ -1,10 +1,12 @@
 #include "app/session_export.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
+#include <cstring>
 #include <system_error>
 
 #include "robot/errors.hpp"
@@ -13,9 +15,9 @@ namespace flexirob::app {
 
 namespace {
 
-// Recorded states are replayed this many seconds at a time (a 1 kHz recording: 10 000 states,
-// about 2 MB), so that a long session is not read into memory at once.
-constexpr double kReplayWindow = 10.0;
+// Recorded states are replayed this many at a time (about 2 MB), so that a long session is not
+// read into memory at once.
+constexpr std::int64_t kReplayPage = 10000;
 
 std::string number(double value) {
   char text[32];
@@ -42,27 +44,26 @@ std::string jointHeader(Eigen::Index joints) {
 }
 
 // Where the workflow stands, replayed from its stage records: which stage holds from which
-// state on. Workflow::update fires a trigger and takes the position of the same state, so a stage
-// a trigger entered holds for the state it fired at; a button acts between control cycles, after
-// the state of its time was taken, so its stage holds from the next state on.
+// state on. Workflow::update reads a state, fires a trigger and takes the position in one cycle,
+// so a trigger's change (a sub-stage within the same stage: APPROACHING, POSED, RECORDING,
+// TEACH-IN, back to WAITING) holds for the state it fired at. A button acts between cycles, after
+// the state of its time was taken, so its change (another stage: CONFIGURATION, PROGRAMMING,
+// IDLE, EXECUTION) holds from the next state on; a button at or before the first state (the
+// start) holds from the first, which the workflow reads after it.
 struct StageChange {
   double time = 0.0;
   bool from_this_state = false;
   std::string stage, sub_stage;
 };
 
-std::vector<StageChange> stageChanges(const SessionReader& reader) {
-  std::vector<double> trigger_times;
-  for (const SignalRecord& signal : reader.signals()) {
-    if (signal.kind == SignalKind::Trigger) trigger_times.push_back(signal.time);
-  }
-  std::sort(trigger_times.begin(), trigger_times.end());
+std::vector<StageChange> stageChanges(const SessionReader& reader, double first_state_time) {
   std::vector<StageChange> changes;
-  for (const StageRecord& record : reader.stages()) {
-    const bool by_trigger = std::binary_search(trigger_times.begin(), trigger_times.end(), record.time);
-    changes.push_back({record.time, by_trigger, record.stage, record.sub_stage});
+  std::string stage = "IDLE";
+  for (const StageRecord& record : reader.stages()) {  // in time order
+    const bool by_trigger = record.stage == stage;
+    changes.push_back({record.time, by_trigger || record.time <= first_state_time, record.stage, record.sub_stage});
+    stage = record.stage;
   }
-  std::stable_sort(changes.begin(), changes.end(), [](const StageChange& a, const StageChange& b) { return a.time < b.time; });
   return changes;
 }
 
@@ -75,19 +76,25 @@ bool begins(const StageChange& change, double state_time) {
 ConfigurationStream configurationStream(const SessionReader& reader, double sample_period, robot::CollisionWorld* world,
                                         const std::function<void(double)>& progress) {
   if (!(sample_period > 0.0) || !std::isfinite(sample_period)) throw InputError("stream: the sample period must be > 0 s");
-  const std::vector<StageChange> changes = stageChanges(reader);
+  std::int64_t first_row = 0;
+  const std::vector<StateRecord> first = reader.statesInRecordedOrder(0, 1, first_row);
+  const std::vector<StageChange> changes = stageChanges(reader, first.empty() ? 0.0 : first.front().time);
   ConfigurationStream stream;
   std::vector<Eigen::VectorXd> positions, postures;
   Eigen::Index dof = -1;
   std::size_t next_change = 0;
   std::string stage, sub_stage;
   double last_sample_time = -1e9;  // as Workflow::last_sample_time_
-  const double start = reader.startTime();
-  const double end = reader.endTime();
-  for (double window = start; reader.stateCount() > 0 && window <= end; window += kReplayWindow) {
-    // Windows share no state: the upper bound of one is excluded by the next one's lower bound.
-    const double window_end = std::nextafter(window + kReplayWindow, -1e300);
-    for (const StateRecord& state : reader.states(window, window_end)) {
+  const double total = static_cast<double>(std::max<std::int64_t>(reader.stateCount(), 1));
+  std::int64_t row = 0;
+  for (;;) {
+    // In recorded order, page by page: the workflow read them in this order, and a damaged
+    // file's times (1e300, out of order) cannot make the replay loop or skip.
+    std::int64_t last_row = row;
+    const std::vector<StateRecord> page = reader.statesInRecordedOrder(row, kReplayPage, last_row);
+    if (page.empty()) break;
+    row = last_row;
+    for (const StateRecord& state : page) {
       ++stream.states_read;
       while (next_change < changes.size() && begins(changes[next_change], state.time)) {
         const StageChange& change = changes[next_change++];
@@ -118,7 +125,7 @@ ConfigurationStream configurationStream(const SessionReader& reader, double samp
       positions.push_back(p);
       postures.push_back(q);
     }
-    if (progress && end > start) progress(std::min(1.0, (window + kReplayWindow - start) / (end - start)));
+    if (progress) progress(std::min(1.0, static_cast<double>(stream.states_read) / total));
   }
   stream.X.resize(3, static_cast<Eigen::Index>(positions.size()));
   stream.Q.resize(dof < 0 ? 0 : dof, static_cast<Eigen::Index>(postures.size()));
@@ -155,25 +162,29 @@ std::string configurationStreamCsv(const ConfigurationStream& stream) {
 }
 
 void writeFileReplacing(const std::filesystem::path& file, const std::string& text, const std::string& option) {
-  std::filesystem::path temporary = file;
-  temporary += ".tmp";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(option + ": cannot write '" + file.string() + "'");
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    out.flush();
-    if (!out) {
-      out.close();
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw InputError(option + ": cannot write '" + file.string() + "' (disk full?)");
-    }
+  // A temporary of its own (mkstemp) beside the file: a fixed name such as "<file>.tmp" could be
+  // another output of the same run, or a file someone keeps.
+  std::string temporary = file.string() + ".XXXXXX";
+  const int descriptor = ::mkstemp(temporary.data());
+  if (descriptor < 0) throw InputError(option + ": cannot write '" + file.string() + "': " + std::strerror(errno));
+  bool written = true;
+  for (std::size_t done = 0; done < text.size() && written;) {
+    const ssize_t n = ::write(descriptor, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    written = n > 0;
+    if (written) done += static_cast<std::size_t>(n);
   }
+  written = ::close(descriptor) == 0 && written;
   std::error_code error;
-  std::filesystem::rename(temporary, file, error);
-  if (error) {
+  if (written) {
+    std::filesystem::permissions(temporary, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write |
+                                                std::filesystem::perms::group_read | std::filesystem::perms::others_read,
+                                 error);
+    std::filesystem::rename(temporary, file, error);
+  }
+  if (!written || error) {
     std::filesystem::remove(temporary, error);
-    throw InputError(option + ": cannot write '" + file.string() + "'");
+    throw InputError(option + ": cannot write '" + file.string() + "'" + (written ? "" : " (disk full?)"));
   }
 }
 

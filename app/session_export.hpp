@@ -24,17 +24,18 @@ struct ConfigurationStream {
   std::int64_t states_read = 0; ///< recorded states replayed
 };
 
-/// Replays the session's recorded states with its stage and trigger records as
-/// Workflow::recordSample takes positions: every `sample_period` [s] while in CONFIGURATION or
-/// PROGRAMMING, the period restarted where a RECORDING or TEACH-IN begins, kept while in
-/// CONFIGURATION. A stage entered by a trigger counts from the state the trigger fired at, one
-/// entered by a button from the state after it (buttons act between control cycles). With a
-/// collision world of the session's robot and scene, positions where the arm touches anything
-/// are left out, as the workflow leaves out a simulated arm that sank into an obstacle; without
-/// one (a real robot's session) every position is kept. States are read in windows, so a long
-/// session needs no more memory than its stream. `progress` (may be empty) gets the fraction of
-/// the configuration time replayed. Throws InputError for sample_period <= 0, for recorded
-/// postures of varying size or with non-finite values.
+/// Replays the session's recorded states, in the order they were recorded, with its stage
+/// records as Workflow::recordSample takes positions: every `sample_period` [s] while in
+/// CONFIGURATION or PROGRAMMING, the period restarted where a RECORDING or TEACH-IN begins, kept
+/// while in CONFIGURATION. A sub-stage change within a stage (a trigger's) counts from the state
+/// at its time, a change of stage (a button's, between control cycles) from the next state; one
+/// at or before the first state from the first. With a collision world of the session's robot
+/// and scene, positions where the arm touches anything are left out, as the workflow leaves out
+/// a simulated arm that sank into an obstacle; without one (a session over FRI) every position
+/// is kept. States are read a page at a time, so a long session needs no more memory than its
+/// stream. `progress` (may be empty) gets the fraction of the states replayed. Throws
+/// InputError for sample_period <= 0, for recorded postures of varying size or with non-finite
+/// values.
 ConfigurationStream configurationStream(const SessionReader& reader, double sample_period, robot::CollisionWorld* world,
                                         const std::function<void(double)>& progress = {});
 
@@ -47,8 +48,8 @@ std::string trainingSamplesCsv(const RecordedTeaching& teaching);
 /// The stream as CSV: header `x,y,z,q1,…,qN`, one position per row in time order.
 std::string configurationStreamCsv(const ConfigurationStream& stream);
 
-/// Writes `text` to a temporary file beside `file` and renames it into place, so that a reader
-/// never sees half a file and a failed write leaves what was there. Throws InputError naming
+/// Writes `text` to a new temporary file beside `file` and renames it into place, so that a
+/// reader never sees half a file and a failed write leaves what was there. Throws InputError naming
 /// `option` when the file cannot be written.
 void writeFileReplacing(const std::filesystem::path& file, const std::string& text, const std::string& option);
 

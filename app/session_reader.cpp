@@ -200,6 +200,19 @@ std::vector<StateRecord> SessionReader::states(double t0, double t1, int stride)
   return out;
 }
 
+std::vector<StateRecord> SessionReader::statesInRecordedOrder(std::int64_t after_row, std::int64_t limit,
+                                                             std::int64_t& last_row) const {
+  std::vector<StateRecord> out;
+  last_row = after_row;
+  SqliteStatement st(impl_->db, std::string("SELECT ") + kStateColumns + ",id FROM state WHERE id > ? ORDER BY id LIMIT ?");
+  st.bind(1, after_row).bind(2, std::max<std::int64_t>(limit, 1));
+  while (st.step()) {
+    out.push_back(readState(st));
+    last_row = st.columnInt(7);
+  }
+  return out;
+}
+
 std::optional<StateRecord> SessionReader::stateAt(double time) const {
   SqliteStatement st(impl_->db, std::string("SELECT ") + kStateColumns + " FROM state WHERE t <= ? ORDER BY t DESC LIMIT 1");
   st.bind(1, time);

@@ -43,6 +43,10 @@ class SessionReader {
   std::vector<StateRecord> states(double t0, double t1, int stride = 1) const;
   /// The last state at or before `time` (the first state if `time` precedes it).
   std::optional<StateRecord> stateAt(double time) const;
+  /// Up to `limit` states in the order they were recorded, after the row `after_row` (0: from the
+  /// first); `last_row` receives the row to continue after. For replays that must not depend on
+  /// the recorded times (a damaged file may hold any, 1e300 or out of order).
+  std::vector<StateRecord> statesInRecordedOrder(std::int64_t after_row, std::int64_t limit, std::int64_t& last_row) const;
 
   // --- Events, all in time order.
   std::vector<StageRecord> stages() const;

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <unistd.h>
 
@@ -328,10 +329,11 @@ Json runReachable(const EvalOptions& options) {
                {"target_resolved_free", result.target_resolved_free},
                {"target_contact", result.target_contact}};
   // The scene's single targets, reached within the grid's tolerance without a contact on the
-  // way, each started as the grid's targets are: `visited` from the demonstrated posture nearest
-  // it, `learned` from q_c(x), `start` from the start posture; `nearest` and `previous`, whose
+  // way, each started as the grid's targets are: `visited` from the posture the arm stood in
+  // with its tip nearest it, at a grid target reached or at a sample of the demonstration;
+  // `learned` from q_c(x), `start` from the start posture; `nearest` and `previous`, whose
   // starts depend on the grid's tour, from the taught posture of the area whose sample lies
-  // nearest. The start posture where there is no demonstration.
+  // nearest. The start posture where there is no demonstration and no target was reached.
   Json scene_targets = Json::array();
   int scene_targets_reached = 0;
   robot::CollisionWorld world(*session.model, session.scene_data);
@@ -339,6 +341,15 @@ Json runReachable(const EvalOptions& options) {
     Eigen::VectorXd q_start = startPosture(session);
     if (approach == app::ApproachFrom::kNearestVisited) {
       q_start = app::nearestDemonstratedPosture(*session.model, session.data, target, q_start);
+      double nearest = session.data.size() > 0 ? (session.data.X.colwise() - target).colwise().norm().minCoeff()
+                                               : std::numeric_limits<double>::infinity();
+      for (std::size_t i = 0; i < result.target_points.size(); ++i) {
+        const double distance = (result.target_points[i] - target).norm();
+        if (result.target_reached[i] && distance < nearest) {
+          nearest = distance;
+          q_start = result.final_postures[i];
+        }
+      }
     } else if (approach == app::ApproachFrom::kLearnedPosture) {
       q_start = app::learnedPosture(*session.model, *learner, target);
     } else if (approach != app::ApproachFrom::kStartPosture && session.data.size() > 0) {
@@ -511,6 +522,8 @@ Json runPlan(const EvalOptions& options) {
                        {"contact_time_s", motion.contact_time},
                        {"contact_path_error_m", motion.contact_path_error},
                        {"final", toJson(motion.final_W)},
+                       {"final_error_m", motion.final_error_m},
+                       {"tracking_error_max_m", motion.tracking_error_max_m},
                        {"path", pointsJson(motion.planned_W)}});
   }
   Json json = {{"goals", result.goals},
@@ -518,6 +531,8 @@ Json runPlan(const EvalOptions& options) {
           {"found", result.found},
           {"collision_free", result.collision_free},
           {"reached_1cm", result.reached_1cm},
+          {"final_error_max_m", result.final_error_max_m},
+          {"tracking_error_max_m", result.tracking_error_max_m},
           {"mean_plan_ms", result.mean_plan_ms},
           {"contacts", result.contacts},
           {"itm_nodes", session.itm->nodeCount()},

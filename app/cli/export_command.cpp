@@ -10,6 +10,7 @@
 #include "app/session_export.hpp"
 #include "app/session_reader.hpp"
 #include "app/session_teaching.hpp"
+#include "app/session_write_lock.hpp"
 #include "planning/itm_file.hpp"
 #include "robot/collision.hpp"
 #include "robot/errors.hpp"
@@ -34,19 +35,34 @@ bool drivenOverFri(const app::SessionReader& reader) {
 
 std::string bytesText(const std::vector<std::uint8_t>& bytes) { return std::string(bytes.begin(), bytes.end()); }
 
+// The file a path names, spelt one way ("./a.csv", "a.csv" and "dir/../a.csv" alike), whether
+// it exists yet or not.
+std::string sameFileKey(const std::string& path) {
+  std::error_code error;
+  const std::filesystem::path absolute = std::filesystem::absolute(path, error);
+  return std::filesystem::weakly_canonical(error ? std::filesystem::path(path) : absolute, error).lexically_normal().string();
+}
+
 Json exportSession(const ExportOptions& options) {
   const std::vector<std::pair<std::string, std::string>> outputs = {
       {"--samples", options.samples}, {"--stream", options.stream}, {"--model", options.model}, {"--graph", options.graph}};
+  // The session and the files SQLite and the recorder keep beside it (an interrupted session's
+  // log holds what the database does not yet): none of them is an output.
   std::map<std::string, std::string> chosen;
+  for (const char* suffix : {"", "-wal", "-shm", "-journal"}) chosen.emplace(sameFileKey(options.session + suffix), "--session");
+  chosen.emplace(sameFileKey(app::SessionWriteLock::lockFileFor(options.session).string()), "--session");
+  bool any = false;
   for (const auto& [option, path] : outputs) {
     if (path.empty()) continue;
+    any = true;
     checkOutputPath(option, path, {{"--session", options.session}}, true);
-    const std::string key = std::filesystem::weakly_canonical(path).string();
-    if (const auto [where, added] = chosen.emplace(key, option); !added) {
-      throw InputError(option + ": '" + path + "' is the file " + where->second + " names; give each output its own file");
+    if (const auto [where, added] = chosen.emplace(sameFileKey(path), option); !added) {
+      throw InputError(where->second == "--session"
+                           ? option + ": '" + path + "' is the session or a file SQLite keeps beside it; give another file"
+                           : option + ": '" + path + "' is the file " + where->second + " names; give each output its own file");
     }
   }
-  if (chosen.empty()) throw InputError("export: nothing to write; give --samples, --stream, --model or --graph");
+  if (!any) throw InputError("export: nothing to write; give --samples, --stream, --model or --graph");
   {
     std::ifstream in(options.session);
     if (!in) throw InputError("--session: cannot read '" + options.session + "'");
@@ -56,15 +72,13 @@ Json exportSession(const ExportOptions& options) {
     }
   }
   const app::SessionReader reader(options.session);
-  const app::RecordedTeaching teaching = app::readRecordedTeaching(reader);
+  // The graph is read only where it is asked for: a damaged snapshot does not stand in the way
+  // of the samples.
+  const app::RecordedTeaching teaching = app::readRecordedTeaching(reader, false);
   Json result;
   result["session"] = options.session;
   result["robot"] = teaching.robot;
   result["scene"] = teaching.scene;
-  if (!teaching.closed_cleanly) {
-    std::fprintf(stderr, "note: the session '%s' was not closed cleanly (interrupted, or still being written); export writes what was recorded\n",
-                 options.session.c_str());
-  }
 
   // Every output is prepared before the first is written: a session that lacks one writes none.
   struct Output {
@@ -105,13 +119,24 @@ Json exportSession(const ExportOptions& options) {
                   {"states_read", stream.states_read},
                   {"left_out_in_contact", stream.left_out_in_contact},
                   {"contacts_checked", !over_fri}};
-    if (teaching.itm) {
-      // What itm build needs to map the stream as the session did.
-      const planning::ItmParameters& parameters = teaching.itm->parameters();
-      entry["session_graph"] = {{"nodes", teaching.itm->nodeCount()},
-                                {"edges", teaching.itm->edgeCount()},
-                                {"variant", parameters.variant == planning::ItmVariant::kPlain ? "plain" : "hybrid"},
-                                {"parameters", itmParametersJson(parameters)}};
+    // The session's graph and what itm build needs to map the stream as the session did. The
+    // stream rebuilds it exactly where the recording holds every state the workflow read and
+    // its contacts: a simulated teach run that ended cleanly.
+    const Json stored = Json::parse(reader.metadata().parameters, nullptr, false);
+    const bool written_by_teach = stored.is_object() && stored.contains("seed");
+    entry["rebuilds_session_graph"] = written_by_teach && !over_fri && teaching.closed_cleanly;
+    try {
+      if (const std::optional<app::ItmRecord> snapshot = reader.lastItmSnapshot()) {
+        const planning::Itm graph = planning::itmFromBytes(snapshot->bytes.data(), snapshot->bytes.size(), "session graph");
+        const planning::ItmParameters& parameters = graph.parameters();
+        entry["session_graph"] = {{"nodes", graph.nodeCount()},
+                                  {"edges", graph.edgeCount()},
+                                  {"variant", parameters.variant == planning::ItmVariant::kPlain ? "plain" : "hybrid"},
+                                  {"parameters", itmParametersJson(parameters)}};
+      }
+    } catch (const planning::ItmFileError& error) {
+      std::fprintf(stderr, "note: the session's ITM snapshot is damaged (%s); the stream is written without its parameters\n", error.what());
+      entry["rebuilds_session_graph"] = false;
     }
     result["stream"] = entry;
     files.push_back({"--stream", options.stream, app::configurationStreamCsv(stream)});
@@ -134,6 +159,11 @@ Json exportSession(const ExportOptions& options) {
     files.push_back({"--graph", options.graph, bytesText(snapshot->bytes)});
   }
 
+  if (!teaching.closed_cleanly) {
+    std::fprintf(stderr, "note: the session '%s' was not closed cleanly (interrupted, or still being written); export writes what was recorded\n",
+                 options.session.c_str());
+  }
+  result["closed_cleanly"] = teaching.closed_cleanly;
   for (const Output& file : files) app::writeFileReplacing(file.path, file.content, file.option);
   return result;
 }

@@ -298,7 +298,7 @@ Json section83(const SweepOptions& options, std::ostream& md) {
   const auto map = app::fitMap(taught.data, loaded.model.dof(), app::LearnerKind::kElm, {}, {});
   const Eigen::VectorXd start = taught.areas.empty() ? taught.home : taught.areas.front().q_fixed;
   md << "\n## Sect. 8.3 — 9-DoF arm (arm9_areas), 8 areas, " << options.goals << " goals\n\n"
-     << "| null-space posture along the path | areas (taught / given up) | ITM nodes | paths found | collision-free | within 1 cm | mean plan ms | thesis |\n|---|---|---|---|---|---|---|---|\n";
+     << "| null-space posture along the path | areas (taught / given up) | ITM nodes | paths found | collision-free | within 1 cm | final error max mm | tracking error max mm | mean plan ms | thesis |\n|---|---|---|---|---|---|---|---|---|---|\n";
   Json rows = Json::array();
   // Both executions to the same goals: the postures shown along the paths, and the thesis' q_c alone.
   for (const planning::PlanPostures postures : {planning::PlanPostures::kDemonstrated, planning::PlanPostures::kLearned}) {
@@ -309,9 +309,11 @@ Json section83(const SweepOptions& options, std::ostream& md) {
     for (const auto& [contact, count] : result.contacts) log("Sect. 8.3 " + name + " contact " + contact + " x" + std::to_string(count));
     md << "| " << name << " | " << taught.areas.size() << " / " << taught.areas_given_up << " | " << taught.itm->nodeCount()
        << " | " << result.found << " | " << result.collision_free << " | " << result.reached_1cm << " | "
+       << fixed(1e3 * result.final_error_max_m, 3) << " | " << fixed(1e3 * result.tracking_error_max_m, 1) << " | "
        << fixed(result.mean_plan_ms, 2) << " | 100/100 collision-free, 99 within 1 cm |\n";
     rows.push_back({{"postures", name}, {"goals", result.goals}, {"found", result.found},
                     {"collision_free", result.collision_free}, {"reached_1cm", result.reached_1cm},
+                    {"final_error_max_m", result.final_error_max_m}, {"tracking_error_max_m", result.tracking_error_max_m},
                     {"mean_plan_ms", result.mean_plan_ms}, {"contacts", result.contacts},
                     {"disconnected_nodes", result.disconnected_nodes}});
   }

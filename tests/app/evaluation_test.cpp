@@ -416,6 +416,17 @@ TEST(Evaluation, PlannedMotionsThroughAContactGoOnToTheirGoalAndTheNextStartsThe
   }
   EXPECT_GE(crossings, 2) << "the seed should cross the wall more than once";
   EXPECT_EQ(result.collision_free, 12 - collided);
+  // Within 1 cm is judged apart from the contacts (Sect. 8.3 counts them apart): a motion through
+  // the wall still ends at its goal. It had counted only the collision-free ones.
+  EXPECT_EQ(result.reached_1cm, 12);
+  double largest_final_error = 0.0;
+  for (const PlannedMotion& motion : result.motions) {
+    EXPECT_NEAR(motion.final_error_m, (motion.final_W - motion.goal_W).norm(), 1e-12);
+    EXPECT_TRUE(motion.reached_1cm);
+    largest_final_error = std::max(largest_final_error, motion.final_error_m);
+  }
+  EXPECT_EQ(result.final_error_max_m, largest_final_error);
+  EXPECT_GT(result.tracking_error_max_m, 0.0);
   int counted = 0;
   for (const auto& [contact, motions] : result.contacts) {
     EXPECT_NE(contact.find("/wall"), std::string::npos) << contact;
@@ -451,6 +462,31 @@ TEST(Evaluation, ExploredFractionCountsCellsHoldingSamples) {
   EXPECT_DOUBLE_EQ(result.explored_fraction, 0.5);
   EXPECT_EQ(result.collided, 0);
   EXPECT_EQ(result.reached, 6);  // free space in front of the robot
+}
+
+// A looser "reached" had also shrunk T: the edge of the reach was drawn at reach − tolerance,
+// and a 5 cm tolerance dropped points between 1 and 5 cm inside the edge from the targets.
+TEST(Evaluation, TheGridsToleranceDoesNotChangeWhichPointsAreWithinReach) {
+  Parameters s;
+  const auto map = constantMap();
+  robot::Scene empty;
+  const ArmReach reach = armReach(lwr4());
+  // A row of points straight out from the shoulder, 0.5 to 4.5 cm inside the edge of the reach.
+  robot::EvaluationGrid grid;
+  const Eigen::Vector3d out(-1.0, 0.0, 0.0);
+  grid.lower = reach.shoulder + (reach.reach - 0.045) * out;
+  grid.upper = reach.shoulder + (reach.reach - 0.005) * out;
+  std::swap(grid.lower.x(), grid.upper.x());
+  grid.spacing = 0.01;
+  ASSERT_EQ(grid.points().size(), 5U);
+  grid.tolerance = 0.01;
+  const ReachableResult tight = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, {});
+  grid.tolerance = 0.05;
+  const ReachableResult loose = evaluateReachable(lwr4(), empty, s.parameters, *map, ready(), grid, {});
+  EXPECT_EQ(tight.out_of_reach, 1);  // only the point 0.5 cm from the edge
+  EXPECT_EQ(loose.out_of_reach, tight.out_of_reach);
+  EXPECT_EQ(loose.targets, tight.targets);
+  EXPECT_GE(loose.reached, tight.reached);
 }
 
 TEST(Evaluation, ExcludedBoxesOfTheGridHoldNoTargets) {

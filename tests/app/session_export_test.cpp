@@ -169,6 +169,27 @@ TEST_F(SessionExport, TheSamplesCsvHoldsTheCompleteAreasLatestTakesWithTheirSess
             "1,0.69999999999999996,0.25,0.5,0.23333333333333331,0.23333333333333331\n");
 }
 
+// A damaged file's times: the replay goes through the states in the order they were recorded
+// and ends, however far apart or out of order their times are (it had stepped through time in
+// 10 s windows: 1e300 never ended, -1e9 took 1e8 queries).
+TEST_F(SessionExport, AbsurdStateTimesDoNotStopTheReplayFromEnding) {
+  for (const double t : {0.0, 1e300, -1e9, 0.02, 0.04}) {
+    StateRecord state;
+    state.time = t;
+    state.dof = 2;
+    state.p_WT = {0.1, 0.2, 0.3};
+    ASSERT_TRUE(recorder_->recordState(state));
+  }
+  ASSERT_TRUE(recorder_->recordStage({0.0, "CONFIGURATION", "WAITING"}));
+  const SessionReader reader = read();
+  const ConfigurationStream stream = configurationStream(reader, 0.02, nullptr);
+  EXPECT_EQ(stream.states_read, 5);
+  // 0 (the first state, after the start button), 1e300; then nothing until 1e300 + 0.02.
+  ASSERT_EQ(stream.times.size(), 2u);
+  EXPECT_EQ(stream.times[0], 0.0);
+  EXPECT_EQ(stream.times[1], 1e300);
+}
+
 TEST_F(SessionExport, ASessionWithoutACompleteAreaHasNoSamplesToExport) {
   ASSERT_TRUE(recorder_->recordSample({1.0, 0, Eigen::Vector3d(0.1, 0.2, 0.3), Eigen::VectorXd::Constant(2, 0.1)}));
   const SessionReader reader = read();

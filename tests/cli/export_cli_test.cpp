@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
+#include <unistd.h>
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -61,13 +62,18 @@ class ExportCli : public ::testing::Test {
 fs::path* ExportCli::session_ = nullptr;
 nlohmann::json* ExportCli::taught_ = nullptr;
 
-TEST_F(ExportCli, TheStreamMapsToTheSessionsOwnGraphUnderItmBuild) {
-  const fs::path stream = scratchDir() / "stream.csv";
-  const fs::path graph_file = scratchDir() / "as-taught.itm";
-  const auto exported = runCliBinary("export --session " + session_->string() + " --stream " + stream.string() + " --graph " +
+// itm build on the exported stream, with the parameters export prints, against the graph the
+// session recorded: the same file, node for node, posture for posture.
+void expectTheStreamRebuildsTheSessionsGraph(const fs::path& session) {
+  const std::string name = session.stem().string();
+  const fs::path stream = scratchDir() / (name + "-stream.csv");
+  const fs::path graph_file = scratchDir() / (name + "-as-taught.itm");
+  const fs::path rebuilt_file = scratchDir() / (name + "-rebuilt.itm");
+  const auto exported = runCliBinary("export --session " + session.string() + " --stream " + stream.string() + " --graph " +
                                      graph_file.string());
   ASSERT_EQ(exported.exit_code, 0) << exported.err;
   const nlohmann::json entry = exported.json().at("stream");
+  EXPECT_TRUE(entry.at("rebuilds_session_graph").get<bool>());
   EXPECT_EQ(lines(stream).front(), "x,y,z,q1,q2,q3,q4,q5,q6,q7");
   EXPECT_EQ(static_cast<int>(lines(stream).size()) - 1, entry.at("rows").get<int>());
   EXPECT_GT(entry.at("rows").get<int>(), 100);
@@ -75,18 +81,27 @@ TEST_F(ExportCli, TheStreamMapsToTheSessionsOwnGraphUnderItmBuild) {
   const nlohmann::json graph = entry.at("session_graph");
   const nlohmann::json p = graph.at("parameters");
   std::ostringstream build;
-  build << "itm build --data " << stream.string() << " --out " << (scratchDir() / "rebuilt.itm").string() << " --emax "
-        << p.at("e_max").get<double>() << " --delta " << p.at("delta").get<int>() << " --dthetamax "
-        << p.at("d_theta_max").get<double>() << " --dcmax " << p.at("d_c_max").get<double>() << " --alpha "
-        << p.at("alpha").get<double>();
+  build << "itm build --data " << stream.string() << " --out " << rebuilt_file.string() << " --variant "
+        << graph.at("variant").get<std::string>() << " --emax " << p.at("e_max").get<double>() << " --delta "
+        << p.at("delta").get<int>() << " --dthetamax " << p.at("d_theta_max").get<double>() << " --dcmax "
+        << p.at("d_c_max").get<double>() << " --alpha " << p.at("alpha").get<double>();
   const auto rebuilt = runCliBinary(build.str());
   ASSERT_EQ(rebuilt.exit_code, 0) << rebuilt.err;
-  // The workflow inserted exactly these positions, in this order, into its graph.
   EXPECT_EQ(rebuilt.json().at("samples").get<int>(), entry.at("rows").get<int>());
   EXPECT_EQ(rebuilt.json().at("nodes").get<int>(), graph.at("nodes").get<int>());
   EXPECT_EQ(rebuilt.json().at("edges").get<int>(), graph.at("edges").get<int>());
-  // Node for node, posture for posture: the same file as the graph the session recorded.
-  EXPECT_EQ(fileBytes(scratchDir() / "rebuilt.itm"), fileBytes(graph_file));
+  EXPECT_EQ(fileBytes(rebuilt_file), fileBytes(graph_file)) << session;
+}
+
+TEST_F(ExportCli, TheStreamMapsToTheSessionsOwnGraphUnderItmBuild) {
+  expectTheStreamRebuildsTheSessionsGraph(*session_);
+  // Seed 23 ends its configuration stage with a position taken in the cycle whose trigger came
+  // at the time of the finishing button: a replay that told buttons from triggers by their
+  // times alone lost it.
+  const fs::path other = scratchDir() / "seed23.flexirob";
+  const auto taught = runCliBinary("teach --scene setup_A --areas 1 --seed 23 --check-points 0 --out " + other.string());
+  ASSERT_EQ(taught.exit_code, 0) << taught.err;
+  expectTheStreamRebuildsTheSessionsGraph(other);
 }
 
 TEST_F(ExportCli, TheSamplesAreTheTaughtOnesAndFitUnderLearnFit) {
@@ -150,6 +165,7 @@ TEST_F(ExportCli, TheModelAndGraphAreReadByLearnPredictAndItmPath) {
 
 TEST_F(ExportCli, BadRequestsAreRefusedWithOneLineAndWriteNothing) {
   const fs::path out = scratchDir() / "refused.csv";
+  const fs::path relative = "flexirob-export-refused-" + std::to_string(::getpid()) + ".csv";
   const fs::path json_session = scratchDir() / "hand.json";
   testing::writeText(json_session, R"({"format": "flexirob-session-json", "version": 1})");
   const std::vector<std::pair<std::string, std::string>> cases = {
@@ -160,6 +176,11 @@ TEST_F(ExportCli, BadRequestsAreRefusedWithOneLineAndWriteNothing) {
       {"export --session " + (scratchDir() / "missing.flexirob").string() + " --samples " + out.string(), "missing.flexirob"},
       {"export --session " + session_->string() + " --samples " + (scratchDir() / "no" / "x.csv").string(), "does not exist"},
       {"export --session " + session_->string() + " --stream " + out.string() + " --sample-period 0", "--sample-period"},
+      {"export --session " + session_->string() + " --samples " + out.string() + " --stream " + session_->string() + "-wal",
+       "a file SQLite keeps beside it"},
+      // Two spellings of one file that does not exist yet (relative to the working folder).
+      {"export --session " + session_->string() + " --samples " + relative.string() + " --stream ./" + relative.string(),
+       "its own file"},
   };
   for (const auto& [arguments, reason] : cases) {
     const auto result = runCliBinary(arguments);
@@ -167,8 +188,24 @@ TEST_F(ExportCli, BadRequestsAreRefusedWithOneLineAndWriteNothing) {
     EXPECT_NE(result.err.find(reason), std::string::npos) << arguments << "\n" << result.err;
     EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
     EXPECT_FALSE(fs::exists(out)) << arguments;
+    EXPECT_FALSE(fs::exists(relative)) << arguments;
   }
   EXPECT_TRUE(fs::exists(*session_));
+}
+
+// Outputs are written through temporaries renamed into place; an output that happens to be
+// named as another's temporary would have been replaced by it.
+TEST_F(ExportCli, AnOutputNamedLikeAnothersTemporaryIsKept) {
+  const fs::path stream = scratchDir() / "pair.csv";
+  const fs::path samples = scratchDir() / "pair.csv.tmp";
+  const auto exported = runCliBinary("export --session " + session_->string() + " --samples " + samples.string() + " --stream " +
+                                     stream.string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  EXPECT_EQ(lines(samples).front(), "area,x,y,z,q1,q2,q3,q4,q5,q6,q7");
+  EXPECT_EQ(lines(stream).front(), "x,y,z,q1,q2,q3,q4,q5,q6,q7");
+  std::size_t files = 0;
+  for (const auto& entry : fs::directory_iterator(scratchDir())) files += entry.path().string().find("pair.csv") != std::string::npos;
+  EXPECT_EQ(files, 2u) << "a temporary was left behind";
 }
 
 TEST(ExportCliWithoutModel, ASessionLackingOneRequestedOutputWritesNoneOfThem) {
