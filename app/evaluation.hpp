@@ -154,7 +154,7 @@ struct ReachableResult {
   int inaccessible = 0;  ///< within reach and outside the obstacles, but neither the IK search nor the learned map found a collision-free posture there
   int excluded = 0;      ///< within reach and outside the obstacles, but in a box the grid excludes
   int reached = 0;       ///< reached within the tolerance without collision
-  int collided = 0;
+  int collided = 0;      ///< not reached: a contact on the way (the others not reached ended farther than the tolerance)
   double reachable_fraction = 0.0;  ///< reached / targets
   /// Targets where the posture the learned redundancy resolution resolves is within the
   /// tolerance and without a contact: the controller run from q_c(x_target) until it settles,

@@ -310,6 +310,7 @@ Json runReachable(const EvalOptions& options) {
                {"reachable_fraction", fraction(result.reachable_fraction)},
                {"explored_fraction", fraction(result.explored_fraction)},
                {"collided", result.collided},
+               {"missed_without_contact", result.targets - result.reached - result.collided},
                {"resolved_free", result.resolved_free},
                {"resolved_fraction", fraction(result.resolved_fraction)},
                {"grid_points", result.grid_points},
