@@ -444,6 +444,16 @@ Json renderPicture(const RenderOptions& options) {
     const Json json = readJsonFile(options.reachable, "--reachable");
     drawn["reachable_matches"] = belongsToTheDrawing(json, "--reachable", options.reachable, scene, model);
     const std::vector<Eigen::Vector3d> points = pointList(json, "target_points", "--reachable");
+    // Targets lie outside the obstacles of the scene they were measured in: targets inside the
+    // drawn scene's obstacles were measured in another scene of the same name (a mirrored copy).
+    const auto inside = std::count_if(points.begin(), points.end(),
+                                      [&scene](const Eigen::Vector3d& p) { return robot::obstacleAt(scene, p) != nullptr; });
+    if (inside > 0 && drawn["reachable_matches"].get<bool>()) {
+      std::cerr << "note: --reachable '" << printable(options.reachable, 200) << "': " << inside << " of its " << points.size()
+                << " targets lie inside the drawn scene's obstacles; it was measured in another scene of the name '"
+                << printable(scene.name, 80) << "'\n";
+      drawn["reachable_matches"] = false;
+    }
     if (!json.contains("target_reached") || !json.at("target_reached").is_array() ||
         json.at("target_reached").size() != points.size()) {
       throw InputError("--reachable: 'target_reached' must be an array as long as 'target_points'");

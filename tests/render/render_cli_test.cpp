@@ -22,6 +22,7 @@
 #include "robot/kinematics.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
+#include "robot/scene.hpp"
 
 namespace flexirob::cli {
 namespace {
@@ -275,6 +276,15 @@ TEST(RenderCommandOverlays, SaysWhenAResultWasMeasuredInAnotherSceneOrWithAnothe
               std::string::npos)
         << other.err;
   }
+  // The same name, another scene (a mirrored copy, say): a target lies inside an obstacle drawn.
+  const Eigen::Vector3d in_box = robot::loadScene("setup_I").obstacles.front().X_WO.translation();
+  writeText(reachable, R"({"target_points": [[-0.6, -0.3, 0.3], [)" + std::to_string(in_box.x()) + ", " + std::to_string(in_box.y()) +
+                           ", " + std::to_string(in_box.z()) + R"(]], "target_reached": [true, false], "robot": "lwr4", "scene": "setup_I"})");
+  const Result copy = run({"render", "--scene", "setup_I", "--reachable", reachable.string(), "--out", file.string(), "--width", "64",
+                           "--height", "48", "--supersample", "1"});
+  ASSERT_EQ(copy.exit_code, 0) << copy.err;
+  EXPECT_FALSE(nlohmann::json::parse(copy.out).at("overlays").at("reachable_matches").get<bool>());
+  EXPECT_NE(copy.err.find("1 of its 2 targets lie inside the drawn scene's obstacles"), std::string::npos) << copy.err;
   for (const auto& f : {reachable, file}) std::filesystem::remove(f);
 }
 
