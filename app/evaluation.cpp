@@ -393,21 +393,30 @@ Eigen::VectorXd demonstratedPosture(const robot::RobotModel& model, const learni
   return training.Y.col(l).cwiseMax(model.softLowerLimits()).cwiseMin(model.softUpperLimits());
 }
 
-Eigen::VectorXd nearestDemonstratedPosture(const robot::RobotModel& model, const learning::TrainingSet& training,
-                                           const Eigen::Vector3d& p_W, const Eigen::VectorXd& fallback) {
+std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> demonstratedStandingPostures(const robot::RobotModel& model,
+                                                                                     const learning::TrainingSet& training) {
+  std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> standing;
   if (training.size() == 0 || training.X.rows() < 3 || training.Y.rows() != model.dof() || training.Y.cols() != training.X.cols()) {
-    return fallback;
+    return standing;
   }
-  Eigen::Index nearest = -1;
-  double nearest_distance = std::numeric_limits<double>::infinity();
   for (Eigen::Index l = 0; l < training.X.cols(); ++l) {
-    const double distance = (training.X.col(l).head<3>() - p_W).squaredNorm();
-    if (distance < nearest_distance && training.Y.col(l).allFinite()) {
-      nearest_distance = distance;
-      nearest = l;
+    if (!training.X.col(l).head<3>().allFinite() || !training.Y.col(l).allFinite()) continue;
+    standing.emplace_back(training.X.col(l).head<3>(), demonstratedPosture(model, training, l));
+  }
+  return standing;
+}
+
+const Eigen::VectorXd& nearestStandingPosture(const std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>>& standing,
+                                              const Eigen::Vector3d& p_W, const Eigen::VectorXd& fallback) {
+  const Eigen::VectorXd* best = &fallback;
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (const auto& [tip, q] : standing) {
+    if ((tip - p_W).squaredNorm() < best_distance) {
+      best_distance = (tip - p_W).squaredNorm();
+      best = &q;
     }
   }
-  return nearest < 0 ? fallback : demonstratedPosture(model, training, nearest);
+  return *best;
 }
 
 ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::Scene& scene,
@@ -487,23 +496,10 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   }
   Eigen::VectorXd q_previous = q_start;  // kPreviousTarget: last posture reached without contact
   // kNearestReached, kNearestVisited: tip positions with the postures the arm stood in there.
-  std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> reached_postures;
-  if (start_from_samples) {
-    for (Eigen::Index l = 0; l < training.X.cols(); ++l) {
-      const Eigen::VectorXd q = demonstratedPosture(model, training, l);
-      if (training.X.col(l).head<3>().allFinite() && q.allFinite()) reached_postures.emplace_back(training.X.col(l).head<3>(), q);
-    }
-  }
+  std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>>& reached_postures = result.standing_postures;
+  if (start_from_samples) reached_postures = demonstratedStandingPostures(model, training);
   const auto nearestReachedPosture = [&](const Eigen::Vector3d& p) -> const Eigen::VectorXd& {
-    const Eigen::VectorXd* best = &q_start;
-    double best_distance = std::numeric_limits<double>::infinity();
-    for (const auto& [target, q] : reached_postures) {
-      if ((target - p).squaredNorm() < best_distance) {
-        best_distance = (target - p).squaredNorm();
-        best = &q;
-      }
-    }
-    return *best;
+    return nearestStandingPosture(reached_postures, p, q_start);
   };
   int explored = 0;
   for (std::size_t i = 0; i < targets.size(); ++i) {

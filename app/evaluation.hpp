@@ -50,10 +50,11 @@ Eigen::VectorXd learnedPosture(const robot::RobotModel& model, const learning::L
 /// is (a recorded posture may sit a hair beyond one).
 Eigen::VectorXd demonstratedPosture(const robot::RobotModel& model, const learning::TrainingSet& training, Eigen::Index l);
 
-/// Where ApproachFrom::kNearestVisited starts a single target p_W: the demonstrated posture whose
-/// tip lay nearest it; `fallback` where the demonstration holds no posture that fits the robot.
-Eigen::VectorXd nearestDemonstratedPosture(const robot::RobotModel& model, const learning::TrainingSet& training,
-                                           const Eigen::Vector3d& p_W, const Eigen::VectorXd& fallback);
+/// The demonstration's samples as places the arm stood: tip position with the posture (clamped as
+/// demonstratedPosture does), samples without a finite posture left out; none where the
+/// demonstration holds no posture that fits the robot. Where ApproachFrom::kNearestVisited starts.
+std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> demonstratedStandingPostures(const robot::RobotModel& model,
+                                                                                     const learning::TrainingSet& training);
 
 /// One target of the reachability evaluation (Sect. 3.3.2): from q_start to the fixed target p_W,
 /// settle time 3 s.
@@ -173,7 +174,15 @@ struct ReachableResult {
   std::vector<bool> target_resolved_free;     ///< per target of T: counted in resolved_free
   std::vector<Eigen::VectorXd> final_postures; ///< per target of T: where the arm ended [rad]
   std::vector<std::string> target_contact;     ///< per target of T: its first contact "body/other", "" if none
+  /// kNearestVisited, kNearestReached: where the arm stood by the end of the run, tip position
+  /// with posture (the demonstration's samples for kNearestVisited, then every target reached),
+  /// from which the nearest start of a further target is taken (nearestStandingPosture).
+  std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> standing_postures;
 };
+
+/// The posture of `standing` whose tip lay nearest p_W; `fallback` when `standing` is empty.
+const Eigen::VectorXd& nearestStandingPosture(const std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>>& standing,
+                                              const Eigen::Vector3d& p_W, const Eigen::VectorXd& fallback);
 
 /// Whether some collision-free posture puts the tip on p_W (within 1 mm): IK with the
 /// hierarchical controller from `seeds` null-space targets (q_start first, then seeded random

@@ -1,5 +1,6 @@
 #include "app/session_export.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -167,7 +168,18 @@ void writeFileReplacing(const std::filesystem::path& file, const std::string& te
   std::string temporary = file.string() + ".XXXXXX";
   const int descriptor = ::mkstemp(temporary.data());
   if (descriptor < 0) throw InputError(option + ": cannot write '" + file.string() + "': " + std::strerror(errno));
-  bool written = true;
+  // mkstemp makes the file private; it gets the mode the file it replaces had, or the one a new
+  // file gets under the user's umask.
+  struct stat existing {};
+  mode_t mode = 0;
+  if (::stat(file.c_str(), &existing) == 0) {
+    mode = existing.st_mode & 07777;
+  } else {
+    const mode_t mask = ::umask(0);
+    ::umask(mask);
+    mode = 0666 & ~mask;
+  }
+  bool written = ::fchmod(descriptor, mode) == 0;
   for (std::size_t done = 0; done < text.size() && written;) {
     const ssize_t n = ::write(descriptor, text.data() + done, text.size() - done);
     if (n < 0 && errno == EINTR) continue;
@@ -176,12 +188,7 @@ void writeFileReplacing(const std::filesystem::path& file, const std::string& te
   }
   written = ::close(descriptor) == 0 && written;
   std::error_code error;
-  if (written) {
-    std::filesystem::permissions(temporary, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write |
-                                                std::filesystem::perms::group_read | std::filesystem::perms::others_read,
-                                 error);
-    std::filesystem::rename(temporary, file, error);
-  }
+  if (written) std::filesystem::rename(temporary, file, error);
   if (!written || error) {
     std::filesystem::remove(temporary, error);
     throw InputError(option + ": cannot write '" + file.string() + "'" + (written ? "" : " (disk full?)"));

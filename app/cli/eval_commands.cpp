@@ -341,16 +341,9 @@ Json runReachable(const EvalOptions& options) {
   for (const Eigen::Vector3d& target : session.scene_data.targets) {
     Eigen::VectorXd q_start = startPosture(session);
     if (approach == app::ApproachFrom::kNearestVisited) {
-      q_start = app::nearestDemonstratedPosture(*session.model, session.data, target, q_start);
-      double nearest = session.data.size() > 0 ? (session.data.X.colwise() - target).colwise().norm().minCoeff()
-                                               : std::numeric_limits<double>::infinity();
-      for (std::size_t i = 0; i < result.target_points.size(); ++i) {
-        const double distance = (result.target_points[i] - target).norm();
-        if (result.target_reached[i] && distance < nearest) {
-          nearest = distance;
-          q_start = result.final_postures[i];
-        }
-      }
+      // Where the grid's run left the arm standing: the demonstration's samples and the
+      // targets it reached, as the grid's own targets start.
+      q_start = app::nearestStandingPosture(result.standing_postures, target, q_start);
     } else if (approach == app::ApproachFrom::kLearnedPosture) {
       q_start = app::learnedPosture(*session.model, *learner, target);
     } else if (approach != app::ApproachFrom::kStartPosture && session.data.size() > 0) {

@@ -49,8 +49,12 @@ Json exportSession(const ExportOptions& options) {
   // The session and the files SQLite and the recorder keep beside it (an interrupted session's
   // log holds what the database does not yet): none of them is an output.
   std::map<std::string, std::string> chosen;
-  for (const char* suffix : {"", "-wal", "-shm", "-journal"}) chosen.emplace(sameFileKey(options.session + suffix), "--session");
-  chosen.emplace(sameFileKey(app::SessionWriteLock::lockFileFor(options.session).string()), "--session");
+  // As given and, for a session reached through a symbolic link, as resolved: SQLite keeps its
+  // log beside the file the link names.
+  for (const std::string& session : {options.session, sameFileKey(options.session)}) {
+    for (const char* suffix : {"", "-wal", "-shm", "-journal"}) chosen.emplace(sameFileKey(session + suffix), "--session");
+    chosen.emplace(sameFileKey(app::SessionWriteLock::lockFileFor(session).string()), "--session");
+  }
   bool any = false;
   for (const auto& [option, path] : outputs) {
     if (path.empty()) continue;
@@ -124,9 +128,10 @@ Json exportSession(const ExportOptions& options) {
     // its contacts: a simulated teach run that ended cleanly.
     const Json stored = Json::parse(reader.metadata().parameters, nullptr, false);
     const bool written_by_teach = stored.is_object() && stored.contains("seed");
-    entry["rebuilds_session_graph"] = written_by_teach && !over_fri && teaching.closed_cleanly;
+    entry["rebuilds_session_graph"] = false;
     try {
       if (const std::optional<app::ItmRecord> snapshot = reader.lastItmSnapshot()) {
+        entry["rebuilds_session_graph"] = written_by_teach && !over_fri && teaching.closed_cleanly;
         const planning::Itm graph = planning::itmFromBytes(snapshot->bytes.data(), snapshot->bytes.size(), "session graph");
         const planning::ItmParameters& parameters = graph.parameters();
         entry["session_graph"] = {{"nodes", graph.nodeCount()},
@@ -164,7 +169,9 @@ Json exportSession(const ExportOptions& options) {
                  options.session.c_str());
   }
   result["closed_cleanly"] = teaching.closed_cleanly;
-  for (const Output& file : files) app::writeFileReplacing(file.path, file.content, file.option);
+  // Each to the file its path names: through a symbolic link to the file it points at, so that
+  // the link stays and the check for outputs naming one file holds for what is written.
+  for (const Output& file : files) app::writeFileReplacing(sameFileKey(file.path), file.content, file.option);
   return result;
 }
 

@@ -792,18 +792,21 @@ TEST(Evaluation, ASingleTargetStartsFromTheDemonstratedPostureNearestItClampedTo
   demonstration.X.col(3) += Eigen::Vector3d(0.0, 0.0, 0.05);  // the broken sample 5 cm above ready()'s tip
   const Eigen::VectorXd fallback = lwr4().midPosture();
   const Eigen::Vector3d near_shown = demonstration.X.col(0) + Eigen::Vector3d(0.01, 0.0, 0.0);
-  EXPECT_EQ(nearestDemonstratedPosture(lwr4(), demonstration, near_shown, fallback), shown);
-  const Eigen::VectorXd clamped = nearestDemonstratedPosture(lwr4(), demonstration, demonstration.X.col(1), fallback);
+  const auto standing = demonstratedStandingPostures(lwr4(), demonstration);
+  EXPECT_EQ(standing.size(), 3U);  // the broken sample is left out
+  EXPECT_EQ(nearestStandingPosture(standing, near_shown, fallback), shown);
+  const Eigen::VectorXd clamped = nearestStandingPosture(standing, demonstration.X.col(1), fallback);
   EXPECT_DOUBLE_EQ(clamped[1], lwr4().softUpperLimits()[1]);
   // The sample without a finite posture is passed over for the next nearest.
-  EXPECT_EQ(nearestDemonstratedPosture(lwr4(), demonstration, demonstration.X.col(3), fallback), ready());
+  EXPECT_EQ(nearestStandingPosture(standing, demonstration.X.col(3), fallback), ready());
   // Nothing that fits the robot: the fallback.
   learning::TrainingSet positions_only;
   positions_only.X = demonstration.X;
-  EXPECT_EQ(nearestDemonstratedPosture(lwr4(), positions_only, near_shown, fallback), fallback);
+  EXPECT_TRUE(demonstratedStandingPostures(lwr4(), positions_only).empty());
+  EXPECT_EQ(nearestStandingPosture({}, near_shown, fallback), fallback);
   learning::TrainingSet other_robot = demonstration;
   other_robot.Y.conservativeResize(6, Eigen::NoChange);
-  EXPECT_EQ(nearestDemonstratedPosture(lwr4(), other_robot, near_shown, fallback), fallback);
+  EXPECT_TRUE(demonstratedStandingPostures(lwr4(), other_robot).empty());
 }
 
 TEST(Evaluation, ApproachNamesParseAndUnknownOnesAreRefused) {

@@ -2,6 +2,7 @@
 // configuration stage fed the ITM, replayed from the states with the workflow's sampling rule,
 // and the training samples as the CSV learn fit reads.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -213,6 +214,23 @@ TEST(SessionExportFile, ReplacesTheFileWholeAndRefusesAFolderThatIsNotThere) {
   } catch (const InputError& error) {
     EXPECT_EQ(std::string(error.what()).rfind("--stream: cannot write", 0), 0u) << error.what();
   }
+}
+
+// mkstemp makes a private file; the file written must not be more or less private than the
+// one it replaces, or than a new file under the user's umask.
+TEST(SessionExportFile, KeepsTheReplacedFilesModeAndGivesANewOneTheUmasks) {
+  const fs::path folder = fs::temp_directory_path() / ("flexirob-export-mode-" + std::to_string(::getpid()));
+  fs::create_directories(folder);
+  const mode_t previous = ::umask(077);
+  writeFileReplacing(folder / "new.csv", "x\n", "--samples");
+  ::umask(previous);
+  EXPECT_EQ(fs::status(folder / "new.csv").permissions() & fs::perms::all, fs::perms::owner_read | fs::perms::owner_write);
+  writeFileReplacing(folder / "kept.csv", "old\n", "--samples");
+  fs::permissions(folder / "kept.csv", fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  writeFileReplacing(folder / "kept.csv", "new\n", "--samples");
+  EXPECT_EQ(fs::status(folder / "kept.csv").permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  fs::remove_all(folder);
 }
 
 }  // namespace

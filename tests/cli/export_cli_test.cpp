@@ -208,6 +208,29 @@ TEST_F(ExportCli, AnOutputNamedLikeAnothersTemporaryIsKept) {
   EXPECT_EQ(files, 2u) << "a temporary was left behind";
 }
 
+// An output that is a symbolic link: the file it points at is written and the link stays. A
+// session reached through a link: the log SQLite keeps beside the file it points at is refused.
+TEST_F(ExportCli, WritesThroughALinkAndRefusesTheLogBesideALinkedSession) {
+  const fs::path target = scratchDir() / "pointed-at.csv";
+  const fs::path link = scratchDir() / "link.csv";
+  testing::writeText(target, "old\n");
+  fs::remove(link);
+  fs::create_symlink(target, link);
+  const auto written = runCliBinary("export --session " + session_->string() + " --samples " + link.string());
+  ASSERT_EQ(written.exit_code, 0) << written.err;
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_EQ(lines(target).front(), "area,x,y,z,q1,q2,q3,q4,q5,q6,q7");
+
+  const fs::path linked_session = scratchDir() / "linked.flexirob";
+  fs::remove(linked_session);
+  fs::create_symlink(*session_, linked_session);
+  const fs::path log = session_->string() + "-wal";
+  const auto refused = runCliBinary("export --session " + linked_session.string() + " --samples " + log.string());
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("a file SQLite keeps beside it"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(log) && lines(log).size() > 0 && lines(log).front().rfind("area,", 0) == 0);
+}
+
 TEST(ExportCliWithoutModel, ASessionLackingOneRequestedOutputWritesNoneOfThem) {
   const fs::path session = scratchDir() / "no-model.flexirob";
   {
