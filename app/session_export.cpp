@@ -10,6 +10,7 @@
 #include <cstring>
 #include <system_error>
 
+#include "app/workflow.hpp"
 #include "robot/errors.hpp"
 
 namespace flexirob::app {
@@ -59,7 +60,7 @@ struct StageChange {
 
 std::vector<StageChange> stageChanges(const SessionReader& reader, double first_state_time) {
   std::vector<StageChange> changes;
-  std::string stage = "IDLE";
+  std::string stage = toString(Stage::kIdle);
   for (const StageRecord& record : reader.stages()) {  // in time order
     const bool by_trigger = record.stage == stage;
     changes.push_back({record.time, by_trigger || record.time <= first_state_time, record.stage, record.sub_stage});
@@ -86,6 +87,9 @@ ConfigurationStream configurationStream(const SessionReader& reader, double samp
   std::size_t next_change = 0;
   std::string stage, sub_stage;
   double last_sample_time = -1e9;  // as Workflow::last_sample_time_
+  // The names the workflow records its stages under.
+  const std::string configuration = toString(Stage::kConfiguration), programming = toString(Stage::kProgramming);
+  const std::string recording = toString(SubStage::kRecording), teach_in = toString(SubStage::kTeachIn);
   const double total = static_cast<double>(std::max<std::int64_t>(reader.stateCount(), 1));
   std::int64_t row = 0;
   for (;;) {
@@ -99,16 +103,16 @@ ConfigurationStream configurationStream(const SessionReader& reader, double samp
       ++stream.states_read;
       while (next_change < changes.size() && begins(changes[next_change], state.time)) {
         const StageChange& change = changes[next_change++];
-        const bool recording_begins = (change.sub_stage == "RECORDING" || change.sub_stage == "TEACH-IN") &&
+        const bool recording_begins = (change.sub_stage == recording || change.sub_stage == teach_in) &&
                                       (change.sub_stage != sub_stage || change.stage != stage);
         stage = change.stage;
         sub_stage = change.sub_stage;
         if (recording_begins) last_sample_time = -1e9;
       }
-      if (stage != "CONFIGURATION" && stage != "PROGRAMMING") continue;
+      if (stage != configuration && stage != programming) continue;
       if (state.time - last_sample_time < sample_period - 1e-9) continue;  // Workflow::recordSample
       last_sample_time = state.time;
-      if (stage != "CONFIGURATION") continue;
+      if (stage != configuration) continue;
       const Eigen::VectorXd q = state.qVector();
       const Eigen::Vector3d p = state.position();
       if (q.size() < 1 || (dof >= 0 && q.size() != dof)) throw InputError("session: recorded states of varying joint counts");

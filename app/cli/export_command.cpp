@@ -2,6 +2,7 @@
 // --samples (learn fit), --stream (itm build), --model (learn predict), --graph (itm path).
 #include <fstream>
 #include <map>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -25,10 +26,9 @@ struct ExportOptions {
 };
 
 // A session driven over FRI (the real robot, or teach --backend fri-sim): the workflow saw no
-// contacts and fed its ITM every position. The GUI records its backend as "sim" or
-// "fri://HOST:PORT", teach as "sim" or "fri-sim".
-bool drivenOverFri(const app::SessionReader& reader) {
-  const Json parameters = Json::parse(reader.metadata().parameters, nullptr, false);
+// contacts and fed its ITM every position. `parameters` are the session's metadata; the GUI
+// records its backend as "sim" or "fri://HOST:PORT", teach as "sim" or "fri-sim".
+bool drivenOverFri(const Json& parameters) {
   if (!parameters.is_object() || !parameters.contains("backend") || !parameters.at("backend").is_string()) return false;
   return parameters.at("backend").get<std::string>().rfind("fri", 0) == 0;
 }
@@ -79,6 +79,10 @@ Json exportSession(const ExportOptions& options) {
   // The graph is read only where it is asked for: a damaged snapshot does not stand in the way
   // of the samples.
   const app::RecordedTeaching teaching = app::readRecordedTeaching(reader, false);
+  const Json stored_parameters = Json::parse(reader.metadata().parameters, nullptr, false);
+  // The last ITM snapshot, read once for --stream and --graph.
+  const std::optional<app::ItmRecord> snapshot =
+      options.stream.empty() && options.graph.empty() ? std::nullopt : reader.lastItmSnapshot();
   Json result;
   result["session"] = options.session;
   result["robot"] = teaching.robot;
@@ -107,7 +111,7 @@ Json exportSession(const ExportOptions& options) {
     std::unique_ptr<robot::RobotModel> model;
     std::unique_ptr<robot::Scene> scene;
     std::unique_ptr<robot::CollisionWorld> world;
-    const bool over_fri = drivenOverFri(reader);
+    const bool over_fri = drivenOverFri(stored_parameters);
     if (!over_fri) {
       model = std::make_unique<robot::RobotModel>(loadSessionRobot(teaching.robot, teaching.robot_urdf, teaching.tip));
       scene = std::make_unique<robot::Scene>(loadSessionScene(teaching.scene, teaching.scene_text));
@@ -126,11 +130,10 @@ Json exportSession(const ExportOptions& options) {
     // The session's graph and what itm build needs to map the stream as the session did. The
     // stream rebuilds it exactly where the recording holds every state the workflow read and
     // its contacts: a simulated teach run that ended cleanly.
-    const Json stored = Json::parse(reader.metadata().parameters, nullptr, false);
-    const bool written_by_teach = stored.is_object() && stored.contains("seed");
+    const bool written_by_teach = stored_parameters.is_object() && stored_parameters.contains("seed");
     entry["rebuilds_session_graph"] = false;
     try {
-      if (const std::optional<app::ItmRecord> snapshot = reader.lastItmSnapshot()) {
+      if (snapshot) {
         entry["rebuilds_session_graph"] = written_by_teach && !over_fri && teaching.closed_cleanly;
         const planning::Itm graph = planning::itmFromBytes(snapshot->bytes.data(), snapshot->bytes.size(), "session graph");
         const planning::ItmParameters& parameters = graph.parameters();
@@ -156,7 +159,6 @@ Json exportSession(const ExportOptions& options) {
   }
 
   if (!options.graph.empty()) {
-    const std::optional<app::ItmRecord> snapshot = reader.lastItmSnapshot();
     if (!snapshot) throw InputError("--graph: the session recorded no ITM graph");
     // The snapshot is checked as itm path will read it; a damaged one is not handed on.
     const planning::Itm graph = planning::itmFromBytes(snapshot->bytes.data(), snapshot->bytes.size(), options.session + " (ITM snapshot)");
