@@ -332,17 +332,19 @@ Json runReachable(const EvalOptions& options) {
   // The scene's single targets, reached within the grid's tolerance without a contact on the
   // way, each started as the grid's targets are: `visited` from the posture the arm stood in
   // with its tip nearest it, at a grid target reached or at a sample of the demonstration;
-  // `learned` from q_c(x), `start` from the start posture; `nearest` and `previous`, whose
-  // starts depend on the grid's tour, from the taught posture of the area whose sample lies
-  // nearest. The start posture where there is no demonstration and no target was reached.
+  // `nearest` from the posture at the grid target reached nearest it (the demonstration left
+  // out, as for the grid's targets); `learned` from q_c(x), `start` from the start posture;
+  // `previous`, whose start is wherever the grid's tour ended, from the taught posture of the
+  // area whose sample lies nearest. The start posture where there is no demonstration and no
+  // target was reached.
   Json scene_targets = Json::array();
   int scene_targets_reached = 0;
   robot::CollisionWorld world(*session.model, session.scene_data);
   for (const Eigen::Vector3d& target : session.scene_data.targets) {
     Eigen::VectorXd q_start = startPosture(session);
-    if (approach == app::ApproachFrom::kNearestVisited) {
-      // Where the grid's run left the arm standing: the demonstration's samples and the
-      // targets it reached, as the grid's own targets start.
+    if (approach == app::ApproachFrom::kNearestVisited || approach == app::ApproachFrom::kNearestReached) {
+      // Where the grid's run left the arm standing, as the grid's own targets start: the
+      // targets it reached, and under `visited` the demonstration's samples.
       q_start = app::nearestStandingPosture(result.standing_postures, target, q_start);
     } else if (approach == app::ApproachFrom::kLearnedPosture) {
       q_start = app::learnedPosture(*session.model, *learner, target);
