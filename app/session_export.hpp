@@ -48,9 +48,4 @@ std::string trainingSamplesCsv(const RecordedTeaching& teaching);
 /// The stream as CSV: header `x,y,z,q1,…,qN`, one position per row in time order.
 std::string configurationStreamCsv(const ConfigurationStream& stream);
 
-/// Writes `text` to a new temporary file beside `file` and renames it into place, so that a
-/// reader never sees half a file and a failed write leaves what was there. Throws InputError naming
-/// `option` when the file cannot be written.
-void writeFileReplacing(const std::filesystem::path& file, const std::string& text, const std::string& option);
-
 }  // namespace flexirob::app

@@ -15,28 +15,7 @@ namespace flexirob::app {
 WorkflowSessionWriter::WorkflowSessionWriter(SessionRecorder& recorder, const Workflow& workflow,
                                              robot::Simulation* simulation, WorkflowSessionOptions options)
     : recorder_(&recorder), workflow_(&workflow), simulation_(simulation), options_(std::move(options)) {
-  scratch_ = options_.scratch_directory.empty()
-                 ? std::filesystem::temp_directory_path() / ("flexirob-session-" + std::to_string(::getpid()) + "-" +
-                                                             std::to_string(reinterpret_cast<std::uintptr_t>(this)))
-                 : options_.scratch_directory;
-  std::filesystem::create_directories(scratch_);
   itm_version_ = workflow.itmVersion();
-}
-
-WorkflowSessionWriter::~WorkflowSessionWriter() {
-  std::error_code ignored;
-  if (options_.scratch_directory.empty()) std::filesystem::remove_all(scratch_, ignored);
-}
-
-std::vector<std::uint8_t> WorkflowSessionWriter::serialized(
-    const std::string& name, const std::function<void(const std::filesystem::path&)>& save) {
-  const std::filesystem::path file = scratch_ / name;
-  save(file);
-  std::ifstream in(file, std::ios::binary);
-  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::error_code ignored;
-  std::filesystem::remove(file, ignored);
-  return bytes;
 }
 
 void WorkflowSessionWriter::recordModel(double time) {
@@ -47,7 +26,8 @@ void WorkflowSessionWriter::recordModel(double time) {
   record.learner_kind = model->kind();
   record.samples = static_cast<int>(workflow_->trainingSet().size());
   record.train_seconds = workflow_->learningSeconds();
-  record.bytes = serialized("model.bin", [&](const std::filesystem::path& file) { model->save(file); });
+  const std::string text = model->modelText();
+  record.bytes.assign(text.begin(), text.end());
   recorder_->recordModel(std::move(record));
   ++records_;
 }

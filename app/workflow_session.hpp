@@ -28,8 +28,6 @@ namespace flexirob::app {
 struct WorkflowSessionOptions {
   double itm_period = 1.0;        ///< [s] of backend time between ITM snapshots (when it changed)
   double executed_period = 0.02;  ///< [s] between recorded points of an executed motion
-  /// Where models and graphs are serialized before they are recorded (created, removed after).
-  std::filesystem::path scratch_directory;
 };
 
 /// Bytes of ITM snapshots a session may take per second of backend time. Each snapshot holds the
@@ -78,7 +76,7 @@ class WorkflowSessionWriter {
   /// recorder and workflow (and simulation, may be null: no collisions) must outlive the writer.
   WorkflowSessionWriter(SessionRecorder& recorder, const Workflow& workflow, robot::Simulation* simulation,
                         WorkflowSessionOptions options = {});
-  ~WorkflowSessionWriter();
+  ~WorkflowSessionWriter() = default;
   WorkflowSessionWriter(const WorkflowSessionWriter&) = delete;
   WorkflowSessionWriter& operator=(const WorkflowSessionWriter&) = delete;
 
@@ -94,13 +92,11 @@ class WorkflowSessionWriter {
   void recordModel(double time);
   void recordItm(double time);
   void trackExecution();
-  std::vector<std::uint8_t> serialized(const std::string& name, const std::function<void(const std::filesystem::path&)>& save);
 
   SessionRecorder* recorder_;
   const Workflow* workflow_;
   robot::Simulation* simulation_;
   WorkflowSessionOptions options_;
-  std::filesystem::path scratch_;
   std::size_t events_seen_ = 0;
   std::size_t collisions_seen_ = 0;
   std::uint64_t itm_version_ = 0;

@@ -162,10 +162,10 @@ double Learner::meanSquaredError(const TrainingSet& data) const {
   return (predictColumns(data.X) - data.Y).colwise().squaredNorm().mean();
 }
 
-void Learner::save(const std::filesystem::path& file) const {
+std::string Learner::modelText() const {
   ModelWriter writer(kind());
   write(writer);
-  writer.writeFile(file);
+  return writer.text();
 }
 
 std::unique_ptr<Learner> readLearner(const ModelReader& reader) {

@@ -128,7 +128,8 @@ class Learner {
 
   /// Writes the whole model (hyper-parameters, dimensions, normalization, seed, weights).
   virtual void write(ModelWriter& writer) const = 0;
-  void save(const std::filesystem::path& file) const;
+  /// The model file's content (ModelReader reads it back; loadLearner reads a file of it).
+  std::string modelText() const;
 
  protected:
   /// Throws unless trained, x has M finite entries and y_size == N.

@@ -110,25 +110,6 @@ std::string ModelWriter::text() const {
   return body_ + "checksum " + hex64(fnv1a64(body_.data(), body_.size())) + "\n";
 }
 
-void ModelWriter::writeFile(const std::filesystem::path& file) const {
-  const std::string content = text();
-  std::filesystem::path temporary = file;
-  temporary += ".tmp";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw ModelFileError("cannot write model file '" + file.string() + "'");
-    out.write(content.data(), static_cast<std::streamsize>(content.size()));
-    out.flush();
-    if (!out) throw ModelFileError("cannot write model file '" + file.string() + "' (disk full?)");
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, file, error);
-  if (error) {
-    std::filesystem::remove(temporary, error);
-    throw ModelFileError("cannot write model file '" + file.string() + "'");
-  }
-}
-
 // ---------------------------------------------------------------------------------------------
 ModelReader ModelReader::fromFile(const std::filesystem::path& file) {
   std::error_code error;

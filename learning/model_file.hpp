@@ -42,11 +42,9 @@ class ModelWriter {
   void set(const std::string& key, std::int64_t value);
   void set(const std::string& key, int value) { set(key, static_cast<std::int64_t>(value)); }
   void setMatrix(const std::string& name, const Eigen::MatrixXd& matrix);
-  /// The complete file content including the checksum line.
+  /// The complete file content including the checksum line (the application writes it to a
+  /// file; this library reads files but never writes them).
   std::string text() const;
-  /// Writes to a temporary file next to `file` and renames it, so a crash never leaves a
-  /// half-written model under the final name. Throws ModelFileError on I/O failure.
-  void writeFile(const std::filesystem::path& file) const;
 
  private:
   std::string body_;

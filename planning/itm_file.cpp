@@ -110,24 +110,6 @@ std::vector<std::uint8_t> itmToBytes(const Itm& graph) {
   return std::vector<std::uint8_t>(out.buffer().begin(), out.buffer().end());
 }
 
-void saveItm(const Itm& graph, const std::filesystem::path& path) {
-  const std::vector<std::uint8_t> bytes = itmToBytes(graph);
-  std::filesystem::path temporary = path;
-  temporary += ".tmp";
-  {
-    std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
-    if (!file) throw ItmFileError("cannot write ITM graph file '" + temporary.string() + "'");
-    file.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    if (!file) throw ItmFileError("cannot write ITM graph file '" + temporary.string() + "'");
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    std::filesystem::remove(temporary, error);
-    throw ItmFileError("cannot write ITM graph file '" + path.string() + "'");
-  }
-}
-
 Itm loadItm(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::error_code error;

@@ -32,15 +32,13 @@ class ItmFileError : public std::runtime_error {
 
 inline constexpr std::uint32_t kItmFileVersion = 1;
 
-/// Writes graph to path (through a temporary file renamed into place). Node ids are compacted.
-/// The graph in the file format above, in memory (session recordings store these bytes).
+/// The graph in the file format above, in memory: the content of a graph file (the application
+/// writes it; session recordings store these bytes). Node ids are compacted.
 std::vector<std::uint8_t> itmToBytes(const Itm& graph);
 /// Parses bytes written by itmToBytes with the checks of loadItm; `source` names them in errors.
 Itm itmFromBytes(const std::uint8_t* bytes, std::size_t size, const std::string& source);
 
-void saveItm(const Itm& graph, const std::filesystem::path& path);
-
-/// Reads a graph written by saveItm.
+/// Reads a graph file (the bytes of itmToBytes).
 Itm loadItm(const std::filesystem::path& path);
 
 }  // namespace flexirob::planning

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "app/cli/cli_support.hpp"
+#include "app/file_output.hpp"
 #include "app/session_export.hpp"
 #include "app/session_reader.hpp"
 #include "app/session_teaching.hpp"

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "app/cli/cli_support.hpp"
+#include "app/file_output.hpp"
 #include "app/table_text.hpp"
 #include "planning/itm.hpp"
 #include "planning/itm_file.hpp"
@@ -159,7 +160,8 @@ Json buildMap(const BuildOptions& options) {
   }
   if (samples == 0) throw InputError(options.data + ": no samples after the header");
   if (samples >= 20000) reportProgress("itm build", 1.0);
-  planning::saveItm(itm, options.out);
+  const std::vector<std::uint8_t> bytes = planning::itmToBytes(itm);
+  app::writeFileReplacing(options.out, std::string(bytes.begin(), bytes.end()), "--out");
   const double total_seconds = std::chrono::duration<double>(Clock::now() - started).count();
 
   const auto stats = itm.statistics();

@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "app/cli/cli_support.hpp"
+#include "app/file_output.hpp"
 #include "app/table_text.hpp"
 #include "learning/bpdc.hpp"
 #include "learning/clustering.hpp"
@@ -229,7 +230,7 @@ Json fit(const FitOptions& options) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (shown) reportStatus("learn fit (" + options.learner + "): done after " + std::to_string(epochs_done) + " epochs", true);
   const double mse = learner->meanSquaredError(data);
-  learner->save(options.out);
+  app::writeFileReplacing(options.out, learner->modelText(), "--out");
 
   Json result = {{"learner", learner->kind()},
                  {"samples", data.size()},

@@ -198,40 +198,5 @@ TEST_F(SessionExport, ASessionWithoutACompleteAreaHasNoSamplesToExport) {
   EXPECT_THROW(configurationStream(reader, 0.0, nullptr), InputError);
 }
 
-TEST(SessionExportFile, ReplacesTheFileWholeAndRefusesAFolderThatIsNotThere) {
-  const fs::path file = fs::temp_directory_path() / ("flexirob-export-file-" + std::to_string(::getpid()) + ".csv");
-  writeFileReplacing(file, "old\n", "--samples");
-  writeFileReplacing(file, "new\n", "--samples");
-  std::ifstream in(file);
-  std::stringstream text;
-  text << in.rdbuf();
-  EXPECT_EQ(text.str(), "new\n");
-  EXPECT_FALSE(fs::exists(fs::path(file.string() + ".tmp")));
-  fs::remove(file);
-  try {
-    writeFileReplacing(fs::temp_directory_path() / "flexirob-no-such-folder" / "x.csv", "x", "--stream");
-    FAIL() << "expected InputError";
-  } catch (const InputError& error) {
-    EXPECT_EQ(std::string(error.what()).rfind("--stream: cannot write", 0), 0u) << error.what();
-  }
-}
-
-// mkstemp makes a private file; the file written must not be more or less private than the
-// one it replaces, or than a new file under the user's umask.
-TEST(SessionExportFile, KeepsTheReplacedFilesModeAndGivesANewOneTheUmasks) {
-  const fs::path folder = fs::temp_directory_path() / ("flexirob-export-mode-" + std::to_string(::getpid()));
-  fs::create_directories(folder);
-  const mode_t previous = ::umask(077);
-  writeFileReplacing(folder / "new.csv", "x\n", "--samples");
-  ::umask(previous);
-  EXPECT_EQ(fs::status(folder / "new.csv").permissions() & fs::perms::all, fs::perms::owner_read | fs::perms::owner_write);
-  writeFileReplacing(folder / "kept.csv", "old\n", "--samples");
-  fs::permissions(folder / "kept.csv", fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
-  writeFileReplacing(folder / "kept.csv", "new\n", "--samples");
-  EXPECT_EQ(fs::status(folder / "kept.csv").permissions() & fs::perms::all,
-            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
-  fs::remove_all(folder);
-}
-
 }  // namespace
 }  // namespace flexirob::app

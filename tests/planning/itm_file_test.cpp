@@ -27,6 +27,12 @@ std::filesystem::path scratchFile(const std::string& name) {
   return folder.path / name;
 }
 
+// A graph file as the application writes one: the bytes of itmToBytes.
+void saveItm(const Itm& graph, const std::filesystem::path& path) {
+  const std::vector<std::uint8_t> bytes = itmToBytes(graph);
+  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
 std::vector<char> readBytes(const std::filesystem::path& path) {
   std::ifstream file(path, std::ios::binary);
   return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};

@@ -1,0 +1,17 @@
+#pragma once
+// Every file a command writes as its output (a model, a graph, an export) goes through here, so
+// that one rule holds for all of them: a reader never sees half a file, a failed or interrupted
+// write leaves what was there, and nothing beside the output is touched.
+#include <filesystem>
+#include <string>
+
+namespace flexirob::app {
+
+/// Writes `text` to a new temporary file beside `file` (a name of its own, so that no file kept
+/// there is overwritten) and renames it into place. Through a symbolic link it writes the file the
+/// link names and keeps the link; the file keeps the mode it had, a new one gets the umask's. SIGINT
+/// and SIGTERM wait until the temporary is renamed or removed. Throws robot::InputError naming
+/// `option` when the file cannot be written.
+void writeFileReplacing(const std::filesystem::path& file, const std::string& text, const std::string& option);
+
+}  // namespace flexirob::app
