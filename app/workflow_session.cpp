@@ -14,7 +14,11 @@ namespace flexirob::app {
 
 WorkflowSessionWriter::WorkflowSessionWriter(SessionRecorder& recorder, const Workflow& workflow,
                                              robot::Simulation* simulation, WorkflowSessionOptions options)
-    : recorder_(&recorder), workflow_(&workflow), simulation_(simulation), options_(std::move(options)) {
+    : recorder_(&recorder),
+      workflow_(&workflow),
+      simulation_(simulation),
+      options_(std::move(options)),
+      activity_(options_.executed_period) {
   itm_version_ = workflow.itmVersion();
 }
 
@@ -68,9 +72,22 @@ void WorkflowSessionWriter::recordEvent(const WorkflowEvent& event) {
       break;
     case K::kAreaRemoved: recorder_->recordButton(event.time, "remove_area " + std::to_string(event.area)); break;
     case K::kModelLearned: recordModel(event.time); break;
+    case K::kTeachIn:
+    case K::kExecution:
+    case K::kRefused:
+    case K::kWarning:
+    case K::kCheck: activity_.event(*workflow_, *recorder_, event, events_seen_); return;
+  }
+  ++records_;
+}
+
+void WorkflowActivityStream::event(const Workflow& workflow, SessionRecorder& recorder, const WorkflowEvent& event,
+                                   std::size_t index) {
+  using K = WorkflowEvent::Kind;
+  switch (event.kind) {
     case K::kTeachIn: {
-      if (event.area < 0 || event.area >= static_cast<int>(workflow_->teachIns().size())) break;
-      const Eigen::MatrixXd& points = workflow_->teachIns()[static_cast<std::size_t>(event.area)];
+      if (event.area < 0 || event.area >= static_cast<int>(workflow.teachIns().size())) break;
+      const Eigen::MatrixXd& points = workflow.teachIns()[static_cast<std::size_t>(event.area)];
       TrajectoryRecord record;
       record.kind = TrajectoryKind::TeachIn;
       record.name = "teach_in_" + std::to_string(event.area);
@@ -78,10 +95,10 @@ void WorkflowSessionWriter::recordEvent(const WorkflowEvent& event) {
       // Recorded every sample_period, ending at the event.
       record.times.resize(points.cols());
       for (Eigen::Index i = 0; i < points.cols(); ++i) {
-        record.times[i] = event.time - static_cast<double>(points.cols() - 1 - i) * workflow_->options().sample_period;
+        record.times[i] = event.time - static_cast<double>(points.cols() - 1 - i) * workflow.options().sample_period;
       }
-      const std::int64_t id = recorder_->recordTrajectory(std::move(record));
-      teach_in_ids_.resize(workflow_->teachIns().size(), -1);
+      const std::int64_t id = recorder.recordTrajectory(std::move(record));
+      teach_in_ids_.resize(workflow.teachIns().size(), -1);
       teach_in_ids_[static_cast<std::size_t>(event.area)] = id;
       break;
     }
@@ -91,22 +108,48 @@ void WorkflowSessionWriter::recordEvent(const WorkflowEvent& event) {
                                      event.area < static_cast<int>(teach_in_ids_.size())
                                  ? teach_in_ids_[static_cast<std::size_t>(event.area)]
                                  : -1;
-      recorder_->recordSignal({event.time, SignalKind::Button, event.name});
+      recorder.recordSignal({event.time, SignalKind::Button, event.name});
       break;
     case K::kRefused:
     case K::kWarning:
     case K::kCheck:
       // Kept as free text: "<kind> <name>: <detail>" under a numbered meta key.
-      recorder_->recordMeta("event." + std::to_string(events_seen_),
-                            std::string(toString(event.kind)) + " " + event.name + ": " + event.detail);
+      recorder.recordMeta("event." + std::to_string(index),
+                          std::string(toString(event.kind)) + " " + event.name + ": " + event.detail);
       break;
+    default: return;
   }
   ++records_;
 }
 
-void WorkflowSessionWriter::trackExecution() {
-  const bool moving = workflow_->stage() == Stage::kExecution && !workflow_->executionDone();
-  const robot::RobotState& state = workflow_->state();
+void WorkflowActivityStream::afterCycle(const Workflow& workflow, SessionRecorder& recorder, robot::Simulation* simulation) {
+  trackExecution(workflow, recorder);
+  if (simulation == nullptr) return;
+  robot::CollisionWorld* world = simulation->collisionWorld();
+  const auto& log = simulation->collisions().eventLog();
+  if (collisions_seen_ > log.size()) collisions_seen_ = 0;  // the monitor started over
+  // A recorder attached late gets the log's earlier events (the first 1000 are kept) a few per
+  // cycle, so that no cycle pushes more than the recorder's queue takes at once.
+  constexpr std::size_t kCollisionsPerCall = 32;
+  const std::size_t end = std::min(log.size(), collisions_seen_ + kCollisionsPerCall);
+  for (; collisions_seen_ < end; ++collisions_seen_) {
+    if (world == nullptr) continue;
+    const auto& event = log[collisions_seen_];
+    recorder.recordCollision({event.time, world->bodyName(event.contact.body), world->otherName(event.contact),
+                              event.contact.depth, event.contact.p_W});
+    ++records_;
+  }
+}
+
+void WorkflowActivityStream::restart() {
+  const std::uint64_t records = records_;
+  *this = WorkflowActivityStream(executed_period_);
+  records_ = records;
+}
+
+void WorkflowActivityStream::trackExecution(const Workflow& workflow, SessionRecorder& recorder) {
+  const bool moving = workflow.stage() == Stage::kExecution && !workflow.executionDone();
+  const robot::RobotState& state = workflow.state();
   if (moving) {
     if (!executing_) {
       executing_ = true;
@@ -115,7 +158,7 @@ void WorkflowSessionWriter::trackExecution() {
       execution_postures_.clear();
       last_execution_sample_ = -1e9;
     }
-    if (state.time - last_execution_sample_ >= options_.executed_period - 1e-9) {
+    if (state.time - last_execution_sample_ >= executed_period_ - 1e-9) {
       last_execution_sample_ = state.time;
       execution_times_.push_back(state.time);
       execution_positions_.push_back(state.p_WT());
@@ -132,14 +175,14 @@ void WorkflowSessionWriter::trackExecution() {
   const auto k = static_cast<Eigen::Index>(execution_times_.size());
   record.times.resize(k);
   record.positions.resize(3, k);
-  record.postures.resize(workflow_->robotModel().dof(), k);
+  record.postures.resize(workflow.robotModel().dof(), k);
   for (Eigen::Index i = 0; i < k; ++i) {
     record.times[i] = execution_times_[static_cast<std::size_t>(i)];
     record.positions.col(i) = execution_positions_[static_cast<std::size_t>(i)];
     record.postures.col(i) = execution_postures_[static_cast<std::size_t>(i)];
   }
-  record.outcome = workflow_->stage() == Stage::kExecution ? "reached" : "cancelled";
-  recorder_->recordTrajectory(std::move(record));
+  record.outcome = workflow.stage() == Stage::kExecution ? "reached" : "cancelled";
+  recorder.recordTrajectory(std::move(record));
   ++records_;
 }
 
@@ -215,22 +258,11 @@ void WorkflowSessionWriter::poll() {
   for (; events_seen_ < events.size(); ++events_seen_) recordEvent(events[events_seen_]);
   // After the events: an area that ended in this cycle took its remaining samples with it.
   records_ += samples_.stream(*workflow_, *recorder_);
-  trackExecution();
   const double time = workflow_->state().time;
   if (workflow_->itmVersion() != itm_version_ && time - itm_time_ >= itmSnapshotPeriod(options_.itm_period, itm_bytes_) - 1e-9) {
     recordItm(time);
   }
-  if (simulation_ != nullptr) {
-    robot::CollisionWorld* world = simulation_->collisionWorld();
-    const auto& log = simulation_->collisions().eventLog();
-    for (; collisions_seen_ < log.size(); ++collisions_seen_) {
-      if (world == nullptr) continue;
-      const auto& event = log[collisions_seen_];
-      recorder_->recordCollision({event.time, world->bodyName(event.contact.body), world->otherName(event.contact),
-                                  event.contact.depth, event.contact.p_W});
-      ++records_;
-    }
-  }
+  activity_.afterCycle(*workflow_, *recorder_, simulation_);
 }
 
 void WorkflowSessionWriter::finish() {

@@ -71,6 +71,41 @@ class TrainingSampleStream {
   std::uint64_t backlog_version_ = 0;
 };
 
+/// Records what the workflow did besides its samples and areas: teach-ins, executed motions,
+/// collisions of the simulated arm, and refusals, warnings and checks as meta lines
+/// (docs/SESSIONS.md). Only the recorder's non-blocking pushes and small copies:
+/// WorkflowSessionWriter uses it between cycles, WorkflowThread inside the control cycle (the
+/// GUI's recordings), so both kinds of session hold the same records.
+class WorkflowActivityStream {
+ public:
+  explicit WorkflowActivityStream(double executed_period = 0.02) : executed_period_(executed_period) {}
+  /// The workflow's event number `index` (its place in Workflow::events()).
+  void event(const Workflow& workflow, SessionRecorder& recorder, const WorkflowEvent& event, std::size_t index);
+  /// After the cycle's events: the executed motion in progress, the simulation's new collisions
+  /// (simulation may be null: none).
+  void afterCycle(const Workflow& workflow, SessionRecorder& recorder, robot::Simulation* simulation);
+  /// A new recorder: the simulation's collisions from its first again, no motion in progress, no
+  /// teach-in to refer to.
+  void restart();
+  std::uint64_t records() const { return records_; }
+
+ private:
+  void trackExecution(const Workflow& workflow, SessionRecorder& recorder);
+
+  double executed_period_;
+  std::uint64_t records_ = 0;
+  std::size_t collisions_seen_ = 0;
+  // The executed motion in progress.
+  bool executing_ = false;
+  std::string execution_name_;
+  std::int64_t execution_reference_ = -1;
+  double last_execution_sample_ = -1e9;
+  std::vector<double> execution_times_;
+  std::vector<Eigen::Vector3d> execution_positions_;
+  std::vector<Eigen::VectorXd> execution_postures_;
+  std::vector<std::int64_t> teach_in_ids_;
+};
+
 class WorkflowSessionWriter {
  public:
   /// recorder and workflow (and simulation, may be null: no collisions) must outlive the writer.
@@ -85,34 +120,24 @@ class WorkflowSessionWriter {
   /// The last ITM snapshot (if the graph changed since) and anything still new.
   void finish();
 
-  std::uint64_t recordsQueued() const { return records_; }
+  std::uint64_t recordsQueued() const { return records_ + activity_.records(); }
 
  private:
   void recordEvent(const WorkflowEvent& event);
   void recordModel(double time);
   void recordItm(double time);
-  void trackExecution();
 
   SessionRecorder* recorder_;
   const Workflow* workflow_;
   robot::Simulation* simulation_;
   WorkflowSessionOptions options_;
   std::size_t events_seen_ = 0;
-  std::size_t collisions_seen_ = 0;
   std::uint64_t itm_version_ = 0;
   double itm_time_ = -1e9;
   std::size_t itm_bytes_ = 0;  ///< size of the last snapshot
   std::uint64_t records_ = 0;
-  // The executed motion in progress.
-  bool executing_ = false;
-  std::string execution_name_;
-  std::int64_t execution_reference_ = -1;
-  double last_execution_sample_ = -1e9;
-  std::vector<double> execution_times_;
-  std::vector<Eigen::Vector3d> execution_positions_;
-  std::vector<Eigen::VectorXd> execution_postures_;
-  std::vector<std::int64_t> teach_in_ids_;
   TrainingSampleStream samples_;
+  WorkflowActivityStream activity_;
 };
 
 }  // namespace flexirob::app

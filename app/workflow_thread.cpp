@@ -378,6 +378,7 @@ void WorkflowThread::setRecorder(SessionRecorder* recorder) {
   const std::lock_guard lock(recorder_mutex_);
   recorder_ = recorder;
   recorder_samples_.restart();
+  recorder_activity_.restart();
 }
 
 void WorkflowThread::recordCycle(std::size_t events_before) {
@@ -396,11 +397,14 @@ void WorkflowThread::recordCycle(std::size_t events_before) {
       recorder_samples_.finishArea(*workflow_, *recorder_, event.area, event.time);
     } else if (event.kind == WorkflowEvent::Kind::kAreaRemoved) {
       recorder_->recordButton(event.time, "remove_area " + std::to_string(event.area));  // indices above shift down
+    } else {
+      recorder_activity_.event(*workflow_, *recorder_, event, i);
     }
   }
   recorder_samples_.writeAreasBacklog(*workflow_, *recorder_, kBacklogSamplesPerCycle);
   recorder_samples_.stream(*workflow_, *recorder_);
   recorder_->recordState(workflow_->state());
+  recorder_activity_.afterCycle(*workflow_, *recorder_, simulation_);
 }
 
 void WorkflowThread::loop() {

@@ -252,6 +252,7 @@ class WorkflowThread {
   std::mutex recorder_mutex_;
   SessionRecorder* recorder_ = nullptr;  // guarded by recorder_mutex_
   TrainingSampleStream recorder_samples_;  // guarded
+  WorkflowActivityStream recorder_activity_;  // guarded
   std::atomic<std::uint64_t> recorder_skips_{0};
   // Statistics (loop writes, any thread reads).
   std::atomic<std::uint64_t> cycles_{0}, deadline_misses_{0};

@@ -307,7 +307,7 @@ void MainWindow::stopLive() {
     live_->setRecorder(nullptr);
     handleEvents();
   }
-  if (live_ && recorder_) recordItm(live_->snapshot(), true);
+  if (live_ && recorder_) recordSnapshotData(live_->snapshot());
   live_.reset();
   if (recorder_) recorder_->close();
   recorder_.reset();
@@ -331,7 +331,7 @@ void MainWindow::stopLive() {
 }
 
 void MainWindow::startRecording() {
-  recorded_itm_version_ = ~0ULL;  // a new file holds the graph again
+  recorded_itm_version_ = recorded_model_version_ = ~0ULL;  // a new file holds the graph and model again
   session_file_.clear();
   if (!options_.record_sessions || !model_ || !live_) return;
   const QString directory =
@@ -412,7 +412,7 @@ bool MainWindow::saveSession(const QString& file) {
   }
   // Everything shown so far goes in; saveCopy closes the recorder, so record on into a new file.
   handleEvents();
-  recordItm(live_->snapshot(), true);
+  recordSnapshotData(live_->snapshot());
   live_->setRecorder(nullptr);
   bool ok = true;
   try {
@@ -638,6 +638,7 @@ void MainWindow::mirror() {
   }
   if (s.cycle != shown_cycle_ && s.dof == model_->dof()) {
     recordItm(s, false);
+    recordModel(s);
     updateOverlays(s);
     updateConfidence(s, false);
     updateGoalAndPath(s);
@@ -987,7 +988,7 @@ void MainWindow::buildMenus() {
       return;
     }
     handleEvents();
-    if (live_) recordItm(live_->snapshot(), true);
+    if (live_) recordSnapshotData(live_->snapshot());
     if (recorder_) recorder_->flush();  // the review opens what is on disk
     openRecording(session_file_);
   });
@@ -1238,6 +1239,30 @@ void MainWindow::recordItm(const LiveSnapshot& s, bool final) {
   } catch (const std::exception& error) {
     reportError(tr("Cannot record the ITM graph"), error);
   }
+}
+
+void MainWindow::recordModel(const LiveSnapshot& s) {
+  if (!recorder_ || !s.model || !s.model_ready || s.model_version == recorded_model_version_) return;
+  recorded_model_version_ = s.model_version;
+  try {
+    app::ModelRecord record;
+    record.time = s.time;
+    record.learner_kind = s.model->kind();
+    if (s.area_data) {
+      for (const app::TrainingArea& area : *s.area_data) record.samples += static_cast<int>(area.X.cols());
+    }
+    record.train_seconds = s.learning_seconds;
+    const std::string text = s.model->modelText();
+    record.bytes.assign(text.begin(), text.end());
+    recorder_->recordModel(std::move(record));
+  } catch (const std::exception& error) {
+    reportError(tr("Cannot record the learned model"), error);
+  }
+}
+
+void MainWindow::recordSnapshotData(const LiveSnapshot& s) {
+  recordItm(s, true);
+  recordModel(s);
 }
 
 ReviewWindow* MainWindow::openRecording(const QString& file) {

@@ -199,6 +199,11 @@ class MainWindow : public QMainWindow {
   void placeViewLabels();
   /// Records the ITM graph into the session when it changed (at most once per second, and at the end).
   void recordItm(const LiveSnapshot& snapshot, bool final);
+  /// The learned model, once per version, as teach records it (the control thread records the
+  /// rest; serializing a model is no work for its cycle).
+  void recordModel(const LiveSnapshot& snapshot);
+  /// The graph and the model as they stand, before the file is closed, copied or opened.
+  void recordSnapshotData(const LiveSnapshot& snapshot);
 
   Options options_;
   render::World world_;
@@ -249,7 +254,8 @@ class MainWindow : public QMainWindow {
   std::vector<std::string> coloured_links_;
   std::unique_ptr<render::Overlays> overlays_;
   std::uint64_t shown_areas_version_ = ~0ULL, shown_teach_ins_version_ = ~0ULL, shown_itm_version_ = ~0ULL;
-  std::uint64_t shown_model_version_ = ~0ULL, shown_path_version_ = ~0ULL, recorded_itm_version_ = ~0ULL;
+  std::uint64_t shown_model_version_ = ~0ULL, shown_path_version_ = ~0ULL, recorded_itm_version_ = ~0ULL,
+                recorded_model_version_ = ~0ULL;
   PlotPanel* plot_panel_ = nullptr;
   QElapsedTimer plot_clock_;
   ConfidencePanel* confidence_panel_ = nullptr;

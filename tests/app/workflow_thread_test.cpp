@@ -208,6 +208,79 @@ TEST(WorkflowThread, RecordsEveryCycleAndTheTrainingSamplesIntoAnAttachedSession
   std::filesystem::remove(later_file);
 }
 
+// The GUI's sessions are recorded by the control thread: they hold what teach's do besides the
+// states and samples (a refusal as a meta line, the teach-in, the replay that follows it, the
+// simulated arm's collisions). They had held none of these.
+TEST(WorkflowThread, RecordsRefusalsTeachInsReplaysAndCollisionsAsTeachDoes) {
+  Rig rig;
+  Workflow workflow(rig.sim, rig.parameters, rig.options());
+  WorkflowThread thread(workflow, &rig.sim, fast());
+  const auto file = std::filesystem::temp_directory_path() / ("flexirob-thread-activity-" + std::to_string(::getpid()) + ".flexirob");
+  std::filesystem::remove(file);
+  SessionMetadata metadata;
+  metadata.robot_name = "lwr4";
+  RecorderOptions recorder_options;
+  recorder_options.state_capacity = 1 << 17;
+  auto recorder = std::make_unique<SessionRecorder>(file, metadata, recorder_options);
+  thread.setRecorder(recorder.get());
+  thread.start();
+  EXPECT_FALSE(handled(thread, thread.post(WorkflowRequest::press(Button::kStartProgramming))).last_request_accepted);
+  // One area, learned at finished_configuration.
+  handled(thread, thread.post(WorkflowRequest::press(Button::kStartConfiguration)));
+  handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnAffected)));
+  handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnConverged)));
+  WorkflowSnapshot s = handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnAffected)));
+  s = waitFor(thread, [t = s.time](const WorkflowSnapshot& x) { return x.time > t + 0.3; });
+  handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnConverged)));
+  s = handled(thread, thread.post(WorkflowRequest::press(Button::kFinishedConfiguration)));
+  s = waitFor(thread, [](const WorkflowSnapshot& x) { return x.model_ready; });
+  ASSERT_TRUE(s.model_ready);
+  // One teach-in, replayed.
+  handled(thread, thread.post(WorkflowRequest::press(Button::kStartProgramming)));
+  handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnAffected)));
+  handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnConverged)));
+  s = handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnAffected)));
+  s = waitFor(thread, [t = s.time](const WorkflowSnapshot& x) { return x.time > t + 0.3; });
+  s = handled(thread, thread.post(WorkflowRequest::fire(Trigger::kOnConverged)));
+  ASSERT_EQ(s.teach_ins, 1);
+  handled(thread, thread.post(WorkflowRequest::press(Button::kFinishedProgramming)));
+  s = handled(thread, thread.post(WorkflowRequest::replayTeachIn(0)));
+  ASSERT_TRUE(s.last_request_accepted) << s.last_request_reason.data();
+  s = waitFor(thread, [t = s.time](const WorkflowSnapshot& x) { return x.execution_done && x.time > t + 0.05; });
+  ASSERT_TRUE(s.execution_done);
+  // The arm pushed into the table top: a collision of the simulation.
+  Eigen::VectorXd into_table = lwr4().midPosture();
+  into_table[1] = 2.0;
+  thread.stop();
+  rig.sim.reset(into_table);
+  thread.start();
+  waitFor(thread, [](const WorkflowSnapshot& x) { return x.collision_events > 0; });
+  const WorkflowSnapshot last = waitFor(thread, [t = thread.snapshot().time](const WorkflowSnapshot& x) { return x.time > t + 0.05; });
+  thread.stop();
+  thread.setRecorder(nullptr);
+  recorder->close();
+  ASSERT_GT(last.collision_events, 0U);
+
+  const SessionReader reader(file);
+  bool refusal = false;
+  for (int i = 0; i < 8; ++i) {
+    refusal = refusal || reader.meta("event." + std::to_string(i)).rfind("refused start_programming", 0) == 0;
+  }
+  EXPECT_TRUE(refusal) << reader.meta("event.0");
+  const auto teach_ins = reader.trajectories(TrajectoryKind::TeachIn);
+  ASSERT_EQ(teach_ins.size(), 1U);
+  EXPECT_TRUE(teach_ins[0].positions.isApprox(workflow.teachIns()[0]));
+  const auto executed = reader.trajectories(TrajectoryKind::Executed);
+  ASSERT_EQ(executed.size(), 1U);
+  EXPECT_EQ(executed[0].reference_id, teach_ins[0].id);
+  EXPECT_EQ(executed[0].outcome, "reached");
+  EXPECT_GE(executed[0].positions.cols(), 1);  // a teach-in where the arm stood still replays in a few cycles
+  const auto collisions = reader.collisions();
+  ASSERT_FALSE(collisions.empty());
+  EXPECT_EQ(collisions.size(), rig.sim.collisions().eventLog().size());
+  std::filesystem::remove(file);
+}
+
 TEST(WorkflowThread, RefusedRequestsCarryTheReasonAndChangeNothing) {
   Rig rig;
   Workflow workflow(rig.sim, rig.parameters, rig.options());

@@ -529,6 +529,36 @@ class OperatorTest : public QObject {
     QVERIFY(window.sessionFile() != file);
   }
 
+  // The window records the learned model as teach does (the control thread records the
+  // rest); GUI sessions had held none, so `export --model` and the review found nothing.
+  void theLearnedModelIsInTheSession() {
+    MainWindow::Options options = quietOptions();
+    options.record_sessions = true;
+    MainWindow window("lwr4", "empty", options);
+    waitRunning(window);
+    QTest::keyClick(&window, Qt::Key_F5);
+    QTRY_COMPARE(window.live()->snapshot().stage, Stage::kConfiguration);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTest::qWait(400);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(window.live()->snapshot().areas, 1);
+    QTest::keyClick(&window, Qt::Key_F6);
+    QTRY_VERIFY_WITH_TIMEOUT(window.live()->snapshot().model_ready, 20000);
+    QTest::qWait(200);
+    QTemporaryDir directory;
+    const QString file = directory.filePath(QStringLiteral("learned.flexirob"));
+    QVERIFY(window.saveSession(file));
+    const flexirob::app::SessionReader reader(file.toStdString());
+    const auto models = reader.models();
+    QCOMPARE(models.size(), std::size_t{1});
+    QCOMPARE(models[0].learner_kind, window.live()->snapshot().model->kind());
+    QCOMPARE(models[0].samples, static_cast<int>(reader.samples().size()));
+    const std::string text = window.live()->snapshot().model->modelText();
+    QVERIFY(models[0].bytes == std::vector<std::uint8_t>(text.begin(), text.end()));
+  }
+
   void theRobotOverFriIsMirroredItsLinkShownAndDisconnected() {
     // The robot controller's stand-in on loopback, talking to the GUI's FRI port as a KRC would.
     const auto model = flexirob::robot::RobotModel::fromUrdfFile(flexirob::resolveRobotPath("lwr4"));
