@@ -7,6 +7,7 @@
 #include <optional>
 #include <set>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -80,6 +81,26 @@ Json toJsonRows(const Eigen::MatrixXd& m) {
   return rows;
 }
 
+std::string sameFileKey(const std::string& path) {
+  std::error_code error;
+  const std::filesystem::path absolute = std::filesystem::absolute(path, error);
+  const std::filesystem::path key =
+      std::filesystem::weakly_canonical(error ? std::filesystem::path(path) : absolute, error).lexically_normal();
+  // A chain of links that never ends resolves to nothing: the path as given stands for itself.
+  return error || key.empty() ? (error ? std::filesystem::path(path) : absolute).lexically_normal().string() : key.string();
+}
+
+void refuseStandardStreamsFile(const std::string& option, const std::string& path) {
+  struct stat output {};
+  if (::stat(path.c_str(), &output) != 0 || !S_ISREG(output.st_mode)) return;
+  for (const auto& [descriptor, name] : {std::pair{STDOUT_FILENO, "standard output"}, std::pair{STDERR_FILENO, "standard error"}}) {
+    struct stat stream {};
+    if (::fstat(descriptor, &stream) == 0 && stream.st_dev == output.st_dev && stream.st_ino == output.st_ino) {
+      throw InputError(option + ": '" + path + "' is the file " + name + " goes to; give another file");
+    }
+  }
+}
+
 void checkOutputPath(const std::string& option, const std::string& path,
                      const std::vector<std::pair<std::string, std::string>>& inputs, bool replaced_by_rename) {
   namespace fs = std::filesystem;
@@ -91,6 +112,7 @@ void checkOutputPath(const std::string& option, const std::string& path,
   if (replaced_by_rename && fs::exists(path, error) && !fs::is_regular_file(path, error)) {
     throw InputError(option + ": '" + path + "' is not a regular file (a device, a pipe or a socket); expected a file path");
   }
+  if (replaced_by_rename) refuseStandardStreamsFile(option, path);
   for (const auto& [input_option, input] : inputs) {
     if (!input.empty() && fs::exists(path, error) && fs::equivalent(input, path, error)) {
       throw InputError(option + ": '" + path + "' is the " + input_option + " file the run reads; give another file");

@@ -109,11 +109,21 @@ Json toJsonRows(const Eigen::MatrixXd& m);
 /// --dthetamax, --dcmax, --eta, --alpha).
 Json itmParametersJson(const planning::ItmParameters& parameters);
 
+/// The file a path names, spelt one way ("./a.csv", "a.csv" and "dir/../a.csv" alike), whether
+/// it exists yet or not: compare two of these to see whether two paths name one file.
+std::string sameFileKey(const std::string& path);
+
+/// Refuses (InputError naming `option`) an output that is the file standard output or standard
+/// error goes to (`--out /dev/stdout > f`): the command's JSON or its messages would go into it,
+/// or, once it is renamed over, nowhere.
+void refuseStandardStreamsFile(const std::string& option, const std::string& path);
+
 /// Refuses (InputError naming `option`) an output path that is a directory, that is one of the
 /// run's `inputs` ({option, path}: writing would destroy what is being read), or whose folder
 /// does not exist or cannot be written, before any work is done; with `replaced_by_rename` (the
 /// output is written to a temporary file renamed into place) also a device, a pipe or a socket,
-/// which the rename would replace with a regular file.
+/// which the rename would replace with a regular file, and the file standard output or error
+/// goes to.
 void checkOutputPath(const std::string& option, const std::string& path,
                      const std::vector<std::pair<std::string, std::string>>& inputs = {}, bool replaced_by_rename = false);
 

@@ -1,5 +1,6 @@
 // `export --session F`: a recorded session as the files the offline tools read (docs/SESSIONS.md):
 // --samples (learn fit), --stream (itm build), --model (learn predict), --graph (itm path).
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -13,6 +14,7 @@
 #include "app/session_reader.hpp"
 #include "app/session_teaching.hpp"
 #include "app/session_write_lock.hpp"
+#include "app/workflow.hpp"
 #include "planning/itm_file.hpp"
 #include "robot/collision.hpp"
 #include "robot/errors.hpp"
@@ -35,14 +37,6 @@ bool drivenOverFri(const Json& parameters) {
 }
 
 std::string bytesText(const std::vector<std::uint8_t>& bytes) { return std::string(bytes.begin(), bytes.end()); }
-
-// The file a path names, spelt one way ("./a.csv", "a.csv" and "dir/../a.csv" alike), whether
-// it exists yet or not.
-std::string sameFileKey(const std::string& path) {
-  std::error_code error;
-  const std::filesystem::path absolute = std::filesystem::absolute(path, error);
-  return std::filesystem::weakly_canonical(error ? std::filesystem::path(path) : absolute, error).lexically_normal().string();
-}
 
 Json exportSession(const ExportOptions& options) {
   const std::vector<std::pair<std::string, std::string>> outputs = {
@@ -130,12 +124,14 @@ Json exportSession(const ExportOptions& options) {
                   {"contacts_checked", !over_fri}};
     // The session's graph and what itm build needs to map the stream as the session did. The
     // stream rebuilds it exactly where the recording holds every state the workflow read and
-    // its contacts: a simulated teach run that ended cleanly.
+    // its contacts: a simulated teach run that ended cleanly, replayed at the workflow's own
+    // sample period (teach keeps the default; another period feeds the map other positions).
     const bool written_by_teach = stored_parameters.is_object() && stored_parameters.contains("seed");
+    const bool workflows_period = std::abs(options.sample_period - app::WorkflowOptions{}.sample_period) < 1e-12;
     entry["rebuilds_session_graph"] = false;
     try {
       if (snapshot) {
-        entry["rebuilds_session_graph"] = written_by_teach && !over_fri && teaching.closed_cleanly;
+        entry["rebuilds_session_graph"] = written_by_teach && !over_fri && teaching.closed_cleanly && workflows_period;
         const planning::Itm graph = planning::itmFromBytes(snapshot->bytes.data(), snapshot->bytes.size(), "session graph");
         const planning::ItmParameters& parameters = graph.parameters();
         entry["session_graph"] = {{"nodes", graph.nodeCount()},

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -16,6 +17,7 @@
 #include <sstream>
 
 #include "app/cli/cli_support.hpp"
+#include "app/file_output.hpp"
 #include "app/experiments.hpp"
 #include "planning/path_postures.hpp"
 #include "robot/errors.hpp"
@@ -341,16 +343,18 @@ Json runSweep(const SweepOptions& options) {
       throw InputError("--only: selects rows of Tab. 3.3, which --tables leaves out");
     }
   }
-  // A sweep runs for minutes: a --json file that cannot be written is refused before it starts.
-  if (!options.json_out.empty()) checkOutputPath("--json", options.json_out);
-  if (!options.markdown.empty()) checkOutputPath("--markdown", options.markdown);
-  std::ofstream file;
-  if (!options.markdown.empty()) {
-    file.open(options.markdown);
-    if (!file) throw InputError("--markdown: cannot write '" + options.markdown + "'");
+  // A sweep runs for minutes: an output that cannot be written is refused before it starts.
+  for (const auto& [option, path] : {std::pair{"--json", options.json_out}, std::pair{"--markdown", options.markdown}}) {
+    if (path.empty()) continue;
+    checkOutputPath(option, path);
+    refuseStandardStreamsFile(option, path);
   }
-  std::ostringstream discard;
-  std::ostream& md = options.markdown.empty() ? static_cast<std::ostream&>(discard) : file;
+  if (!options.json_out.empty() && !options.markdown.empty() && sameFileKey(options.json_out) == sameFileKey(options.markdown)) {
+    throw InputError("--markdown: '" + options.markdown + "' is the file --json names; give each output its own file");
+  }
+  // The tables are kept until the sweep ends and only then written: a sweep stopped or failed
+  // half-way leaves the files of the last one whole (progress is on stderr meanwhile).
+  std::ostringstream md;
   md << "# flexirob-cli sweep\n";
   Json out = Json::object();
   const auto wanted = [&](const std::string& t) { return std::find(options.tables.begin(), options.tables.end(), t) != options.tables.end(); };
@@ -359,11 +363,20 @@ Json runSweep(const SweepOptions& options) {
   if (wanted("3.4")) out["tab_3_4"] = table34(options, md);
   if (wanted("7.1")) out["tab_7_1"] = table71(md);
   if (wanted("8.3")) out["sect_8_3"] = section83(options, md);
-  if (!options.json_out.empty()) {
-    std::ofstream json(options.json_out);
-    if (!json) throw InputError("--json: cannot write '" + options.json_out + "'");
-    json << out.dump(2) << "\n";
-  }
+  // A regular file through a rename (app::writeFileReplacing); a device or a pipe (/dev/stdout
+  // into a pipe) in place.
+  const auto write = [](const std::string& option, const std::string& path, const std::string& text) {
+    std::error_code error;
+    if (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error)) {
+      std::ofstream device(path);
+      device << text;
+      if (!device.flush()) throw InputError(option + ": cannot write '" + path + "'");
+    } else {
+      app::writeFileReplacing(path, text, option);
+    }
+  };
+  if (!options.markdown.empty()) write("--markdown", options.markdown, md.str());
+  if (!options.json_out.empty()) write("--json", options.json_out, out.dump(2) + "\n");
   return out;
 }
 

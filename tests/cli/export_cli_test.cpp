@@ -95,6 +95,14 @@ void expectTheStreamRebuildsTheSessionsGraph(const fs::path& session) {
 
 TEST_F(ExportCli, TheStreamMapsToTheSessionsOwnGraphUnderItmBuild) {
   expectTheStreamRebuildsTheSessionsGraph(*session_);
+  // At another period the stream holds other positions: it does not rebuild the graph, and
+  // export says so.
+  for (const char* period : {"0.05", "10"}) {
+    const auto other = runCliBinary("export --session " + session_->string() + " --sample-period " + period + " --stream " +
+                                    (scratchDir() / "other-period.csv").string());
+    ASSERT_EQ(other.exit_code, 0) << other.err;
+    EXPECT_FALSE(other.json().at("stream").at("rebuilds_session_graph").get<bool>()) << period;
+  }
   // Seed 23 ends its configuration stage with a position taken in the cycle whose trigger came
   // at the time of the finishing button: a replay that told buttons from triggers by their
   // times alone lost it.

@@ -2,12 +2,14 @@
 // and exactly one line "error: ..." on stderr, quickly and without exhausting memory
 // (docs/RELIABILITY.md).
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "tests/cli/cli_test_support.hpp"
 
@@ -153,6 +155,49 @@ TEST_F(HostileCli, AnOutputOntoADeviceOrTheInputFileIsRefused) {
   std::string header;
   std::getline(kept, header);
   EXPECT_EQ(header, "area,x,y,z,q1,q2") << "the data file is as it was";
+}
+
+// /dev/stdout with standard output redirected to a file names that file: renamed over, the
+// command's JSON went to the unlinked old file and the output took the JSON's place.
+TEST_F(HostileCli, AnOutputThatIsTheFileStandardOutputGoesToIsRefused) {
+  std::string rows = "area,x,y,z,q1,q2\n";
+  for (int i = 0; i < 20; ++i) rows += "0," + std::to_string(0.01 * i) + ",0.2,0.3," + std::to_string(0.02 * i) + ",0.5\n";
+  const fs::path data = write("stdout-data.csv", rows);
+  const fs::path out = dir_ / "stdout.json";
+  const fs::path err = dir_ / "stderr.txt";
+  for (const std::string& command : std::vector<std::string>{"learn fit --data " + data.string() + " --out /dev/stdout",
+                                     "sweep --tables 7.1 --markdown /dev/stdout"}) {
+    const int status = std::system((std::string(FLEXIROB_CLI_EXECUTABLE) + " " + command + " > " + out.string() + " 2> " + err.string()).c_str());
+    ASSERT_TRUE(WIFEXITED(status)) << command;
+    EXPECT_EQ(WEXITSTATUS(status), 2) << command;
+    std::ifstream in(err);
+    std::string line;
+    std::getline(in, line);
+    EXPECT_NE(line.find("is the file standard output goes to"), std::string::npos) << command << ": " << line;
+    EXPECT_TRUE(fs::exists(out));
+  }
+}
+
+// The sweep keeps its tables until it ends: stopped half-way it leaves the last sweep's files
+// whole (it had emptied --markdown at its start), and one file for both outputs is refused.
+TEST_F(HostileCli, ASweepStoppedHalfWayLeavesTheLastTablesWhole) {
+  const fs::path markdown = write("sweep.md", "# the last sweep\n");
+  const std::string sweep = std::string(FLEXIROB_CLI_EXECUTABLE) + " sweep --tables 3.3 --max-areas 1 --spacing 0.3 --markdown " +
+                            markdown.string() + " > /dev/null 2>&1";
+  const int status = std::system(("timeout -s INT 1 " + sweep).c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_NE(WEXITSTATUS(status), 0) << "the sweep ended within a second; nothing was stopped";
+  std::ifstream in(markdown);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), "# the last sweep\n");
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir_)) ++files;
+  expectRefused(runCliBinary("sweep --tables 7.1 --json " + markdown.string() + " --markdown ./" + markdown.lexically_relative(fs::current_path()).string()),
+                "is the file --json names");
+  std::size_t after = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir_)) ++after;
+  EXPECT_EQ(after, files) << "no temporary left";
 }
 
 TEST_F(HostileCli, GarbageModelGraphAndSessionFilesAreRefused) {
