@@ -1,6 +1,8 @@
 // `export --session F`: a recorded session as the files the offline tools read (docs/SESSIONS.md):
 // --samples (learn fit), --stream (itm build), --model (learn predict), --graph (itm path).
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -15,6 +17,10 @@
 #include "app/session_teaching.hpp"
 #include "app/session_write_lock.hpp"
 #include "app/workflow.hpp"
+#include "learning/elm.hpp"
+#include "learning/llm.hpp"
+#include "learning/model_file.hpp"
+#include "learning/learner.hpp"
 #include "planning/itm_file.hpp"
 #include "robot/collision.hpp"
 #include "robot/errors.hpp"
@@ -37,6 +43,55 @@ bool drivenOverFri(const Json& parameters) {
 }
 
 std::string bytesText(const std::vector<std::uint8_t>& bytes) { return std::string(bytes.begin(), bytes.end()); }
+
+// The shortest spelling that reads back as the same double.
+std::string exactNumber(double value) {
+  char text[32];
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, value);
+    if (std::strtod(text, nullptr) == value) break;
+  }
+  return text;
+}
+
+// The `learn fit` options that learn the session's model again from the exported samples, byte
+// for byte, or null with the reason why none do.
+void describeRefit(const std::vector<std::uint8_t>& model_bytes, Json& entry) {
+  entry["learn_fit_arguments"] = nullptr;
+  std::unique_ptr<learning::Learner> learner;
+  try {
+    learner = learning::readLearner(learning::ModelReader(bytesText(model_bytes), "the session's model"));
+  } catch (const learning::ModelFileError& error) {
+    entry["learn_fit_note"] = std::string("the recorded model does not read: ") + error.what();
+    return;
+  }
+  if (const auto* elm = dynamic_cast<const learning::Elm*>(learner.get())) {
+    const learning::ElmParams& p = elm->params();
+    const learning::ElmParams defaults;
+    if (p.input_weight_range != defaults.input_weight_range || p.gain_min != defaults.gain_min ||
+        p.gain_max != defaults.gain_max || p.bias_range != defaults.bias_range) {
+      entry["learn_fit_note"] = "its random features were drawn with ranges learn fit has no option for";
+      return;
+    }
+    entry["learn_fit_arguments"] = "--learner elm --hidden " + std::to_string(p.hidden) + " --epsilon " + exactNumber(p.epsilon) +
+                                   " --seed " + std::to_string(p.seed);
+  } else if (const auto* llm = dynamic_cast<const learning::Llm*>(learner.get())) {
+    const learning::LlmParams& p = llm->params();
+    if (p.target_mse != learning::LlmParams{}.target_mse) {
+      entry["learn_fit_note"] = "it stopped at a target error learn fit has no option for";
+      return;
+    }
+    entry["learn_fit_arguments"] = "--learner llm --eta " + exactNumber(p.eta) + " --max-epochs " + std::to_string(p.max_epochs) +
+                                   " --tolerance " + exactNumber(p.tolerance) + " --patience " + std::to_string(p.patience) +
+                                   " --seed " + std::to_string(p.seed);
+  } else if (learner->kind() == "oselm") {
+    entry["learn_fit_note"] =
+        "an OS-ELM learned online scales its inputs to a fixed box about the arm's shoulder, learn fit to its data: "
+        "the refit is an OS-ELM of the same samples, not this model";
+  } else {
+    entry["learn_fit_note"] = "learn fit does not learn a '" + learner->kind() + "' model as the session did";
+  }
+}
 
 Json exportSession(const ExportOptions& options) {
   const std::vector<std::pair<std::string, std::string>> outputs = {
@@ -152,6 +207,7 @@ Json exportSession(const ExportOptions& options) {
     if (models.empty()) throw InputError("--model: the session recorded no learned model (learning runs after finished_configuration)");
     const app::ModelRecord& last = models.back();
     result["model"] = {{"file", options.model}, {"learner", last.learner_kind}, {"samples", last.samples}, {"time_s", last.time}};
+    describeRefit(last.bytes, result["model"]);
     files.push_back({"--model", options.model, bytesText(last.bytes)});
   }
 

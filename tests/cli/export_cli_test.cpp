@@ -154,6 +154,14 @@ TEST_F(ExportCli, TheModelAndGraphAreReadByLearnPredictAndItmPath) {
   const nlohmann::json result = exported.json();
   EXPECT_EQ(result.at("model").at("learner").get<std::string>(), "elm");
   EXPECT_EQ(result.at("model").at("samples").get<int>(), taught_->at("samples").get<int>());
+  // learn fit with the arguments export prints learns the session's model again, byte for byte
+  // (the session's ELM was drawn with teach's seed 3, not learn fit's default 1).
+  const std::string arguments = result.at("model").at("learn_fit_arguments").get<std::string>();
+  EXPECT_NE(arguments.find("--seed 3"), std::string::npos) << arguments;
+  const fs::path refit = scratchDir() / "session-refit.flm";
+  const auto fit = runCliBinary("learn fit " + arguments + " --data " + samples.string() + " --out " + refit.string());
+  ASSERT_EQ(fit.exit_code, 0) << fit.err;
+  EXPECT_EQ(fileBytes(refit), fileBytes(model));
 
   const auto predicted = runCliBinary("learn predict --model " + model.string() + " --data " + samples.string());
   ASSERT_EQ(predicted.exit_code, 0) << predicted.err;
