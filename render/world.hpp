@@ -24,7 +24,10 @@ struct Palette {
   static Eigen::Vector4f trainingArea() { return {0.15F, 0.65F, 0.25F, 0.30F}; }
   static Eigen::Vector4f workingArea() { return {0.20F, 0.45F, 0.90F, 0.22F}; }
   static Eigen::Vector4f target() { return {0.10F, 0.10F, 0.12F, 1.0F}; }
-  static Eigen::Vector4f trajectory() { return {0.55F, 0.15F, 0.65F, 1.0F}; }
+  /// The scene's evaluation trajectories: the target trajectories' near-black
+  /// (OverlayPalette::targetTrajectory), apart from every area's samples (a purple had read as
+  /// the first area's).
+  static Eigen::Vector4f trajectory() { return {0.10F, 0.10F, 0.12F, 1.0F}; }
 };
 
 /// The obstacles, areas, targets and trajectories of a scene (world frame). Throws InputError

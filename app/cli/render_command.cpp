@@ -336,6 +336,8 @@ Json renderPicture(const RenderOptions& options) {
   if (options.no_scene_areas) scene.training_areas.clear();
   // Fig. 4.6 shows the implicit scene model on its own, where the obstacles would hide it.
   if (options.no_obstacles) scene.obstacles.clear();
+  // The scene's evaluation trajectories are target trajectories: hidden with them.
+  if (!shown(render::OverlayLayer::kTrajectories)) scene.trajectories.clear();
 
   render::World world;
   if (!options.no_robot) world.setRobot(model);
@@ -360,6 +362,7 @@ Json renderPicture(const RenderOptions& options) {
   render::Overlays& overlays = world.overlays();
   std::vector<render::LegendEntry> legend;
   if (!touching_links.empty() && !options.no_robot) legend.push_back({"Link in contact", render::OverlayPalette::collision()});
+  if (!scene.trajectories.empty()) legend.push_back({"Scene's evaluation trajectories", render::Palette::trajectory()});
   // Point sizes and line widths are pixels of the render target: with supersampling they scale
   // with it, so that they keep their size in the picture.
   const auto scale = static_cast<float>(options.supersampling);
@@ -610,7 +613,7 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
   command->add_option("--scene-model", options->scene_model, "JSON of eval scene-model: the points of S (Eq. 4.1, Fig. 4.6)");
   command->add_option("--plan", options->plan, "JSON of plan: goals and planned paths (Fig. 7.7, 8.4)");
   command->add_option("--plan-paths", options->plan_paths, "draw only the first N planned paths")->check(finiteRange(0, 100000));
-  command->add_option("--hide", options->hide, "overlay layers not to draw: samples,ghosts,confidence,itm,path,reachability,legend");
+  command->add_option("--hide", options->hide, "overlay layers not to draw: samples,ghosts,confidence,itm,path,reachability,trajectories (also the scene's),legend");
   command->add_option("--point-size", options->point_size, "size of points [px]")
       ->capture_default_str()
       ->check(finiteRange(1.0, 64.0));

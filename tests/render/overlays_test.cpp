@@ -104,6 +104,7 @@ TEST(OverlayPalette, AreaColoursDifferFromEachOtherAndFromTheOtherOverlaysAndRep
       {"planned path", OverlayPalette::plannedPath()},
       {"path with a contact", OverlayPalette::collidedPath()},
       {"target trajectory", OverlayPalette::targetTrajectory()},
+      {"scene's trajectory", Palette::trajectory()},
       {"teach-in", OverlayPalette::teachInTrajectory()},
       {"executed motion", OverlayPalette::executedTrajectory()},
       {"scene model", OverlayPalette::sceneModel()},

@@ -253,6 +253,26 @@ TEST(RenderCommandOverlays, DrawsReachedTargetsGreenUnreachedRedAndTheSceneModel
   for (const auto& f : {reachable, model, file}) std::filesystem::remove(f);
 }
 
+// A scene's evaluation trajectories are target trajectories: near-black, named in the legend and
+// hidden with them (drawn purple, unnamed and always, they had read as the first area's samples).
+TEST(RenderCommandOverlays, TheScenesTrajectoriesAreNamedAndHiddenWithTheTrajectories) {
+  const auto file = tempPng("scene-trajectories.png");
+  const std::vector<std::string> common = {"render", "--scene", "setup_A", "--out", file.string(), "--width", "320",
+                                           "--height", "240", "--supersample", "1", "--legend"};
+  const Result shown = run(common);
+  ASSERT_EQ(shown.exit_code, 0) << shown.err;
+  const auto legend = nlohmann::json::parse(shown.out).at("legend");
+  EXPECT_NE(std::find(legend.begin(), legend.end(), "Scene's evaluation trajectories"), legend.end()) << legend.dump();
+  std::vector<std::string> hiding = common;
+  hiding.insert(hiding.end(), {"--hide", "trajectories"});
+  const Result hidden = run(hiding);
+  ASSERT_EQ(hidden.exit_code, 0) << hidden.err;
+  const auto hidden_legend = nlohmann::json::parse(hidden.out).at("legend");
+  EXPECT_EQ(std::find(hidden_legend.begin(), hidden_legend.end(), "Scene's evaluation trajectories"), hidden_legend.end());
+  EXPECT_EQ(render::Palette::trajectory(), render::OverlayPalette::targetTrajectory());  // apart from the areas: overlays_test
+  std::filesystem::remove(file);
+}
+
 // A result measured in another scene or with another arm is drawn as asked, and said: its
 // points mean nothing in this picture, which the picture alone would not show.
 TEST(RenderCommandOverlays, SaysWhenAResultWasMeasuredInAnotherSceneOrWithAnotherRobot) {
