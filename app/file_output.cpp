@@ -12,29 +12,19 @@
 
 namespace flexirob::app {
 
+InterruptionsHeld::InterruptionsHeld() {
+  sigset_t held;
+  sigemptyset(&held);
+  sigaddset(&held, SIGINT);
+  sigaddset(&held, SIGTERM);
+  active_ = ::pthread_sigmask(SIG_BLOCK, &held, &previous_) == 0;
+}
+
+InterruptionsHeld::~InterruptionsHeld() {
+  if (active_) ::pthread_sigmask(SIG_SETMASK, &previous_, nullptr);
+}
+
 namespace {
-
-// Holds SIGINT and SIGTERM back while it lives; one that came meanwhile is delivered when it
-// ends, after the temporary is gone.
-class InterruptionsHeld {
- public:
-  InterruptionsHeld() {
-    sigset_t held;
-    sigemptyset(&held);
-    sigaddset(&held, SIGINT);
-    sigaddset(&held, SIGTERM);
-    active_ = ::pthread_sigmask(SIG_BLOCK, &held, &previous_) == 0;
-  }
-  ~InterruptionsHeld() {
-    if (active_) ::pthread_sigmask(SIG_SETMASK, &previous_, nullptr);
-  }
-  InterruptionsHeld(const InterruptionsHeld&) = delete;
-  InterruptionsHeld& operator=(const InterruptionsHeld&) = delete;
-
- private:
-  sigset_t previous_{};
-  bool active_ = false;
-};
 
 // The file a symbolic link (or a chain of them) names, whether it exists yet or not; the path
 // itself where it is no link (or the chain does not end).

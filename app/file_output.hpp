@@ -5,7 +5,24 @@
 #include <filesystem>
 #include <string>
 
+#include <signal.h>
+
 namespace flexirob::app {
+
+/// Holds SIGINT and SIGTERM back while it lives; one that came meanwhile is delivered when it
+/// ends. Around the writing of several outputs that belong together (export's files), so that an
+/// interruption leaves all of them or none.
+class InterruptionsHeld {
+ public:
+  InterruptionsHeld();
+  ~InterruptionsHeld();
+  InterruptionsHeld(const InterruptionsHeld&) = delete;
+  InterruptionsHeld& operator=(const InterruptionsHeld&) = delete;
+
+ private:
+  sigset_t previous_{};
+  bool active_ = false;
+};
 
 /// Writes `text` to a new temporary file beside `file` (a name of its own, so that no file kept
 /// there is overwritten) and renames it into place. Through a symbolic link it writes the file the

@@ -226,6 +226,8 @@ Json exportSession(const ExportOptions& options) {
   result["closed_cleanly"] = teaching.closed_cleanly;
   // Each to the file its path names: through a symbolic link to the file it points at, so that
   // the link stays and the check for outputs naming one file holds for what is written.
+  // All of them or none: an interruption waits until the last is in place.
+  const app::InterruptionsHeld held;
   for (const Output& file : files) app::writeFileReplacing(sameFileKey(file.path), file.content, file.option);
   return result;
 }

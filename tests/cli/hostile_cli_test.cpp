@@ -182,8 +182,9 @@ TEST_F(HostileCli, AnOutputThatIsTheFileStandardOutputGoesToIsRefused) {
 // whole (it had emptied --markdown at its start), and one file for both outputs is refused.
 TEST_F(HostileCli, ASweepStoppedHalfWayLeavesTheLastTablesWhole) {
   const fs::path markdown = write("sweep.md", "# the last sweep\n");
+  const fs::path said = dir_ / "sweep-stderr.txt";
   const std::string sweep = std::string(FLEXIROB_CLI_EXECUTABLE) + " sweep --tables 3.3 --max-areas 1 --spacing 0.3 --markdown " +
-                            markdown.string() + " > /dev/null 2>&1";
+                            markdown.string() + " > /dev/null 2> " + said.string();
   const int status = std::system(("timeout -s INT 1 " + sweep).c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_NE(WEXITSTATUS(status), 0) << "the sweep ended within a second; nothing was stopped";
@@ -191,6 +192,12 @@ TEST_F(HostileCli, ASweepStoppedHalfWayLeavesTheLastTablesWhole) {
   std::stringstream text;
   text << in.rdbuf();
   EXPECT_EQ(text.str(), "# the last sweep\n");
+  // It says why it ended, in its last line.
+  std::ifstream messages(said);
+  std::string line, last;
+  while (std::getline(messages, line)) last = line;
+  EXPECT_EQ(last, "flexirob-cli: stopped by SIGINT; files not written yet are as they were");
+  fs::remove(said);
   std::size_t files = 0;
   for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir_)) ++files;
   expectRefused(runCliBinary("sweep --tables 7.1 --json " + markdown.string() + " --markdown ./" + markdown.lexically_relative(fs::current_path()).string()),
