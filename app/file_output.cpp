@@ -24,10 +24,6 @@ InterruptionsHeld::~InterruptionsHeld() {
   if (active_) ::pthread_sigmask(SIG_SETMASK, &previous_, nullptr);
 }
 
-namespace {
-
-// The file a symbolic link (or a chain of them) names, whether it exists yet or not; the path
-// itself where it is no link (or the chain does not end).
 std::filesystem::path followLinks(const std::filesystem::path& file) {
   std::filesystem::path path = file;
   for (int hop = 0; hop < 40; ++hop) {
@@ -35,12 +31,13 @@ std::filesystem::path followLinks(const std::filesystem::path& file) {
     if (!std::filesystem::is_symlink(path, error)) return path;
     const std::filesystem::path target = std::filesystem::read_symlink(path, error);
     if (error) return file;
-    path = (target.is_absolute() ? target : path.parent_path() / target).lexically_normal();
+    // Joined as the kernel reads it: "dirlink/../x" is ".." of the folder dirlink names, which
+    // a lexical normalization would take for the folder holding dirlink.
+    path = target.is_absolute() ? target : path.parent_path() / target;
   }
   return file;
 }
 
-}  // namespace
 
 void writeFileReplacing(const std::filesystem::path& requested, const std::string& text, const std::string& option) {
   const std::filesystem::path file = followLinks(requested);

@@ -24,6 +24,10 @@ class InterruptionsHeld {
   bool active_ = false;
 };
 
+/// The file a symbolic link (or a chain of them) names, whether it exists yet or not; the path
+/// itself where it is no link (or the chain does not end). What writeFileReplacing writes.
+std::filesystem::path followLinks(const std::filesystem::path& file);
+
 /// Writes `text` to a new temporary file beside `file` (a name of its own, so that no file kept
 /// there is overwritten) and renames it into place. Through a symbolic link it writes the file the
 /// link names and keeps the link; the file keeps the mode it had, a new one gets the umask's. SIGINT

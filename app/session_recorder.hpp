@@ -91,7 +91,7 @@ struct SampleRecord {
   Eigen::VectorXd q;  ///< joint posture [rad] (N)
 };
 
-/// A learned model: the learner's own model-file bytes (learning::Learner::save).
+/// A learned model: the learner's own model-file bytes (learning::Learner::modelText).
 struct ModelRecord {
   double time = 0.0;          ///< [s] when the model was swapped in
   std::string learner_kind;   ///< "elm", "oselm", "llm", "bpdc"
@@ -100,7 +100,7 @@ struct ModelRecord {
   std::vector<std::uint8_t> bytes;
 };
 
-/// An ITM graph snapshot: the bytes of planning::saveItm's file.
+/// An ITM graph snapshot: the bytes of a graph file (planning::itmToBytes).
 struct ItmRecord {
   double time = 0.0;  ///< [s]
   int nodes = 0;

@@ -124,14 +124,18 @@ void WorkflowActivityStream::event(const Workflow& workflow, SessionRecorder& re
 
 void WorkflowActivityStream::afterCycle(const Workflow& workflow, SessionRecorder& recorder, robot::Simulation* simulation) {
   trackExecution(workflow, recorder);
+  // A recorder attached late gets the log's earlier events (the first 1000 are kept) a few per
+  // cycle, so that no cycle pushes more than the recorder's queue takes at once.
+  constexpr std::size_t kCollisionsPerCycle = 32;
+  recordCollisions(recorder, simulation, kCollisionsPerCycle);
+}
+
+void WorkflowActivityStream::recordCollisions(SessionRecorder& recorder, robot::Simulation* simulation, std::size_t limit) {
   if (simulation == nullptr) return;
   robot::CollisionWorld* world = simulation->collisionWorld();
   const auto& log = simulation->collisions().eventLog();
   if (collisions_seen_ > log.size()) collisions_seen_ = 0;  // the monitor started over
-  // A recorder attached late gets the log's earlier events (the first 1000 are kept) a few per
-  // cycle, so that no cycle pushes more than the recorder's queue takes at once.
-  constexpr std::size_t kCollisionsPerCall = 32;
-  const std::size_t end = std::min(log.size(), collisions_seen_ + kCollisionsPerCall);
+  const std::size_t end = log.size() - collisions_seen_ > limit ? collisions_seen_ + limit : log.size();
   for (; collisions_seen_ < end; ++collisions_seen_) {
     if (world == nullptr) continue;
     const auto& event = log[collisions_seen_];
@@ -267,6 +271,7 @@ void WorkflowSessionWriter::poll() {
 
 void WorkflowSessionWriter::finish() {
   poll();
+  activity_.recordCollisions(*recorder_, simulation_);
   if (workflow_->itmVersion() != itm_version_ || itm_time_ < -1e8) recordItm(workflow_->state().time);
 }
 

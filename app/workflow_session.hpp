@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <vector>
 #include <string>
 
@@ -84,6 +85,10 @@ class WorkflowActivityStream {
   /// After the cycle's events: the executed motion in progress, the simulation's new collisions
   /// (simulation may be null: none).
   void afterCycle(const Workflow& workflow, SessionRecorder& recorder, robot::Simulation* simulation);
+  /// The simulation's collisions not recorded yet, at most `limit` of them (the session's end:
+  /// all; the control thread's cycle: a few).
+  void recordCollisions(SessionRecorder& recorder, robot::Simulation* simulation,
+                        std::size_t limit = std::numeric_limits<std::size_t>::max());
   /// A new recorder: the simulation's collisions from its first again, no motion in progress, no
   /// teach-in to refer to.
   void restart();

@@ -470,6 +470,14 @@ void WorkflowThread::loop() {
     failed_ = true;
     copyText(failure_, "unknown exception");
   }
+  // The collisions of the last step, which no cycle recorded after it (recordCycle runs
+  // before the step), and any a late recorder has not got yet.
+  try {
+    const std::lock_guard lock(recorder_mutex_);
+    if (recorder_ != nullptr) recorder_activity_.recordCollisions(*recorder_, simulation_);
+  } catch (...) {
+    // The recording loses these few records; the thread still ends cleanly.
+  }
   publish(statistics);
   running_.store(false, std::memory_order_release);
 }

@@ -331,7 +331,8 @@ void MainWindow::stopLive() {
 }
 
 void MainWindow::startRecording() {
-  recorded_itm_version_ = recorded_model_version_ = ~0ULL;  // a new file holds the graph and model again
+  recorded_itm_version_ = ~0ULL;  // a new file holds the graph and the model again
+  recorded_model_.reset();
   session_file_.clear();
   if (!options_.record_sessions || !model_ || !live_) return;
   const QString directory =
@@ -1242,8 +1243,8 @@ void MainWindow::recordItm(const LiveSnapshot& s, bool final) {
 }
 
 void MainWindow::recordModel(const LiveSnapshot& s) {
-  if (!recorder_ || !s.model || !s.model_ready || s.model_version == recorded_model_version_) return;
-  recorded_model_version_ = s.model_version;
+  if (!recorder_ || !s.model || !s.model_ready || s.model == recorded_model_) return;
+  recorded_model_ = s.model;
   try {
     app::ModelRecord record;
     record.time = s.time;

@@ -20,6 +20,7 @@
 #include <sstream>
 #include <iostream>
 
+#include "app/file_output.hpp"
 #include "robot/errors.hpp"
 #include "robot/resources.hpp"
 
@@ -118,7 +119,9 @@ void checkOutputPath(const std::string& option, const std::string& path,
       throw InputError(option + ": '" + path + "' is the " + input_option + " file the run reads; give another file");
     }
   }
-  const fs::path folder = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
+  // The folder of the file written: through a symbolic link, the folder of the file it names.
+  const fs::path written = app::followLinks(path);
+  const fs::path folder = written.parent_path().empty() ? fs::path(".") : written.parent_path();
   if (!fs::is_directory(folder, error)) {
     throw InputError(option + (fs::exists(folder, error) ? ": '" + folder.string() + "' is a file, not a folder"
                                                           : ": the folder '" + folder.string() + "' does not exist"));

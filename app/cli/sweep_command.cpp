@@ -375,8 +375,10 @@ Json runSweep(const SweepOptions& options) {
       app::writeFileReplacing(path, text, option);
     }
   };
-  if (!options.markdown.empty()) write("--markdown", options.markdown, md.str());
+  // Both or, stopped, neither: an interruption waits until the second is in place.
+  const app::InterruptionsHeld held;
   if (!options.json_out.empty()) write("--json", options.json_out, out.dump(2) + "\n");
+  if (!options.markdown.empty()) write("--markdown", options.markdown, md.str());
   return out;
 }
 

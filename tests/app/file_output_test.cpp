@@ -106,6 +106,19 @@ TEST_F(FileOutput, WritesTheFileASymbolicLinkNamesAndKeepsTheLink) {
   EXPECT_EQ(read(folder_ / "real" / "later.itm"), "made\n");
 }
 
+// A relative link in a folder reached through a linked folder: "../x" is read from the folder
+// the link lies in, as the kernel reads it (not from the folder holding the folder's link).
+TEST_F(FileOutput, ALinkInALinkedFolderWritesTheFileTheKernelWouldOpen) {
+  fs::create_directories(folder_ / "d1" / "real");
+  std::ofstream(folder_ / "d1" / "target.flm") << "old\n";
+  fs::create_symlink("../target.flm", folder_ / "d1" / "real" / "out.flm");
+  fs::create_symlink(folder_ / "d1" / "real", folder_ / "dirlink");
+  writeFileReplacing(folder_ / "dirlink" / "out.flm", "new\n", "--out");
+  EXPECT_EQ(read(folder_ / "d1" / "target.flm"), "new\n");
+  EXPECT_TRUE(fs::is_symlink(folder_ / "d1" / "real" / "out.flm"));
+  EXPECT_FALSE(fs::exists(folder_ / "target.flm"));
+}
+
 // Killed by SIGTERM while it writes (200 MB), a process leaves the output whole or not at all,
 // and no temporary beside it; the signal still ends the process, once the write is done.
 TEST_F(FileOutput, AnInterruptedWriteLeavesNoTemporaryAndNoHalfFile) {

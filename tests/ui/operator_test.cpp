@@ -547,15 +547,27 @@ class OperatorTest : public QObject {
     QTest::keyClick(&window, Qt::Key_F6);
     QTRY_VERIFY_WITH_TIMEOUT(window.live()->snapshot().model_ready, 20000);
     QTest::qWait(200);
+    const auto learned = window.live()->snapshot().model;
+    const int learned_from = static_cast<int>(window.live()->snapshot().area_data->front().X.cols());
+    // A second area changes the confidence (the model version) but not the model: recorded once.
+    QTest::keyClick(&window, Qt::Key_F5);
+    QTRY_COMPARE(window.live()->snapshot().stage, Stage::kConfiguration);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTest::qWait(300);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(window.live()->snapshot().areas, 2);
+    QTest::qWait(200);
     QTemporaryDir directory;
     const QString file = directory.filePath(QStringLiteral("learned.flexirob"));
     QVERIFY(window.saveSession(file));
     const flexirob::app::SessionReader reader(file.toStdString());
     const auto models = reader.models();
     QCOMPARE(models.size(), std::size_t{1});
-    QCOMPARE(models[0].learner_kind, window.live()->snapshot().model->kind());
-    QCOMPARE(models[0].samples, static_cast<int>(reader.samples().size()));
-    const std::string text = window.live()->snapshot().model->modelText();
+    QCOMPARE(models[0].learner_kind, learned->kind());
+    QCOMPARE(models[0].samples, learned_from);
+    const std::string text = learned->modelText();
     QVERIFY(models[0].bytes == std::vector<std::uint8_t>(text.begin(), text.end()));
   }
 
