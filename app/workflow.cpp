@@ -704,6 +704,7 @@ void Workflow::collectLearning() {
     return;
   }
   model_ = std::move(result->model);
+  model_samples_ = result->samples;
   ++model_version_;
   // OS-ELM: keep learning online from the refit on.
   if (result->online) online_ = std::move(result->online);

@@ -205,6 +205,8 @@ class Workflow {
   const std::vector<Eigen::MatrixXd>& teachIns() const { return teach_ins_; }
   /// The learned q_c(x), or null (nothing learned yet / learning in progress).
   std::shared_ptr<const learning::Learner> model() const { return model_; }
+  /// The samples model() was learned from (0 without a model).
+  Eigen::Index modelSamples() const { return model_ != nullptr ? model_samples_ : 0; }
   bool learning() const { return learning_thread_.joinable(); }
   /// [s] wall time since the running fit started (or the last fit took); 0 before any.
   double learningSeconds() const;
@@ -355,6 +357,7 @@ class Workflow {
   std::unique_ptr<const planning::PathPostures> path_postures_;
   bool keyboard_ = false;
   std::uint64_t areas_version_ = 0, teach_ins_version_ = 0, model_version_ = 0, itm_version_ = 0, path_version_ = 0;
+  Eigen::Index model_samples_ = 0;
 
   std::vector<WorkflowEvent> events_;
   std::size_t events_taken_ = 0;

@@ -334,6 +334,7 @@ void WorkflowThread::publish(const CycleStatistics& statistics) {
   snapshot.learning = workflow.learning();
   snapshot.learning_seconds = workflow.learningSeconds();
   snapshot.model_ready = model_ != nullptr;
+  snapshot.model_samples = static_cast<int>(workflow.modelSamples());
   snapshot.joint_limit_warnings = joint_limit_warnings_;
   int inconsistent = 0;
   if (checks_) {

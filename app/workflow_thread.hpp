@@ -157,6 +157,8 @@ struct WorkflowSnapshot {
   bool running = false;
   bool failed = false;  ///< the loop stopped on an exception
   std::array<char, 208> failure{};
+
+  int model_samples = 0;  ///< the samples `model` was learned from (0 without one)
 };
 
 class WorkflowThread {

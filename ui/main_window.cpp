@@ -1249,9 +1249,7 @@ void MainWindow::recordModel(const LiveSnapshot& s) {
     app::ModelRecord record;
     record.time = s.time;
     record.learner_kind = s.model->kind();
-    if (s.area_data) {
-      for (const app::TrainingArea& area : *s.area_data) record.samples += static_cast<int>(area.X.cols());
-    }
+    record.samples = s.model_samples;
     record.train_seconds = s.learning_seconds;
     const std::string text = s.model->modelText();
     record.bytes.assign(text.begin(), text.end());

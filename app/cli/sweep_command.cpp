@@ -41,7 +41,8 @@ struct SweepOptions {
   std::string json_out;        ///< JSON file, or empty
 };
 
-void log(const std::string& line) { std::cerr << "sweep: " << line << std::endl; }
+// One write per line, so that a line is never cut by what comes between its parts.
+void log(const std::string& line) { std::cerr << ("sweep: " + line + "\n") << std::flush; }
 
 std::string fixed(double value, int digits) {
   std::ostringstream out;
@@ -363,22 +364,27 @@ Json runSweep(const SweepOptions& options) {
   if (wanted("3.4")) out["tab_3_4"] = table34(options, md);
   if (wanted("7.1")) out["tab_7_1"] = table71(md);
   if (wanted("8.3")) out["sect_8_3"] = section83(options, md);
-  // A regular file through a rename (app::writeFileReplacing); a device or a pipe (/dev/stdout
-  // into a pipe) in place.
-  const auto write = [](const std::string& option, const std::string& path, const std::string& text) {
+  // A device or a pipe (/dev/stdout into a pipe) in place and first, free to be interrupted (a
+  // pipe nobody reads would otherwise hold the process); the regular files through renames,
+  // both or, stopped, neither: an interruption waits until the second is in place.
+  std::vector<std::pair<std::string, std::string>> outputs;  // option, text
+  if (!options.json_out.empty()) outputs.emplace_back("--json", out.dump(2) + "\n");
+  if (!options.markdown.empty()) outputs.emplace_back("--markdown", md.str());
+  const auto path_of = [&](const std::string& option) { return option == "--json" ? options.json_out : options.markdown; };
+  const auto in_place = [&](const std::string& option) {
     std::error_code error;
-    if (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error)) {
-      std::ofstream device(path);
-      device << text;
-      if (!device.flush()) throw InputError(option + ": cannot write '" + path + "'");
-    } else {
-      app::writeFileReplacing(path, text, option);
-    }
+    return std::filesystem::exists(path_of(option), error) && !std::filesystem::is_regular_file(path_of(option), error);
   };
-  // Both or, stopped, neither: an interruption waits until the second is in place.
+  for (const auto& [option, text] : outputs) {
+    if (!in_place(option)) continue;
+    std::ofstream device(path_of(option));
+    device << text;
+    if (!device.flush()) throw InputError(option + ": cannot write '" + path_of(option) + "'");
+  }
   const app::InterruptionsHeld held;
-  if (!options.json_out.empty()) write("--json", options.json_out, out.dump(2) + "\n");
-  if (!options.markdown.empty()) write("--markdown", options.markdown, md.str());
+  for (const auto& [option, text] : outputs) {
+    if (!in_place(option)) app::writeFileReplacing(path_of(option), text, option);
+  }
   return out;
 }
 

@@ -188,7 +188,7 @@ TEST_F(HostileCli, ASweepStoppedHalfWayLeavesTheLastTablesWhole) {
   // would be ignored by a command a shell starts in the background.
   const std::string script = std::string(FLEXIROB_CLI_EXECUTABLE) +
                              " sweep --tables 3.3 --max-areas 1 --spacing 0.3 --markdown " + markdown.string() +
-                             " > /dev/null 2> " + said.string() + " & pid=$!; for i in $(seq 1200); do grep -q 'sweep: Tab. 3.3' " +
+                             " > /dev/null 2> " + said.string() + " & pid=$!; for i in $(seq 1200); do grep -qs 'sweep: Tab. 3.3' " +
                              said.string() + " && break; sleep 0.05; done; kill -TERM $pid; wait $pid";
   const int status = std::system(script.c_str());
   ASSERT_TRUE(WIFEXITED(status));

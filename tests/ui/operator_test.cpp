@@ -569,6 +569,14 @@ class OperatorTest : public QObject {
     QCOMPARE(models[0].samples, learned_from);
     const std::string text = learned->modelText();
     QVERIFY(models[0].bytes == std::vector<std::uint8_t>(text.begin(), text.end()));
+    // The file recording goes on into holds the model again, with the samples it was learned
+    // from, not those of the areas there are now.
+    QTest::qWait(300);
+    const QString later = directory.filePath(QStringLiteral("later.flexirob"));
+    QVERIFY(window.saveSession(later));
+    const auto later_models = flexirob::app::SessionReader(later.toStdString()).models();
+    QCOMPARE(later_models.size(), std::size_t{1});
+    QCOMPARE(later_models[0].samples, learned_from);
   }
 
   void theRobotOverFriIsMirroredItsLinkShownAndDisconnected() {
