@@ -536,28 +536,25 @@ class OperatorTest : public QObject {
     options.record_sessions = true;
     MainWindow window("lwr4", "empty", options);
     waitRunning(window);
-    QTest::keyClick(&window, Qt::Key_F5);
-    QTRY_COMPARE(window.live()->snapshot().stage, Stage::kConfiguration);
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTest::keyClick(&window, Qt::Key_Return);
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTest::qWait(400);
-    QTest::keyClick(&window, Qt::Key_Return);
-    QTRY_COMPARE(window.live()->snapshot().areas, 1);
+    // start_configuration, then one area: on_affected, on_converged, on_affected, recording, on_converged.
+    const auto recordAnArea = [&window](int areas_after) {
+      QTest::keyClick(&window, Qt::Key_F5);
+      QTRY_COMPARE(window.live()->snapshot().stage, Stage::kConfiguration);
+      QTest::keyClick(&window, Qt::Key_Space);
+      QTest::keyClick(&window, Qt::Key_Return);
+      QTest::keyClick(&window, Qt::Key_Space);
+      QTest::qWait(400);
+      QTest::keyClick(&window, Qt::Key_Return);
+      QTRY_COMPARE(window.live()->snapshot().areas, areas_after);
+    };
+    recordAnArea(1);
     QTest::keyClick(&window, Qt::Key_F6);
     QTRY_VERIFY_WITH_TIMEOUT(window.live()->snapshot().model_ready, 20000);
     QTest::qWait(200);
     const auto learned = window.live()->snapshot().model;
     const int learned_from = static_cast<int>(window.live()->snapshot().area_data->front().X.cols());
     // A second area changes the confidence (the model version) but not the model: recorded once.
-    QTest::keyClick(&window, Qt::Key_F5);
-    QTRY_COMPARE(window.live()->snapshot().stage, Stage::kConfiguration);
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTest::keyClick(&window, Qt::Key_Return);
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTest::qWait(300);
-    QTest::keyClick(&window, Qt::Key_Return);
-    QTRY_COMPARE(window.live()->snapshot().areas, 2);
+    recordAnArea(2);
     QTest::qWait(200);
     QTemporaryDir directory;
     const QString file = directory.filePath(QStringLiteral("learned.flexirob"));
