@@ -1,11 +1,6 @@
 #include "app/workflow_session.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
-#include <fstream>
-#include <iterator>
-#include <system_error>
 
 #include "planning/itm_file.hpp"
 #include "robot/sim/simulation.hpp"
