@@ -38,7 +38,6 @@ std::filesystem::path followLinks(const std::filesystem::path& file) {
   return file;
 }
 
-
 void writeFileReplacing(const std::filesystem::path& requested, const std::string& text, const std::string& option) {
   const std::filesystem::path file = followLinks(requested);
   const InterruptionsHeld held;

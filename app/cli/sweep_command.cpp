@@ -367,23 +367,28 @@ Json runSweep(const SweepOptions& options) {
   // A device or a pipe (/dev/stdout into a pipe) in place and first, free to be interrupted (a
   // pipe nobody reads would otherwise hold the process); the regular files through renames,
   // both or, stopped, neither: an interruption waits until the second is in place.
-  std::vector<std::pair<std::string, std::string>> outputs;  // option, text
-  if (!options.json_out.empty()) outputs.emplace_back("--json", out.dump(2) + "\n");
-  if (!options.markdown.empty()) outputs.emplace_back("--markdown", md.str());
-  const auto path_of = [&](const std::string& option) { return option == "--json" ? options.json_out : options.markdown; };
-  const auto in_place = [&](const std::string& option) {
-    std::error_code error;
-    return std::filesystem::exists(path_of(option), error) && !std::filesystem::is_regular_file(path_of(option), error);
+  struct Output {
+    std::string option, path, text;
+    bool in_place;
   };
-  for (const auto& [option, text] : outputs) {
-    if (!in_place(option)) continue;
-    std::ofstream device(path_of(option));
-    device << text;
-    if (!device.flush()) throw InputError(option + ": cannot write '" + path_of(option) + "'");
+  std::vector<Output> outputs;
+  const auto add = [&outputs](const std::string& option, const std::string& path, std::string text) {
+    if (path.empty()) return;
+    std::error_code error;
+    const bool in_place = std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error);
+    outputs.push_back({option, path, std::move(text), in_place});
+  };
+  add("--json", options.json_out, out.dump(2) + "\n");
+  add("--markdown", options.markdown, md.str());
+  for (const Output& output : outputs) {
+    if (!output.in_place) continue;
+    std::ofstream device(output.path);
+    device << output.text;
+    if (!device.flush()) throw InputError(output.option + ": cannot write '" + output.path + "'");
   }
   const app::InterruptionsHeld held;
-  for (const auto& [option, text] : outputs) {
-    if (!in_place(option)) app::writeFileReplacing(path_of(option), text, option);
+  for (const Output& output : outputs) {
+    if (!output.in_place) app::writeFileReplacing(output.path, output.text, output.option);
   }
   return out;
 }
