@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "app/session_reader.hpp"
+#include "app/file_output.hpp"
 #include "app/session_schema.hpp"
 #include "app/session_teaching.hpp"
 #include "app/study_metrics.hpp"
@@ -436,10 +437,7 @@ std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const
   std::vector<std::filesystem::path> written;
   const auto write = [&](const std::string& name, const std::string& text) {
     const std::filesystem::path file = folder / name;
-    std::ofstream out(file, std::ios::binary);
-    out << text;
-    out.close();
-    if (!out) throw InputError("--csv-dir: cannot write '" + file.string() + "'");
+    writeFileReplacing(file, text, "--csv-dir");
     written.push_back(file);
   };
 

@@ -6,8 +6,8 @@
 
 #include <array>
 #include <cstdint>
-#include <filesystem>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "render/camera.hpp"
@@ -44,7 +44,8 @@ class OffscreenRenderer {
   std::unique_ptr<Impl> impl_;
 };
 
-/// Writes an 8-bit RGBA PNG. Throws InputError if the file cannot be written.
-void writePng(const Image& image, const std::filesystem::path& file);
+/// The image as the bytes of an 8-bit RGBA PNG file. The caller writes them (the CLI through
+/// app::writeFileReplacing, so that a picture is replaced whole or not at all).
+std::string encodePng(const Image& image);
 
 }  // namespace flexirob::render

@@ -13,9 +13,6 @@
 #include <zlib.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
-#include <fstream>
 #include <stdexcept>
 #include <string>
 
@@ -168,10 +165,10 @@ void appendChunk(std::string& out, const char* type, const std::string& data) {
 
 }  // namespace
 
-void writePng(const Image& image, const std::filesystem::path& file) {
+std::string encodePng(const Image& image) {
   if (image.width < 1 || image.height < 1 ||
       image.rgba.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) * 4) {
-    throw std::invalid_argument("writePng: image size does not match its pixel data");
+    throw std::invalid_argument("encodePng: image size does not match its pixel data");
   }
   // Raw scanlines, each preceded by filter type 0 (none), deflated into one IDAT chunk.
   const std::size_t stride = static_cast<std::size_t>(image.width) * 4;
@@ -185,7 +182,7 @@ void writePng(const Image& image, const std::filesystem::path& file) {
   std::string compressed(compressed_size, '\0');
   if (compress2(reinterpret_cast<Bytef*>(compressed.data()), &compressed_size,
                 reinterpret_cast<const Bytef*>(raw.data()), static_cast<uLong>(raw.size()), 6) != Z_OK) {
-    throw std::runtime_error("writePng: compression failed");
+    throw std::runtime_error("encodePng: compression failed");
   }
   compressed.resize(compressed_size);
 
@@ -197,11 +194,7 @@ void writePng(const Image& image, const std::filesystem::path& file) {
   appendChunk(png, "IHDR", header);
   appendChunk(png, "IDAT", compressed);
   appendChunk(png, "IEND", "");
-
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) throw InputError("cannot write '" + file.string() + "': " + std::strerror(errno));
-  out.write(png.data(), static_cast<std::streamsize>(png.size()));
-  if (!out) throw InputError("cannot write '" + file.string() + "': " + std::strerror(errno));
+  return png;
 }
 
 }  // namespace flexirob::render

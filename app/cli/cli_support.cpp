@@ -103,17 +103,15 @@ void refuseStandardStreamsFile(const std::string& option, const std::string& pat
 }
 
 void checkOutputPath(const std::string& option, const std::string& path,
-                     const std::vector<std::pair<std::string, std::string>>& inputs, bool replaced_by_rename) {
+                     const std::vector<std::pair<std::string, std::string>>& inputs, bool regular_file_only) {
   namespace fs = std::filesystem;
   if (path.empty()) throw InputError(option + ": expected a file path");
   std::error_code error;
   if (fs::is_directory(path, error)) throw InputError(option + ": '" + path + "' is a directory; expected a file path");
-  // An output written to a temporary file renamed into place would put a regular file where
-  // /dev/null or a pipe was (outputs written in place may go to /dev/stdout).
-  if (replaced_by_rename && fs::exists(path, error) && !fs::is_regular_file(path, error)) {
+  if (regular_file_only && fs::exists(path, error) && !fs::is_regular_file(path, error)) {
     throw InputError(option + ": '" + path + "' is not a regular file (a device, a pipe or a socket); expected a file path");
   }
-  if (replaced_by_rename) refuseStandardStreamsFile(option, path);
+  refuseStandardStreamsFile(option, path);
   for (const auto& [input_option, input] : inputs) {
     if (!input.empty() && fs::exists(path, error) && fs::equivalent(input, path, error)) {
       throw InputError(option + ": '" + path + "' is the " + input_option + " file the run reads; give another file");

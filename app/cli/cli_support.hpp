@@ -119,13 +119,13 @@ std::string sameFileKey(const std::string& path);
 void refuseStandardStreamsFile(const std::string& option, const std::string& path);
 
 /// Refuses (InputError naming `option`) an output path that is a directory, that is one of the
-/// run's `inputs` ({option, path}: writing would destroy what is being read), or whose folder
-/// does not exist or cannot be written, before any work is done; with `replaced_by_rename` (the
-/// output is written to a temporary file renamed into place) also a device, a pipe or a socket,
-/// which the rename would replace with a regular file, and the file standard output or error
-/// goes to.
+/// run's `inputs` ({option, path}: writing would destroy what is being read), that is the file
+/// standard output or error goes to (refuseStandardStreamsFile), or whose folder does not exist or
+/// cannot be written, before any work is done. With `regular_file_only` (a session SQLite keeps
+/// open) also a device, a pipe or a socket; other outputs are written to them in place
+/// (app::writeFileReplacing).
 void checkOutputPath(const std::string& option, const std::string& path,
-                     const std::vector<std::pair<std::string, std::string>>& inputs = {}, bool replaced_by_rename = false);
+                     const std::vector<std::pair<std::string, std::string>>& inputs = {}, bool regular_file_only = false);
 
 /// robot::loadScene, and its sceneNotes on stderr ("note: ..."), once per scene and process.
 robot::Scene loadSceneNoting(const std::string& name_or_path);

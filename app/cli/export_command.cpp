@@ -109,7 +109,7 @@ Json exportSession(const ExportOptions& options) {
   for (const auto& [option, path] : outputs) {
     if (path.empty()) continue;
     any = true;
-    checkOutputPath(option, path, {{"--session", options.session}}, true);
+    checkOutputPath(option, path, {{"--session", options.session}});
     if (const auto [where, added] = chosen.emplace(sameFileKey(path), option); !added) {
       throw InputError(where->second == "--session"
                            ? option + ": '" + path + "' is the session or a file SQLite keeps beside it; give another file"
@@ -139,10 +139,7 @@ Json exportSession(const ExportOptions& options) {
   result["scene"] = teaching.scene;
 
   // Every output is prepared before the first is written: a session that lacks one writes none.
-  struct Output {
-    std::string option, path, content;
-  };
-  std::vector<Output> files;
+  std::vector<app::OutputFile> files;
 
   if (!options.samples.empty()) {
     std::string csv = app::trainingSamplesCsv(teaching);
@@ -224,11 +221,8 @@ Json exportSession(const ExportOptions& options) {
                  options.session.c_str());
   }
   result["closed_cleanly"] = teaching.closed_cleanly;
-  // Each to the file its path names: through a symbolic link to the file it points at, so that
-  // the link stays and the check for outputs naming one file holds for what is written.
-  // All of them or none: an interruption waits until the last is in place.
-  const app::InterruptionsHeld held;
-  for (const Output& file : files) app::writeFileReplacing(sameFileKey(file.path), file.content, file.option);
+  // Through a symbolic link to the file it points at, keeping the link; all of them or none.
+  app::writeFilesTogether(files);
   return result;
 }
 

@@ -129,7 +129,7 @@ struct BuildOptions {
 };
 
 Json buildMap(const BuildOptions& options) {
-  checkOutputPath("--out", options.out, {{"--data", options.data}}, true);
+  checkOutputPath("--out", options.out, {{"--data", options.data}});
   ItmParameters parameters = options.parameters;
   if (options.variant == "plain") {
     parameters.variant = planning::ItmVariant::kPlain;

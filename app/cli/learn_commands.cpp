@@ -144,7 +144,7 @@ struct FitOptions {
 };
 
 Json fit(const FitOptions& options) {
-  checkOutputPath("--out", options.out, {{"--data", options.data}}, true);
+  checkOutputPath("--out", options.out, {{"--data", options.data}});
   LearningCsv csv = readLearningCsv(options.data, true);
   learning::TrainingSet& data = csv.data;
   const bool areas_inferred = !csv.has_area;

@@ -18,6 +18,7 @@
 
 #include "app/cli/cli_support.hpp"
 #include "app/evaluation.hpp"
+#include "app/file_output.hpp"
 #include "app/session_reader.hpp"
 #include "app/session_teaching.hpp"
 #include "learning/confidence.hpp"
@@ -544,7 +545,7 @@ Json renderPicture(const RenderOptions& options) {
   const Eigen::Vector4f background = render::Palette::background();
   const render::Image image =
       renderer.render(world.root(), camera, {background[0], background[1], background[2], background[3]});
-  render::writePng(image, options.out);
+  app::writeFileReplacing(options.out, render::encodePng(image), "--out");
 
   const std::optional<Eigen::Vector2d> tip_pixel =
       render::projectToPixel(camera, options.width, options.height, kinematics.p_WT());

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "app/cli/cli_support.hpp"
+#include "app/file_output.hpp"
 #include "app/session_reader.hpp"
 #include "app/session_teaching.hpp"
 #include "app/study.hpp"
@@ -262,7 +263,7 @@ Json reviewStudy(const StudyArguments& arguments) {
     image.width = scatter.width;
     image.height = scatter.height;
     image.rgba = scatter.rgba;
-    render::writePng(image, arguments.plot);
+    app::writeFileReplacing(arguments.plot, render::encodePng(image), "--plot");
     out["plot"] = arguments.plot;
   }
   return out;

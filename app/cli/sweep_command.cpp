@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -348,7 +347,6 @@ Json runSweep(const SweepOptions& options) {
   for (const auto& [option, path] : {std::pair{"--json", options.json_out}, std::pair{"--markdown", options.markdown}}) {
     if (path.empty()) continue;
     checkOutputPath(option, path);
-    refuseStandardStreamsFile(option, path);
   }
   if (!options.json_out.empty() && !options.markdown.empty() && sameFileKey(options.json_out) == sameFileKey(options.markdown)) {
     throw InputError("--markdown: '" + options.markdown + "' is the file --json names; give each output its own file");
@@ -364,32 +362,10 @@ Json runSweep(const SweepOptions& options) {
   if (wanted("3.4")) out["tab_3_4"] = table34(options, md);
   if (wanted("7.1")) out["tab_7_1"] = table71(md);
   if (wanted("8.3")) out["sect_8_3"] = section83(options, md);
-  // A device or a pipe (/dev/stdout into a pipe) in place and first, free to be interrupted (a
-  // pipe nobody reads would otherwise hold the process); the regular files through renames,
-  // both or, stopped, neither: an interruption waits until the second is in place.
-  struct Output {
-    std::string option, path, text;
-    bool in_place;
-  };
-  std::vector<Output> outputs;
-  const auto add = [&outputs](const std::string& option, const std::string& path, std::string text) {
-    if (path.empty()) return;
-    std::error_code error;
-    const bool in_place = std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error);
-    outputs.push_back({option, path, std::move(text), in_place});
-  };
-  add("--json", options.json_out, out.dump(2) + "\n");
-  add("--markdown", options.markdown, md.str());
-  for (const Output& output : outputs) {
-    if (!output.in_place) continue;
-    std::ofstream device(output.path);
-    device << output.text;
-    if (!device.flush()) throw InputError(output.option + ": cannot write '" + output.path + "'");
-  }
-  const app::InterruptionsHeld held;
-  for (const Output& output : outputs) {
-    if (!output.in_place) app::writeFileReplacing(output.path, output.text, output.option);
-  }
+  std::vector<app::OutputFile> outputs;
+  if (!options.json_out.empty()) outputs.push_back({"--json", options.json_out, out.dump(2) + "\n"});
+  if (!options.markdown.empty()) outputs.push_back({"--markdown", options.markdown, md.str()});
+  app::writeFilesTogether(outputs);
   return out;
 }
 

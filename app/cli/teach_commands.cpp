@@ -19,6 +19,7 @@
 #include "app/backend_factory.hpp"
 #include "app/evaluation.hpp"
 #include "app/experiments.hpp"
+#include "app/file_output.hpp"
 #include "app/cli/cli_support.hpp"
 #include "app/session_recorder.hpp"
 #include "app/session_write_lock.hpp"
@@ -127,6 +128,7 @@ class StopOnSignal {
 Json runTeach(TeachOptions options) {
   // From the start: a signal before the tutor's first cycle stops it there.
   const StopOnSignal stop_on_signal;
+  // A session is SQLite's, kept open through the run, or a JSON file: a regular file either way.
   checkOutputPath("--out", options.out, {}, true);
   // Held to the end of the run: a second teach into the same file is refused at its start.
   const app::SessionWriteLock out_lock(options.out, "--out");
@@ -372,10 +374,7 @@ Json runTeach(TeachOptions options) {
   std::uint64_t states_dropped = 0;
   std::string session_error, session_copy;
   if (json_session) {
-    std::ofstream file(options.out);
-    if (!file) throw InputError("--out: cannot write '" + options.out + "'");
-    file << session.dump();
-    if (!file) throw InputError("--out: writing '" + options.out + "' failed");
+    app::writeFileReplacing(options.out, session.dump(), "--out");
   } else {
     writer->finish();
     recorder->close();

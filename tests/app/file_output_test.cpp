@@ -1,4 +1,5 @@
 // app::writeFileReplacing: how every output file of the commands is written.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
@@ -145,6 +146,72 @@ TEST_F(FileOutput, AnInterruptedWriteLeavesNoTemporaryAndNoHalfFile) {
   if (left.count("big.bin") > 0) {
     EXPECT_EQ(fs::file_size(folder_ / "big.bin"), text.size());
   }
+}
+
+// /dev/stdout into a pipe, or a named pipe: renaming a file over it would leave a regular file
+// where the pipe was, and the reader would get nothing.
+TEST_F(FileOutput, APipeIsWrittenInPlaceAndStaysAPipe) {
+  const fs::path pipe = folder_ / "pipe";
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  const int reader = ::open(pipe.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(reader, 0);
+  writeFileReplacing(pipe, "through the pipe\n", "--json");
+  char buffer[64] = {};
+  const ssize_t n = ::read(reader, buffer, sizeof buffer);
+  ::close(reader);
+  EXPECT_EQ(std::string(buffer, n > 0 ? static_cast<std::size_t>(n) : 0), "through the pipe\n");
+  EXPECT_TRUE(fs::is_fifo(pipe));
+  EXPECT_EQ(names(), std::set<std::string>{"pipe"});
+}
+
+// Outputs written together: a pipe nobody reads blocks its writer, and a Ctrl-C must still end
+// the command, before the regular files (all or none) are written.
+TEST_F(FileOutput, OutputsWrittenTogetherStayInterruptibleWhileAPipeWaitsForItsReader) {
+  const fs::path pipe = folder_ / "pipe";
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::signal(SIGTERM, SIG_DFL);
+    try {
+      writeFilesTogether({{"--json", folder_ / "table.json", "{}\n"}, {"--markdown", pipe, "# table\n"}});
+    } catch (...) {
+      ::_exit(3);
+    }
+    ::_exit(0);
+  }
+  ::usleep(100000);
+  ASSERT_EQ(::kill(child, SIGTERM), 0);
+  int status = 0;
+  pid_t ended = 0;
+  for (int wait = 0; wait < 100 && ended == 0; ++wait) {
+    ended = ::waitpid(child, &status, WNOHANG);
+    if (ended == 0) ::usleep(50000);
+  }
+  if (ended == 0) {
+    ::kill(child, SIGKILL);
+    ::waitpid(child, &status, 0);
+    FAIL() << "SIGTERM did not end a writer waiting for the pipe's reader";
+  }
+  ASSERT_TRUE(WIFSIGNALED(status)) << "exit status " << status;
+  EXPECT_EQ(WTERMSIG(status), SIGTERM);
+  EXPECT_EQ(names(), std::set<std::string>{"pipe"});
+}
+
+// Read end open: the pipe gets its text in place and every regular file is written.
+TEST_F(FileOutput, OutputsWrittenTogetherAreAllWritten) {
+  const fs::path pipe = folder_ / "pipe";
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  const int reader = ::open(pipe.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(reader, 0);
+  writeFilesTogether({{"--samples", folder_ / "a.csv", "a\n"}, {"--stream", pipe, "p\n"}, {"--model", folder_ / "m.flm", "m\n"}});
+  char buffer[8] = {};
+  const ssize_t n = ::read(reader, buffer, sizeof buffer);
+  ::close(reader);
+  EXPECT_EQ(std::string(buffer, n > 0 ? static_cast<std::size_t>(n) : 0), "p\n");
+  EXPECT_EQ(read(folder_ / "a.csv"), "a\n");
+  EXPECT_EQ(read(folder_ / "m.flm"), "m\n");
+  EXPECT_EQ(names(), (std::set<std::string>{"a.csv", "m.flm", "pipe"}));
 }
 
 }  // namespace

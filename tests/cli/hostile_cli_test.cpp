@@ -134,9 +134,9 @@ TEST_F(HostileCli, ReachRefusesTargetsUnderTheTableAndPosturesOutsideTheLimits) 
   expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --from 0,0,0,0,0,0,10"), "--from: joint 7");
 }
 
-// Outputs are written to a temporary file renamed into place: a pipe (or /dev/null) at --out
-// would have been replaced by a regular file, and --out naming the --data file destroyed it.
-TEST_F(HostileCli, AnOutputOntoADeviceOrTheInputFileIsRefused) {
+// A session is SQLite's, kept open through the run: a pipe at --out cannot hold one. --out naming
+// the --data file would destroy what the run reads.
+TEST_F(HostileCli, ASessionIntoAPipeOrAnOutputOntoTheInputFileIsRefused) {
   const fs::path pipe = dir_ / "pipe";
   ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
   expectRefused(runCliBinary("teach --scene setup_A --areas 1 --overwrite --out " + pipe.string()), "is not a regular file");
@@ -158,6 +158,38 @@ TEST_F(HostileCli, AnOutputOntoADeviceOrTheInputFileIsRefused) {
   EXPECT_EQ(header, "area,x,y,z,q1,q2") << "the data file is as it was";
 }
 
+// Any other output goes through a pipe as it is (`--out /dev/stdout | ...`, a named pipe): a
+// file renamed into its place would leave the reader with nothing.
+TEST_F(HostileCli, AModelOrAPictureWrittenIntoAPipeReachesItsReader) {
+  std::string rows = "area,x,y,z,q1,q2\n";
+  for (int i = 0; i < 20; ++i) rows += "0," + std::to_string(0.01 * i) + ",0.2,0.3," + std::to_string(0.02 * i) + ",0.5\n";
+  const fs::path data = write("pipe-data.csv", rows);
+  const fs::path pipe = dir_ / "out.pipe";
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  const auto readFile = [](const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  const fs::path model = dir_ / "model-through-pipe.txt";
+  const fs::path picture = dir_ / "picture-through-pipe.png";
+  const std::string cli = FLEXIROB_CLI_EXECUTABLE;
+  for (const auto& [command, received] :
+       std::vector<std::pair<std::string, fs::path>>{{"learn fit --data " + data.string() + " --out " + pipe.string(), model},
+                                                     {"render --scene empty --width 32 --height 24 --out " + pipe.string(), picture}}) {
+    const int status = std::system(("cat " + pipe.string() + " > " + received.string() + " & " + cli + " " + command +
+                                    " > /dev/null 2>&1; code=$?; wait; exit $code").c_str());
+    ASSERT_TRUE(WIFEXITED(status)) << command;
+    EXPECT_EQ(WEXITSTATUS(status), 0) << command;
+    EXPECT_TRUE(fs::is_fifo(pipe)) << command << ": still the pipe";
+  }
+  const std::string model_text = readFile(model);
+  EXPECT_GT(model_text.size(), 100U);
+  const fs::path kept = dir_ / "model-in-a-file.txt";
+  ASSERT_EQ(runCliBinary("learn fit --data " + data.string() + " --out " + kept.string()).exit_code, 0);
+  EXPECT_EQ(model_text, readFile(kept)) << "the model through the pipe is the one a file gets";
+  EXPECT_EQ(readFile(picture).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+}
+
 // /dev/stdout with standard output redirected to a file names that file: renamed over, the
 // command's JSON went to the unlinked old file and the output took the JSON's place.
 TEST_F(HostileCli, AnOutputThatIsTheFileStandardOutputGoesToIsRefused) {
@@ -167,7 +199,8 @@ TEST_F(HostileCli, AnOutputThatIsTheFileStandardOutputGoesToIsRefused) {
   const fs::path out = dir_ / "stdout.json";
   const fs::path err = dir_ / "stderr.txt";
   for (const std::string& command : std::vector<std::string>{"learn fit --data " + data.string() + " --out /dev/stdout",
-                                     "sweep --tables 7.1 --markdown /dev/stdout"}) {
+                                     "sweep --tables 7.1 --markdown /dev/stdout",
+                                     "render --scene empty --width 32 --height 24 --out /dev/stdout"}) {
     const int status = std::system((std::string(FLEXIROB_CLI_EXECUTABLE) + " " + command + " > " + out.string() + " 2> " + err.string()).c_str());
     ASSERT_TRUE(WIFEXITED(status)) << command;
     EXPECT_EQ(WEXITSTATUS(status), 2) << command;
