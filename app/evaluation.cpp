@@ -974,11 +974,12 @@ PlanningResult evaluatePlanning(const robot::RobotModel& model, const robot::Sce
     motion.contact_time = outcome.contact_time;
     motion.contact_path_error = outcome.contact_task_error;
     if (outcome.collided) ++result.contacts[outcome.contact];
-    result.motions.push_back(std::move(motion));
     // Where the motion ended in contact, the next starts where the last one ended free (the
     // operator frees the arm): starting inside the obstacle would count it as collided as well.
     world.update(outcome.q);
-    if (world.contacts().empty()) q = outcome.q;
+    motion.ended_in_contact = !world.contacts().empty();
+    if (!motion.ended_in_contact) q = outcome.q;
+    result.motions.push_back(std::move(motion));
     if (progress) progress(static_cast<double>(g + 1) / goals);
   }
   result.mean_plan_ms = plan_ms / goals;

@@ -252,6 +252,9 @@ struct PlannedMotion {
   double contact_path_error = 0.0;  ///< [m] |x_des − x| of the tip at the contact
   double final_error_m = 0.0;  ///< [m] |goal − final| (found paths)
   double tracking_error_max_m = 0.0;  ///< [m] largest |x_des − x| along the motion, every 10 ms
+  /// The motion ended with a link in contact: the next starts where the last motion ended free,
+  /// not here (an operator frees the arm).
+  bool ended_in_contact = false;
 };
 
 struct PlanningResult {

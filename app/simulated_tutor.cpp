@@ -421,6 +421,8 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
       q_reference = area.q_fixed;
     }
   }
+  // Asked to, the scene's suggested posture is the reference: the one its author wants shown.
+  if (options_.follow_scene_postures && suggested && suggested->size() == dof) q_reference = *suggested;
   // Clearance up to a comfortable 8 cm counts; beyond it, the posture nearest the reference
   // (joint-space distance, 0.2 per rad: 4 cm less clearance weigh as much as 2.5 rad) wins.
   // Postures near a joint limit are penalized: they would warn, and the hands' deflections
@@ -796,6 +798,7 @@ void SimulatedTutor::leadTipOutOfAssistance(const std::vector<Eigen::VectorXd>& 
 }
 
 bool SimulatedTutor::teachArea(TutorAreaReport& area, const std::optional<Eigen::VectorXd>& suggested) {
+  if (suggested) area.q_suggested = *suggested;
   // What a person sees at once, said as such instead of as a failed posture search.
   if (const robot::Obstacle* obstacle = robot::obstacleAt(*scene_, area.target)) {
     area.failure = "the area's centre lies inside " + obstacle->name;

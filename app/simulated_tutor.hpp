@@ -79,6 +79,11 @@ struct TutorOptions {
   /// Where the map's checks start (homePosture of the scene); computed when empty. A caller
   /// that has it already passes it in, as the search behind it is not free.
   std::optional<Eigen::VectorXd> home;
+  /// Where the scene suggests a posture for an area: false (the default, and the thesis'
+  /// experiments in docs/RESULTS.md) starts the search there and shows the posture nearest the
+  /// areas already taught, so that neighbouring areas share one redundancy family; true shows the
+  /// posture nearest the scene's (teach --scene-postures), as its author wrote it.
+  bool follow_scene_postures = false;
 };
 
 /// What the tutor did in one area.
@@ -103,6 +108,7 @@ struct TutorAreaReport {
   /// ended and the links were pushed (Sect. 6.1: where the robot is confident it holds the null
   /// space); 0 where no lead was needed.
   double assistance_lead = 0.0;
+  Eigen::VectorXd q_suggested;  ///< the scene's suggested posture for the area [rad] (empty: none)
 };
 
 struct TutorReport {

@@ -332,6 +332,13 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
       study.not_clustered.push_back(participant.file + ": robot '" + participant.robot + "', the study's postures are of '" + robot + "'");
     }
   }
+  study.clustering_note.clear();
+  if (!options.seeds_robot.empty() && !robot.empty() && robot != options.seeds_robot && !options.seeds.empty()) {
+    // Another arm's postures near the LWR IV's centres would still fall into "L2" or "R5".
+    study.clustering_note = "the initial centres are postures of '" + options.seeds_robot + "' (thesis Tab. B.1), the study's robot is '" +
+                            robot + "': give its own with --centres";
+    return;
+  }
   for (const auto& seeds : options.seeds) {
     if (seeds.centres.empty()) continue;
     const Eigen::Index joints = seeds.centres.front().size();

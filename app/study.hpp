@@ -98,6 +98,9 @@ struct StudyOptions {
   /// E_task is known) and E_coll = 0.
   double success_e_task = 0.01;
   std::function<void(const std::string&, double)> progress;  ///< (what, fraction); may be empty
+  /// The robot whose postures `seeds` are (Tab. B.1: the LWR IV's); a study of another robot is
+  /// not clustered against them. Empty: seeds for any robot (given with --centres).
+  std::string seeds_robot = "lwr4";
 };
 
 /// One training area's clustering.
@@ -129,6 +132,8 @@ struct StudyResult {
   std::vector<std::string> not_clustered;
   std::vector<AreaClustering> clusterings;
   std::vector<Combination> combinations;
+  /// Why nothing was clustered although seeds were given (another robot's centres); empty otherwise.
+  std::string clustering_note;
 };
 
 /// Metrics of one recording, E_coll replayed every `replay_interval` seconds of states.

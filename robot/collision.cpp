@@ -298,7 +298,7 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
   }
   if (impl.table >= 0) {
     // Like the base, a link no joint can raise or lower (every joint before it turns about a
-    // vertical axis) keeps its height: it stands on the table in every posture or never
+    // vertical axis or slides along a horizontal one, a rail) keeps its height: it stands on the table in every posture or never
     // reaches it, and a gap to it that no motion can widen must not count as clearance. The
     // first moving link also stands on the table when it lies on (or within 1 cm of) it at the
     // reference posture, as a link reaching down to the mounting plate does; a link further
@@ -308,7 +308,8 @@ CollisionWorld::CollisionWorld(const RobotModel& model, const Scene& scene)
     for (int b = 1; b < impl.bodies; ++b) {
       const Joint& joint = joints[static_cast<std::size_t>(b - 1)];
       const Eigen::Vector3d axis_W = impl.kinematics.X_WB(b).linear() * joint.axis_J;
-      height_fixed = height_fixed && joint.type != JointType::kPrismatic && std::abs(axis_W.z()) > 1.0 - 1e-9;
+      const bool keeps_height = joint.type == JointType::kPrismatic ? std::abs(axis_W.z()) < 1e-9 : std::abs(axis_W.z()) > 1.0 - 1e-9;
+      height_fixed = height_fixed && keeps_height;
       if (height_fixed || (b == 1 && distance(b, impl.table, 0.02) < 0.01)) {
         impl.table_exempt[static_cast<std::size_t>(b)] = 1;
         dropped = true;

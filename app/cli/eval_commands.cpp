@@ -340,6 +340,7 @@ Json runReachable(const EvalOptions& options) {
   Json scene_targets = Json::array();
   int scene_targets_reached = 0;
   robot::CollisionWorld world(*session.model, session.scene_data);
+  const app::ArmReach arm_reach = app::armReach(*session.model);
   for (const Eigen::Vector3d& target : session.scene_data.targets) {
     Eigen::VectorXd q_start = startPosture(session);
     if (approach == app::ApproachFrom::kNearestVisited || approach == app::ApproachFrom::kNearestReached) {
@@ -358,11 +359,19 @@ Json runReachable(const EvalOptions& options) {
     const bool reached = !outcome.collided && outcome.final_error_m <= grid.tolerance;
     scene_targets_reached += reached ? 1 : 0;
     const robot::Obstacle* inside = robot::obstacleAt(session.scene_data, target);
+    // As a grid target out of reach is left out of T: a target no posture reaches is said to be
+    // one, not reported as a miss of the learned map with whatever the arm met on its way.
+    const double beyond_reach = arm_reach.fromShoulder(target) - arm_reach.reach;
+    if (beyond_reach > 0.0) {
+      std::fprintf(stderr, "note: scene target (%.3f, %.3f, %.3f) m lies %.2f m beyond the arm's reach (%.2f m from the shoulder)\n",
+                   target.x(), target.y(), target.z(), beyond_reach, arm_reach.reach);
+    }
     scene_targets.push_back({{"target_m", {target.x(), target.y(), target.z()}},
                              {"reached", reached},
                              {"error_m", outcome.final_error_m},
                              {"contact", outcome.contact},
-                             {"inside_obstacle", inside != nullptr ? Json(inside->name) : Json(nullptr)}});
+                             {"inside_obstacle", inside != nullptr ? Json(inside->name) : Json(nullptr)},
+                             {"beyond_reach_m", beyond_reach > 0.0 ? Json(beyond_reach) : Json(nullptr)}});
   }
   json["scene_targets"] = scene_targets;
   json["scene_targets_reached"] = scene_targets_reached;
@@ -517,6 +526,7 @@ Json runPlan(const EvalOptions& options) {
                        {"contact", motion.contact},
                        {"contact_time_s", motion.contact_time},
                        {"contact_path_error_m", motion.contact_path_error},
+                       {"ended_in_contact", motion.ended_in_contact},
                        {"final", toJson(motion.final_W)},
                        {"final_error_m", motion.final_error_m},
                        {"tracking_error_max_m", motion.tracking_error_max_m},

@@ -84,14 +84,18 @@ Json review(const std::string& file) {
   std::int64_t samples = 0;
   std::int64_t unfinished = 0;
   Json per_area = Json::object();
+  Json taught_areas = Json::array();  // with the names teach, export and the GUI give the areas
   for (const app::RecordedArea& area : teaching.areas) {
     samples += area.X.cols();
     unfinished += area.unfinished_X.cols();
-    if (area.complete) per_area[std::to_string(area.index)] = area.X.cols();
+    if (!area.complete) continue;
+    per_area[std::to_string(area.index)] = area.X.cols();
+    taught_areas.push_back({{"index", area.index}, {"name", area.name.empty() ? Json() : Json(area.name)}, {"samples", area.X.cols()}});
   }
   out["areas"] = std::count_if(teaching.areas.begin(), teaching.areas.end(), [](const app::RecordedArea& a) { return a.complete; });
   out["samples"] = samples;
   out["samples_per_area"] = per_area;
+  out["taught_areas"] = taught_areas;
   out["unfinished_recording_samples"] = unfinished;
 
   // E_task (Eq. 3.20) over every executed motion that names its reference trajectory.
@@ -181,7 +185,10 @@ struct StudyArguments {
 
 Json reviewStudy(const StudyArguments& arguments) {
   app::StudyOptions options;
-  if (!arguments.centres.empty()) options.seeds = app::loadClusterSeeds(arguments.centres);
+  if (!arguments.centres.empty()) {
+    options.seeds = app::loadClusterSeeds(arguments.centres);
+    options.seeds_robot.clear();
+  }
   options.success_e_task = arguments.success_e_task;
   options.replay_interval = arguments.replay_interval;
   options.progress = [](const std::string& what, double fraction) { reportProgress("review " + what, fraction); };
@@ -219,6 +226,8 @@ Json reviewStudy(const StudyArguments& arguments) {
   out["participants"] = participants;
   out["skipped"] = study.skipped;
   out["not_clustered"] = study.not_clustered;
+  out["clustering_note"] = study.clustering_note.empty() ? Json() : Json(study.clustering_note);
+  if (!study.clustering_note.empty()) std::cerr << "note: not clustered: " << study.clustering_note << "\n";
   for (const std::string& line : study.not_clustered) std::cerr << "note: not clustered: " << line << "\n";
   Json clusterings = Json::array();
   for (const auto& c : study.clusterings) {

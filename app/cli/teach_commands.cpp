@@ -52,6 +52,7 @@ struct TeachOptions {
   int candidates = 24;
   int check_points = app::TutorOptions{}.check_points;
   std::string backend = "sim";
+  bool scene_postures = false;
 };
 
 Json matrixColumns(const Eigen::MatrixXd& m) { return toJsonRows(m.transpose()); }
@@ -204,6 +205,7 @@ Json runTeach(TeachOptions options) {
   tutor_options.realtime = options.realtime;
   tutor_options.circle_diameter = options.diameter;
   tutor_options.posture_candidates = options.candidates;
+  tutor_options.follow_scene_postures = options.scene_postures;
   tutor_options.check_points = options.check_points;
   tutor_options.progress = [](const std::string& what, double fraction) { reportProgress(what, fraction); };
   tutor_options.stop_requested = [] { return g_stop_signal.load() != 0; };
@@ -331,6 +333,10 @@ Json runTeach(TeachOptions options) {
     tutor_areas.push_back({{"name", area.name},
                            {"target", toJson(area.target)},
                            {"taught", area.taught},
+                           {"posture", area.q_chosen.size() > 0 ? toJson(area.q_chosen) : Json()},
+                           {"scene_posture_offset_rad", area.q_chosen.size() > 0 && area.q_chosen.size() == area.q_suggested.size()
+                                                            ? Json((area.q_chosen - area.q_suggested).norm())
+                                                            : Json()},
                            {"clearance_m", area.clearance},
                            {"failure", area.failure},
                            {"automatic", area.automatic},
@@ -437,6 +443,24 @@ Json runTeach(TeachOptions options) {
     std::fprintf(stderr, "note: %zu of the %d areas asked for %s taught; \"tutor\" in the JSON says why the others were not\n",
                  workflow.areas().size(), options.areas, workflow.areas().size() == 1 ? "was" : "were");
   }
+  // The scene's suggested postures are where the search starts; the tutor shows the posture
+  // nearest the areas taught before, which may be another: said, so that a scene's author does
+  // not take the shown posture for the one written.
+  if (!options.scene_postures) {
+    int shown_elsewhere = 0, suggested = 0;
+    constexpr double kElsewhere = 0.5;  // [rad] joint-space distance
+    for (const auto& area : report.areas) {
+      if (!area.taught || area.q_suggested.size() != area.q_chosen.size() || area.q_chosen.size() == 0) continue;
+      ++suggested;
+      shown_elsewhere += (area.q_chosen - area.q_suggested).norm() > kElsewhere ? 1 : 0;
+    }
+    if (shown_elsewhere > 0) {
+      std::fprintf(stderr,
+                   "note: %d of the %d taught areas with a posture in the scene were shown in another (more than %.1f rad from it, "
+                   "nearer the start posture or the areas taught before; \"scene_posture_offset_rad\" in the JSON); --scene-postures shows the scene's\n",
+                   shown_elsewhere, suggested, kElsewhere);
+    }
+  }
   Json link = nullptr;
   if (connection) {
     const app::LinkStatus status = connection->status();
@@ -531,6 +555,9 @@ void registerTeachCommands(CLI::App& app, CommandRunner& runner) {
       ->check(finiteRange(app::kSmallestCircleDiameter, app::kLargestCircleDiameter))
       ->capture_default_str();
   teach->add_option("--candidates", options->candidates, "IK postures tried per area")->check(finiteRange(1, 1000))->capture_default_str();
+  teach->add_flag("--scene-postures", options->scene_postures,
+                  "show each area in the posture nearest the one the scene suggests (default: nearest the areas already taught, "
+                  "the scene's posture only where the search starts)");
   teach->add_option("--check-points", options->check_points,
                     "points on which areas beyond the scene's list are checked and taken back if the map got worse (0: random places, kept)")
       ->check(finiteRange(0, 10000))

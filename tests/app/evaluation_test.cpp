@@ -413,6 +413,7 @@ TEST(Evaluation, PlannedMotionsThroughAContactGoOnToTheirGoalAndTheNextStartsThe
     crossings += crosses ? 1 : 0;
     collided += motion.collided ? 1 : 0;
     EXPECT_EQ(motion.collided, crosses) << "goal " << i;
+    EXPECT_FALSE(motion.ended_in_contact) << "goal " << i << ": the wall is passed, not stood in";
   }
   EXPECT_GE(crossings, 2) << "the seed should cross the wall more than once";
   EXPECT_EQ(result.collision_free, 12 - collided);
@@ -433,6 +434,38 @@ TEST(Evaluation, PlannedMotionsThroughAContactGoOnToTheirGoalAndTheNextStartsThe
     counted += motions;
   }
   EXPECT_EQ(counted, collided);
+}
+
+// A goal inside a block: the motion ends with the hand in it, says so, and the next motion
+// starts where the last one ended free (the JSON had shown a start that matched no end).
+TEST(Evaluation, APlannedMotionThatEndsInContactSaysSoAndTheNextStartsWhereTheArmWasFree) {
+  Parameters s;
+  const auto map = constantMap();
+  const Eigen::Vector3d start = robot::tipPose(lwr4(), ready()).translation();
+  const Eigen::Vector3d goal = start + Eigen::Vector3d(0.0, 0.3, 0.0);
+  robot::Scene scene;
+  robot::Obstacle block;
+  block.name = "block";
+  block.size = Eigen::Vector3d(0.1, 0.1, 0.1);
+  block.X_WO.translation() = goal;
+  scene.obstacles.push_back(block);
+  planning::Itm graph(planning::ItmParameters{}, 7);
+  for (const int k : {0, 1, 0}) graph.insert(start + k * (goal - start), ready());
+  ASSERT_EQ(graph.nodeCount(), 2);
+  const PlanningResult result = evaluatePlanning(lwr4(), scene, s.parameters, *map, graph, ready(), 4, 3);
+  ASSERT_EQ(result.motions.size(), 4U);
+  int ended_in_contact = 0;
+  for (std::size_t i = 0; i < result.motions.size(); ++i) {
+    const PlannedMotion& motion = result.motions[i];
+    const bool at_block = (motion.goal_W - goal).norm() < 1e-9;
+    EXPECT_EQ(motion.ended_in_contact, at_block) << "goal " << i;
+    ended_in_contact += motion.ended_in_contact ? 1 : 0;
+    if (i == 0) continue;
+    const PlannedMotion& before = result.motions[i - 1];
+    const Eigen::Vector3d expected_start = before.ended_in_contact ? before.start_W : before.final_W;
+    EXPECT_LT((motion.start_W - expected_start).norm(), 1e-6) << "goal " << i;
+  }
+  EXPECT_GE(ended_in_contact, 1);
 }
 
 // Grid points in front of the robot at z = 0.3 m, 0.4 m wide and 0.2 m deep.

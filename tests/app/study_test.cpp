@@ -188,6 +188,7 @@ ParticipantResult participant(const std::string& name, const Eigen::VectorXd& le
   ParticipantResult p;
   p.participant = name;
   p.file = name + ".db";
+  p.robot = "lwr4";
   p.q_fixed[0] = left;
   p.q_fixed[1] = right;
   p.e_task = e_task;
@@ -327,12 +328,23 @@ TEST(StudyClusters, ClustersTheRobotMostParticipantsUsedAndNamesTheOthers) {
   EXPECT_TRUE(study.participants[2].cluster.empty());
   ASSERT_EQ(study.not_clustered.size(), 1U);
   EXPECT_EQ(study.not_clustered[0], "other.db: robot 'arm9', the study's postures are of 'lwr4'");
-  // Two against two: the robot of the first file.
+  EXPECT_TRUE(study.clustering_note.empty());
+  // Two against two: the robot of the first file. Tab. B.1's centres are the LWR IV's: arm9's
+  // postures are not clustered against them, and the study says why.
   study.participants[0].robot = "arm9";
   clusterStudy(study, options);
   ASSERT_EQ(study.not_clustered.size(), 2U);
   EXPECT_EQ(study.not_clustered[0], "p2.db: robot 'lwr4', the study's postures are of 'arm9'");
   EXPECT_EQ(study.not_clustered[1], "p3.db: robot 'lwr4', the study's postures are of 'arm9'");
+  EXPECT_TRUE(study.clusterings.empty());
+  EXPECT_TRUE(study.participants[0].cluster.empty());
+  EXPECT_NE(study.clustering_note.find("postures of 'lwr4' (thesis Tab. B.1), the study's robot is 'arm9'"), std::string::npos)
+      << study.clustering_note;
+  // Centres given for the study's own robot (--centres) cluster it.
+  options.seeds_robot.clear();
+  clusterStudy(study, options);
+  EXPECT_TRUE(study.clustering_note.empty());
+  ASSERT_EQ(study.clusterings.size(), 2U);
   EXPECT_EQ(study.clusterings[0].participants, (std::vector<std::string>{"p1", "other"}));
 }
 

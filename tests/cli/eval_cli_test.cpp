@@ -229,6 +229,11 @@ TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   EXPECT_EQ(targets[1].at("inside_obstacle"), "far_box");
   EXPECT_NE(result.err.find("note: targets[1] (-3.000, 0.000, 0.300) m lies inside obstacle 'far_box'"), std::string::npos)
       << result.err;
+  // And one out of reach as such: 3 m from the shoulder (z = 0.31 m), whose reach is under 1 m.
+  EXPECT_TRUE(targets[0].at("beyond_reach_m").is_null()) << targets[0].dump();
+  EXPECT_GT(targets[1].at("beyond_reach_m").get<double>(), 2.0) << targets[1].dump();
+  EXPECT_LT(targets[1].at("beyond_reach_m").get<double>(), 2.2) << targets[1].dump();
+  EXPECT_NE(result.err.find("note: scene target (-3.000, 0.000, 0.300) m lies"), std::string::npos) << result.err;
   std::filesystem::remove(session);
   std::filesystem::remove(scene);
 }

@@ -100,6 +100,13 @@ TEST_F(ReviewCli, SessionReportsWhatWasRecorded) {
   EXPECT_EQ(json.at("samples").get<int>(), 7 + 3);
   EXPECT_EQ(json.at("samples_per_area").at("0").get<int>(), 7);
   EXPECT_EQ(json.at("samples_per_area").at("1").get<int>(), 3);
+  // By the names the areas were given, as teach and export give them; a re-take's name holds.
+  ASSERT_EQ(json.at("taught_areas").size(), 2U);
+  EXPECT_EQ(json.at("taught_areas")[0].at("index").get<int>(), 0);
+  EXPECT_EQ(json.at("taught_areas")[0].at("name"), "front");
+  EXPECT_EQ(json.at("taught_areas")[0].at("samples").get<int>(), 7);
+  EXPECT_EQ(json.at("taught_areas")[1].at("name"), "left");
+  EXPECT_EQ(json.at("taught_areas")[1].at("samples").get<int>(), 3);
   EXPECT_EQ(json.at("unfinished_recording_samples").get<int>(), 4);
   // Every executed point lies 1 cm above its target (Eq. 3.20).
   EXPECT_NEAR(json.at("e_task").get<double>(), 0.01, 1e-12);

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -163,6 +164,44 @@ TEST(TeachCli, RefusesAnUnknownBackendFriForTheNineJointArmAndAHelixUnderACentim
 
 // The grid's exclude box covers the whole workspace: the tutor teaches the listed area and finds
 // no place of its own to add, and says so instead of teaching inside the excluded box.
+// A scene's posture for an area is where the tutor's search starts; it shows the posture nearest
+// where the arm stands (here A7 turned 2.5 rad, which does not move the tip) and says so, or,
+// with --scene-postures, the scene's own (A7 at 0).
+TEST(TeachCli, ShowsTheScenesPostureWhenAskedAndSaysWhenItShowedAnother) {
+  const fs::path scene = scratch("scene-postures.yaml");
+  std::ofstream(scene) << "name: scene_postures\n"
+                          "home_posture: [0, 0.6, 0, -1.6, 0, 0.9, 2.5]\n"
+                          "training_areas:\n"
+                          "  - {name: front, centre: [-0.5, 0.25, 0.3], posture: [-0.3073, 0.6386, -0.1907, -1.6904, -0.0092, 0.3138, 0.0]}\n";
+  const std::vector<double> suggested{-0.3073, 0.6386, -0.1907, -1.6904, -0.0092, 0.3138, 0.0};
+  const auto offset = [&suggested](const nlohmann::json& posture) {
+    double sum = 0.0;
+    for (std::size_t j = 0; j < suggested.size(); ++j) sum += std::pow(posture.at(j).get<double>() - suggested[j], 2);
+    return std::sqrt(sum);
+  };
+  for (const bool follow : {false, true}) {
+    const fs::path out = scratch(follow ? "followed.json" : "nearest.json");
+    const auto result = runCliBinary("teach --scene " + scene.string() + " --areas 1 --seed 1 --out " + out.string() +
+                                     (follow ? " --scene-postures" : ""));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const nlohmann::json area = result.json().at("tutor").at(0);
+    ASSERT_TRUE(area.at("taught").get<bool>()) << area.dump();
+    const nlohmann::json& posture = area.at("posture");
+    ASSERT_EQ(posture.size(), 7U);
+    EXPECT_NEAR(area.at("scene_posture_offset_rad").get<double>(), offset(posture), 1e-9);
+    if (follow) {
+      EXPECT_LT(offset(posture), 0.05) << posture.dump();
+      EXPECT_EQ(result.err.find("--scene-postures shows the scene's"), std::string::npos) << result.err;
+    } else {
+      EXPECT_NEAR(posture.at(6).get<double>(), 2.5, 0.05) << posture.dump();
+      EXPECT_NE(result.err.find("note: 1 of the 1 taught areas with a posture in the scene were shown in another"), std::string::npos)
+          << result.err;
+    }
+    fs::remove(out);
+  }
+  fs::remove(scene);
+}
+
 TEST(TeachCli, TeachesNoPlaceOfItsOwnInsideTheGridsExcludedBoxes) {
   const fs::path scene = scratch("excluded.yaml");
   const fs::path out = scratch("excluded.json");

@@ -269,6 +269,42 @@ TEST(CollisionWorld, ALinkNoJointCanLowerIsNoClearanceProblemButOneTheReferenceP
   EXPECT_LT(bent_world.distance(3, 0), 0.0);
 }
 
+// The three-link arm on a carriage 2 cm above the table, the carriage on a rail: a horizontal
+// rail keeps its height as a vertical axis does, so the carriage's gap to the table is no
+// clearance (every posture of the arm kept only 2 cm); a vertical lift can lower it.
+RobotModel armOnCarriage(const std::string& rail_axis) {
+  std::string urdf = kPlanarArm;
+  const std::string base = R"(<link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="link1"/>)";
+  EXPECT_NE(urdf.find(base), std::string::npos);
+  urdf.replace(urdf.find(base), base.size(), R"(<link name="base"/>
+  <joint name="rail" type="prismatic"><parent link="base"/><child link="carriage"/>
+    <origin xyz="0 0 0.02"/><axis xyz=")" + rail_axis + R"("/><limit lower="0" upper="0.5" velocity="0.5" effort="200"/></joint>
+  <link name="carriage">
+    <inertial><origin xyz="0 0 0.02"/><mass value="3"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>
+    <collision><origin xyz="0 0 0.02"/><geometry><box size="0.2 0.2 0.04"/></geometry></collision>
+  </link>
+  <joint name="j1" type="revolute"><parent link="carriage"/><child link="link1"/><origin xyz="0 0 0.04"/>)");
+  return RobotModel::fromUrdfString(urdf, ".");
+}
+
+TEST(CollisionWorld, ACarriageOnAHorizontalRailIsNoClearanceProblemOneOnALiftIs) {
+  const RobotModel rail = armOnCarriage("0 1 0");
+  ASSERT_EQ(rail.dof(), 4);
+  CollisionWorld rail_world(rail, Scene{});
+  ASSERT_EQ(rail_world.bodyName(1), "carriage");
+  rail_world.update(Eigen::Vector4d(0.25, 0.0, 0.0, 0.0));
+  EXPECT_EQ(rail_world.distance(1, 0), std::numeric_limits<double>::infinity());
+  EXPECT_NE(rail_world.clearance(0.5).body, 1);
+
+  const RobotModel lift = armOnCarriage("0 0 1");
+  CollisionWorld lift_world(lift, Scene{});
+  lift_world.update(Eigen::Vector4d(0.25, 0.0, 0.0, 0.0));
+  EXPECT_NEAR(lift_world.distance(1, 0), 0.27, 1e-3);
+  lift_world.update(Eigen::Vector4d::Zero());
+  EXPECT_NEAR(lift_world.distance(1, 0), 0.02, 1e-3);
+}
+
 TEST(CollisionWorld, AGapToTheFirstLinkItsJointCannotChangeIsNoClearanceProblemButStillMeasured) {
   // A fixture flush against the LWR IV's base, as high as the base: link1 turns about its own
   // axis beside it, 1.7-1.8 cm away whatever A1 does. The clearance a posture keeps is the
