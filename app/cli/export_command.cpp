@@ -189,7 +189,15 @@ Json exportSession(const ExportOptions& options) {
         entry["session_graph"] = {{"nodes", graph.nodeCount()},
                                   {"edges", graph.edgeCount()},
                                   {"variant", parameters.variant == planning::ItmVariant::kPlain ? "plain" : "hybrid"},
-                                  {"parameters", itmParametersJson(parameters)}};
+                                  {"parameters", itmParametersJson(parameters)},
+                                  // As learn_fit_arguments for the model: the session's values
+                                  // (scaled to the arm), which itm build's defaults are not.
+                                  {"itm_build_arguments",
+                                   "--emax " + exactNumber(parameters.e_max) + " --delta " + std::to_string(parameters.delta) +
+                                       " --dthetamax " + exactNumber(parameters.d_theta_max) + " --dcmax " +
+                                       exactNumber(parameters.d_c_max) + " --alpha " + exactNumber(parameters.alpha) + " --eta " +
+                                       exactNumber(parameters.eta) + " --variant " +
+                                       (parameters.variant == planning::ItmVariant::kPlain ? "plain" : "hybrid")}};
       }
     } catch (const planning::ItmFileError& error) {
       std::fprintf(stderr, "note: the session's ITM snapshot is damaged (%s); the stream is written without its parameters\n", error.what());

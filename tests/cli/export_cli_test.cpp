@@ -79,13 +79,11 @@ void expectTheStreamRebuildsTheSessionsGraph(const fs::path& session) {
   EXPECT_GT(entry.at("rows").get<int>(), 100);
 
   const nlohmann::json graph = entry.at("session_graph");
-  const nlohmann::json p = graph.at("parameters");
-  std::ostringstream build;
-  build << "itm build --data " << stream.string() << " --out " << rebuilt_file.string() << " --variant "
-        << graph.at("variant").get<std::string>() << " --emax " << p.at("e_max").get<double>() << " --delta "
-        << p.at("delta").get<int>() << " --dthetamax " << p.at("d_theta_max").get<double>() << " --dcmax "
-        << p.at("d_c_max").get<double>() << " --alpha " << p.at("alpha").get<double>();
-  const auto rebuilt = runCliBinary(build.str());
+  // The arguments export prints, as a user pastes them.
+  const std::string arguments = graph.at("itm_build_arguments").get<std::string>();
+  EXPECT_NE(arguments.find("--variant " + graph.at("variant").get<std::string>()), std::string::npos) << arguments;
+  EXPECT_NE(arguments.find("--delta " + std::to_string(graph.at("parameters").at("delta").get<int>())), std::string::npos) << arguments;
+  const auto rebuilt = runCliBinary("itm build --data " + stream.string() + " --out " + rebuilt_file.string() + " " + arguments);
   ASSERT_EQ(rebuilt.exit_code, 0) << rebuilt.err;
   EXPECT_EQ(rebuilt.json().at("samples").get<int>(), entry.at("rows").get<int>());
   EXPECT_EQ(rebuilt.json().at("nodes").get<int>(), graph.at("nodes").get<int>());
