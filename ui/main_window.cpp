@@ -23,6 +23,7 @@
 #include <QThread>
 #include <QTimer>
 #include <QVBoxLayout>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -844,6 +845,10 @@ void MainWindow::keyPressEvent(QKeyEvent* event) {
   switch (action->kind) {
     case TeleopAction::Kind::kTask:
     case TeleopAction::Kind::kJoint:
+      // The keys held until now move by the time up to this press, and the new one from here:
+      // the time since the last display tick was counted for it too, so a tap on a slow display
+      // moved the target by up to half a second of motion.
+      driveKeyboard();
       teleop_.press(event->key());
       if (live_ && !keyboard_mode_) {
         live_->setKeyboardMode(true);
@@ -908,6 +913,13 @@ void MainWindow::closeEvent(QCloseEvent* event) {
   QMainWindow::closeEvent(event);
 }
 
+namespace {
+
+// A coordinate shown to the millimetre: one that rounds to zero is shown as 0.000, not -0.000.
+double shownMillimetres(double metres) { return std::abs(metres) < 0.0005 ? 0.0 : metres; }
+
+}  // namespace
+
 void MainWindow::updateStatus() {
   QString text;
   if (model_) {
@@ -916,9 +928,9 @@ void MainWindow::updateStatus() {
                .arg(QString::fromStdString(model_->name()))
                .arg(model_->dof())
                .arg(QString::fromStdString(model_->tipLink()))
-               .arg(p.x(), 0, 'f', 3)
-               .arg(p.y(), 0, 'f', 3)
-               .arg(p.z(), 0, 'f', 3);
+               .arg(shownMillimetres(p.x()), 0, 'f', 3)
+               .arg(shownMillimetres(p.y()), 0, 'f', 3)
+               .arg(shownMillimetres(p.z()), 0, 'f', 3);
   } else {
     text = tr("no robot   ");
   }
