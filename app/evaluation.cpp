@@ -859,6 +859,7 @@ TrajectoryResult evaluateTrajectories(const robot::RobotModel& model, const robo
       }
       if (outcome.collided) {
         ++out.collisions;
+        ++out.e_task_until_contact;
         ++out.contacts[outcome.contact];
         out.collided.push_back({trajectory_name, outcome.contact, outcome.contact_time, contact_target, false});
         q = q_area;

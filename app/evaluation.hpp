@@ -327,6 +327,9 @@ struct TrajectoryRegionResult {
   /// there. The straight way through a wall between two scene trajectories had counted as the
   /// map's collision.
   int starts_placed = 0;
+  /// Of the e_task_trajectories, those a contact ended on the way (the motion stops there, as on
+  /// the real robot): their E_task covers the way up to the contact, not the whole trajectory.
+  int e_task_until_contact = 0;
 };
 struct TrajectoryResult {
   std::vector<TrajectoryRegionResult> regions;

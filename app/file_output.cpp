@@ -39,34 +39,64 @@ std::filesystem::path followLinks(const std::filesystem::path& file) {
   return file;
 }
 
-bool isDeviceOrPipe(const std::filesystem::path& file) {
+bool writtenInPlace(const std::filesystem::path& file) {
   struct stat status {};
-  return ::stat(file.c_str(), &status) == 0 && !S_ISREG(status.st_mode) && !S_ISDIR(status.st_mode);
+  return ::stat(file.c_str(), &status) == 0 && (S_ISFIFO(status.st_mode) || S_ISCHR(status.st_mode));
+}
+
+bool isNullDevice(const std::filesystem::path& file) {
+  struct stat output {}, null {};
+  return ::stat(file.c_str(), &output) == 0 && S_ISCHR(output.st_mode) && ::stat("/dev/null", &null) == 0 &&
+         output.st_rdev == null.st_rdev;
+}
+
+void refuseStandardStreams(const std::string& option, const std::filesystem::path& file) {
+  struct stat output {};
+  if (::stat(file.c_str(), &output) != 0 || isNullDevice(file)) return;
+  for (const auto& [descriptor, name] : {std::pair{STDOUT_FILENO, "standard output"}, std::pair{STDERR_FILENO, "standard error"}}) {
+    struct stat stream {};
+    if (::fstat(descriptor, &stream) == 0 && stream.st_dev == output.st_dev && stream.st_ino == output.st_ino) {
+      throw InputError(option + ": '" + file.string() + "' is where " + name + " goes" +
+                       (descriptor == STDOUT_FILENO ? ", which carries the command's JSON" : "") +
+                       "; give another file (a named pipe, mkfifo, passes an output on)");
+    }
+  }
 }
 
 namespace {
 
-bool writeAll(int descriptor, const std::string& text) {
+// The reason of the first failure, or empty.
+std::string writeAll(int descriptor, const std::string& text) {
   for (std::size_t done = 0; done < text.size();) {
     const ssize_t n = ::write(descriptor, text.data() + done, text.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
+    if (n < 0) return std::strerror(errno);
+    if (n == 0) return "nothing more could be written";
     done += static_cast<std::size_t>(n);
   }
-  return true;
+  return "";
+}
+
+// Closes the descriptor; the reason it failed, `earlier` first.
+std::string closeReporting(int descriptor, std::string earlier) {
+  if (::close(descriptor) != 0 && earlier.empty()) earlier = std::strerror(errno);
+  return earlier;
 }
 
 }  // namespace
 
 void writeFileReplacing(const std::filesystem::path& requested, const std::string& text, const std::string& option) {
+  refuseStandardStreams(option, requested);
+  const auto failed = [&](const std::string& reason) {
+    return InputError(option + ": cannot write '" + requested.string() + "': " + reason);
+  };
   // stat and open follow /proc's links to pipes, which followLinks cannot name.
-  if (isDeviceOrPipe(requested)) {
-    // Renaming over a device or a pipe would put a regular file in its place; it is written as it
-    // is, and not held: a pipe nobody reads must stay interruptible.
+  if (writtenInPlace(requested)) {
+    // Renaming over a pipe or a device would put a regular file in its place; it is written as
+    // it is, and not held: a pipe nobody reads must stay interruptible.
     const int descriptor = ::open(requested.c_str(), O_WRONLY | O_CLOEXEC);
-    if (descriptor < 0) throw InputError(option + ": cannot write '" + requested.string() + "': " + std::strerror(errno));
-    const bool written = writeAll(descriptor, text);
-    if (!(::close(descriptor) == 0 && written)) throw InputError(option + ": cannot write '" + requested.string() + "'");
+    if (descriptor < 0) throw failed(std::strerror(errno));
+    if (const std::string reason = closeReporting(descriptor, writeAll(descriptor, text)); !reason.empty()) throw failed(reason);
     return;
   }
   const std::filesystem::path file = followLinks(requested);
@@ -75,7 +105,7 @@ void writeFileReplacing(const std::filesystem::path& requested, const std::strin
   // another output of the same run, or a file someone keeps.
   std::string temporary = file.string() + ".XXXXXX";
   const int descriptor = ::mkstemp(temporary.data());
-  if (descriptor < 0) throw InputError(option + ": cannot write '" + requested.string() + "': " + std::strerror(errno));
+  if (descriptor < 0) throw failed(std::strerror(errno));
   // mkstemp makes the file private; it gets the mode the file it replaces had, or the one a new
   // file gets under the user's umask.
   struct stat existing {};
@@ -87,23 +117,28 @@ void writeFileReplacing(const std::filesystem::path& requested, const std::strin
     ::umask(mask);
     mode = 0666 & ~mask;
   }
-  bool written = ::fchmod(descriptor, mode) == 0 && writeAll(descriptor, text);
-  written = ::close(descriptor) == 0 && written;
+  std::string reason = ::fchmod(descriptor, mode) == 0 ? writeAll(descriptor, text) : std::strerror(errno);
+  reason = closeReporting(descriptor, reason);
   std::error_code error;
-  if (written) std::filesystem::rename(temporary, file, error);
-  if (!written || error) {
-    std::filesystem::remove(temporary, error);
-    throw InputError(option + ": cannot write '" + requested.string() + "'" + (written ? "" : " (disk full?)"));
+  if (reason.empty()) {
+    std::filesystem::rename(temporary, file, error);
+    if (error) reason = error.message();
+  }
+  if (!reason.empty()) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw failed(reason);
   }
 }
 
 void writeFilesTogether(const std::vector<OutputFile>& files) {
+  for (const OutputFile& file : files) refuseStandardStreams(file.option, file.path);  // before any is written
   for (const OutputFile& file : files) {
-    if (isDeviceOrPipe(file.path)) writeFileReplacing(file.path, file.text, file.option);
+    if (writtenInPlace(file.path)) writeFileReplacing(file.path, file.text, file.option);
   }
   const InterruptionsHeld held;
   for (const OutputFile& file : files) {
-    if (!isDeviceOrPipe(file.path)) writeFileReplacing(file.path, file.text, file.option);
+    if (!writtenInPlace(file.path)) writeFileReplacing(file.path, file.text, file.option);
   }
 }
 

@@ -29,15 +29,26 @@ class InterruptionsHeld {
 /// itself where it is no link (or the chain does not end). What writeFileReplacing writes.
 std::filesystem::path followLinks(const std::filesystem::path& file);
 
-/// True where `file` (after its links, /proc's to pipes too) exists and is neither a regular file nor a folder: a device
-/// or a pipe, such as /dev/stdout into a pipe.
-bool isDeviceOrPipe(const std::filesystem::path& file);
+/// True where `file` (after its links, /proc's to pipes too) is a pipe or a character device
+/// (/dev/stdout into a pipe, /dev/null, a terminal): written in place. Block devices and sockets
+/// are no output at all (checkOutputPath refuses them).
+bool writtenInPlace(const std::filesystem::path& file);
+
+/// True where `file` is the null device (/dev/null): it takes any number of outputs.
+bool isNullDevice(const std::filesystem::path& file);
+
+/// Throws robot::InputError naming `option` where `file` is what standard output or standard error
+/// goes to (`--out /dev/stdout`, or `--out f > f`), the null device aside: the command's JSON or its
+/// messages would go into the output, or, renamed over, nowhere.
+void refuseStandardStreams(const std::string& option, const std::filesystem::path& file);
 
 /// Writes `text` to a new temporary file beside `file` (a name of its own, so that no file kept
 /// there is overwritten) and renames it into place. Through a symbolic link it writes the file the
 /// link names and keeps the link; the file keeps the mode it had, a new one gets the umask's. SIGINT
-/// and SIGTERM wait until the temporary is renamed or removed. A device or a pipe is written in
-/// place, interruptibly. Throws robot::InputError naming `option` when the file cannot be written.
+/// and SIGTERM wait until the temporary is renamed or removed. A pipe or a character device is
+/// written in place, interruptibly (writtenInPlace). Refuses the file standard output or error
+/// goes to (refuseStandardStreams). Throws robot::InputError naming `option` and the reason when
+/// the file cannot be written.
 void writeFileReplacing(const std::filesystem::path& file, const std::string& text, const std::string& option);
 
 /// One of several outputs of a command that belong together.
@@ -47,7 +58,8 @@ struct OutputFile {
   std::string text;
 };
 
-/// Writes outputs that belong together (export's files, sweep's tables): devices and pipes first,
+/// Writes outputs that belong together (export's files, sweep's tables, a study's CSV files and
+/// plot): pipes and character devices first,
 /// in place and interruptible, so that a pipe nobody reads cannot hold the process; then the
 /// regular files, each through writeFileReplacing and all under one hold of SIGINT and SIGTERM, so
 /// that an interruption leaves all of them or none.

@@ -333,7 +333,9 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
     }
   }
   study.clustering_note.clear();
-  if (!options.seeds_robot.empty() && !robot.empty() && robot != options.seeds_robot && !options.seeds.empty()) {
+  // The robot as a session names it: built in ("lwr4") or a URDF file ("/cell/lwr4.urdf").
+  const bool seeds_fit = robot == options.seeds_robot || std::filesystem::path(robot).stem().string() == options.seeds_robot;
+  if (!options.seeds_robot.empty() && !robot.empty() && !seeds_fit && !options.seeds.empty()) {
     // Another arm's postures near the LWR IV's centres would still fall into "L2" or "R5".
     study.clustering_note = "the initial centres are postures of '" + options.seeds_robot + "' (thesis Tab. B.1), the study's robot is '" +
                             robot + "': give its own with --centres";
@@ -441,11 +443,10 @@ std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const
   std::error_code error;
   std::filesystem::create_directories(folder, error);
   if (error) throw InputError("--csv-dir: cannot create '" + folder.string() + "': " + error.message());
-  std::vector<std::filesystem::path> written;
+  // All tables or, interrupted or refused, none (writeFilesTogether).
+  std::vector<OutputFile> outputs;
   const auto write = [&](const std::string& name, const std::string& text) {
-    const std::filesystem::path file = folder / name;
-    writeFileReplacing(file, text, "--csv-dir");
-    written.push_back(file);
+    outputs.push_back({"--csv-dir", folder / name, text});
   };
 
   std::ostringstream participants;
@@ -513,6 +514,9 @@ std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const
                  << ',' << csvNumber(c.median_e_coll) << ',' << (c.consistent ? 1 : 0) << "\n";
   }
   write("combinations.csv", combinations.str());
+  writeFilesTogether(outputs);
+  std::vector<std::filesystem::path> written;
+  for (const OutputFile& output : outputs) written.push_back(output.path);
   return written;
 }
 

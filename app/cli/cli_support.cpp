@@ -91,31 +91,27 @@ std::string sameFileKey(const std::string& path) {
   return error || key.empty() ? (error ? std::filesystem::path(path) : absolute).lexically_normal().string() : key.string();
 }
 
-void refuseStandardStreamsFile(const std::string& option, const std::string& path) {
-  struct stat output {};
-  if (::stat(path.c_str(), &output) != 0 || !S_ISREG(output.st_mode)) return;
-  for (const auto& [descriptor, name] : {std::pair{STDOUT_FILENO, "standard output"}, std::pair{STDERR_FILENO, "standard error"}}) {
-    struct stat stream {};
-    if (::fstat(descriptor, &stream) == 0 && stream.st_dev == output.st_dev && stream.st_ino == output.st_ino) {
-      throw InputError(option + ": '" + path + "' is the file " + name + " goes to; give another file");
-    }
-  }
-}
-
 void checkOutputPath(const std::string& option, const std::string& path,
                      const std::vector<std::pair<std::string, std::string>>& inputs, bool regular_file_only) {
   namespace fs = std::filesystem;
   if (path.empty()) throw InputError(option + ": expected a file path");
   std::error_code error;
   if (fs::is_directory(path, error)) throw InputError(option + ": '" + path + "' is a directory; expected a file path");
-  if (regular_file_only && fs::exists(path, error) && !fs::is_regular_file(path, error)) {
-    throw InputError(option + ": '" + path + "' is not a regular file (a device, a pipe or a socket); expected a file path");
+  const bool in_place = app::writtenInPlace(path);
+  if (fs::exists(path, error) && !fs::is_regular_file(path, error) && (regular_file_only || !in_place)) {
+    throw InputError(option + ": '" + path + "' is not a regular file (" +
+                     (regular_file_only ? "a device, a pipe or a socket" : "a block device or a socket") + "); expected a file path");
   }
-  refuseStandardStreamsFile(option, path);
+  app::refuseStandardStreams(option, path);
   for (const auto& [input_option, input] : inputs) {
     if (!input.empty() && fs::exists(path, error) && fs::equivalent(input, path, error)) {
       throw InputError(option + ": '" + path + "' is the " + input_option + " file the run reads; give another file");
     }
+  }
+  if (in_place) {
+    // Written as it is: /dev/null or a terminal lies in a folder only root may write in.
+    if (::access(path.c_str(), W_OK) != 0) throw InputError(option + ": cannot write '" + path + "': " + std::strerror(errno));
+    return;
   }
   // The folder of the file written: through a symbolic link, the folder of the file it names.
   const fs::path written = app::followLinks(path);

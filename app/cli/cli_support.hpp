@@ -113,17 +113,12 @@ Json itmParametersJson(const planning::ItmParameters& parameters);
 /// it exists yet or not: compare two of these to see whether two paths name one file.
 std::string sameFileKey(const std::string& path);
 
-/// Refuses (InputError naming `option`) an output that is the file standard output or standard
-/// error goes to (`--out /dev/stdout > f`): the command's JSON or its messages would go into it,
-/// or, once it is renamed over, nowhere.
-void refuseStandardStreamsFile(const std::string& option, const std::string& path);
-
 /// Refuses (InputError naming `option`) an output path that is a directory, that is one of the
-/// run's `inputs` ({option, path}: writing would destroy what is being read), that is the file
-/// standard output or error goes to (refuseStandardStreamsFile), or whose folder does not exist or
-/// cannot be written, before any work is done. With `regular_file_only` (a session SQLite keeps
-/// open) also a device, a pipe or a socket; other outputs are written to them in place
-/// (app::writeFileReplacing).
+/// run's `inputs` ({option, path}: writing would destroy what is being read), that is where
+/// standard output or error goes (app::refuseStandardStreams), or whose folder does not exist or
+/// cannot be written, before any work is done. A block device or a socket is refused, a pipe or a
+/// character device is written in place (app::writeFileReplacing) and must be writable; with
+/// `regular_file_only` (a session SQLite keeps open) those are refused too.
 void checkOutputPath(const std::string& option, const std::string& path,
                      const std::vector<std::pair<std::string, std::string>>& inputs = {}, bool regular_file_only = false);
 

@@ -455,6 +455,7 @@ Json trajectoryRegionJson(const app::TrajectoryRegionResult& region) {
   return {{"region", region.name},
           {"trajectories", region.trajectories},
           {"e_task_trajectories", region.e_task_trajectories},
+          {"e_task_until_contact", region.e_task_until_contact},
           {"e_task_mean_mm", measured(region.e_task_mean_mm)},
           {"e_task_std_mm", measured(region.e_task_std_mm)},
           {"e_task_max_mm", measured(region.e_task_max_mm)},

@@ -110,6 +110,7 @@ Json exportSession(const ExportOptions& options) {
     if (path.empty()) continue;
     any = true;
     checkOutputPath(option, path, {{"--session", options.session}});
+    if (app::isNullDevice(path)) continue;  // takes any number of outputs
     if (const auto [where, added] = chosen.emplace(sameFileKey(path), option); !added) {
       throw InputError(where->second == "--session"
                            ? option + ": '" + path + "' is the session or a file SQLite keeps beside it; give another file"

@@ -10,7 +10,9 @@ namespace {
 // A command stopped by SIGINT or SIGTERM says so in one line and still ends by the signal (exit
 // status 128 + n for the shell). Files are written through temporaries that hold these signals
 // back (app/file_output.hpp), so what it says holds: what was written is whole, what was not is
-// as it was. teach installs its own handler, which stops the tutor and closes the session.
+// as it was. A pipe or a device is written in place and stays interruptible (one nobody reads
+// would hold the command): its reader may have got part of an output. teach installs its own
+// handler, which stops the tutor and closes the session.
 void sayStoppedAndEnd(int signal_number) {
   const char* text = signal_number == SIGTERM
                          ? "flexirob-cli: stopped by SIGTERM; files not written yet are as they were\n"

@@ -348,7 +348,8 @@ Json runSweep(const SweepOptions& options) {
     if (path.empty()) continue;
     checkOutputPath(option, path);
   }
-  if (!options.json_out.empty() && !options.markdown.empty() && sameFileKey(options.json_out) == sameFileKey(options.markdown)) {
+  if (!options.json_out.empty() && !options.markdown.empty() && !app::isNullDevice(options.json_out) &&
+      sameFileKey(options.json_out) == sameFileKey(options.markdown)) {
     throw InputError("--markdown: '" + options.markdown + "' is the file --json names; give each output its own file");
   }
   // The tables are kept until the sweep ends and only then written: a sweep stopped or failed

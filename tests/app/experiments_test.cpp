@@ -326,6 +326,9 @@ TEST(Experiments, TrajectoriesThatMeetAnObstacleAreNamedWithTheirContactAndWhere
   EXPECT_NEAR(collided.target.z(), tip.z(), 1e-6);
   EXPECT_NEAR(collided.contact_time, (along - 0.05) / kSpeed, 0.02);
   EXPECT_EQ(left.contacts.at(collided.contact), 1);
+  // Its E_task counts up to the contact, and the region says so.
+  EXPECT_EQ(left.e_task_trajectories, 3);
+  EXPECT_EQ(left.e_task_until_contact, 1);
 }
 
 TEST(Experiments, ETaskIsMeasuredAlongTheTrajectoryFromRestAtItsStartNotOnTheWayThere) {
@@ -384,6 +387,7 @@ TEST(Experiments, AContactOnTheWayToATrajectorysStartCountsAndIsReportedAsSuch) 
   EXPECT_NEAR(left.collided[0].target.y() - tip.y(), 0.3, 1e-9);
   // E_task is over the two trajectories that ran; the third started again in the area.
   EXPECT_EQ(left.e_task_trajectories, 2);
+  EXPECT_EQ(left.e_task_until_contact, 0);
   EXPECT_LT(left.e_task_mean_mm, 2.0);
 }
 

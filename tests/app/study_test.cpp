@@ -340,6 +340,14 @@ TEST(StudyClusters, ClustersTheRobotMostParticipantsUsedAndNamesTheOthers) {
   EXPECT_TRUE(study.participants[0].cluster.empty());
   EXPECT_NE(study.clustering_note.find("postures of 'lwr4' (thesis Tab. B.1), the study's robot is 'arm9'"), std::string::npos)
       << study.clustering_note;
+  // The LWR IV's URDF given as a file is the LWR IV.
+  for (auto& p : study.participants) p.robot = "/cell/robots/lwr4.urdf";
+  clusterStudy(study, options);
+  EXPECT_TRUE(study.clustering_note.empty()) << study.clustering_note;
+  EXPECT_EQ(study.clusterings.size(), 2U);
+  for (auto& p : study.participants) p.robot = "lwr4";
+  study.participants[0].robot = "arm9";
+  study.participants[2].robot = "arm9";
   // Centres given for the study's own robot (--centres) cluster it.
   options.seeds_robot.clear();
   clusterStudy(study, options);

@@ -205,6 +205,9 @@ TEST_F(ExportCli, BadRequestsAreRefusedWithOneLineAndWriteNothing) {
     EXPECT_FALSE(fs::exists(relative)) << arguments;
   }
   EXPECT_TRUE(fs::exists(*session_));
+  // The null device is the one file that takes several outputs: nothing is kept of any.
+  const auto discarded = runCliBinary("export --session " + session_->string() + " --samples /dev/null --stream /dev/null");
+  EXPECT_EQ(discarded.exit_code, 0) << discarded.err;
 }
 
 // Outputs are written through temporaries renamed into place; an output that happens to be

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <csignal>
@@ -176,7 +177,8 @@ TEST_F(HostileCli, AModelOrAPictureWrittenIntoAPipeReachesItsReader) {
   for (const auto& [command, received] :
        std::vector<std::pair<std::string, fs::path>>{{"learn fit --data " + data.string() + " --out " + pipe.string(), model},
                                                      {"render --scene empty --width 32 --height 24 --out " + pipe.string(), picture}}) {
-    const int status = std::system(("cat " + pipe.string() + " > " + received.string() + " & " + cli + " " + command +
+    // timeout: a command that refused before opening the pipe would leave cat waiting for ever.
+    const int status = std::system(("timeout 60 cat " + pipe.string() + " > " + received.string() + " & " + cli + " " + command +
                                     " > /dev/null 2>&1; code=$?; wait; exit $code").c_str());
     ASSERT_TRUE(WIFEXITED(status)) << command;
     EXPECT_EQ(WEXITSTATUS(status), 0) << command;
@@ -191,8 +193,9 @@ TEST_F(HostileCli, AModelOrAPictureWrittenIntoAPipeReachesItsReader) {
 }
 
 // /dev/stdout with standard output redirected to a file names that file: renamed over, the
-// command's JSON went to the unlinked old file and the output took the JSON's place.
-TEST_F(HostileCli, AnOutputThatIsTheFileStandardOutputGoesToIsRefused) {
+// command's JSON went to the unlinked old file and the output took the JSON's place. Into a pipe,
+// the output and the JSON came out one after the other.
+TEST_F(HostileCli, AnOutputThatIsWhereStandardOutputGoesIsRefused) {
   std::string rows = "area,x,y,z,q1,q2\n";
   for (int i = 0; i < 20; ++i) rows += "0," + std::to_string(0.01 * i) + ",0.2,0.3," + std::to_string(0.02 * i) + ",0.5\n";
   const fs::path data = write("stdout-data.csv", rows);
@@ -207,9 +210,44 @@ TEST_F(HostileCli, AnOutputThatIsTheFileStandardOutputGoesToIsRefused) {
     std::ifstream in(err);
     std::string line;
     std::getline(in, line);
-    EXPECT_NE(line.find("is the file standard output goes to"), std::string::npos) << command << ": " << line;
+    EXPECT_NE(line.find("is where standard output goes"), std::string::npos) << command << ": " << line;
     EXPECT_TRUE(fs::exists(out));
+    const fs::path code = dir_ / "code.txt";
+    const int piped = std::system(("(" + std::string(FLEXIROB_CLI_EXECUTABLE) + " " + command + " 2> " + err.string() + "; echo $? > " +
+                                   code.string() + ") | cat > " + out.string())
+                                      .c_str());
+    ASSERT_TRUE(WIFEXITED(piped)) << command;
+    std::ifstream exit_code(code);
+    int value = -1;
+    exit_code >> value;
+    EXPECT_EQ(value, 2) << command << " into a pipe";
+    std::ifstream piped_err(err);
+    std::getline(piped_err, line);
+    EXPECT_NE(line.find("is where standard output goes"), std::string::npos) << command << ": " << line;
   }
+  // The null device takes any output, also where standard output goes too.
+  const int discarded =
+      std::system((std::string(FLEXIROB_CLI_EXECUTABLE) + " learn fit --data " + data.string() + " --out /dev/null > /dev/null 2>&1").c_str());
+  ASSERT_TRUE(WIFEXITED(discarded));
+  EXPECT_EQ(WEXITSTATUS(discarded), 0);
+}
+
+// /dev/null and a terminal lie in folders only root may write in: an output written in place is
+// checked for itself, not for its folder. A block device is no output (it had been written over).
+TEST_F(HostileCli, TheNullDeviceIsAnOutputForEveryUserABlockDeviceForNone) {
+  std::string rows = "area,x,y,z,q1,q2\n";
+  for (int i = 0; i < 20; ++i) rows += "0," + std::to_string(0.01 * i) + ",0.2,0.3," + std::to_string(0.02 * i) + ",0.5\n";
+  const fs::path data = write("null-data.csv", rows);
+  fs::permissions(dir_, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+  const std::string cli = FLEXIROB_CLI_EXECUTABLE;
+  if (::geteuid() == 0 && std::system("command -v runuser > /dev/null 2>&1 && id nobody > /dev/null 2>&1") == 0) {
+    const int status = std::system(("runuser -u nobody -- " + cli + " learn fit --data " + data.string() + " --out /dev/null > /dev/null").c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 0) << "learn fit --out /dev/null as nobody";
+  }
+  const fs::path block = dir_ / "block";
+  if (::mknod(block.c_str(), S_IFBLK | 0600, makedev(7, 250)) != 0) GTEST_SKIP() << "no device node can be made here";
+  expectRefused(runCliBinary("learn fit --data " + data.string() + " --out " + block.string()), "is not a regular file (a block device or a socket)");
 }
 
 // The sweep keeps its tables until it ends: stopped half-way it leaves the last sweep's files

@@ -162,8 +162,6 @@ TEST(TeachCli, RefusesAnUnknownBackendFriForTheNineJointArmAndAHelixUnderACentim
   }
 }
 
-// The grid's exclude box covers the whole workspace: the tutor teaches the listed area and finds
-// no place of its own to add, and says so instead of teaching inside the excluded box.
 // A scene's posture for an area is where the tutor's search starts; it shows the posture nearest
 // where the arm stands (here A7 turned 2.5 rad, which does not move the tip) and says so, or,
 // with --scene-postures, the scene's own (A7 at 0).
@@ -202,6 +200,8 @@ TEST(TeachCli, ShowsTheScenesPostureWhenAskedAndSaysWhenItShowedAnother) {
   fs::remove(scene);
 }
 
+// The grid's exclude box covers the whole workspace: the tutor teaches the listed area and finds
+// no place of its own to add, and says so instead of teaching inside the excluded box.
 TEST(TeachCli, TeachesNoPlaceOfItsOwnInsideTheGridsExcludedBoxes) {
   const fs::path scene = scratch("excluded.yaml");
   const fs::path out = scratch("excluded.json");
