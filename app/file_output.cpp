@@ -3,9 +3,11 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <map>
 #include <cstring>
 #include <system_error>
 
@@ -39,26 +41,47 @@ std::filesystem::path followLinks(const std::filesystem::path& file) {
   return file;
 }
 
+namespace {
+
+// Linux's terminal devices: the virtual consoles and serial lines (4), /dev/tty and /dev/console
+// (5), pseudo-terminals (136-143).
+bool isTerminal(dev_t device) {
+  const unsigned int kind = major(device);
+  return kind == 4 || kind == 5 || (kind >= 136 && kind <= 143);
+}
+
+bool isNull(const struct stat& status) {
+  struct stat null {};
+  return S_ISCHR(status.st_mode) && ::stat("/dev/null", &null) == 0 && status.st_rdev == null.st_rdev;
+}
+
+}  // namespace
+
 bool writtenInPlace(const std::filesystem::path& file) {
   struct stat status {};
-  return ::stat(file.c_str(), &status) == 0 && (S_ISFIFO(status.st_mode) || S_ISCHR(status.st_mode));
+  if (::stat(file.c_str(), &status) != 0) return false;
+  // Other character devices (memory, raw flash, a tape) are nothing to write a model over.
+  return S_ISFIFO(status.st_mode) || isNull(status) || (S_ISCHR(status.st_mode) && isTerminal(status.st_rdev));
 }
 
 bool isNullDevice(const std::filesystem::path& file) {
-  struct stat output {}, null {};
-  return ::stat(file.c_str(), &output) == 0 && S_ISCHR(output.st_mode) && ::stat("/dev/null", &null) == 0 &&
-         output.st_rdev == null.st_rdev;
+  struct stat output {};
+  return ::stat(file.c_str(), &output) == 0 && isNull(output);
 }
 
 void refuseStandardStreams(const std::string& option, const std::filesystem::path& file) {
   struct stat output {};
-  if (::stat(file.c_str(), &output) != 0 || isNullDevice(file)) return;
+  if (::stat(file.c_str(), &output) != 0 || isNull(output)) return;
   for (const auto& [descriptor, name] : {std::pair{STDOUT_FILENO, "standard output"}, std::pair{STDERR_FILENO, "standard error"}}) {
     struct stat stream {};
-    if (::fstat(descriptor, &stream) == 0 && stream.st_dev == output.st_dev && stream.st_ino == output.st_ino) {
+    if (::fstat(descriptor, &stream) != 0) continue;
+    const bool same_file = stream.st_dev == output.st_dev && stream.st_ino == output.st_ino;
+    // Another node of the same device, or /dev/tty: the terminal the stream shows on.
+    const bool same_terminal = S_ISCHR(output.st_mode) && isTerminal(output.st_rdev) && ::isatty(descriptor) == 1 &&
+                               (output.st_rdev == stream.st_rdev || output.st_rdev == makedev(5, 0));
+    if (same_file || same_terminal) {
       throw InputError(option + ": '" + file.string() + "' is where " + name + " goes" +
-                       (descriptor == STDOUT_FILENO ? ", which carries the command's JSON" : "") +
-                       "; give another file (a named pipe, mkfifo, passes an output on)");
+                       (descriptor == STDOUT_FILENO ? ", which carries the command's JSON" : "") + "; give another file");
     }
   }
 }
@@ -132,7 +155,20 @@ void writeFileReplacing(const std::filesystem::path& requested, const std::strin
 }
 
 void writeFilesTogether(const std::vector<OutputFile>& files) {
-  for (const OutputFile& file : files) refuseStandardStreams(file.option, file.path);  // before any is written
+  // Before any is written: where standard output goes, and two outputs naming one file (the
+  // second would replace the first, which the command still reports as written).
+  std::map<std::string, std::string> named;
+  for (const OutputFile& file : files) {
+    refuseStandardStreams(file.option, file.path);
+    if (isNullDevice(file.path)) continue;
+    std::error_code error;
+    std::filesystem::path key = std::filesystem::weakly_canonical(std::filesystem::absolute(file.path, error), error);
+    if (error) key = file.path.lexically_normal();
+    if (const auto [where, added] = named.emplace(key.string(), file.option); !added) {
+      throw InputError(file.option + ": '" + file.path.string() + "' is the file " + where->second +
+                       " names; give each output its own file");
+    }
+  }
   for (const OutputFile& file : files) {
     if (writtenInPlace(file.path)) writeFileReplacing(file.path, file.text, file.option);
   }

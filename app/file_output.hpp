@@ -29,17 +29,18 @@ class InterruptionsHeld {
 /// itself where it is no link (or the chain does not end). What writeFileReplacing writes.
 std::filesystem::path followLinks(const std::filesystem::path& file);
 
-/// True where `file` (after its links, /proc's to pipes too) is a pipe or a character device
-/// (/dev/stdout into a pipe, /dev/null, a terminal): written in place. Block devices and sockets
-/// are no output at all (checkOutputPath refuses them).
+/// True where `file` (after its links, /proc's to pipes too) is a pipe, the null device or a
+/// terminal: written in place. Other devices and sockets are no output at all (checkOutputPath
+/// refuses them).
 bool writtenInPlace(const std::filesystem::path& file);
 
 /// True where `file` is the null device (/dev/null): it takes any number of outputs.
 bool isNullDevice(const std::filesystem::path& file);
 
 /// Throws robot::InputError naming `option` where `file` is what standard output or standard error
-/// goes to (`--out /dev/stdout`, or `--out f > f`), the null device aside: the command's JSON or its
-/// messages would go into the output, or, renamed over, nowhere.
+/// goes to (`--out /dev/stdout`, `--out f > f`, /dev/tty on the terminal they show on), the null
+/// device aside: the command's JSON or its messages would go into the output, or, renamed over,
+/// nowhere.
 void refuseStandardStreams(const std::string& option, const std::filesystem::path& file);
 
 /// Writes `text` to a new temporary file beside `file` (a name of its own, so that no file kept

@@ -334,7 +334,8 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
   }
   study.clustering_note.clear();
   // The robot as a session names it: built in ("lwr4") or a URDF file ("/cell/lwr4.urdf").
-  const bool seeds_fit = robot == options.seeds_robot || std::filesystem::path(robot).stem().string() == options.seeds_robot;
+  const std::filesystem::path robot_file(robot);
+  const bool seeds_fit = robot == options.seeds_robot || (robot_file.extension() == ".urdf" && robot_file.stem().string() == options.seeds_robot);
   if (!options.seeds_robot.empty() && !robot.empty() && !seeds_fit && !options.seeds.empty()) {
     // Another arm's postures near the LWR IV's centres would still fall into "L2" or "R5".
     study.clustering_note = "the initial centres are postures of '" + options.seeds_robot + "' (thesis Tab. B.1), the study's robot is '" +
@@ -439,7 +440,8 @@ StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions
   return study;
 }
 
-std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const std::filesystem::path& folder) {
+std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const std::filesystem::path& folder,
+                                                 const std::vector<OutputFile>& along) {
   std::error_code error;
   std::filesystem::create_directories(folder, error);
   if (error) throw InputError("--csv-dir: cannot create '" + folder.string() + "': " + error.message());
@@ -514,9 +516,10 @@ std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const
                  << ',' << csvNumber(c.median_e_coll) << ',' << (c.consistent ? 1 : 0) << "\n";
   }
   write("combinations.csv", combinations.str());
-  writeFilesTogether(outputs);
   std::vector<std::filesystem::path> written;
   for (const OutputFile& output : outputs) written.push_back(output.path);
+  outputs.insert(outputs.end(), along.begin(), along.end());
+  writeFilesTogether(outputs);
   return written;
 }
 

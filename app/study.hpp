@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "app/file_output.hpp"
+
 namespace flexirob::app {
 
 class SessionReader;
@@ -148,9 +150,11 @@ StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions
 void clusterStudy(StudyResult& study, const StudyOptions& options);
 
 /// CSV files of every table: participants.csv, phases.csv, clusters_area<k>.csv,
-/// centres_area<k>.csv and combinations.csv. Returns the files written. Throws InputError if
-/// the folder cannot be created or written.
-std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const std::filesystem::path& folder);
+/// centres_area<k>.csv and combinations.csv, written together with `along` (the plot) through
+/// writeFilesTogether. Returns the CSV files written. Throws InputError if the folder cannot be
+/// created or a file written, or if one of `along` names a table's file.
+std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const std::filesystem::path& folder,
+                                                 const std::vector<OutputFile>& along = {});
 
 /// The MDS scatter plot of every clustered area side by side (points coloured by cluster,
 /// centres as rings) as an RGBA image of width x height pixels.

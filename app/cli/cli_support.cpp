@@ -100,7 +100,8 @@ void checkOutputPath(const std::string& option, const std::string& path,
   const bool in_place = app::writtenInPlace(path);
   if (fs::exists(path, error) && !fs::is_regular_file(path, error) && (regular_file_only || !in_place)) {
     throw InputError(option + ": '" + path + "' is not a regular file (" +
-                     (regular_file_only ? "a device, a pipe or a socket" : "a block device or a socket") + "); expected a file path");
+                     (regular_file_only ? "a device, a pipe or a socket" : "a device other than a terminal or /dev/null, or a socket") +
+                     "); expected a file path");
   }
   app::refuseStandardStreams(option, path);
   for (const auto& [input_option, input] : inputs) {
@@ -297,6 +298,11 @@ int runCli(int argc, const char* const* argv) {
     if (!runner.hasAction()) throw InputError("no command given; see --help");
     const Json result = runner.run();
     std::cout << result.dump(2) << std::endl;
+    if (!std::cout) {
+      // A full disk or a closed descriptor: the command's result is lost, which is no success.
+      std::cerr << "error: cannot write the result to standard output" << std::endl;
+      return 1;
+    }
     return 0;
   } catch (const CommandFailed& e) {
     std::cout << e.result().dump(2) << std::endl;

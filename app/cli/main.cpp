@@ -33,5 +33,8 @@ void sayWhenStopped() {
 
 int main(int argc, char** argv) {
   sayWhenStopped();
+  // A pipe whose reader went away (an output into a named pipe, the JSON into `| head`) is a
+  // write error with a reason (EPIPE), not a silent death by SIGPIPE.
+  ::signal(SIGPIPE, SIG_IGN);
   return flexirob::cli::runCli(argc, argv);
 }

@@ -261,20 +261,24 @@ Json reviewStudy(const StudyArguments& arguments) {
                             {"consistent", c.consistent}});
   }
   out["combinations"] = combinations;
-  if (!arguments.csv_dir.empty()) {
-    Json files = Json::array();
-    for (const auto& file : app::writeStudyCsv(study, arguments.csv_dir)) files.push_back(file.string());
-    out["csv_files"] = files;
-  }
+  std::vector<app::OutputFile> plot;
   if (!arguments.plot.empty()) {
     const app::ScatterImage scatter = app::renderMdsScatter(study, 360 * std::max<int>(1, static_cast<int>(study.clusterings.size())), 360);
     render::Image image;
     image.width = scatter.width;
     image.height = scatter.height;
     image.rgba = scatter.rgba;
-    app::writeFileReplacing(arguments.plot, render::encodePng(image), "--plot");
-    out["plot"] = arguments.plot;
+    plot.push_back({"--plot", arguments.plot, render::encodePng(image)});
   }
+  // The tables and the plot together: all of them or none.
+  if (!arguments.csv_dir.empty()) {
+    Json files = Json::array();
+    for (const auto& file : app::writeStudyCsv(study, arguments.csv_dir, plot)) files.push_back(file.string());
+    out["csv_files"] = files;
+  } else {
+    app::writeFilesTogether(plot);
+  }
+  if (!arguments.plot.empty()) out["plot"] = arguments.plot;
   return out;
 }
 

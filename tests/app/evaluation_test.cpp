@@ -12,6 +12,7 @@
 #include <fstream>
 
 #include "app/evaluation.hpp"
+#include "tests/common/scene_objects.hpp"
 #include "learning/elm.hpp"
 #include "planning/itm.hpp"
 #include "robot/collision.hpp"
@@ -444,11 +445,7 @@ TEST(Evaluation, APlannedMotionThatEndsInContactSaysSoAndTheNextStartsWhereTheAr
   const Eigen::Vector3d start = robot::tipPose(lwr4(), ready()).translation();
   const Eigen::Vector3d goal = start + Eigen::Vector3d(0.0, 0.3, 0.0);
   robot::Scene scene;
-  robot::Obstacle block;
-  block.name = "block";
-  block.size = Eigen::Vector3d(0.1, 0.1, 0.1);
-  block.X_WO.translation() = goal;
-  scene.obstacles.push_back(block);
+  scene.obstacles.push_back(testing::boxObstacle("block", Eigen::Vector3d(0.1, 0.1, 0.1), goal));
   planning::Itm graph(planning::ItmParameters{}, 7);
   for (const int k : {0, 1, 0}) graph.insert(start + k * (goal - start), ready());
   ASSERT_EQ(graph.nodeCount(), 2);
@@ -668,11 +665,7 @@ TEST(Evaluation, ResolvedPostureIsJudgedWhereTheArmEndsNotOnTheWayThere) {
   const Eigen::Vector3d tip_of_ready = robot::tipPose(lwr4(), ready()).translation();
   const Eigen::Vector3d target = tip_of_ready + Eigen::Vector3d(0.0, 0.3, 0.0);
   robot::Scene scene;
-  robot::Obstacle box;
-  box.name = "box";
-  box.size = Eigen::Vector3d(0.05, 0.05, 0.05);
-  box.X_WO.translation() = tip_of_ready;
-  scene.obstacles.push_back(box);
+  scene.obstacles.push_back(testing::boxObstacle("box", Eigen::Vector3d(0.05, 0.05, 0.05), tip_of_ready));
   robot::CollisionWorld world(lwr4(), scene);
   world.update(ready());
   ASSERT_FALSE(world.contacts().empty()) << "the learned posture must touch the box for this test";

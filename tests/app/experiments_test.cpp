@@ -2,6 +2,7 @@
 // Sect. 3.3.2, the implicit scene model (Eq. 4.1) and the trajectory evaluation (Tab. 3.2).
 #include <gtest/gtest.h>
 
+#include "tests/common/scene_objects.hpp"
 #include "app/evaluation.hpp"
 #include "app/experiments.hpp"
 #include "learning/elm.hpp"
@@ -48,13 +49,7 @@ EvaluatedArea cubeArea(const Eigen::VectorXd& q_fixed, const Eigen::Vector3d& ce
   return area;
 }
 
-robot::Obstacle boxObstacle(const std::string& name, const Eigen::Vector3d& size, const Eigen::Vector3d& centre) {
-  robot::Obstacle box;
-  box.name = name;
-  box.size = size;
-  box.X_WO = Eigen::Isometry3d(Eigen::Translation3d(centre));
-  return box;
-}
+using testing::boxObstacle;
 
 // The scene's trajectories at 0.1 m/s with the constant map, one area taught in ready() at its
 // tip; the one region they form.

@@ -214,5 +214,19 @@ TEST_F(FileOutput, OutputsWrittenTogetherAreAllWritten) {
   EXPECT_EQ(names(), (std::set<std::string>{"a.csv", "m.flm", "pipe"}));
 }
 
+// A study's plot named as one of its tables: the second would have replaced the first, which the
+// command still listed as written. Refused before either is written; /dev/null takes both.
+TEST_F(FileOutput, OutputsWrittenTogetherMayNotNameOneFileButTheNullDevice) {
+  try {
+    writeFilesTogether({{"--csv-dir", folder_ / "participants.csv", "a\n"}, {"--plot", folder_ / "." / "participants.csv", "png"}});
+    FAIL() << "expected InputError";
+  } catch (const flexirob::InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("--plot: '"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("is the file --csv-dir names"), std::string::npos) << error.what();
+  }
+  EXPECT_TRUE(names().empty());
+  writeFilesTogether({{"--samples", "/dev/null", "a\n"}, {"--stream", "/dev/null", "b\n"}});
+}
+
 }  // namespace
 }  // namespace flexirob::app

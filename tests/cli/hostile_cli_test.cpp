@@ -192,6 +192,24 @@ TEST_F(HostileCli, AModelOrAPictureWrittenIntoAPipeReachesItsReader) {
   EXPECT_EQ(readFile(picture).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
 }
 
+// A reader that goes away before the output is through: a write error with its reason and exit
+// code 2, not a silent death by SIGPIPE (exit 141, no line).
+TEST_F(HostileCli, AnOutputWhosePipeReaderLeftEndsWithOneLine) {
+  const fs::path pipe = dir_ / "short.pipe";
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  const fs::path err = dir_ / "short-stderr.txt";
+  const int status = std::system(("(exec 3< " + pipe.string() + "; timeout 60 head -c 1 <&3 > /dev/null) & " +
+                                  std::string(FLEXIROB_CLI_EXECUTABLE) +
+                                  " render --scene setup_I --width 1500 --height 1500 --supersample 1 --out " + pipe.string() +
+                                  " > /dev/null 2> " + err.string() + "; code=$?; wait; exit $code")
+                                     .c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  std::ifstream in(err);
+  std::string said((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(said.find("error: --out: cannot write '" + pipe.string() + "': Broken pipe"), std::string::npos) << said;
+}
+
 // /dev/stdout with standard output redirected to a file names that file: renamed over, the
 // command's JSON went to the unlinked old file and the output took the JSON's place. Into a pipe,
 // the output and the JSON came out one after the other.
@@ -240,14 +258,16 @@ TEST_F(HostileCli, TheNullDeviceIsAnOutputForEveryUserABlockDeviceForNone) {
   const fs::path data = write("null-data.csv", rows);
   fs::permissions(dir_, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
   const std::string cli = FLEXIROB_CLI_EXECUTABLE;
-  if (::geteuid() == 0 && std::system("command -v runuser > /dev/null 2>&1 && id nobody > /dev/null 2>&1") == 0) {
+  if (::geteuid() == 0 && std::system(("command -v runuser > /dev/null 2>&1 && runuser -u nobody -- test -r " + data.string()).c_str()) == 0) {
     const int status = std::system(("runuser -u nobody -- " + cli + " learn fit --data " + data.string() + " --out /dev/null > /dev/null").c_str());
     ASSERT_TRUE(WIFEXITED(status));
     EXPECT_EQ(WEXITSTATUS(status), 0) << "learn fit --out /dev/null as nobody";
   }
+  // Nor is any device but a terminal and the null device (memory, raw flash, a tape).
+  expectRefused(runCliBinary("learn fit --data " + data.string() + " --out /dev/zero"), "is not a regular file (a device other than");
   const fs::path block = dir_ / "block";
   if (::mknod(block.c_str(), S_IFBLK | 0600, makedev(7, 250)) != 0) GTEST_SKIP() << "no device node can be made here";
-  expectRefused(runCliBinary("learn fit --data " + data.string() + " --out " + block.string()), "is not a regular file (a block device or a socket)");
+  expectRefused(runCliBinary("learn fit --data " + data.string() + " --out " + block.string()), "is not a regular file (a device other than");
 }
 
 // The sweep keeps its tables until it ends: stopped half-way it leaves the last sweep's files
