@@ -41,6 +41,14 @@ std::filesystem::path followLinks(const std::filesystem::path& file) {
   return file;
 }
 
+std::string sameFileKey(const std::filesystem::path& path) {
+  std::error_code error;
+  const std::filesystem::path absolute = std::filesystem::absolute(path, error);
+  const std::filesystem::path key = std::filesystem::weakly_canonical(error ? path : absolute, error).lexically_normal();
+  // A chain of links that never ends resolves to nothing: the path as given stands for itself.
+  return error || key.empty() ? (error ? path : absolute).lexically_normal().string() : key.string();
+}
+
 namespace {
 
 // Linux's terminal devices: the virtual consoles and serial lines (4), /dev/tty and /dev/console
@@ -122,6 +130,10 @@ void writeFileReplacing(const std::filesystem::path& requested, const std::strin
     if (const std::string reason = closeReporting(descriptor, writeAll(descriptor, text)); !reason.empty()) throw failed(reason);
     return;
   }
+  // Renamed over, a block device or a socket would be replaced by a regular file.
+  if (struct stat status {}; ::stat(requested.c_str(), &status) == 0 && !S_ISREG(status.st_mode) && !S_ISDIR(status.st_mode)) {
+    throw InputError(option + ": '" + requested.string() + "' is not a regular file (a device other than a terminal or /dev/null, or a socket)");
+  }
   const std::filesystem::path file = followLinks(requested);
   const InterruptionsHeld held;
   // A temporary of its own (mkstemp) beside the file: a fixed name such as "<file>.tmp" could be
@@ -161,10 +173,7 @@ void writeFilesTogether(const std::vector<OutputFile>& files) {
   for (const OutputFile& file : files) {
     refuseStandardStreams(file.option, file.path);
     if (isNullDevice(file.path)) continue;
-    std::error_code error;
-    std::filesystem::path key = std::filesystem::weakly_canonical(std::filesystem::absolute(file.path, error), error);
-    if (error) key = file.path.lexically_normal();
-    if (const auto [where, added] = named.emplace(key.string(), file.option); !added) {
+    if (const auto [where, added] = named.emplace(sameFileKey(file.path), file.option); !added) {
       throw InputError(file.option + ": '" + file.path.string() + "' is the file " + where->second +
                        " names; give each output its own file");
     }

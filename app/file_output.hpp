@@ -29,6 +29,10 @@ class InterruptionsHeld {
 /// itself where it is no link (or the chain does not end). What writeFileReplacing writes.
 std::filesystem::path followLinks(const std::filesystem::path& file);
 
+/// The file a path names, spelt one way ("./a.csv", "a.csv" and "dir/../a.csv" alike), whether
+/// it exists yet or not: compare two of these to see whether two paths name one file.
+std::string sameFileKey(const std::filesystem::path& path);
+
 /// True where `file` (after its links, /proc's to pipes too) is a pipe, the null device or a
 /// terminal: written in place. Other devices and sockets are no output at all (checkOutputPath
 /// refuses them).

@@ -82,15 +82,6 @@ Json toJsonRows(const Eigen::MatrixXd& m) {
   return rows;
 }
 
-std::string sameFileKey(const std::string& path) {
-  std::error_code error;
-  const std::filesystem::path absolute = std::filesystem::absolute(path, error);
-  const std::filesystem::path key =
-      std::filesystem::weakly_canonical(error ? std::filesystem::path(path) : absolute, error).lexically_normal();
-  // A chain of links that never ends resolves to nothing: the path as given stands for itself.
-  return error || key.empty() ? (error ? std::filesystem::path(path) : absolute).lexically_normal().string() : key.string();
-}
-
 void checkOutputPath(const std::string& option, const std::string& path,
                      const std::vector<std::pair<std::string, std::string>>& inputs, bool regular_file_only) {
   namespace fs = std::filesystem;

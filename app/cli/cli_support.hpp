@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "app/cli/number_list.hpp"
+#include "app/file_output.hpp"
 #include "planning/itm.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/scene.hpp"
@@ -109,9 +110,7 @@ Json toJsonRows(const Eigen::MatrixXd& m);
 /// --dthetamax, --dcmax, --eta, --alpha).
 Json itmParametersJson(const planning::ItmParameters& parameters);
 
-/// The file a path names, spelt one way ("./a.csv", "a.csv" and "dir/../a.csv" alike), whether
-/// it exists yet or not: compare two of these to see whether two paths name one file.
-std::string sameFileKey(const std::string& path);
+using app::sameFileKey;
 
 /// Refuses (InputError naming `option`) an output path that is a directory, that is one of the
 /// run's `inputs` ({option, path}: writing would destroy what is being read), that is where

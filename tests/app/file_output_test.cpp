@@ -2,10 +2,13 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -226,6 +229,27 @@ TEST_F(FileOutput, OutputsWrittenTogetherMayNotNameOneFileButTheNullDevice) {
   }
   EXPECT_TRUE(names().empty());
   writeFilesTogether({{"--samples", "/dev/null", "a\n"}, {"--stream", "/dev/null", "b\n"}});
+}
+
+// Renamed over, a socket (or a block device) would have been replaced by a regular file.
+TEST_F(FileOutput, RefusesASocketAndLeavesIt) {
+  const fs::path socket_file = folder_ / "control.sock";
+  const int listening = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  ASSERT_GE(listening, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  ASSERT_LT(socket_file.string().size(), sizeof(address.sun_path));
+  std::snprintf(address.sun_path, sizeof(address.sun_path), "%s", socket_file.c_str());
+  ASSERT_EQ(::bind(listening, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0);
+  try {
+    writeFileReplacing(socket_file, "x\n", "--out");
+    FAIL() << "expected InputError";
+  } catch (const flexirob::InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("is not a regular file"), std::string::npos) << error.what();
+  }
+  ::close(listening);
+  EXPECT_TRUE(fs::is_socket(socket_file));
+  EXPECT_EQ(names(), std::set<std::string>{"control.sock"});
 }
 
 }  // namespace
