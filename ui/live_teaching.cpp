@@ -116,6 +116,8 @@ bool LiveTeaching::nudgeJoint(int joint, double dq) { return post(app::WorkflowR
 
 bool LiveTeaching::planTo(const Eigen::Vector3d& goal) { return post(app::WorkflowRequest::planTo(goal)); }
 
+bool LiveTeaching::replayTeachIn(int teach_in) { return post(app::WorkflowRequest::replayTeachIn(teach_in)); }
+
 void LiveTeaching::tick() {
   if (grab_body_ > 0) sendSpring();
 }

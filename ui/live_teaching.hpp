@@ -84,6 +84,8 @@ class LiveTeaching {
   bool nudgeJoint(int joint, double dq);
   /// EXECUTION: plan through the ITM to `goal` and execute (Sect. 7.4).
   bool planTo(const Eigen::Vector3d& goal);
+  /// EXECUTION: replay teach-in `teach_in` (0-based).
+  bool replayTeachIn(int teach_in);
   /// Display tick: re-evaluates the mouse spring at the newest posture.
   void tick();
 

@@ -231,6 +231,10 @@ void MainWindow::buildDocks() {
     if (live_) live_->press(button);
     view_->setFocus();
   });
+  connect(stage_panel_, &StagePanel::replayRequested, this, [this](int teach_in) {
+    if (live_) live_->replayTeachIn(teach_in);
+    view_->setFocus();
+  });
 
   joint_panel_ = new JointPanel;
   auto* scroll = new QScrollArea;
@@ -615,7 +619,7 @@ void MainWindow::mirror() {
   driveKeyboard();
   const LiveSnapshot& s = live_->snapshot();
   handleEvents();
-  stage_panel_->showSnapshot(s, robotMeasured());
+  stage_panel_->showSnapshot(s, robotMeasured(), live_->simulated());
   if (s.failed) {
     const auto end = std::find(s.failure.begin(), s.failure.end(), '\0');
     last_warning_ = tr("The robot stopped: %1").arg(QString::fromStdString(std::string(s.failure.begin(), end)));
@@ -857,12 +861,15 @@ void MainWindow::keyPressEvent(QKeyEvent* event) {
       break;
     case TeleopAction::Kind::kTrigger:
     case TeleopAction::Kind::kButton:
+    case TeleopAction::Kind::kReplay:
       if (!live_) {
         showStatusMessage(statusBar(), tr("No robot runs: the message in the view says why"), 8000);
       } else if (!robotMeasured()) {
         showStatusMessage(statusBar(), tr("The robot has not sent a measurement yet: teaching starts when it does"), 8000);
       } else if (action->kind == TeleopAction::Kind::kTrigger) {
         live_->fire(action->trigger);
+      } else if (action->kind == TeleopAction::Kind::kReplay) {
+        live_->replayTeachIn(stage_panel_->chosenTeachIn());
       } else {
         live_->press(action->button);
       }

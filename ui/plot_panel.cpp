@@ -183,12 +183,16 @@ void TimePlot::mouseMoveEvent(QMouseEvent* event) {
   QChartView::mouseMoveEvent(event);
 }
 
+void TimePlot::setTitle(const QString& title) { chart_->setTitle(title); }
+
+QString TimePlot::title() const { return chart_->title(); }
+
 // --- PlotPanel ------------------------------------------------------------------------------
 
 PlotPanel::PlotPanel(QWidget* parent) : QWidget(parent) {
   auto* layout = new QVBoxLayout(this);
   layout->setContentsMargins(0, 0, 0, 0);
-  task_error_ = new TimePlot(QStringLiteral("Task error"), QStringLiteral("[m]"), this);
+  task_error_ = new TimePlot(QStringLiteral("Task error: tip from its target"), QStringLiteral("[m]"), this);
   task_error_->addSeries(QStringLiteral("|x - x_des|"), QColor(0, 114, 178));
   task_error_->setMinimumValueSpan(0.001);  // [m]
   // Joint values scaled to their hard limits: every joint shares one axis, the limits are the

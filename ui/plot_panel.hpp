@@ -48,6 +48,8 @@ class TimePlot : public QChartView {
   int addSeries(const QString& name, const QColor& color, Qt::PenStyle style = Qt::SolidLine, qreal width = 1.5);
   void setSeriesData(int series, const QList<QPointF>& points);
   void setSeriesName(int series, const QString& name);
+  void setTitle(const QString& title);
+  QString title() const;
   void hideFromLegend(int series);
   int seriesCount() const { return static_cast<int>(series_.size()); }
   const QLineSeries* series(int index) const { return series_.at(static_cast<std::size_t>(index)); }

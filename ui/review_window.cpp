@@ -363,6 +363,8 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
       samples.push_back(std::move(sample));
     }
     plots_->setSamples(samples);
+    // Not the live plot's |x - x_des|: the title says which error this is.
+    plots_->taskErrorPlot()->setTitle(QStringLiteral("Tip from the commanded posture's tip"));
     plots_->taskErrorPlot()->setSeriesName(0, QStringLiteral("|FK(q_cmd) - x|"));
 
     reader_ = std::move(reader);

@@ -5,7 +5,9 @@
 #include <QFontMetrics>
 #include <QLabel>
 #include <QProgressBar>
+#include <QHBoxLayout>
 #include <QPushButton>
+#include <QSpinBox>
 #include <QVBoxLayout>
 
 namespace flexirob::ui {
@@ -30,6 +32,13 @@ StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
   controller_label_->setAlignment(Qt::AlignCenter);
   controller_label_->setWordWrap(true);
   layout->addWidget(controller_label_);
+
+  hint_label_ = new QLabel;
+  hint_label_->setObjectName(QStringLiteral("hint_label"));
+  hint_label_->setWordWrap(true);
+  hint_label_->setStyleSheet(QStringLiteral("QLabel { background: #e8f0fa; color: #1a3550; border: 1px solid #9ab4d0;"
+                                            " padding: 4px; }"));
+  layout->addWidget(hint_label_);
 
   const struct {
     app::Button button;
@@ -57,6 +66,25 @@ StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
     layout->addWidget(push);
   }
 
+  // EXECUTION replays a teach-in of PROGRAMMING (Sect. 2.3): which one, and the button (F9).
+  auto* replay_row = new QHBoxLayout;
+  replay_choice_ = new QSpinBox;
+  replay_choice_->setObjectName(QStringLiteral("replay_choice"));
+  replay_choice_->setPrefix(tr("teach-in "));
+  replay_choice_->setRange(1, 1);
+  replay_choice_->setFocusPolicy(Qt::ClickFocus);
+  replay_choice_->setToolTip(tr("The teach-in to replay: 1 is the first recorded."));
+  replay_button_ = new QPushButton(tr("Replay"));
+  replay_button_->setObjectName(QStringLiteral("replay"));
+  replay_button_->setToolTip(tr("Move the tip to the teach-in's start and along it (F9)."));
+  replay_button_->setFocusPolicy(Qt::NoFocus);
+  replay_button_->setEnabled(false);
+  replay_choice_->setEnabled(false);
+  connect(replay_button_, &QPushButton::clicked, this, [this] { Q_EMIT replayRequested(chosenTeachIn()); });
+  replay_row->addWidget(replay_choice_, 1);
+  replay_row->addWidget(replay_button_);
+  layout->addLayout(replay_row);
+
   learning_bar_ = new QProgressBar;
   learning_bar_->setObjectName(QStringLiteral("learning_bar"));
   learning_bar_->setFormat(tr("learning q_c(x)…"));
@@ -79,6 +107,8 @@ StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
 }
 
 QPushButton* StagePanel::button(app::Button button) const { return buttons_[static_cast<int>(button)]; }
+
+int StagePanel::chosenTeachIn() const { return replay_choice_->value() - 1; }
 
 QColor StagePanel::stageColor(app::Stage stage, app::SubStage sub_stage) {
   using app::Stage;
@@ -112,6 +142,55 @@ QString StagePanel::stageText(app::Stage stage, app::SubStage sub_stage) {
   return text;
 }
 
+QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
+  using app::Stage;
+  using app::SubStage;
+  const QString touch = s.keyboard_mode   ? tr("press Space, then move the arm with the keys")
+                        : hand_can_pull ? tr("pull a link with the mouse (or press Space)")
+                                        : tr("push the arm by hand (or press Space)");
+  const QString areas = s.areas == 1 ? tr("1 area") : tr("%1 areas").arg(s.areas);
+  switch (s.stage) {
+    case Stage::kIdle:
+      if (s.learning) return tr("Learning the redundancy resolution from %1; the buttons wait for it.").arg(areas);
+      if (s.areas == 0) return tr("Next: Start configuration (F5), then show the robot a posture in each training area.");
+      if (s.model_ready) {
+        return tr("Next: Start programming (F7) to guide the tip along a motion, or Start configuration (F5) to add "
+                  "areas.");
+      }
+      return tr("Next: Start configuration (F5) to add areas; the map is learned when you finish.");
+    case Stage::kConfiguration:
+      switch (s.sub_stage) {
+        case SubStage::kApproaching:
+          return tr("Move the arm to the posture wanted here, then let go and keep still for 2 s (or press Enter).");
+        case SubStage::kPosed:
+          return tr("Posture fixed. To record the area, %1 again and move the tip around inside it.").arg(touch);
+        case SubStage::kRecording:
+          return tr("Recording: move the tip around inside the area; let go and keep still (or press Enter) to store it.");
+        default:
+          if (s.areas == 0) return tr("First area: %1 and move the arm to the posture wanted there.").arg(touch);
+          return tr("Next area: %1 — or Finish configuration (F6) to learn from %2.").arg(touch, areas);
+      }
+    case Stage::kProgramming:
+      switch (s.sub_stage) {
+        case SubStage::kApproaching:
+          return tr("Guide the tip to where the motion starts (the learned map keeps the posture); keep still for 2 s "
+                    "(or press Enter).");
+        case SubStage::kPosed:
+          return tr("At the start. To record the motion, %1 again and guide the tip along it.").arg(touch);
+        case SubStage::kTeachIn:
+          return tr("Recording the motion: guide the tip along it; let go and keep still (or press Enter) to store it.");
+        default:
+          return tr("To teach a motion, %1 and guide the tip to its start — or Finish programming (F8) to execute.")
+              .arg(touch);
+      }
+    case Stage::kExecution:
+      if (!s.execution_done) return tr("The arm moves on its own; wait for it to arrive.");
+      return s.teach_ins > 0 ? tr("Ctrl+click a point in the view to send the arm there, or Replay a teach-in (F9).")
+                             : tr("Ctrl+click a point in the view to send the arm there.");
+  }
+  return {};
+}
+
 void StagePanel::showNoRobot(const QString& reason) {
   const QString text = tr("NO ROBOT");
   if (text != shown_stage_) {
@@ -122,11 +201,14 @@ void StagePanel::showNoRobot(const QString& reason) {
   }
   controller_label_->setText(reason);
   for (QPushButton* button : buttons_) button->setEnabled(false);
+  replay_button_->setEnabled(false);
+  replay_choice_->setEnabled(false);
+  hint_label_->setText(tr("Choose a robot in the Robot menu."));
   learning_bar_->setVisible(false);
   counts_label_->clear();
 }
 
-void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured) {
+void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured, bool hand_can_pull) {
   const QString text = stageText(s.stage, s.sub_stage);
   if (text != shown_stage_) {
     shown_stage_ = text;
@@ -141,6 +223,17 @@ void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured) {
   for (int b = 0; b < 4; ++b) {
     buttons_[b]->setEnabled(robot_measured && s.running && buttonMakesSense(static_cast<app::Button>(b), s));
   }
+  // A new teach-in is the one a replay names next; the operator's choice stands otherwise.
+  if (s.teach_ins != shown_teach_ins_) {
+    shown_teach_ins_ = s.teach_ins;
+    replay_choice_->setRange(1, std::max(1, s.teach_ins));
+    replay_choice_->setValue(std::max(1, s.teach_ins));
+  }
+  const bool can_replay = robot_measured && s.running && s.stage == app::Stage::kExecution && s.teach_ins > 0;
+  replay_button_->setEnabled(can_replay);
+  replay_choice_->setEnabled(can_replay && s.teach_ins > 1);
+  const QString hint = robot_measured ? nextStepHint(s, hand_can_pull) : tr("Teaching starts when the robot sends its first measurement.");
+  if (hint_label_->text() != hint) hint_label_->setText(hint);
   learning_bar_->setVisible(s.learning);
   counts_label_->setText(tr("areas %1   teach-ins %2   model %3\non_affected %4   on_converged %5\nITM nodes %6, edges %7   "
                             "collisions %8")

@@ -3,7 +3,8 @@
 // procedure, enabled only when the workflow would accept them; the current stage and sub-stage
 // in large, colour-coded letters (APPROACHING amber, RECORDING red, TEACH-IN magenta, EXECUTION
 // blue, ...); a progress bar while the redundancy resolution is learned; the latest tutor
-// warning; counts of areas, teach-ins and triggers. The panel only shows a LiveSnapshot and
+// warning; counts of areas, teach-ins and triggers; what to do next, in words; the replay of a
+// teach-in in EXECUTION. The panel only shows a LiveSnapshot and
 // emits the button the operator pressed; it owns no workflow.
 #include <QWidget>
 
@@ -13,6 +14,7 @@
 class QLabel;
 class QProgressBar;
 class QPushButton;
+class QSpinBox;
 
 namespace flexirob::ui {
 
@@ -25,7 +27,8 @@ class StagePanel : public QWidget {
   /// Shows the state of `snapshot` (cheap when nothing changed; called at display rate).
   /// Without a measurement of the robot yet (`robot_measured` false: an FRI link waiting for
   /// the arm) every button is disabled: the workflow would teach on a posture never measured.
-  void showSnapshot(const LiveSnapshot& snapshot, bool robot_measured = true);
+  /// `hand_can_pull`: the mouse can pull the arm (a simulation), which the next-step hint says.
+  void showSnapshot(const LiveSnapshot& snapshot, bool robot_measured = true, bool hand_can_pull = true);
   /// No robot runs (it could not be loaded or started): every button disabled, and why.
   void showNoRobot(const QString& reason);
   /// A tutor warning or a refused request, shown until the next one or until cleared.
@@ -36,13 +39,23 @@ class StagePanel : public QWidget {
   QLabel* stageLabel() const { return stage_label_; }
   QLabel* warningLabel() const { return warning_label_; }
   QProgressBar* learningBar() const { return learning_bar_; }
+  QLabel* hintLabel() const { return hint_label_; }
+  QPushButton* replayButton() const { return replay_button_; }
+  QSpinBox* replayChoice() const { return replay_choice_; }
+  /// The teach-in the replay control names, 0-based (the newest unless the operator chose).
+  int chosenTeachIn() const;
 
   /// Background and text colour of a stage / sub-stage (also used by the view's banner).
   static QColor stageColor(app::Stage stage, app::SubStage sub_stage);
   static QString stageText(app::Stage stage, app::SubStage sub_stage);
+  /// What the operator does next, in one or two sentences: a novice in WAITING is told to
+  /// touch the arm, and how (the mouse when `hand_can_pull`, the keys in keyboard mode).
+  static QString nextStepHint(const LiveSnapshot& snapshot, bool hand_can_pull);
 
  Q_SIGNALS:
   void buttonPressed(app::Button button);
+  /// The operator asked to replay teach-in `teach_in` (0-based) in EXECUTION.
+  void replayRequested(int teach_in);
 
  private:
   QPushButton* buttons_[4] = {};
@@ -51,6 +64,10 @@ class StagePanel : public QWidget {
   QLabel* counts_label_ = nullptr;
   QLabel* warning_label_ = nullptr;
   QProgressBar* learning_bar_ = nullptr;
+  QLabel* hint_label_ = nullptr;
+  QSpinBox* replay_choice_ = nullptr;
+  QPushButton* replay_button_ = nullptr;
+  int shown_teach_ins_ = 0;
   QString shown_stage_;
 };
 

@@ -57,6 +57,11 @@ std::optional<TeleopAction> TeleopKeys::actionOf(int key) {
       a.button = static_cast<app::Button>(key - Qt::Key_F5);
       return a;
     }
+    case Qt::Key_F9: {
+      TeleopAction a;
+      a.kind = TeleopAction::Kind::kReplay;
+      return a;
+    }
     case Qt::Key_F1:
     case Qt::Key_H: {
       TeleopAction a;
@@ -95,7 +100,7 @@ QString TeleopKeys::keyMapText(int dof) {
              "<b>tip</b>: &larr;/&rarr; &minus;x/+x &nbsp; &uarr;/&darr; +y/&minus;y &nbsp; PgUp/PgDn +z/&minus;z<br>"
              "<b>joints 1&ndash;%1</b> (null space): %2 turn +, %3 turn &minus;<br>"
              "<b>triggers</b>: Space on_affected &nbsp; Enter on_converged<br>"
-             "<b>buttons</b>: F5 start conf. &nbsp; F6 finish conf. &nbsp; F7 start prog. &nbsp; F8 finish prog.<br>"
+             "<b>buttons</b>: F5 start conf. &nbsp; F6 finish conf. &nbsp; F7 start prog. &nbsp; F8 finish prog. &nbsp; F9 replay<br>"
              "<b>mouse</b>: left-drag a link to pull it; left-drag elsewhere orbits<br>"
              "F1 / H: hide this map")
       .arg(shown)

@@ -11,7 +11,7 @@
 //   joints:   1 … 9 : joint 1 … 9 in +     Q W E R T Y U I O : joint 1 … 9 in −
 //   triggers: Space : on_affected   Enter : on_converged
 //   buttons:  F5 start configuration   F6 finish configuration   F7 start programming
-//             F8 finish programming
+//             F8 finish programming   F9 replay the teach-in chosen in the panel (EXECUTION)
 //   F1 or H : show or hide this map
 #include <Qt>
 #include <QString>
@@ -25,7 +25,7 @@
 namespace flexirob::ui {
 
 struct TeleopAction {
-  enum class Kind { kTask, kJoint, kTrigger, kButton, kToggleMap };
+  enum class Kind { kTask, kJoint, kTrigger, kButton, kToggleMap, kReplay };
   Kind kind = Kind::kTask;
   int index = 0;   ///< task axis (0..2) or joint (0-based)
   int sign = 1;    ///< +1 or −1 for task and joint keys

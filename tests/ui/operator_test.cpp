@@ -164,6 +164,81 @@ class OperatorTest : public QObject {
     QTRY_VERIFY(panel->stageLabel()->text().contains(QStringLiteral("EXECUTION")));
   }
 
+  // A novice reads what to do next in the panel at every step, and in EXECUTION replays the
+  // motion taught in PROGRAMMING with the panel's Replay button or F9.
+  void theHintSaysWhatToDoNextAndATeachInIsReplayed() {
+    MainWindow window("lwr4", "empty", quietOptions());
+    if (canDraw()) window.show();
+    waitRunning(window);
+    flexirob::ui::StagePanel* panel = window.stagePanel();
+    const auto& s = window.live()->snapshot();
+    const auto hintSays = [panel](const char* words) { return panel->hintLabel()->text().contains(QLatin1String(words)); };
+    QTRY_VERIFY(hintSays("Start configuration (F5)"));
+    QTest::keyClick(&window, Qt::Key_F5);
+    QTRY_COMPARE(s.sub_stage, SubStage::kWaiting);
+    // The simulated arm is touched with the mouse; nothing was taught yet.
+    QTRY_VERIFY(hintSays("First area") && hintSays("pull a link with the mouse"));
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
+    QTRY_VERIFY(hintSays("keep still"));
+    QTest::keyPress(&window, Qt::Key_Right);
+    QTest::qWait(1500);
+    QTest::keyRelease(&window, Qt::Key_Right);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
+    // Moved with the keys: the keys are what the hint offers now.
+    QTRY_VERIFY(hintSays("To record the area") && hintSays("move the arm with the keys"));
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kRecording);
+    QTest::keyPress(&window, Qt::Key_Left);
+    QTest::qWait(600);
+    QTest::keyRelease(&window, Qt::Key_Left);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(s.areas, 1);
+    QTRY_VERIFY(hintSays("Next area") && hintSays("Finish configuration (F6) to learn from 1 area."));
+    QTest::keyClick(&window, Qt::Key_F6);
+    QTRY_VERIFY_WITH_TIMEOUT(s.model_ready && s.stage == Stage::kIdle, 30000);
+    QTRY_VERIFY(hintSays("Start programming (F7)"));
+
+    // One teach-in: from where the arm is, 0.12 m along -x.
+    QTest::keyClick(&window, Qt::Key_F7);
+    QTRY_COMPARE(s.stage, Stage::kProgramming);
+    QVERIFY(!panel->replayButton()->isEnabled());
+    QTRY_VERIFY(hintSays("To teach a motion"));
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kTeachIn);
+    QTRY_VERIFY(hintSays("Recording the motion"));
+    QTest::keyPress(&window, Qt::Key_Left);
+    QTest::qWait(1500);
+    QTest::keyRelease(&window, Qt::Key_Left);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(s.teach_ins, 1);
+    QTRY_VERIFY(s.teach_in_data != nullptr && s.teach_in_data->size() == 1);
+    const Eigen::MatrixXd taught = s.teach_in_data->front();
+    const Eigen::Vector3d start = taught.col(0);
+    const Eigen::Vector3d end = taught.col(taught.cols() - 1);
+    QVERIFY2((end - start).norm() > 0.05, "the teach-in is too short to tell a replay");
+
+    QTest::keyClick(&window, Qt::Key_F8);
+    QTRY_COMPARE(s.stage, Stage::kExecution);
+    QTRY_VERIFY(panel->replayButton()->isEnabled());
+    QCOMPARE(panel->chosenTeachIn(), 0);
+    QTRY_VERIFY(hintSays("Replay a teach-in (F9)"));
+    QVERIFY((tip(window) - end).norm() < 0.03);
+    // F9 replays: the tip goes back to the teach-in's start, then along it to its end.
+    QTest::keyClick(&window, Qt::Key_F9);
+    QTRY_VERIFY_WITH_TIMEOUT((tip(window) - start).norm() < 0.01, 20000);
+    QTRY_VERIFY_WITH_TIMEOUT(s.execution_done && (tip(window) - end).norm() < 0.01, 20000);
+    // So does the button.
+    QTest::mouseClick(panel->replayButton(), Qt::LeftButton);
+    QTRY_VERIFY_WITH_TIMEOUT((tip(window) - start).norm() < 0.01, 20000);
+    QTRY_VERIFY_WITH_TIMEOUT(s.execution_done && (tip(window) - end).norm() < 0.01, 20000);
+  }
+
   void aRefusedRequestIsShownAsAWarning() {
     MainWindow window("lwr4", "empty", quietOptions());
     waitRunning(window);
@@ -509,6 +584,8 @@ class OperatorTest : public QObject {
     QCOMPARE(TeleopKeys::actionOf(Qt::Key_Space)->trigger, flexirob::app::Trigger::kOnAffected);
     QCOMPARE(TeleopKeys::actionOf(Qt::Key_Return)->trigger, flexirob::app::Trigger::kOnConverged);
     QCOMPARE(TeleopKeys::actionOf(Qt::Key_F7)->button, Button::kStartProgramming);
+    QVERIFY(TeleopKeys::actionOf(Qt::Key_F9)->kind == TeleopAction::Kind::kReplay);
+    QVERIFY(TeleopKeys::keyMapText(7).contains(QStringLiteral("F9 replay")));
     QVERIFY(!TeleopKeys::actionOf(Qt::Key_Z).has_value());
     QVERIFY(keys.release(Qt::Key_Right));
     QCOMPARE(keys.taskVelocity().x(), 0.0);

@@ -102,6 +102,10 @@ class ReviewWindowTest : public QObject {
     QCOMPARE(window.stageAt(3.0), std::string("CONFIGURATION / RECORDING"));
     QCOMPARE(window.stageAt(5.0), std::string("PROGRAMMING / TEACH-IN"));
     QVERIFY(window.plots()->sampleCount() > 1000);
+    // A recording holds no desired tip position: its error plot is another error than the live
+    // one, and its title says so.
+    const ui::PlotPanel live_plots;
+    QVERIFY(window.plots()->taskErrorPlot()->title() != live_plots.taskErrorPlot()->title());
     // Joint 1 plotted within its limits: at t = 0.5 s the swing is at its top.
     const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
     const auto& limits = model.joints()[0].limits;
