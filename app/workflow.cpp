@@ -512,8 +512,12 @@ void Workflow::onTrigger(Trigger trigger) {
     case SubStage::kRecording:
       if (affected) return;
       emit(WorkflowEvent::Kind::kTrigger, toString(trigger), from);
-      finishArea();
-      setState(stage_, SubStage::kWaiting);
+      {
+        const int created = finishArea();
+        setState(stage_, SubStage::kWaiting);
+        // After the stage's event: the GUI clears warnings at a new stage.
+        if (created >= 0) warnIfTheAreaIsSmall(created);
+      }
       break;
     case SubStage::kTeachIn: {
       if (affected) return;
@@ -568,10 +572,10 @@ void Workflow::finishTeachIn() {
   emit(WorkflowEvent::Kind::kTeachIn, "teach_in", detail.str(), static_cast<int>(teach_ins_.size()) - 1);
 }
 
-void Workflow::finishArea() {
+int Workflow::finishArea() {
   if (recording_samples_ == 0) {
     emit(WorkflowEvent::Kind::kWarning, "empty_recording", "the recording held no sample; no area created");
-    return;
+    return -1;
   }
   // The one allocation of a RECORDING: its samples leave the preallocated buffer.
   TrainingArea area;
@@ -604,6 +608,20 @@ void Workflow::finishArea() {
          << (created.X.cols() == 1 ? " sample" : " samples") << ", centre (" << created.centre.x() << ", "
          << created.centre.y() << ", " << created.centre.z() << ") m";
   emit(WorkflowEvent::Kind::kAreaCreated, created.name, detail.str(), index);
+  return index;
+}
+
+void Workflow::warnIfTheAreaIsSmall(int index) {
+  const TrainingArea& area = areas_[static_cast<std::size_t>(index)];
+  // An area recorded without moving the tip (a tutor who let go at once, a keyboard user whose
+  // 2 s of stillness ran out) teaches one point: its confidence is nil a few millimetres away.
+  // The thesis' participants recorded from almost no spread to circles of 32 cm (Fig. 4.10).
+  const double extent = (area.X.colwise() - area.centre).colwise().norm().maxCoeff();
+  if (extent >= kSmallestAreaExtent * arm_scale_.length) return;
+  std::ostringstream warning;
+  warning << std::fixed << std::setprecision(1) << area.name << " spans only " << extent * 1e3
+          << " mm: move the tip around inside the area while RECORDING (a few centimetres), or re-teach it";
+  emit(WorkflowEvent::Kind::kWarning, "small_area", warning.str(), index);
 }
 
 void Workflow::rebuildConfidence() {
@@ -737,14 +755,15 @@ std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& even
   // with it (the posture is no longer taught) and moves the later areas down by one.
   std::vector<std::pair<const WorkflowEvent*, int>> standing;
   std::vector<const WorkflowEvent*> this_recordings_limits;
-  const auto isJointLimit = [](const auto& e) { return e.first->name == "joint_limit"; };
+  // A small area's warning follows its area the same way, said once the area is made.
+  const auto ofTheArea = [](const auto& e) { return e.first->name == "joint_limit" || e.first->name == "small_area"; };
   const std::string posed = std::string(toString(Stage::kConfiguration)) + "/" + toString(SubStage::kPosed);
   for (const WorkflowEvent& event : events) {
     if (event.kind == WorkflowEvent::Kind::kModelLearned) {
       std::erase_if(standing, [](const auto& e) { return e.first->name == "transition_inconsistent"; });
     }
     if (event.kind == WorkflowEvent::Kind::kAreaRemoved && event.area >= 0) {
-      std::erase_if(standing, [&](const auto& e) { return isJointLimit(e) && e.second == event.area; });
+      std::erase_if(standing, [&](const auto& e) { return ofTheArea(e) && e.second == event.area; });
       for (auto& e : standing) {
         if (e.second > event.area) --e.second;
       }
@@ -755,7 +774,7 @@ std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& even
     const bool new_pose = event.kind == WorkflowEvent::Kind::kStage && event.name == posed;
     if (event.kind == WorkflowEvent::Kind::kButton || new_pose) this_recordings_limits.clear();
     if (event.kind == WorkflowEvent::Kind::kAreaCreated && event.area >= 0) {
-      std::erase_if(standing, [&](const auto& e) { return isJointLimit(e) && e.second == event.area; });
+      std::erase_if(standing, [&](const auto& e) { return ofTheArea(e) && e.second == event.area; });
       for (const WorkflowEvent* limit : this_recordings_limits) standing.emplace_back(limit, event.area);
       this_recordings_limits.clear();
     }

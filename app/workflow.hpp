@@ -50,6 +50,10 @@
 
 namespace flexirob::app {
 
+/// The least distance [m] a RECORDING's tip is expected to move from where it began, on the
+/// LWR IV (times ArmScale::length on another arm); a smaller area is warned about.
+inline constexpr double kSmallestAreaExtent = 0.01;
+
 enum class Stage { kIdle, kConfiguration, kProgramming, kExecution };
 enum class SubStage { kNone, kWaiting, kApproaching, kPosed, kRecording, kTeachIn };
 enum class Button { kStartConfiguration, kFinishedConfiguration, kStartProgramming, kFinishedProgramming };
@@ -295,7 +299,9 @@ class Workflow {
   void emit(WorkflowEvent::Kind kind, std::string name, std::string detail, int area = -1);
   RequestResult refuse(const std::string& request, std::string reason);
   void onTrigger(Trigger trigger);
-  void finishArea();
+  /// Stores the RECORDING as an area; its index, or -1 when it held no sample.
+  int finishArea();
+  void warnIfTheAreaIsSmall(int index);
   void finishTeachIn();
   void checkJointLimits(const Eigen::VectorXd& q_fixed, int area);
   void startLearning();

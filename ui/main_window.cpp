@@ -757,14 +757,19 @@ void MainWindow::handleEvents() {
       chime_->play();
       ++chimes_;
     }
+    if (event.kind == K::kRefused && event.name == "plan") clearGoal();  // the ball was drawn at the click
     if (event.kind == K::kWarning || event.kind == K::kRefused) {
       last_warning_ = QString::fromStdString(event.detail.empty() ? event.name : event.detail);
       stage_panel_->showWarning(last_warning_);
       showStatusMessage(statusBar(), last_warning_, 15000);
     } else if (event.kind == K::kStage || event.kind == K::kButton) {
-      // A new stage: the old warning no longer applies to what the operator sees.
+      // A new stage: the old warning no longer applies to what the operator sees, in the panel
+      // or in the status bar.
+      if (!last_warning_.isEmpty() && fullStatusMessage(statusBar()) == last_warning_) statusBar()->clearMessage();
       last_warning_.clear();
       stage_panel_->clearWarning();
+      // Out of EXECUTION a goal and its path are no motion any more.
+      if (event.kind == K::kStage && event.name.rfind(app::toString(app::Stage::kExecution), 0) != 0) clearGoal();
     } else if (event.kind == K::kCheck || event.kind == K::kModelLearned || event.kind == K::kAreaCreated) {
       showStatusMessage(statusBar(), QString::fromStdString(event.detail.empty() ? event.name : event.detail), 10000);
     }
@@ -1228,7 +1233,28 @@ bool MainWindow::setGoal(const Eigen::Vector3d& goal_W) {
   return posted;
 }
 
+void MainWindow::clearGoal() {
+  if (!goal_ && !goal_moving_) return;
+  goal_.reset();
+  goal_moving_ = false;
+  overlays_->setContent(render::OverlayLayer::kGoalAndPath, nullptr);
+  shown_path_version_ = live_ ? live_->snapshot().path_version : shown_path_version_;
+  view_->requestFrame();
+}
+
 void MainWindow::updateGoalAndPath(const LiveSnapshot& s) {
+  // The motion to a goal ends: say where the tip came to rest against it.
+  if (goal_ && s.stage == app::Stage::kExecution) {
+    if (!s.execution_done) {
+      goal_moving_ = true;
+    } else if (goal_moving_) {
+      goal_moving_ = false;
+      const double gap = std::sqrt((s.p_WT[0] - goal_->x()) * (s.p_WT[0] - goal_->x()) +
+                                   (s.p_WT[1] - goal_->y()) * (s.p_WT[1] - goal_->y()) +
+                                   (s.p_WT[2] - goal_->z()) * (s.p_WT[2] - goal_->z()));
+      showStatusMessage(statusBar(), tr("Goal reached: the tip came to rest %1 mm from it").arg(gap * 1e3, 0, 'f', 1), 10000);
+    }
+  }
   if (s.path_version == shown_path_version_) return;
   shown_path_version_ = s.path_version;
   overlays_->setContent(render::OverlayLayer::kGoalAndPath, nullptr);

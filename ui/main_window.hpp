@@ -196,6 +196,8 @@ class MainWindow : public QMainWindow {
   /// Rebuilds the confidence slices when the model or the heights changed (or `force`).
   void updateConfidence(const LiveSnapshot& snapshot, bool force);
   void updateGoalAndPath(const LiveSnapshot& snapshot);
+  /// Takes the goal and its path out of the view (left EXECUTION, or the plan was refused).
+  void clearGoal();
   void placeViewLabels();
   /// Records the ITM graph into the session when it changed (at most once per second, and at the end).
   void recordItm(const LiveSnapshot& snapshot, bool final);
@@ -265,6 +267,7 @@ class MainWindow : public QMainWindow {
   int confidence_slices_ = 0;
   bool operator_heights_ = false;  // the operator chose the slice heights: no automatic centring
   std::optional<Eigen::Vector3d> goal_;
+  bool goal_moving_ = false;  // the arm is on its way to goal_
   QElapsedTimer itm_record_clock_;
   std::size_t recorded_itm_bytes_ = 0;  ///< size of the last ITM snapshot recorded
   std::vector<QPointer<ReviewWindow>> reviews_;

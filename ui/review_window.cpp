@@ -1,5 +1,7 @@
 #include "ui/review_window.hpp"
 
+#include "ui/stage_panel.hpp"
+
 #include <QComboBox>
 #include <QDateTime>
 #include <QDockWidget>
@@ -23,6 +25,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "app/session_reader.hpp"
 #include "app/session_teaching.hpp"
@@ -71,17 +74,22 @@ std::string bandLabel(const app::StageRecord& stage) {
 }  // namespace
 
 QColor stageColor(const std::string& label) {
-  // The sub-stage decides where there is one (as in the stage panel), else the stage.
-  const std::string key = label.substr(label.find(" / ") == std::string::npos ? 0 : label.find(" / ") + 3);
-  if (key == "APPROACHING") return {240, 180, 60};
-  if (key == "RECORDING") return {220, 80, 70};
-  if (key == "TEACH-IN") return {150, 90, 200};
-  if (key == "EXECUTION") return {60, 170, 90};
-  if (key == "POSED") return {245, 215, 120};
-  if (key == "WAITING" || key == "IDLE") return {190, 195, 205};
-  if (key == "CONFIGURATION") return {90, 150, 220};
-  if (key == "PROGRAMMING") return {170, 130, 220};
-  const auto hue = static_cast<int>(std::hash<std::string>{}(key) % 360U);
+  // The live window's colours (StagePanel::stageColor), so that a stage reads alike in both.
+  const std::size_t slash = label.find(" / ");
+  const std::string stage_name = label.substr(0, slash);
+  const std::string sub_name = slash == std::string::npos ? std::string() : label.substr(slash + 3);
+  std::optional<app::Stage> stage;
+  for (const app::Stage candidate : {app::Stage::kIdle, app::Stage::kConfiguration, app::Stage::kProgramming, app::Stage::kExecution}) {
+    if (stage_name == app::toString(candidate)) stage = candidate;
+  }
+  std::optional<app::SubStage> sub_stage;
+  for (const app::SubStage candidate : {app::SubStage::kNone, app::SubStage::kWaiting, app::SubStage::kApproaching,
+                                        app::SubStage::kPosed, app::SubStage::kRecording, app::SubStage::kTeachIn}) {
+    if (sub_name == app::toString(candidate)) sub_stage = candidate;
+  }
+  if (stage && sub_stage) return StagePanel::stageColor(*stage, *sub_stage);
+  // A stage this version does not know (a newer recording): a colour of its own.
+  const auto hue = static_cast<int>(std::hash<std::string>{}(label) % 360U);
   return QColor::fromHsv(hue, 110, 230);
 }
 
@@ -140,7 +148,7 @@ void Timeline::paintEvent(QPaintEvent* /*event*/) {
       shown = metrics.elidedText(label.section(QStringLiteral(" / "), -1), Qt::ElideRight, static_cast<int>(text_area.width()));
     }
     if (text_area.width() > 20.0 && shown != QStringLiteral("…")) {
-      painter.setPen(QColor(30, 30, 35));
+      painter.setPen(Qt::white);  // on the stage colours, as the live window's banner writes
       painter.drawText(text_area, Qt::AlignVCenter | Qt::AlignLeft, shown);
     }
   }
@@ -561,7 +569,8 @@ void ReviewWindow::updateConfidence(bool force) {
   const std::vector<render::ConfidenceGrid> slices = confidenceSlices(model, confidence_panel_->settings());
   world_->overlays().setContent(render::OverlayLayer::kConfidence, makeConfidenceOverlay(slices));
   confidence_slices_ = static_cast<int>(slices.size());
-  confidence_panel_->setStatus(QStringLiteral("%1 area(s) complete at this moment").arg(model.areas()));
+  confidence_panel_->setStatus((model.areas() == 1 ? QStringLiteral("1 area complete at this moment")
+                                                     : QStringLiteral("%1 areas complete at this moment").arg(model.areas())));
 }
 
 void ReviewWindow::updateLabels() {
@@ -570,7 +579,7 @@ void ReviewWindow::updateLabels() {
   stage_label_->setText(QString::fromStdString(stage));
   const QColor color = stageColor(stage);
   stage_label_->setStyleSheet(stage.empty() ? QString()
-                                            : QStringLiteral("background: %1; padding: 2px 8px;").arg(color.name()));
+                                            : QStringLiteral("background: %1; color: white; padding: 2px 8px;").arg(color.name()));
 }
 
 std::string ReviewWindow::stageAt(double time) const {

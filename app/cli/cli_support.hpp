@@ -15,7 +15,9 @@
 
 #include "app/cli/number_list.hpp"
 #include "app/file_output.hpp"
+#include "app/session_schema.hpp"
 #include "planning/itm.hpp"
+#include "robot/errors.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/scene.hpp"
 
@@ -96,6 +98,17 @@ int jsonInteger(const Json& value, const std::string& what);
 /// Whether a file is JSON text (its first non-blank character opens an object or an array),
 /// as opposed to a recording in SQLite; leaves the stream at that character.
 bool startsAsJson(std::istream& in);
+
+/// Runs `read` on the recorded session `file`: a database SQLite finds damaged while reading
+/// (a corrupt page, a row of the wrong size) becomes a one-line InputError naming the file.
+template <class Read>
+auto readingSession(const std::string& file, Read&& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const app::SqliteError& error) {
+    throw InputError("session file " + file + " is damaged: " + error.what());
+  }
+}
 
 /// Runs the CLI on argv; prints the JSON result on stdout or a one-line error on stderr.
 /// Returns the process exit code (0 success, 1 the command ran but failed, 2 bad input).

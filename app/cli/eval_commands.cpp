@@ -167,7 +167,7 @@ Session loadRecordedSession(const std::string& file) {
 Session loadSession(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError("--session: cannot read '" + file + "'");
-  if (!startsAsJson(in)) return loadRecordedSession(file);
+  if (!startsAsJson(in)) return readingSession(file, [&file] { return loadRecordedSession(file); });
   Json json;
   try {
     json = Json::parse(in);

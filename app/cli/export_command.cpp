@@ -249,7 +249,7 @@ void registerExportCommand(CLI::App& app, CommandRunner& runner) {
   command->add_option("--sample-period", options->sample_period, "with --stream: seconds between positions (the workflow's sample period)")
       ->check(finiteRange(1e-4, 10.0))
       ->capture_default_str();
-  command->callback([&runner, options] { runner.select([options] { return exportSession(*options); }); });
+  command->callback([&runner, options] { runner.select([options] { return readingSession(options->session, [options] { return exportSession(*options); }); }); });
 }
 
 }  // namespace flexirob::cli

@@ -219,7 +219,7 @@ SessionOverlay sessionFromRecording(const std::string& file) {
 SessionOverlay loadSessionOverlay(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError("--session: cannot read '" + file + "'");
-  if (!startsAsJson(in)) return sessionFromRecording(file);
+  if (!startsAsJson(in)) return readingSession(file, [&file] { return sessionFromRecording(file); });
   in.close();
   return sessionFromJson(readJsonFile(file, "--session"), file);
 }

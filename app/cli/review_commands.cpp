@@ -307,7 +307,7 @@ void registerReviewCommands(CLI::App& app, CommandRunner& runner) {
       if (!study->csv_dir.empty() || !study->plot.empty() || !study->centres.empty()) {
         throw InputError("review: --csv-dir, --plot and --centres go with --study");
       }
-      runner.select([session] { return review(*session); });
+      runner.select([session] { return readingSession(*session, [session] { return review(*session); }); });
     } else {
       runner.select([study] { return reviewStudy(*study); });
     }

@@ -83,8 +83,9 @@ void run(Workflow& workflow, double seconds) {
   for (int i = 0; i < steps; ++i) workflow.step();
 }
 
-// One CONFIGURATION area through the real triggers: touch, move, rest, touch, circle, rest.
-void teachArea(Workflow& workflow, ScriptedBackend& backend, const Eigen::VectorXd& q_fixed) {
+// One CONFIGURATION area through the real triggers: touch, move, rest, touch, circle (of
+// `circle` rad in A1 and A4; none: the tutor let go at once), rest.
+void teachArea(Workflow& workflow, ScriptedBackend& backend, const Eigen::VectorXd& q_fixed, double circle = 0.05) {
   backend.push(3.0);  // touched at rest: on_affected
   run(workflow, 0.01);
   EXPECT_EQ(workflow.subStage(), SubStage::kApproaching);
@@ -97,9 +98,9 @@ void teachArea(Workflow& workflow, ScriptedBackend& backend, const Eigen::Vector
   EXPECT_EQ(workflow.subStage(), SubStage::kRecording);
   for (int i = 0; i < 40; ++i) {
     const Eigen::Index n = q_fixed.size();
-    const Eigen::VectorXd q = q_fixed + 0.05 * std::sin(0.3 * i) * Eigen::VectorXd::Unit(n, 0) +
-                              0.05 * std::cos(0.3 * i) * Eigen::VectorXd::Unit(n, 3);
-    backend.move(q, 0.3);
+    const Eigen::VectorXd q = q_fixed + circle * std::sin(0.3 * i) * Eigen::VectorXd::Unit(n, 0) +
+                              circle * std::cos(0.3 * i) * Eigen::VectorXd::Unit(n, 3);
+    backend.move(q, circle > 0.0 ? 0.3 : 0.0);
     run(workflow, 0.02);
   }
   backend.move(q_fixed, 0.0);
@@ -531,6 +532,39 @@ TEST(Workflow, WarnsWhenThePostureIsNearAJointLimit) {
   EXPECT_NE(details[1].find("at area 'shelf'"), std::string::npos) << details[1];
   ASSERT_EQ(workflow.areas().size(), 2U);
   EXPECT_EQ(workflow.areas()[1].name, "shelf") << "the name the warning gave it";
+}
+
+// A recording in which the tip never moved makes an area of one point; the operator is told
+// after the stage's event (a window clears its warnings at a new stage), and the warning goes
+// when the area is taught again with motion.
+TEST(Workflow, WarnsOfAnAreaRecordedWithoutMovingUntilItIsRetaught) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  teachArea(workflow, f.backend, posture(0.0), 0.0);
+  teachArea(workflow, f.backend, posture(0.6));
+  const auto smallAreaWarnings = [&workflow] {
+    std::vector<std::string> details;
+    for (const auto& event : workflow.events()) {
+      if (event.kind == WorkflowEvent::Kind::kWarning && event.name == "small_area") details.push_back(event.detail);
+    }
+    return details;
+  };
+  ASSERT_EQ(smallAreaWarnings().size(), 1U) << "the second area was circled";
+  EXPECT_EQ(smallAreaWarnings()[0].rfind("area_1 spans only 0.0 mm", 0), 0U) << smallAreaWarnings()[0];
+  const auto& events = workflow.events();
+  const auto warning = std::find_if(events.begin(), events.end(), [](const auto& e) { return e.name == "small_area"; });
+  const auto created = std::find_if(events.begin(), events.end(), [](const auto& e) { return e.kind == WorkflowEvent::Kind::kAreaCreated; });
+  const auto waiting = std::find_if(created, events.end(), [](const auto& e) { return e.kind == WorkflowEvent::Kind::kStage; });
+  ASSERT_NE(waiting, events.end());
+  EXPECT_EQ(waiting->name, "CONFIGURATION/WAITING");
+  EXPECT_GT(warning - events.begin(), waiting - events.begin()) << "said before the stage's event, which clears it";
+  EXPECT_EQ(standingWarnings(events), std::vector<std::string>{smallAreaWarnings()[0]});
+
+  ASSERT_TRUE(workflow.reteachArea(0));
+  teachArea(workflow, f.backend, posture(0.0));
+  EXPECT_EQ(smallAreaWarnings().size(), 1U);
+  EXPECT_TRUE(standingWarnings(workflow.events()).empty());
 }
 
 // The joint-limit warnings of an area taught in posture q.

@@ -8,7 +8,10 @@
 #include <filesystem>
 #include <fstream>
 
+#include <sqlite3.h>
+
 #include "app/session_recorder.hpp"
+#include "app/session_schema.hpp"
 #include "cli_test_support.hpp"
 
 namespace flexirob::app {
@@ -147,6 +150,22 @@ TEST_F(ReviewCli, RefusesTruncatedForeignAndMissingFilesWithOneLine) {
   const auto empty_study = runCliBinary("review --study " + (dir_ / "nothing").string());
   EXPECT_NE(empty_study.exit_code, 0);
   EXPECT_EQ(empty_study.err.rfind("error: ", 0), 0U) << empty_study.err;
+}
+
+// A row SQLite reads but the reader cannot take (a sample's posture of 2 bytes, as a damaged
+// disk or a hand edit leaves it): the header and the schema are intact, so the damage shows
+// only while the rows are read, and the error names the file.
+TEST_F(ReviewCli, ASessionDamagedInsideIsNamedWithOneLine) {
+  const fs::path file = writeSession("damaged.flexirob", "dan", 0.0);
+  {
+    SqliteDatabase database(file.string(), SQLITE_OPEN_READWRITE);
+    database.exec("UPDATE sample SET q = x'0102' WHERE id = (SELECT MIN(id) FROM sample)");
+  }
+  const auto result = runCliBinary("review --session " + file.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_EQ(result.err.rfind("error: session file " + file.string() + " is damaged: ", 0), 0U) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_TRUE(result.out.empty()) << result.out;
 }
 
 }  // namespace

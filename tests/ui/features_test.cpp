@@ -7,6 +7,7 @@
 #include <QDockWidget>
 #include <QFile>
 #include <QGuiApplication>
+#include <QLabel>
 #include <QLineSeries>
 #include <QMouseEvent>
 #include <QSpinBox>
@@ -28,10 +29,12 @@
 #include "ui/goal_picking.hpp"
 #include "ui/live_teaching.hpp"
 #include "ui/main_window.hpp"
+#include "ui/status_message.hpp"
 #include "tests/ui/ui_test_support.hpp"
 #include "ui/osg_view.hpp"
 #include "ui/plot_panel.hpp"
 #include "ui/review_window.hpp"
+#include "ui/stage_panel.hpp"
 
 using flexirob::app::Stage;
 using flexirob::app::SubStage;
@@ -279,6 +282,13 @@ class FeaturesTest : public QObject {
 
     // The goal: the explored node farthest from the tip, Ctrl+clicked where it is drawn (or set).
     QVERIFY(s.itm != nullptr);
+    // The node nearest the tip: a second goal, on the way back.
+    const Eigen::Vector3d tip_before = tip(s);
+    Eigen::Vector3d start_tip = s.itm->prototype(s.itm->nodeIds().front()).head<3>();
+    for (const int id : s.itm->nodeIds()) {
+      const Eigen::Vector3d p = s.itm->prototype(id).head<3>();
+      if ((p - tip_before).norm() < (start_tip - tip_before).norm()) start_tip = p;
+    }
     Eigen::Vector3d goal = tip(s);
     for (const int id : s.itm->nodeIds()) {
       const Eigen::Vector3d p = s.itm->prototype(id).head<3>();
@@ -313,6 +323,25 @@ class FeaturesTest : public QObject {
     // Executed: the tip arrives at the goal.
     QTRY_VERIFY_WITH_TIMEOUT((tip(s) - goal).norm() < 0.02, 20000);
     screenshot(window, "07-goal.png");
+    // The status bar says the motion ended, not that it is still being planned.
+    QTRY_VERIFY_WITH_TIMEOUT(flexirob::ui::fullStatusMessage(window.statusBar()).startsWith(QStringLiteral("Goal reached")), 20000);
+    // A goal 2 m above everything explored is refused: its ball goes with the refusal.
+    QVERIFY(window.setGoal(goal + Eigen::Vector3d(0.0, 0.0, 2.0)));
+    QTRY_VERIFY(!window.goal().has_value());
+    window.mirror();
+    QCOMPARE(window.overlays().layer(flexirob::render::OverlayLayer::kGoalAndPath)->getNumChildren(), 0U);
+    QVERIFY(!window.stagePanel()->warningLabel()->text().isEmpty());
+    // Another goal, then CONFIGURATION again: the goal and its path are no motion any more.
+    const std::uint64_t before_second = s.path_version;
+    QVERIFY(window.setGoal(start_tip));
+    QTRY_VERIFY_WITH_TIMEOUT(s.path_version != before_second, 5000);
+    window.mirror();
+    QVERIFY(window.overlays().layer(flexirob::render::OverlayLayer::kGoalAndPath)->getNumChildren() >= 2);
+    QTest::keyClick(&window, Qt::Key_F5);
+    QTRY_COMPARE(s.stage, Stage::kConfiguration);
+    QTRY_VERIFY(!window.goal().has_value());
+    window.mirror();
+    QCOMPARE(window.overlays().layer(flexirob::render::OverlayLayer::kGoalAndPath)->getNumChildren(), 0U);
 
     // The run's recording in the review window: the graph and the slices of the end.
     QTemporaryDir directory;

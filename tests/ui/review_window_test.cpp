@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "app/session_reader.hpp"
+#include "ui/stage_panel.hpp"
 #include "app/session_recorder.hpp"
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
@@ -159,7 +160,16 @@ class ReviewWindowTest : public QObject {
     }
     const int cursor_x = static_cast<int>(std::round(window.timeline()->xOf(5.5) * strip.devicePixelRatio()));
     const QColor cursor = strip.pixelColor(cursor_x, y);
-    QVERIFY(cursor.red() > 150 && cursor.green() < 80);
+    QVERIFY(cursor.red() > 150 && cursor.green() < 80 && cursor.blue() < 80);  // not the magenta band under it
+    // A stage has the live window's colour, so that a reviewer reads both windows alike.
+    using flexirob::app::Stage;
+    using flexirob::app::SubStage;
+    QCOMPARE(ui::stageColor("EXECUTION").rgb(), ui::StagePanel::stageColor(Stage::kExecution, SubStage::kNone).rgb());
+    QCOMPARE(ui::stageColor("CONFIGURATION / WAITING").rgb(),
+             ui::StagePanel::stageColor(Stage::kConfiguration, SubStage::kWaiting).rgb());
+    QCOMPARE(ui::stageColor("PROGRAMMING / WAITING").rgb(),
+             ui::StagePanel::stageColor(Stage::kProgramming, SubStage::kWaiting).rgb());
+    QVERIFY(ui::stageColor("LATER-STAGE") != ui::stageColor("IDLE"));
     if (!qEnvironmentVariableIsEmpty("FLEXIROB_REVIEW_SCREENSHOT")) {
       window.grab().save(qEnvironmentVariable("FLEXIROB_REVIEW_SCREENSHOT"));
     }
