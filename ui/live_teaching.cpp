@@ -118,6 +118,10 @@ bool LiveTeaching::planTo(const Eigen::Vector3d& goal) { return post(app::Workfl
 
 bool LiveTeaching::replayTeachIn(int teach_in) { return post(app::WorkflowRequest::replayTeachIn(teach_in)); }
 
+bool LiveTeaching::removeArea(int area) { return post(app::WorkflowRequest::removeArea(area)); }
+
+bool LiveTeaching::reteachArea(int area) { return post(app::WorkflowRequest::reteachArea(area)); }
+
 void LiveTeaching::tick() {
   if (grab_body_ > 0) sendSpring();
 }

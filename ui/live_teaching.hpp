@@ -86,6 +86,9 @@ class LiveTeaching {
   bool planTo(const Eigen::Vector3d& goal);
   /// EXECUTION: replay teach-in `teach_in` (0-based).
   bool replayTeachIn(int teach_in);
+  /// Removes area `area` (0-based), or has the next RECORDING replace it.
+  bool removeArea(int area);
+  bool reteachArea(int area);
   /// Display tick: re-evaluates the mouse spring at the newest posture.
   void tick();
 

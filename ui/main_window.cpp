@@ -235,6 +235,14 @@ void MainWindow::buildDocks() {
     if (live_) live_->replayTeachIn(teach_in);
     view_->setFocus();
   });
+  connect(stage_panel_, &StagePanel::removeAreaRequested, this, [this](int area) {
+    if (live_) live_->removeArea(area);
+    view_->setFocus();
+  });
+  connect(stage_panel_, &StagePanel::reteachAreaRequested, this, [this](int area) {
+    if (live_) live_->reteachArea(area);
+    view_->setFocus();
+  });
 
   joint_panel_ = new JointPanel;
   auto* scroll = new QScrollArea;
@@ -770,6 +778,11 @@ void MainWindow::handleEvents() {
       stage_panel_->clearWarning();
       // Out of EXECUTION a goal and its path are no motion any more.
       if (event.kind == K::kStage && event.name.rfind(app::toString(app::Stage::kExecution), 0) != 0) clearGoal();
+      if (event.kind == K::kButton && event.name == "reteach_area") {
+        showStatusMessage(statusBar(), tr("The next area you record replaces '%1'").arg(QString::fromStdString(event.detail)), 15000);
+      }
+    } else if (event.kind == K::kAreaRemoved) {
+      showStatusMessage(statusBar(), tr("Area '%1' removed").arg(QString::fromStdString(event.detail)), 10000);
     } else if (event.kind == K::kCheck || event.kind == K::kModelLearned || event.kind == K::kAreaCreated) {
       showStatusMessage(statusBar(), QString::fromStdString(event.detail.empty() ? event.name : event.detail), 10000);
     }

@@ -5,6 +5,7 @@
 #include <QFontMetrics>
 #include <QLabel>
 #include <QProgressBar>
+#include <QComboBox>
 #include <QHBoxLayout>
 #include <QPushButton>
 #include <QSpinBox>
@@ -85,6 +86,38 @@ StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
   replay_row->addWidget(replay_button_);
   layout->addLayout(replay_row);
 
+  // One area undone: removed (the map is learned again from the rest) or recorded again (the
+  // next RECORDING replaces it).
+  auto* area_row = new QHBoxLayout;
+  area_choice_ = new QComboBox;
+  area_choice_->setObjectName(QStringLiteral("area_choice"));
+  area_choice_->setFocusPolicy(Qt::ClickFocus);
+  area_choice_->setToolTip(tr("The training area to remove or to record again."));
+  area_choice_->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+  area_choice_->setMinimumContentsLength(6);
+  remove_area_button_ = new QPushButton(tr("Remove"));
+  remove_area_button_->setObjectName(QStringLiteral("remove_area"));
+  remove_area_button_->setToolTip(tr("Forget this area; the redundancy resolution is learned again from the others."));
+  reteach_area_button_ = new QPushButton(tr("Re-teach"));
+  reteach_area_button_->setObjectName(QStringLiteral("reteach_area"));
+  reteach_area_button_->setToolTip(tr("The next area you record (in CONFIGURATION) replaces this one."));
+  for (QWidget* widget : {static_cast<QWidget*>(area_choice_), static_cast<QWidget*>(remove_area_button_),
+                          static_cast<QWidget*>(reteach_area_button_)}) {
+    widget->setEnabled(false);
+  }
+  remove_area_button_->setFocusPolicy(Qt::NoFocus);
+  reteach_area_button_->setFocusPolicy(Qt::NoFocus);
+  connect(remove_area_button_, &QPushButton::clicked, this, [this] {
+    if (chosenArea() >= 0) Q_EMIT removeAreaRequested(chosenArea());
+  });
+  connect(reteach_area_button_, &QPushButton::clicked, this, [this] {
+    if (chosenArea() >= 0) Q_EMIT reteachAreaRequested(chosenArea());
+  });
+  area_row->addWidget(area_choice_, 1);
+  area_row->addWidget(remove_area_button_);
+  area_row->addWidget(reteach_area_button_);
+  layout->addLayout(area_row);
+
   learning_bar_ = new QProgressBar;
   learning_bar_->setObjectName(QStringLiteral("learning_bar"));
   learning_bar_->setFormat(tr("learning q_c(x)…"));
@@ -109,6 +142,8 @@ StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
 QPushButton* StagePanel::button(app::Button button) const { return buttons_[static_cast<int>(button)]; }
 
 int StagePanel::chosenTeachIn() const { return replay_choice_->value() - 1; }
+
+int StagePanel::chosenArea() const { return area_choice_->currentIndex(); }
 
 QColor StagePanel::stageColor(app::Stage stage, app::SubStage sub_stage) {
   using app::Stage;
@@ -203,6 +238,9 @@ void StagePanel::showNoRobot(const QString& reason) {
   for (QPushButton* button : buttons_) button->setEnabled(false);
   replay_button_->setEnabled(false);
   replay_choice_->setEnabled(false);
+  area_choice_->setEnabled(false);
+  remove_area_button_->setEnabled(false);
+  reteach_area_button_->setEnabled(false);
   hint_label_->setText(tr("Choose a robot in the Robot menu."));
   learning_bar_->setVisible(false);
   counts_label_->clear();
@@ -232,6 +270,27 @@ void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured, bool h
   const bool can_replay = robot_measured && s.running && s.stage == app::Stage::kExecution && s.teach_ins > 0;
   replay_button_->setEnabled(can_replay);
   replay_choice_->setEnabled(can_replay && s.teach_ins > 1);
+  if (s.areas_version != shown_areas_version_) {
+    shown_areas_version_ = s.areas_version;
+    const int chosen = area_choice_->currentIndex();
+    const int before = area_choice_->count();
+    area_choice_->clear();
+    if (s.area_data) {
+      for (std::size_t k = 0; k < s.area_data->size(); ++k) {
+        area_choice_->addItem(QStringLiteral("%1: %2").arg(k + 1).arg(QString::fromStdString((*s.area_data)[k].name)));
+      }
+    }
+    // A new area is the one named next; after a removal or a re-teach the choice stays put.
+    const int count = area_choice_->count();
+    area_choice_->setCurrentIndex(count > before || chosen < 0 ? count - 1 : std::min(chosen, count - 1));
+  }
+  const bool outside_recording = s.sub_stage != app::SubStage::kRecording && s.sub_stage != app::SubStage::kTeachIn;
+  const bool has_area = robot_measured && s.running && area_choice_->count() > 0 && !s.learning;
+  const bool can_remove = has_area && (s.stage == app::Stage::kIdle || (s.stage == app::Stage::kConfiguration && outside_recording));
+  const bool can_reteach = has_area && s.stage == app::Stage::kConfiguration && outside_recording;
+  area_choice_->setEnabled(can_remove || can_reteach);
+  remove_area_button_->setEnabled(can_remove);
+  reteach_area_button_->setEnabled(can_reteach);
   const QString hint = robot_measured ? nextStepHint(s, hand_can_pull) : tr("Teaching starts when the robot sends its first measurement.");
   if (hint_label_->text() != hint) hint_label_->setText(hint);
   learning_bar_->setVisible(s.learning);

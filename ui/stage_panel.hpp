@@ -4,13 +4,17 @@
 // in large, colour-coded letters (APPROACHING amber, RECORDING red, TEACH-IN magenta, EXECUTION
 // blue, ...); a progress bar while the redundancy resolution is learned; the latest tutor
 // warning; counts of areas, teach-ins and triggers; what to do next, in words; the replay of a
-// teach-in in EXECUTION. The panel only shows a LiveSnapshot and
+// teach-in in EXECUTION; an area chosen by name removed or recorded again (Sect. 4.4: a tutor
+// undoes an area that made the map worse). The panel only shows a LiveSnapshot and
 // emits the button the operator pressed; it owns no workflow.
 #include <QWidget>
+
+#include <cstdint>
 
 #include "app/workflow.hpp"
 #include "ui/live_teaching.hpp"
 
+class QComboBox;
 class QLabel;
 class QProgressBar;
 class QPushButton;
@@ -42,6 +46,11 @@ class StagePanel : public QWidget {
   QLabel* hintLabel() const { return hint_label_; }
   QPushButton* replayButton() const { return replay_button_; }
   QSpinBox* replayChoice() const { return replay_choice_; }
+  QComboBox* areaChoice() const { return area_choice_; }
+  QPushButton* removeAreaButton() const { return remove_area_button_; }
+  QPushButton* reteachAreaButton() const { return reteach_area_button_; }
+  /// The area the area controls name, 0-based (-1: none taught).
+  int chosenArea() const;
   /// The teach-in the replay control names, 0-based (the newest unless the operator chose).
   int chosenTeachIn() const;
 
@@ -56,6 +65,9 @@ class StagePanel : public QWidget {
   void buttonPressed(app::Button button);
   /// The operator asked to replay teach-in `teach_in` (0-based) in EXECUTION.
   void replayRequested(int teach_in);
+  /// The operator asked to remove area `area` (0-based), or to record it again.
+  void removeAreaRequested(int area);
+  void reteachAreaRequested(int area);
 
  private:
   QPushButton* buttons_[4] = {};
@@ -68,6 +80,10 @@ class StagePanel : public QWidget {
   QSpinBox* replay_choice_ = nullptr;
   QPushButton* replay_button_ = nullptr;
   int shown_teach_ins_ = 0;
+  QComboBox* area_choice_ = nullptr;
+  QPushButton* remove_area_button_ = nullptr;
+  QPushButton* reteach_area_button_ = nullptr;
+  std::uint64_t shown_areas_version_ = ~0ULL;
   QString shown_stage_;
 };
 

@@ -2,6 +2,7 @@
 // workflow, the keyboard moves the 9-DoF arm, a mouse drag on a link pulls it, the force arrow
 // and the key map show in the window, the joint-limit bars, parameters and sessions.
 #include <QAction>
+#include <QComboBox>
 #include <QApplication>
 #include <QDoubleSpinBox>
 #include <QFile>
@@ -32,6 +33,7 @@
 #include "ui/osg_view.hpp"
 #include "ui/parameter_panel.hpp"
 #include "ui/stage_panel.hpp"
+#include "ui/status_message.hpp"
 #include "ui/teleop_keys.hpp"
 
 using flexirob::app::Button;
@@ -196,6 +198,36 @@ class OperatorTest : public QObject {
     QTest::keyClick(&window, Qt::Key_Return);
     QTRY_COMPARE(s.areas, 1);
     QTRY_VERIFY(hintSays("Next area") && hintSays("Finish configuration (F6) to learn from 1 area."));
+
+    // Area 1 again: Re-teach has the next RECORDING replace it instead of adding a second.
+    const auto recordArea = [&window, &s](Qt::Key direction) {
+      QTest::keyClick(&window, Qt::Key_Space);
+      QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
+      QTest::keyClick(&window, Qt::Key_Return);
+      QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
+      QTest::keyClick(&window, Qt::Key_Space);
+      QTRY_COMPARE(s.sub_stage, SubStage::kRecording);
+      QTest::keyPress(&window, direction);
+      QTest::qWait(600);
+      QTest::keyRelease(&window, direction);
+      QTest::keyClick(&window, Qt::Key_Return);
+      QTRY_COMPARE(s.sub_stage, SubStage::kWaiting);
+    };
+    QTRY_VERIFY(panel->reteachAreaButton()->isEnabled() && panel->removeAreaButton()->isEnabled());
+    QCOMPARE(panel->areaChoice()->currentText(), QStringLiteral("1: area_1"));
+    const Eigen::Vector3d first_centre = s.area_data->front().centre;
+    QTest::mouseClick(panel->reteachAreaButton(), Qt::LeftButton);
+    QTRY_VERIFY(flexirob::ui::fullStatusMessage(window.statusBar()).contains(QStringLiteral("replaces 'area_1'")));
+    recordArea(Qt::Key_Up);
+    QTRY_VERIFY(s.area_data != nullptr && (s.area_data->front().centre - first_centre).norm() > 0.01);
+    QCOMPARE(s.areas, 1);
+    // A second area, removed again: the newest is the one the choice names.
+    recordArea(Qt::Key_Down);
+    QTRY_COMPARE(s.areas, 2);
+    QTRY_COMPARE(panel->chosenArea(), 1);
+    QTest::mouseClick(panel->removeAreaButton(), Qt::LeftButton);
+    QTRY_COMPARE(s.areas, 1);
+    QTRY_COMPARE(panel->areaChoice()->count(), 1);
     QTest::keyClick(&window, Qt::Key_F6);
     QTRY_VERIFY_WITH_TIMEOUT(s.model_ready && s.stage == Stage::kIdle, 30000);
     QTRY_VERIFY(hintSays("Start programming (F7)"));
