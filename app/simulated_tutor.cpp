@@ -127,6 +127,10 @@ void SimulatedTutor::tick() {
   const LockedArm held = arm();
   held->readState(state_);
   if (options_.on_cycle) options_.on_cycle(state_);
+  stopIfAsked();
+}
+
+void SimulatedTutor::stopIfAsked() const {
   if (options_.stop_requested && options_.stop_requested()) throw StopRequested{};
 }
 
@@ -448,6 +452,7 @@ std::vector<PostureChoice> SimulatedTutor::choosePostures(const Eigen::Vector3d&
   // reachable from the start posture or over the whole range (accessibleWithoutCollision).
   const int draws = options_.posture_candidates;
   for (int c = 0; c < 2 * draws; ++c) {
+    stopIfAsked();
     if (c == draws && !candidates.empty()) break;
     // Null-space targets: the scene's suggestion, the reference posture, the current posture,
     // then random postures drawn inside the limits (kept away from them by a fifth of the range
@@ -993,7 +998,15 @@ void SimulatedTutor::drawCheckPoints() {
   check_points_.clear();
   check_postures_.clear();
   Eigen::VectorXd q_found;
-  for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < 100 * options_.check_points; ++k) {
+  const int budget = 100 * options_.check_points;
+  for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < budget; ++k) {
+    // Where the arm reaches little of the grid every draw is a failed search of 24 IK runs: this
+    // takes minutes, so it says how far it is and yields to a stop.
+    stopIfAsked();
+    if (options_.progress && k % 50 == 0) {
+      options_.progress("teach (check points)",
+                        std::max(static_cast<double>(check_points_.size()) / options_.check_points, static_cast<double>(k) / budget));
+    }
     const Eigen::Vector3d x = draw.uniform(grid.lower, grid.upper);
     if (arm_reach_.fromShoulder(x) > arm_reach_.reach || grid.excludes(x)) continue;
     // Only where some posture reaches without a contact (a person sees the arm cannot get there).
@@ -1003,6 +1016,7 @@ void SimulatedTutor::drawCheckPoints() {
     }
   }
   check_failed_.assign(check_points_.size(), true);
+  if (options_.progress) options_.progress("teach (check points)", 1.0);
 }
 
 int SimulatedTutor::mapFailures() {
@@ -1013,6 +1027,7 @@ int SimulatedTutor::mapFailures() {
   const double tolerance = scene_->grid.value_or(robot::EvaluationGrid{}).tolerance;
   int failures = 0;
   for (std::size_t i = 0; i < check_points_.size(); ++i) {
+    stopIfAsked();
     const Eigen::Vector3d& x = check_points_[i];
     const MotionOutcome outcome = approachTarget(*model_, parameters_, *map, learnedPosture(*model_, *map, x), x, world_.get());
     check_failed_[i] = outcome.collided || outcome.final_error_m > tolerance;

@@ -181,6 +181,9 @@ class SimulatedTutor {
   const TutorReport& report() const { return report_; }
 
  private:
+  /// Throws StopRequested when TutorOptions::stop_requested says so (the searches that run
+  /// between simulation ticks call it too).
+  void stopIfAsked() const;
   /// Thrown by tick() when TutorOptions::stop_requested says so; caught by configure() and program().
   struct StopRequested {};
   TutorReport configureAreas(int area_count);

@@ -219,12 +219,22 @@ bool progressShown() {
   static const bool enabled = isatty(STDERR_FILENO) != 0 || std::getenv("FLEXIROB_PROGRESS") != nullptr;
   return enabled;
 }
+
+// A progress line not ended yet: a line said after it starts on a line of its own.
+bool g_progress_line_open = false;
 }  // namespace
+
+void endProgressLine() {
+  if (!g_progress_line_open) return;
+  std::fputc('\n', stderr);
+  g_progress_line_open = false;
+}
 
 void reportProgress(const std::string& what, double fraction) {
   if (!progressShown()) return;
   const int percent = static_cast<int>(std::lround(std::clamp(fraction, 0.0, 1.0) * 100.0));
   std::fprintf(stderr, "\r%s: %3d%%%s", what.c_str(), percent, percent >= 100 ? "\n" : "");
+  g_progress_line_open = percent < 100;
   std::fflush(stderr);
 }
 
@@ -236,6 +246,7 @@ void reportStatus(const std::string& status, bool done) {
   const std::string padding(shown_length > status.size() ? shown_length - status.size() : 0, ' ');
   std::fprintf(stderr, "\r%s%s%s", status.c_str(), padding.c_str(), done ? "\n" : "");
   shown_length = done ? 0 : status.size();
+  g_progress_line_open = !done;
   std::fflush(stderr);
 }
 
@@ -297,6 +308,7 @@ int runCli(int argc, const char* const* argv) {
     return 0;
   } catch (const CommandFailed& e) {
     std::cout << e.result().dump(2) << std::endl;
+    endProgressLine();
     std::cerr << "error: " << e.what() << std::endl;
     return e.exitCode();
   } catch (const CLI::Success& e) {
@@ -306,9 +318,11 @@ int runCli(int argc, const char* const* argv) {
     std::cerr << "error: " << e.what() << optionMeant(app) << std::endl;
     return 2;
   } catch (const std::bad_alloc&) {
+    endProgressLine();
     std::cerr << "error: out of memory (the input is too large)" << std::endl;
     return 2;
   } catch (const std::exception& e) {
+    endProgressLine();
     std::string message = e.what();
     for (char& c : message) {
       if (c == '\n' || c == '\r') c = ' ';

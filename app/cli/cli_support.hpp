@@ -163,5 +163,8 @@ void reportProgress(const std::string& what, double fraction);
 /// The same for work whose end is not known in advance (a fit that stops when it no longer
 /// improves): `status` replaces the line shown before; `done` ends the line.
 void reportStatus(const std::string& status, bool done = false);
+/// Ends a progress line that reportProgress or reportStatus left open, so that an error or a
+/// note said next starts a line of its own.
+void endProgressLine();
 
 }  // namespace flexirob::cli

@@ -97,6 +97,55 @@ TEST(TeachCli, StoppedBySigtermWritesWhatWasRecordedAndSaysSo) {
   for (const fs::path& file : {out, json, err, code}) fs::remove(file);
 }
 
+// Before the first area the tutor draws check points where some posture reaches (Sect. 3.3.2);
+// an arm whose first joint turns 0.2 rad reaches little of its grid, and each miss is a search of
+// 24 IK runs: minutes. A stop asked for meanwhile ends the command within seconds, not after the
+// search, and the progress line it interrupted is ended before the error.
+TEST(TeachCli, AStopEndsTheSearchForCheckPointsAtOnce) {
+  const fs::path robot = scratch("wedge.urdf"), scene = scratch("wedge.yaml"), out = scratch("wedge.flexirob");
+  const fs::path err = scratch("wedge.err"), code = scratch("wedge.code");
+  std::ofstream(robot) << R"(<robot name="wedge">
+  <link name="base"><visual><geometry><cylinder radius="0.06" length="0.3"/></geometry></visual></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.3"/>
+    <axis xyz="0 0 1"/><limit lower="-0.1" upper="0.1" velocity="2" effort="100"/></joint>
+  <link name="l1"><inertial><mass value="2"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.05"/>
+    <axis xyz="0 1 0"/><limit lower="-2.0" upper="2.0" velocity="2" effort="100"/></joint>
+  <link name="l2"><inertial><origin xyz="0 0 0.15"/><mass value="2"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><origin xyz="0 0 0.15"/><geometry><cylinder radius="0.04" length="0.3"/></geometry></visual></link>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.3"/>
+    <axis xyz="0 1 0"/><limit lower="-2.0" upper="2.0" velocity="2" effort="100"/></joint>
+  <link name="l3"><inertial><origin xyz="0 0 0.15"/><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><origin xyz="0 0 0.15"/><geometry><cylinder radius="0.03" length="0.3"/></geometry></visual></link>
+  <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/><origin xyz="0 0 0.3"/>
+    <axis xyz="0 1 0"/><limit lower="-2.0" upper="2.0" velocity="2" effort="100"/></joint>
+  <link name="l4"><inertial><origin xyz="0 0 0.05"/><mass value="0.5"/><inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="tool" type="fixed"><parent link="l4"/><child link="tip"/><origin xyz="0 0 0.1"/></joint>
+  <link name="tip"/>
+</robot>
+)";
+  std::ofstream(scene) << "name: wedge\nrobot: " << robot.filename().string()
+                       << "\ngrid: {lower: [-0.6, -0.6, 0.1], upper: [0.6, 0.6, 0.8], spacing: 0.1}\n";
+  // SIGTERM a second into the search; then at most 15 s for the command to end.
+  const std::string script =
+      "FLEXIROB_PROGRESS=1 " + std::string(FLEXIROB_CLI_EXECUTABLE) + " teach --scene " + scene.string() +
+      " --areas 3 --check-points 1000 --seed 1 --out " + out.string() + " > /dev/null 2> " + err.string() +
+      " & p=$!; for i in $(seq 600); do grep -q \"check points\" " + err.string() +
+      " && break; sleep 0.1; done; sleep 1; kill -TERM $p; for i in $(seq 150); do kill -0 $p 2>/dev/null || break; sleep 0.1; "
+      "done; if kill -0 $p 2>/dev/null; then kill -KILL $p; wait $p; echo late > " + code.string() + "; else wait $p; echo $? > " +
+      code.string() + "; fi";
+  ASSERT_EQ(std::system(("sh -c '" + script + "'").c_str()), 0);
+  const auto text = [](const fs::path& file) {
+    std::stringstream content;
+    content << std::ifstream(file).rdbuf();
+    return content.str();
+  };
+  EXPECT_EQ(text(code), "143\n") << text(err);
+  const std::string said = text(err);
+  EXPECT_NE(said.find("\nerror: teach: stopped by SIGTERM"), std::string::npos) << said;
+  for (const fs::path& file : {robot, scene, out, err, code}) fs::remove(file);
+}
+
 TEST(TeachCli, TeachesOneAreaOverTheFriLinkWithNothingLost) {
   const fs::path out = scratch("fri.json");
   const auto result = runCliBinary("teach --backend fri-sim --scene setup_A --areas 1 --seed 3 --out " + out.string());
