@@ -410,10 +410,15 @@ std::vector<World::SamplePoint> World::visibleSamplePoints() const {
     }
     return true;
   };
+  const std::vector<Eigen::Vector3d> robot_points = robotSamplePoints();
   std::vector<Eigen::Vector3d> arm;
-  for (const Eigen::Vector3d& p_W : robotSamplePoints()) {
+  for (const Eigen::Vector3d& p_W : robot_points) {
     if (!enclosed(p_W)) arm.push_back(p_W);
   }
+  // A robot closed in whole (a dome over it, a box around the cell) is hidden from every side
+  // by what encloses it: its points count, so that the hiding obstacles are drawn see-through
+  // instead of the arm counting as seen.
+  if (arm.empty()) arm = robot_points;
   std::vector<Eigen::Vector3d> areas;
   for (const Eigen::Vector3d& p_W : area_centers_) {
     if (!enclosed(p_W)) areas.push_back(p_W);

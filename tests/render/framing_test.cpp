@@ -263,5 +263,24 @@ TEST(Framing, ANamedViewIsKeptAndTheObstaclesInTheWayTurnSeeThrough) {
   EXPECT_GT(visibleRobotPixels(setup.world, choice.camera), 400);
 }
 
+// A dome of 2 m radius over the robot: every point of the arm is inside it, hidden from every
+// side. The picture had shown a grey ball and called the arm seen (hidden fraction 0).
+TEST(Framing, AnObstacleEnclosingTheWholeRobotTurnsSeeThrough) {
+  robot::Scene scene;
+  robot::Obstacle dome;
+  dome.name = "dome";
+  dome.shape = robot::Obstacle::Shape::kSphere;
+  dome.size = Eigen::Vector3d(2.0, 0.0, 0.0);
+  dome.rgba = Eigen::Vector4f(0.25F, 0.27F, 0.30F, 1.0F);
+  scene.obstacles.push_back(dome);
+  Lwr4InScene setup(scene);
+  const ViewChoice choice = setup.world.chooseView(*setup.world.focusBox(), kAspect, defaultViewOrder());
+  EXPECT_GT(choice.hidden_fraction, 0.9);
+  EXPECT_EQ(visibleRobotPixels(setup.world, choice.camera), 0) << "the dome hides the arm";
+  EXPECT_EQ(setup.world.revealRobot(choice.camera), std::vector<std::string>{"dome"});
+  // Framed with the whole dome, the arm is small, but in sight.
+  EXPECT_GT(visibleRobotPixels(setup.world, choice.camera), 100);
+}
+
 }  // namespace
 }  // namespace flexirob::render
