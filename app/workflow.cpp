@@ -619,8 +619,9 @@ void Workflow::warnIfTheAreaIsSmall(int index) {
   const double extent = (area.X.colwise() - area.centre).colwise().norm().maxCoeff();
   if (extent >= kSmallestAreaExtent * arm_scale_.length) return;
   std::ostringstream warning;
-  warning << std::fixed << std::setprecision(1) << area.name << " spans only " << extent * 1e3
-          << " mm: move the tip around inside the area while RECORDING (a few centimetres), or re-teach it";
+  warning << std::fixed << std::setprecision(1) << area.name << ": the tip moved at most " << extent * 1e3
+          << " mm from where the recording began; move it around inside the area while RECORDING (a few "
+             "centimetres), or re-teach the area";
   emit(WorkflowEvent::Kind::kWarning, "small_area", warning.str(), index);
 }
 

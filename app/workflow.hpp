@@ -51,8 +51,9 @@
 namespace flexirob::app {
 
 /// The least distance [m] a RECORDING's tip is expected to move from where it began, on the
-/// LWR IV (times ArmScale::length on another arm); a smaller area is warned about.
-inline constexpr double kSmallestAreaExtent = 0.01;
+/// LWR IV (times ArmScale::length on another arm); a smaller area is warned about. Half the
+/// smallest helix the simulated tutor draws (1 cm across), so that only a tip hardly moved warns.
+inline constexpr double kSmallestAreaExtent = 0.005;
 
 enum class Stage { kIdle, kConfiguration, kProgramming, kExecution };
 enum class SubStage { kNone, kWaiting, kApproaching, kPosed, kRecording, kTeachIn };

@@ -782,7 +782,17 @@ void MainWindow::handleEvents() {
         showStatusMessage(statusBar(), tr("The next area you record replaces '%1'").arg(QString::fromStdString(event.detail)), 15000);
       }
     } else if (event.kind == K::kAreaRemoved) {
+      // A warning about the area, or about the map it made, goes with it.
+      last_warning_.clear();
+      stage_panel_->clearWarning();
       showStatusMessage(statusBar(), tr("Area '%1' removed").arg(QString::fromStdString(event.detail)), 10000);
+    } else if (event.kind == K::kExecution) {
+      // A replay is no motion to the goal drawn; a plan accepted is, from now until it ends.
+      if (event.name == "replay") clearGoal();
+      if (event.name == "plan") {
+        goal_moving_ = goal_.has_value();
+        goal_plan_time_ = event.time;
+      }
     } else if (event.kind == K::kCheck || event.kind == K::kModelLearned || event.kind == K::kAreaCreated) {
       showStatusMessage(statusBar(), QString::fromStdString(event.detail.empty() ? event.name : event.detail), 10000);
     }
@@ -887,7 +897,11 @@ void MainWindow::keyPressEvent(QKeyEvent* event) {
       } else if (action->kind == TeleopAction::Kind::kTrigger) {
         live_->fire(action->trigger);
       } else if (action->kind == TeleopAction::Kind::kReplay) {
-        live_->replayTeachIn(stage_panel_->chosenTeachIn());
+        if (live_->snapshot().teach_ins == 0) {
+          showStatusMessage(statusBar(), tr("No teach-in to replay: record one in PROGRAMMING first"), 8000);
+        } else {
+          live_->replayTeachIn(stage_panel_->chosenTeachIn());
+        }
       } else {
         live_->press(action->button);
       }
@@ -1170,7 +1184,9 @@ void MainWindow::updateConfidence(const LiveSnapshot& s, bool force) {
       at = grid.z;
     }
   }
-  confidence_panel_->setStatus(tr("%n area(s); largest C on the slices %1 at z = %2 m", nullptr, model->areas())
+  const QString areas = model->areas() == 1 ? tr("1 area") : tr("%1 areas").arg(model->areas());
+  confidence_panel_->setStatus(tr("%1; largest C on the slices %2 at z = %3 m")
+                                   .arg(areas)
                                    .arg(highest, 0, 'f', 2)
                                    .arg(at, 0, 'f', 2));
 }
@@ -1235,9 +1251,9 @@ bool MainWindow::setGoal(const Eigen::Vector3d& goal_W) {
     // The goal shows at once; the path joins it when the workflow has planned it.
     overlays_->setContent(render::OverlayLayer::kGoalAndPath, render::makeGoalMarker(goal_W, goalMarkerRadius()));
     showStatusMessage(statusBar(), tr("Goal (%1, %2, %3) m: planning through the ITM graph")
-                                 .arg(goal_W.x(), 0, 'f', 3)
-                                 .arg(goal_W.y(), 0, 'f', 3)
-                                 .arg(goal_W.z(), 0, 'f', 3),
+                                 .arg(shownMillimetres(goal_W.x()), 0, 'f', 3)
+                                 .arg(shownMillimetres(goal_W.y()), 0, 'f', 3)
+                                 .arg(shownMillimetres(goal_W.z()), 0, 'f', 3),
                              8000);
   }
   // Outside EXECUTION the workflow refuses and says why (shown as a warning).
@@ -1256,11 +1272,13 @@ void MainWindow::clearGoal() {
 }
 
 void MainWindow::updateGoalAndPath(const LiveSnapshot& s) {
-  // The motion to a goal ends: say where the tip came to rest against it.
+  // The motion to a goal ends: say where the tip came to rest against it (the path is done when
+  // its target arrives; the arm follows a moment later).
   if (goal_ && s.stage == app::Stage::kExecution) {
-    if (!s.execution_done) {
-      goal_moving_ = true;
-    } else if (goal_moving_) {
+    double fastest = 0.0;  // [rad/s] (or [m/s] of a slide)
+    for (int j = 0; j < s.dof; ++j) fastest = std::max(fastest, std::abs(s.qd[static_cast<std::size_t>(j)]));
+    // A snapshot from before the plan was accepted shows the last motion done.
+    if (s.execution_done && goal_moving_ && s.time > goal_plan_time_ && fastest < 0.01) {
       goal_moving_ = false;
       const double gap = std::sqrt((s.p_WT[0] - goal_->x()) * (s.p_WT[0] - goal_->x()) +
                                    (s.p_WT[1] - goal_->y()) * (s.p_WT[1] - goal_->y()) +

@@ -267,7 +267,8 @@ class MainWindow : public QMainWindow {
   int confidence_slices_ = 0;
   bool operator_heights_ = false;  // the operator chose the slice heights: no automatic centring
   std::optional<Eigen::Vector3d> goal_;
-  bool goal_moving_ = false;  // the arm is on its way to goal_
+  bool goal_moving_ = false;  // a plan to goal_ was accepted and its motion has not ended
+  double goal_plan_time_ = 0.0;  // [s] robot time the plan to goal_ was accepted
   QElapsedTimer itm_record_clock_;
   std::size_t recorded_itm_bytes_ = 0;  ///< size of the last ITM snapshot recorded
   std::vector<QPointer<ReviewWindow>> reviews_;

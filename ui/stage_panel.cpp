@@ -73,7 +73,7 @@ StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
   replay_choice_->setObjectName(QStringLiteral("replay_choice"));
   replay_choice_->setPrefix(tr("teach-in "));
   replay_choice_->setRange(1, 1);
-  replay_choice_->setFocusPolicy(Qt::ClickFocus);
+  replay_choice_->setFocusPolicy(Qt::NoFocus);  // the keys stay the view's: arrows and digits move the arm
   replay_choice_->setToolTip(tr("The teach-in to replay: 1 is the first recorded."));
   replay_button_ = new QPushButton(tr("Replay"));
   replay_button_->setObjectName(QStringLiteral("replay"));
@@ -91,7 +91,7 @@ StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
   auto* area_row = new QHBoxLayout;
   area_choice_ = new QComboBox;
   area_choice_->setObjectName(QStringLiteral("area_choice"));
-  area_choice_->setFocusPolicy(Qt::ClickFocus);
+  area_choice_->setFocusPolicy(Qt::NoFocus);  // the keys stay the view's: arrows and digits move the arm
   area_choice_->setToolTip(tr("The training area to remove or to record again."));
   area_choice_->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
   area_choice_->setMinimumContentsLength(6);
@@ -277,7 +277,7 @@ void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured, bool h
     area_choice_->clear();
     if (s.area_data) {
       for (std::size_t k = 0; k < s.area_data->size(); ++k) {
-        area_choice_->addItem(QStringLiteral("%1: %2").arg(k + 1).arg(QString::fromStdString((*s.area_data)[k].name)));
+        area_choice_->addItem(QString::fromStdString((*s.area_data)[k].name));
       }
     }
     // A new area is the one named next; after a removal or a re-teach the choice stays put.

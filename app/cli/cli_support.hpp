@@ -2,6 +2,7 @@
 // Shared plumbing of flexirob-cli's commands: how a command hands its JSON result back, and
 // strict parsing of the numeric lists users type on the command line.
 #include <CLI/CLI.hpp>
+#include <sqlite3.h>
 #include <Eigen/Core>
 #include <cmath>
 #include <cstdlib>
@@ -99,14 +100,16 @@ int jsonInteger(const Json& value, const std::string& what);
 /// as opposed to a recording in SQLite; leaves the stream at that character.
 bool startsAsJson(std::istream& in);
 
-/// Runs `read` on the recorded session `file`: a database SQLite finds damaged while reading
-/// (a corrupt page, a row of the wrong size) becomes a one-line InputError naming the file.
+/// Runs `read` on the recorded session `file`: an SQLite error while reading (a corrupt page,
+/// a row of the wrong size: "is damaged") becomes a one-line InputError naming the file.
 template <class Read>
 auto readingSession(const std::string& file, Read&& read) -> decltype(read()) {
   try {
     return read();
   } catch (const app::SqliteError& error) {
-    throw InputError("session file " + file + " is damaged: " + error.what());
+    // A corrupt page or row is damage; a busy or unreadable file is not.
+    const bool damaged = error.code() == SQLITE_CORRUPT || error.code() == SQLITE_NOTADB;
+    throw InputError("session file " + file + (damaged ? " is damaged: " : ": ") + error.what());
   }
 }
 

@@ -405,6 +405,7 @@ Json runTeach(TeachOptions options) {
   // Only the last map's transition warnings stand (app::standingWarnings): an OS-ELM session had
   // listed one pair once per refit.
   const std::vector<std::string> standing = app::standingWarnings(workflow.events());
+  endProgressLine();  // an interrupted run left its progress line open
   Json warning_lines = Json::array();
   if (!start_sags.empty()) warning_lines.push_back(start_sags);  // said on stderr at the start
   for (std::size_t i = 0; i < standing.size(); ++i) {

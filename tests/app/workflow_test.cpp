@@ -551,7 +551,7 @@ TEST(Workflow, WarnsOfAnAreaRecordedWithoutMovingUntilItIsRetaught) {
     return details;
   };
   ASSERT_EQ(smallAreaWarnings().size(), 1U) << "the second area was circled";
-  EXPECT_EQ(smallAreaWarnings()[0].rfind("area_1 spans only 0.0 mm", 0), 0U) << smallAreaWarnings()[0];
+  EXPECT_EQ(smallAreaWarnings()[0].rfind("area_1: the tip moved at most 0.0 mm", 0), 0U) << smallAreaWarnings()[0];
   const auto& events = workflow.events();
   const auto warning = std::find_if(events.begin(), events.end(), [](const auto& e) { return e.name == "small_area"; });
   const auto created = std::find_if(events.begin(), events.end(), [](const auto& e) { return e.kind == WorkflowEvent::Kind::kAreaCreated; });

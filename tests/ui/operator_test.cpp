@@ -5,6 +5,7 @@
 #include <QComboBox>
 #include <QApplication>
 #include <QDoubleSpinBox>
+#include <QElapsedTimer>
 #include <QFile>
 #include <QGuiApplication>
 #include <QLabel>
@@ -214,7 +215,7 @@ class OperatorTest : public QObject {
       QTRY_COMPARE(s.sub_stage, SubStage::kWaiting);
     };
     QTRY_VERIFY(panel->reteachAreaButton()->isEnabled() && panel->removeAreaButton()->isEnabled());
-    QCOMPARE(panel->areaChoice()->currentText(), QStringLiteral("1: area_1"));
+    QCOMPARE(panel->areaChoice()->currentText(), QStringLiteral("area_1"));
     const Eigen::Vector3d first_centre = s.area_data->front().centre;
     QTest::mouseClick(panel->reteachAreaButton(), Qt::LeftButton);
     QTRY_VERIFY(flexirob::ui::fullStatusMessage(window.statusBar()).contains(QStringLiteral("replaces 'area_1'")));
@@ -261,14 +262,26 @@ class OperatorTest : public QObject {
     QCOMPARE(panel->chosenTeachIn(), 0);
     QTRY_VERIFY(hintSays("Replay a teach-in (F9)"));
     QVERIFY((tip(window) - end).norm() < 0.03);
-    // F9 replays: the tip goes back to the teach-in's start, then along it to its end.
+    // F9 replays: the tip goes back to the teach-in's start, then along it to its end. The
+    // closest it comes to the start is watched all along (it turns there in a moment).
+    const auto replayed = [&window, &s, &start, &end] {
+      QTRY_VERIFY_WITH_TIMEOUT(!s.execution_done, 5000);
+      double closest = (tip(window) - start).norm();
+      QElapsedTimer clock;
+      clock.start();
+      while (!(s.execution_done && (tip(window) - end).norm() < 0.01) && clock.elapsed() < 30000) {
+        QTest::qWait(5);
+        closest = std::min(closest, (tip(window) - start).norm());
+      }
+      QVERIFY2(closest < 0.02, qPrintable(QStringLiteral("the tip came within %1 m of the start").arg(closest)));
+      QVERIFY(s.execution_done && (tip(window) - end).norm() < 0.01);
+    };
     QTest::keyClick(&window, Qt::Key_F9);
-    QTRY_VERIFY_WITH_TIMEOUT((tip(window) - start).norm() < 0.01, 20000);
-    QTRY_VERIFY_WITH_TIMEOUT(s.execution_done && (tip(window) - end).norm() < 0.01, 20000);
+    replayed();
+    if (QTest::currentTestFailed()) return;
     // So does the button.
     QTest::mouseClick(panel->replayButton(), Qt::LeftButton);
-    QTRY_VERIFY_WITH_TIMEOUT((tip(window) - start).norm() < 0.01, 20000);
-    QTRY_VERIFY_WITH_TIMEOUT(s.execution_done && (tip(window) - end).norm() < 0.01, 20000);
+    replayed();
   }
 
   void aRefusedRequestIsShownAsAWarning() {
