@@ -639,7 +639,8 @@ class OperatorTest : public QObject {
   void appliedParametersRestartTheRobotWithThem() {
     MainWindow window("lwr4", "empty", quietOptions());
     waitRunning(window);
-    const auto& declaration = window.parameters().declarations().front();
+    // A copy: applying rebuilds the parameter set, and a reference into it would dangle.
+    const flexirob::robot::ParameterDeclaration declaration = window.parameters().declarations().front();
     QDoubleSpinBox* box = window.parameterPanel()->spinBox(declaration.name);
     QVERIFY(box != nullptr);
     const double changed = declaration.min_value + 0.25 * (declaration.max_value - declaration.min_value);
