@@ -29,6 +29,12 @@ fs::path scratch(const std::string& name) {
   return fs::temp_directory_path() / ("flexirob-teach-cli-" + std::to_string(::getpid()) + "-" + name);
 }
 
+std::string text(const fs::path& file) {
+  std::stringstream content;
+  content << std::ifstream(file).rdbuf();
+  return content.str();
+}
+
 TEST(TeachCli, RefusesAnOutputAnotherRunIsStillWriting) {
   const fs::path out = scratch("being-written.db");
   const app::SessionWriteLock other_run(out, "--out");
@@ -80,11 +86,6 @@ TEST(TeachCli, StoppedBySigtermWritesWhatWasRecordedAndSaysSo) {
   const std::string script = std::string(FLEXIROB_CLI_EXECUTABLE) + " teach --scene setup_I --areas 12 --seed 1 --out " + out.string() +
                              " > " + json.string() + " 2> " + err.string() + " & p=$!; sleep 2; kill -TERM $p; wait $p; echo $? > " + code.string();
   ASSERT_EQ(std::system(("sh -c '" + script + "'").c_str()), 0);
-  const auto text = [](const fs::path& file) {
-    std::stringstream content;
-    content << std::ifstream(file).rdbuf();
-    return content.str();
-  };
   EXPECT_EQ(text(code), "143\n") << text(err);
   EXPECT_NE(text(err).find("error: teach: stopped by SIGTERM after"), std::string::npos) << text(err);
   EXPECT_NE(text(err).find("was written to " + out.string()), std::string::npos) << text(err);
@@ -135,11 +136,6 @@ TEST(TeachCli, AStopEndsTheSearchForCheckPointsAtOnce) {
       "done; if kill -0 $p 2>/dev/null; then kill -KILL $p; wait $p; echo late > " + code.string() + "; else wait $p; echo $? > " +
       code.string() + "; fi";
   ASSERT_EQ(std::system(("sh -c '" + script + "'").c_str()), 0);
-  const auto text = [](const fs::path& file) {
-    std::stringstream content;
-    content << std::ifstream(file).rdbuf();
-    return content.str();
-  };
   EXPECT_EQ(text(code), "143\n") << text(err);
   const std::string said = text(err);
   EXPECT_NE(said.find("\nerror: teach: stopped by SIGTERM"), std::string::npos) << said;
