@@ -1280,9 +1280,7 @@ void MainWindow::updateGoalAndPath(const LiveSnapshot& s) {
     // A snapshot from before the plan was accepted shows the last motion done.
     if (s.execution_done && goal_moving_ && s.time > goal_plan_time_ && fastest < 0.01) {
       goal_moving_ = false;
-      const double gap = std::sqrt((s.p_WT[0] - goal_->x()) * (s.p_WT[0] - goal_->x()) +
-                                   (s.p_WT[1] - goal_->y()) * (s.p_WT[1] - goal_->y()) +
-                                   (s.p_WT[2] - goal_->z()) * (s.p_WT[2] - goal_->z()));
+      const double gap = (Eigen::Map<const Eigen::Vector3d>(s.p_WT.data()) - *goal_).norm();
       showStatusMessage(statusBar(), tr("Goal reached: the tip came to rest %1 mm from it").arg(gap * 1e3, 0, 'f', 1), 10000);
     }
   }
