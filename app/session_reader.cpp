@@ -282,6 +282,23 @@ std::vector<SampleRecord> SessionReader::samples(int area) const {
   return out;
 }
 
+std::string SessionReader::damage() const {
+  try {
+    SqliteStatement check(impl_->db, "PRAGMA quick_check(1)");
+    if (!check.step()) return "the check returned nothing";
+    std::string finding = check.columnText(0);
+    if (finding == "ok") return {};
+    // "*** in database main ***\nOn tree page 11 ...": the heading says nothing a reader needs.
+    const std::string heading = "*** in database main ***";
+    if (finding.rfind(heading, 0) == 0) finding.erase(0, heading.size());
+    std::replace(finding.begin(), finding.end(), '\n', ' ');
+    const auto first = finding.find_first_not_of(' ');
+    return first == std::string::npos ? std::string("damaged") : finding.substr(first);
+  } catch (const SqliteError& error) {
+    return error.what();
+  }
+}
+
 std::map<int, std::int64_t> SessionReader::sampleCounts() const {
   std::map<int, std::int64_t> out;
   SqliteStatement st(impl_->db, "SELECT area, count(*) FROM sample GROUP BY area");

@@ -33,6 +33,11 @@ class SessionReader {
   /// A meta value or `fallback`.
   std::string meta(const std::string& key, const std::string& fallback = "") const;
 
+  /// What SQLite's quick check finds wrong with the file's pages (its first finding), empty when
+  /// it finds nothing. Reads the whole file once: a reader that reads only part of it (the review
+  /// window seeks states by time) would otherwise never learn of damage elsewhere.
+  std::string damage() const;
+
   // --- Robot state at control rate.
   std::int64_t stateCount() const { return state_count_; }
   /// [s] first and last state time (0, 0 without states).

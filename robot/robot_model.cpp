@@ -757,6 +757,19 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
       beyond_turns += (beyond_turns.empty() ? "" : ", ") + range.str();
     }
   }
+  // Equal limits are how some exports write a joint locked in place: it is kept as a joint (the
+  // posture vector keeps its length) that no controller can move, which is worth saying once.
+  std::string locked;
+  for (const Joint& joint : model.joints_) {
+    if (joint.type == JointType::kContinuous || joint.limits.lower != joint.limits.upper) continue;
+    std::ostringstream at;
+    at << "'" << joint.name << "' at " << joint.limits.lower;
+    locked += (locked.empty() ? "" : ", ") + at.str();
+  }
+  if (!locked.empty()) {
+    model.notes_.push_back("equal lower and upper limits lock " + std::string(locked.find(',') == std::string::npos ? "joint " : "joints ") +
+                           locked + " in place (rad, m for a slide): such a joint keeps its place in the posture but never moves; type=\"fixed\" removes it");
+  }
   if (!beyond_turns.empty()) {
     model.notes_.push_back("revolute joint limits beyond two turns either way, " + beyond_turns +
                            " rad: URDF limits are radians (written in degrees?)");

@@ -275,6 +275,7 @@ ReviewWindow::~ReviewWindow() {
 bool ReviewWindow::open(const std::filesystem::path& file) {
   try {
     auto reader = std::make_unique<app::SessionReader>(file);
+    const std::string damage = reader->damage();
     const std::string name = file.filename().string();
     std::unique_ptr<robot::RobotModel> model;
     std::vector<std::string> left_out;
@@ -385,9 +386,11 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     confidence_slices_ = 0;
     operator_heights_ = false;
     error_.clear();
+    damage_ = QString::fromUtf8(printable(damage, 300).c_str());
     view_->setHomeCamera(world_->defaultCamera(static_cast<double>(std::max(1, view_->width())) /
                                                std::max(1, view_->height())));
-    setWindowTitle(QStringLiteral("FlexIRob review — %1").arg(QString::fromStdString(file.filename().string())));
+    setWindowTitle(QStringLiteral("FlexIRob review — %1%2")
+                       .arg(QString::fromStdString(file.filename().string()), damage_.isEmpty() ? QString() : QStringLiteral(" (damaged)")));
     QString status = QStringLiteral("%1: %2 states, %3 s, robot %4")
                          .arg(QString::fromStdString(file.string()))
                          .arg(reader_->stateCount())
@@ -399,6 +402,12 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
                     .arg(left_out.size())
                     .arg(QString::fromStdString(left_out.front()));
       qWarning("note: %s", qPrintable(status));
+    }
+    if (!damage_.isEmpty()) {
+      // Played as far as it reads: a file damaged at its end still holds the session before.
+      status = QStringLiteral("session file %1 is damaged (%2); what could be read is shown — %3")
+                   .arg(QString::fromStdString(file.string()), damage_, status);
+      qWarning("warning: %s", qPrintable(status));
     }
     showStatusMessage(statusBar(), status);
     time_ = t0 - 1.0;  // force a redraw

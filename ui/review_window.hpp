@@ -109,6 +109,9 @@ class ReviewWindow : public QMainWindow {
   /// reason in errorString() (and the status bar).
   bool open(const std::filesystem::path& file);
   const QString& errorString() const { return error_; }
+  /// Why the open file is damaged (SQLite's quick check), empty when it is not; a damaged file
+  /// is still shown as far as it can be read.
+  const QString& damage() const { return damage_; }
   bool isOpen() const { return reader_ != nullptr; }
 
   /// Shows the recording at `time` (clamped to the recording).
@@ -171,6 +174,7 @@ class ReviewWindow : public QMainWindow {
   QLabel* stage_label_ = nullptr;
   QTimer* timer_ = nullptr;
   QString error_;
+  QString damage_;
 
   double time_ = 0.0;
   double speed_ = 1.0;

@@ -35,6 +35,14 @@ struct LearningCsv {
   std::vector<std::string> input_names;
 };
 
+// Each q column's root mean square error in that column's own unit. The file does not say which
+// joints slide, so one RMSE over all columns mixes metres with radians when one does.
+Json rmsePerJoint(const Eigen::MatrixXd& error) {
+  Json per_joint = Json::array();
+  const double samples = static_cast<double>(error.cols());
+  for (Eigen::Index j = 0; j < error.rows(); ++j) per_joint.push_back(std::sqrt(error.row(j).squaredNorm() / samples));
+  return per_joint;
+}
 
 bool isOutputName(const std::string& name) {
   return name.size() >= 2 && name[0] == 'q' && name.find_first_not_of("0123456789", 1) == std::string::npos;
@@ -229,7 +237,8 @@ Json fit(const FitOptions& options) {
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (shown) reportStatus("learn fit (" + options.learner + "): done after " + std::to_string(epochs_done) + " epochs", true);
-  const double mse = learner->meanSquaredError(data);
+  const Eigen::MatrixXd training_error = learner->predictColumns(data.X) - data.Y;
+  const double mse = training_error.colwise().squaredNorm().mean();  // Eq. 3.3
   app::writeFileReplacing(options.out, learner->modelText(), "--out");
 
   Json result = {{"learner", learner->kind()},
@@ -240,6 +249,7 @@ Json fit(const FitOptions& options) {
                  {"output_dim", N},
                  {"train_mse", mse},
                  {"train_rmse_rad", std::sqrt(mse / N)},
+                 {"train_rmse_per_joint", rmsePerJoint(training_error)},
                  {"seconds", seconds},
                  {"model", options.out},
                  {"parameters", parameters}};
@@ -278,6 +288,7 @@ Json predict(const std::string& model_path, const std::string& data_path) {
     result["mse"] = mse;
     result["rmse_rad"] = std::sqrt(mse / learner->outputDim());
     result["max_abs_error_rad"] = error.cwiseAbs().maxCoeff();
+    result["rmse_per_joint"] = rmsePerJoint(error);
   }
   return result;
 }

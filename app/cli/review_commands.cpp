@@ -75,6 +75,9 @@ Json review(const std::string& file) {
   out["start_time_utc"] = reader.metadata().start_time_utc;
   // A session closed by its recorder has an end time; a killed one does not.
   out["closed_cleanly"] = !reader.meta("end_time_utc").empty();
+  // Damage where this review does not read (a stored model's pages) still makes the file suspect.
+  const std::string damage = reader.damage();
+  out["damage"] = damage.empty() ? Json(nullptr) : Json(damage);
   out["duration_s"] = reader.endTime() - reader.startTime();
   out["states"] = reader.stateCount();
 

@@ -127,15 +127,25 @@ TEST_F(LearnCli, FitsAndPredictsAKnownSmoothMapWithEveryLearner) {
     ASSERT_EQ(predicted.at("predictions")[0].size(), 7u);
     // The reported error agrees with the printed predictions and the known map.
     double sum = 0.0;
+    double joint_sums[7] = {};
     const double points[4][3] = {{-0.7, 0.0, 0.3}, {-0.3, 0.0, 0.6}, {-0.5, -0.4, 0.45}, {-0.5, 0.0, 0.42}};
     for (int r = 0; r < 4; ++r) {
       for (int j = 0; j < 7; ++j) {
         const double e = predicted["predictions"][static_cast<std::size_t>(r)][static_cast<std::size_t>(j)].get<double>() -
                          joint(j, points[r][0], points[r][1], points[r][2]);
         sum += e * e;
+        joint_sums[j] += e * e;
       }
     }
     EXPECT_NEAR(predicted.at("mse").get<double>(), sum / 4.0, 1e-9);
+    ASSERT_EQ(predicted.at("rmse_per_joint").size(), 7u);
+    for (std::size_t j = 0; j < 7; ++j) {
+      EXPECT_NEAR(predicted["rmse_per_joint"][j].get<double>(), std::sqrt(joint_sums[j] / 4.0), 1e-9) << learner << " q" << j + 1;
+    }
+    ASSERT_EQ(fitted.at("train_rmse_per_joint").size(), 7u);
+    double fitted_sum = 0.0;
+    for (const auto& rmse : fitted.at("train_rmse_per_joint")) fitted_sum += 4 * 6 * rmse.get<double>() * rmse.get<double>();
+    EXPECT_NEAR(fitted.at("train_mse").get<double>(), fitted_sum / 24.0, 1e-12) << learner;
     EXPECT_LT(predicted.at("rmse_rad").get<double>(), 0.05) << learner;
   }
 }

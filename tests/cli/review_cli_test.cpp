@@ -96,6 +96,7 @@ TEST_F(ReviewCli, SessionReportsWhatWasRecorded) {
   EXPECT_EQ(json.at("scene"), "setup_I");
   EXPECT_EQ(json.at("participant"), "alice");
   EXPECT_TRUE(json.at("closed_cleanly").get<bool>());
+  EXPECT_TRUE(json.at("damage").is_null()) << json.at("damage");
   EXPECT_EQ(json.at("states").get<int>(), 2000);
   EXPECT_NEAR(json.at("duration_s").get<double>(), 1.999, 1e-9);
   // Area 0's second take (7 samples) holds; area 2 never ended.

@@ -191,6 +191,19 @@ TEST(RobotModel, SaysWhichJointsGiveAZeroEffortLimit) {
   EXPECT_TRUE(RobotModel::fromUrdfString(twoJointArm(), ".").notes().empty());
 }
 
+// A joint locked by its limits stays in the posture vector, and the model says it never moves.
+TEST(RobotModel, SaysWhichJointsEqualLimitsLockInPlace) {
+  std::string urdf = twoJointArm();
+  const std::string given = R"(lower="-2" upper="2")";
+  urdf.replace(urdf.find(given), given.size(), R"(lower="0.25" upper="0.25")");
+  const RobotModel model = RobotModel::fromUrdfString(urdf, ".");
+  ASSERT_EQ(model.dof(), 2);
+  EXPECT_DOUBLE_EQ(model.midPosture()[1], 0.25);
+  ASSERT_EQ(model.notes().size(), 1U);
+  EXPECT_NE(model.notes()[0].find("equal lower and upper limits lock joint 'j2' at 0.25 in place"), std::string::npos)
+      << model.notes()[0];
+}
+
 // lower="-110" upper="110" was meant in degrees; read as radians the joint turns 35 times round.
 TEST(RobotModel, SaysWhichRevoluteLimitsLookWrittenInDegrees) {
   std::string urdf = twoJointArm();

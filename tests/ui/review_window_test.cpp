@@ -36,8 +36,9 @@ Eigen::VectorXd postureAt(const robot::RobotModel& model, double t) {
 
 // A recording as the workflow writes one: stages with sub-stages, triggers and buttons, a
 // training area with samples, a teach-in trajectory and the robot's states at 1 kHz.
-// `robot_name` names the robot in the metadata (the states are the LWR IV's in any case).
-void writeRecording(const std::filesystem::path& file, const std::string& robot_name = "lwr4") {
+// `robot_name` names the robot in the metadata (the states are the LWR IV's in any case);
+// a non-empty `model_text` is stored as a learned model.
+void writeRecording(const std::filesystem::path& file, const std::string& robot_name = "lwr4", const std::string& model_text = "") {
   const auto path = resolveRobotPath("lwr4");
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(path);
   app::SessionMetadata meta;
@@ -62,6 +63,13 @@ void writeRecording(const std::filesystem::path& file, const std::string& robot_
   recorder.recordArea(area);
   for (int k = 0; k < 20; ++k) {
     recorder.recordSample({2.5 + 0.05 * k, 0, Eigen::Vector3d(-0.5, 0.01 * k, 0.5), model.midPosture()});
+  }
+  if (!model_text.empty()) {
+    app::ModelRecord learned;
+    learned.time = 3.9;
+    learned.learner_kind = "elm";
+    learned.bytes.assign(model_text.begin(), model_text.end());
+    recorder.recordModel(std::move(learned));
   }
   robot::Kinematics kinematics(model);
   for (int i = 0; i <= static_cast<int>(kDuration * 1000); ++i) {
@@ -242,6 +250,37 @@ class ReviewWindowTest : public QObject {
     QVERIFY(window.errorString().contains(QStringLiteral("junk.db")));
     QVERIFY(window.isOpen());
     QCOMPARE(window.reader()->file(), file_);
+  }
+
+  // A page overwritten (a disk fault) where the window does not read when it opens the file, in
+  // the middle of a stored model: what reads is shown, and the window says the file is damaged
+  // rather than playing it as if it were whole.
+  void saysAFileWithADamagedPageIsDamagedAndShowsWhatReads() {
+    ui::ReviewWindow whole;
+    QVERIFY(whole.open(file_));
+    QVERIFY2(whole.damage().isEmpty(), qPrintable(whole.damage()));
+    QVERIFY(!whole.windowTitle().contains(QStringLiteral("damaged")));
+
+    const auto damaged = std::filesystem::path(dir_.path().toStdString()) / "damaged.db";
+    const std::string marker = "<<the middle of the stored model>>";
+    writeRecording(damaged, "lwr4", std::string(20000, 'a') + marker + std::string(20000, 'b'));
+    std::ostringstream read;
+    read << std::ifstream(damaged, std::ios::binary).rdbuf();
+    const std::string bytes = read.str();
+    const std::size_t at = bytes.find(marker);
+    QVERIFY(at != std::string::npos);
+    constexpr std::size_t kPage = 4096;
+    {
+      std::fstream out(damaged, std::ios::in | std::ios::out | std::ios::binary);
+      out.seekp(static_cast<std::streamoff>(at / kPage * kPage));
+      const std::string garbage(kPage, '\xA5');
+      out.write(garbage.data(), static_cast<std::streamsize>(garbage.size()));
+    }
+    ui::ReviewWindow window;
+    QVERIFY2(window.open(damaged), qPrintable(window.errorString()));
+    QVERIFY2(window.damage().startsWith(QStringLiteral("On tree page")), qPrintable(window.damage()));
+    QVERIFY(window.windowTitle().contains(QStringLiteral("(damaged)")));
+    QCOMPARE(window.reader()->stateCount(), static_cast<std::int64_t>(kDuration * 1000) + 1);
   }
 
   // The states of a 7-joint arm under the name of the 9-joint one: refused, not replayed as a
