@@ -418,7 +418,12 @@ RequestResult Workflow::replayTeachIn(int k) {
 RequestResult Workflow::planTo(const Eigen::Vector3d& goal) {
   if (stage_ != Stage::kExecution) return refuse("plan", std::string("plan: not in EXECUTION but ") + stateName());
   if (!goal.allFinite()) return refuse("plan", "plan: the goal must be three finite numbers");
-  if (itm_.nodeCount() == 0) return refuse("plan", "plan: the ITM graph is empty (nothing explored in CONFIGURATION)");
+  // A map that never grew was mostly taught in contact: then the goal is not what is wrong.
+  const bool mostly_in_contact = itm_positions_in_contact_ > 0 && itm_positions_in_contact_ >= static_cast<std::size_t>(itm_.nodeCount());
+  const std::string left_out = mostly_in_contact ? "; " + std::to_string(itm_positions_in_contact_) +
+                                                       " positions of CONFIGURATION were left out of it because the arm touched something"
+                                                 : std::string();
+  if (itm_.nodeCount() == 0) return refuse("plan", "plan: the ITM graph is empty (nothing explored in CONFIGURATION)" + left_out);
   const Eigen::Vector3d start = interaction_.taskTarget();
   auto path = std::make_shared<planning::PlannedPath>(
       planning::planPath(itm_, Eigen::VectorXd(start), Eigen::VectorXd(goal)));
@@ -427,6 +432,7 @@ RequestResult Workflow::planTo(const Eigen::Vector3d& goal) {
     std::ostringstream reason;
     reason << "plan: the goal is " << path->goal_gap * 1e3 << " mm from the nearest explored position (at most "
            << options_.max_goal_gap * 1e3 << " mm)";
+    if (mostly_in_contact) reason << "; the map holds " << itm_.nodeCount() << (itm_.nodeCount() == 1 ? " node" : " nodes") << left_out;
     return refuse("plan", reason.str());
   }
   std::vector<Eigen::Vector3d> waypoints;
@@ -506,6 +512,7 @@ void Workflow::onTrigger(Trigger trigger) {
         setState(stage_, SubStage::kTeachIn);
       }
       recording_samples_ = 0;
+      recording_contacts_ = 0;
       recording_full_ = false;
       last_sample_time_ = -1e9;
       break;
@@ -513,10 +520,14 @@ void Workflow::onTrigger(Trigger trigger) {
       if (affected) return;
       emit(WorkflowEvent::Kind::kTrigger, toString(trigger), from);
       {
+        const Eigen::Index contacts = recording_contacts_;
         const int created = finishArea();
         setState(stage_, SubStage::kWaiting);
         // After the stage's event: the GUI clears warnings at a new stage.
-        if (created >= 0) warnIfTheAreaIsSmall(created);
+        if (created >= 0) {
+          warnIfTheAreaIsSmall(created);
+          warnIfTheAreaWasTaughtInContact(created, contacts);
+        }
       }
       break;
     case SubStage::kTeachIn: {
@@ -623,6 +634,20 @@ void Workflow::warnIfTheAreaIsSmall(int index) {
           << " mm from where the recording began; move it around inside the area while RECORDING (a few "
              "centimetres), or re-teach the area";
   emit(WorkflowEvent::Kind::kWarning, "small_area", warning.str(), index);
+}
+
+void Workflow::warnIfTheAreaWasTaughtInContact(int index, Eigen::Index contacts) {
+  // A simulated link passes through the table or an obstacle; a tutor who posed the arm there
+  // teaches the map a posture inside it, and the map of free space (Chap. 7) keeps none of
+  // those positions, so a session taught that way cannot plan. Said now, not at the first plan.
+  // A circle that brushes an obstacle for a moment (under 5 % of the samples) is not worth it.
+  const TrainingArea& area = areas_[static_cast<std::size_t>(index)];
+  if (contacts == 0 || 20 * contacts < area.X.cols()) return;
+  std::ostringstream warning;
+  warning << area.name << ": " << contacts << " of " << area.X.cols()
+          << " samples were recorded with the arm touching something (drawn red); the map of free space "
+             "keeps none of them and the learned postures lead into the contact: re-teach the area with the arm clear";
+  emit(WorkflowEvent::Kind::kWarning, "area_in_contact", warning.str(), index);
 }
 
 void Workflow::rebuildConfidence() {
@@ -757,7 +782,9 @@ std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& even
   std::vector<std::pair<const WorkflowEvent*, int>> standing;
   std::vector<const WorkflowEvent*> this_recordings_limits;
   // A small area's warning follows its area the same way, said once the area is made.
-  const auto ofTheArea = [](const auto& e) { return e.first->name == "joint_limit" || e.first->name == "small_area"; };
+  const auto ofTheArea = [](const auto& e) {
+    return e.first->name == "joint_limit" || e.first->name == "small_area" || e.first->name == "area_in_contact";
+  };
   const std::string posed = std::string(toString(Stage::kConfiguration)) + "/" + toString(SubStage::kPosed);
   for (const WorkflowEvent& event : events) {
     if (event.kind == WorkflowEvent::Kind::kModelLearned) {
@@ -841,9 +868,13 @@ void Workflow::recordSample() {
   // Every position of the configuration stage feeds the ITM (DESIGN §3, Chap. 7), a map of the
   // visited free space: a simulated arm that sank into an obstacle (the simulation lets links
   // pass through) visited no free space there.
-  if (stage_ == Stage::kConfiguration && !state_.in_contact) {
-    itm_.insert(p, state_.q);
-    ++itm_version_;
+  if (stage_ == Stage::kConfiguration) {
+    if (state_.in_contact) {
+      ++itm_positions_in_contact_;
+    } else {
+      itm_.insert(p, state_.q);
+      ++itm_version_;
+    }
   }
   if (sub_stage_ != SubStage::kRecording && sub_stage_ != SubStage::kTeachIn) return;
   if (recording_samples_ >= recording_X_.cols()) {
@@ -857,6 +888,7 @@ void Workflow::recordSample() {
   recording_X_.col(recording_samples_) = p;
   recording_Q_.col(recording_samples_) = state_.q;
   ++recording_samples_;
+  if (state_.in_contact && sub_stage_ == SubStage::kRecording) ++recording_contacts_;
   if (sub_stage_ == SubStage::kRecording && options_.learner == LearnerKind::kOsElm) {
     // Online learning during RECORDING (Chap. 6, Eq. 6.4-6.5).
     if (!online_) online_ = makeOnlineLearner();

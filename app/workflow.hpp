@@ -303,6 +303,7 @@ class Workflow {
   /// Stores the RECORDING as an area; its index, or -1 when it held no sample.
   int finishArea();
   void warnIfTheAreaIsSmall(int index);
+  void warnIfTheAreaWasTaughtInContact(int index, Eigen::Index contacts);
   void finishTeachIn();
   void checkJointLimits(const Eigen::VectorXd& q_fixed, int area);
   void startLearning();
@@ -337,6 +338,8 @@ class Workflow {
   Eigen::Index recording_samples_ = 0;
   std::uint64_t recording_serial_ = 0;
   bool recording_full_ = false;
+  Eigen::Index recording_contacts_ = 0;  ///< samples of this recording taken in contact
+  std::size_t itm_positions_in_contact_ = 0;  ///< CONFIGURATION positions kept out of the ITM
   int reteach_index_ = -1;
   std::string next_area_name_;
   std::vector<Eigen::MatrixXd> teach_ins_;

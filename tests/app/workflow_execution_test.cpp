@@ -23,6 +23,7 @@ const robot::RobotModel& lwr4() {
 // position-controlled robot); otherwise the test places it (the tutor's hand) and sets τ_ext.
 class KinematicBackend final : public robot::RobotBackend {
  public:
+  bool touching = false;  ///< every link overlaps something (a simulated arm in the table)
   explicit KinematicBackend(const robot::RobotModel& model) : model_(&model), kinematics_(model) {
     state_.resize(model.dof());
     place(posture(0.0), 0.0);
@@ -37,7 +38,10 @@ class KinematicBackend final : public robot::RobotBackend {
   }
   const robot::RobotModel& model() const override { return *model_; }
   double cycleTime() const override { return 1e-3; }
-  void readState(robot::RobotState& state) const override { state = state_; }
+  void readState(robot::RobotState& state) const override {
+    state = state_;
+    state.in_contact = touching;
+  }
   robot::CommandStatus writeCommand(const robot::JointImpedanceCommand& command) override {
     last_ = command;
     return robot::CommandStatus::kAccepted;
@@ -264,6 +268,26 @@ TEST(WorkflowExecution, RefusesAGoalOutsideTheExploredSpaceWithoutMoving) {
   EXPECT_EQ(workflow.plannedPath(), nullptr);
   EXPECT_EQ(workflow.stage(), Stage::kExecution);
   EXPECT_FALSE(workflow.planTo(Eigen::Vector3d(NAN, 0.0, 0.0)));
+}
+
+// Taught with the arm in the table, the map of free space keeps nothing: the refusal says why,
+// instead of only blaming the goal.
+TEST(WorkflowExecution, APlanRefusedForAMapTaughtInContactSaysThePositionsWereLeftOut) {
+  Rig rig;
+  rig.backend.touching = true;
+  Workflow workflow(rig.backend, rig.parameters, syncOptions());
+  configureAndProgram(workflow, rig.backend);
+  const auto result = workflow.planTo(Eigen::Vector3d(0.0, -0.7, 0.2));
+  EXPECT_FALSE(result);
+  EXPECT_NE(result.reason.find("the ITM graph is empty"), std::string::npos) << result.reason;
+  EXPECT_NE(result.reason.find(" positions of CONFIGURATION were left out of it because the arm touched something"), std::string::npos)
+      << result.reason;
+
+  Rig clear;
+  Workflow cleanly_taught(clear.backend, clear.parameters, syncOptions());
+  configureAndProgram(cleanly_taught, clear.backend);
+  const auto refused = cleanly_taught.planTo(Eigen::Vector3d(0.0, -0.7, 0.2));
+  EXPECT_EQ(refused.reason.find("left out"), std::string::npos) << refused.reason;
 }
 
 TEST(WorkflowExecution, OnlineOsElmBlendsAssistanceByConfidence) {

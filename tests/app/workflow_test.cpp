@@ -567,6 +567,36 @@ TEST(Workflow, WarnsOfAnAreaRecordedWithoutMovingUntilItIsRetaught) {
   EXPECT_TRUE(standingWarnings(workflow.events()).empty());
 }
 
+// A simulated link passes through the table; an area recorded that way leaves the map of free
+// space empty, which the tutor hears when the area is made, not at the first refused plan.
+TEST(Workflow, WarnsOfAnAreaRecordedInContactUntilItIsRetaughtClear) {
+  Fixture f;
+  Workflow workflow(f.backend, f.parameters, syncOptions());
+  ASSERT_TRUE(workflow.press(Button::kStartConfiguration));
+  const auto contactWarnings = [&workflow] {
+    std::vector<std::string> details;
+    for (const auto& event : workflow.events()) {
+      if (event.kind == WorkflowEvent::Kind::kWarning && event.name == "area_in_contact") details.push_back(event.detail);
+    }
+    return details;
+  };
+  f.backend.overlapObstacle(true);
+  teachArea(workflow, f.backend, posture(0.0));
+  f.backend.overlapObstacle(false);
+  teachArea(workflow, f.backend, posture(0.6));
+  ASSERT_EQ(contactWarnings().size(), 1U) << "the second area was recorded clear";
+  EXPECT_EQ(contactWarnings()[0].rfind("area_1: ", 0), 0U) << contactWarnings()[0];
+  const std::size_t samples = workflow.areas()[0].X.cols();
+  EXPECT_NE(contactWarnings()[0].find(std::to_string(samples) + " of " + std::to_string(samples) + " samples"), std::string::npos)
+      << contactWarnings()[0];
+  EXPECT_EQ(standingWarnings(workflow.events()), std::vector<std::string>{contactWarnings()[0]});
+
+  ASSERT_TRUE(workflow.reteachArea(0));
+  teachArea(workflow, f.backend, posture(0.0));
+  EXPECT_EQ(contactWarnings().size(), 1U);
+  EXPECT_TRUE(standingWarnings(workflow.events()).empty());
+}
+
 // The joint-limit warnings of an area taught in posture q.
 std::vector<std::string> jointLimitWarnings(const robot::RobotModel& model, const Eigen::VectorXd& q) {
   ScriptedBackend backend(model);
