@@ -688,7 +688,7 @@ void MainWindow::mirror() {
     } else {
       force_arrow_->hide();
     }
-    if (!last_warning_.isEmpty() || banner_label_->text().isEmpty() ||
+    if (!last_warning_.isEmpty() || banner_label_->text().isEmpty() || banner_label_->property("warning").toString() != last_warning_ ||
         banner_label_->property("stage").toString() !=
             StagePanel::stageText(s.stage, s.sub_stage) + (robotMeasured() ? QString() : QStringLiteral("?"))) {
       showBanner(last_warning_);
@@ -729,6 +729,7 @@ void MainWindow::showBanner(const QString& warning) {
                                                            Qt::ElideRight, std::max(200, view_->width() - 24) - 60);
   }
   setBanner(text, StagePanel::stageColor(s.stage, s.sub_stage), stage + (measured ? QString() : QStringLiteral("?")));
+  banner_label_->setProperty("warning", warning);  // a warning withdrawn leaves the banner too
 }
 
 void MainWindow::setBanner(const QString& text, const QColor& colour, const QString& key) {
@@ -768,6 +769,7 @@ void MainWindow::handleEvents() {
     if (event.kind == K::kRefused && event.name == "plan") clearGoal();  // the ball was drawn at the click
     if (event.kind == K::kWarning || event.kind == K::kRefused) {
       last_warning_ = QString::fromStdString(event.detail.empty() ? event.name : event.detail);
+      last_warning_refused_ = event.kind == K::kRefused;
       stage_panel_->showWarning(last_warning_);
       showStatusMessage(statusBar(), last_warning_, 15000);
     } else if (event.kind == K::kStage || event.kind == K::kButton) {
@@ -789,6 +791,12 @@ void MainWindow::handleEvents() {
     } else if (event.kind == K::kExecution) {
       // A replay is no motion to the goal drawn; a plan accepted is, from now until it ends.
       if (event.name == "replay") clearGoal();
+      // A request refused before this accepted one no longer describes what the arm does.
+      if (last_warning_refused_ && !last_warning_.isEmpty()) {
+        if (fullStatusMessage(statusBar()) == last_warning_) statusBar()->clearMessage();
+        last_warning_.clear();
+        stage_panel_->clearWarning();
+      }
       if (event.name == "plan") {
         goal_moving_ = goal_.has_value();
         goal_plan_time_ = event.time;

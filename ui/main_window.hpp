@@ -245,6 +245,7 @@ class MainWindow : public QMainWindow {
   bool keyboard_mode_ = false;
   QElapsedTimer key_clock_;
   QString last_warning_;
+  bool last_warning_refused_ = false;  ///< last_warning_ is a refused request's reason
   QElapsedTimer deadline_clock_;
   std::uint64_t deadline_cycles_ = 0, deadline_misses_ = 0;
   bool start_checked_ = false;  ///< whether the live arm's first state was checked for contacts

@@ -256,6 +256,9 @@ void PlotPanel::setSamples(const std::vector<PlotSample>& samples) {
 
 void PlotPanel::append(const PlotSample& sample) {
   live_ = true;
+  // Time running backwards is a robot started anew (another scene, robot or backend): its
+  // curves begin again rather than join the last run's with a line back to zero.
+  if (!samples_.empty() && sample.time < samples_.back().time) samples_.clear();
   samples_.push_back(sample);
   while (!samples_.empty() && samples_.front().time < sample.time - window_seconds_) samples_.pop_front();
   // Hidden (a closed dock), the samples are kept and drawn when the panel shows again.

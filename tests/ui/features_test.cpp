@@ -203,6 +203,27 @@ class FeaturesTest : public QObject {
     QCOMPARE(plots->taskErrorPlot()->valueRange().first, 0.0);
   }
 
+  // Another scene restarts the robot's clock: the new run's curves start afresh, not joined to
+  // the old run's by a line back to zero, and the old peak leaves the axis.
+  void aRestartedRobotStartsThePlotsAfresh() {
+    flexirob::ui::PlotPanel plots;
+    plots.setJoints({"A1"}, Eigen::VectorXd::Constant(1, -1.0), Eigen::VectorXd::Constant(1, 1.0));
+    flexirob::ui::PlotSample sample;
+    sample.q = Eigen::VectorXd::Zero(1);
+    for (int i = 0; i < 50; ++i) {
+      sample.time = 100.0 + 0.1 * i;
+      sample.compute_us = i == 25 ? 2200.0 : 50.0;
+      plots.append(sample);
+    }
+    QCOMPARE(plots.sampleCount(), 50);
+    sample.time = 0.0;
+    sample.compute_us = 40.0;
+    plots.append(sample);
+    sample.time = 0.1;
+    plots.append(sample);
+    QCOMPARE(plots.sampleCount(), 2);
+  }
+
   void aTaughtAreaShowsAsSlicesAndAGoalIsPlannedAndReviewed() {
     MainWindow::Options options = quietOptions();
     options.record_sessions = true;
@@ -335,6 +356,9 @@ class FeaturesTest : public QObject {
     const std::uint64_t before_second = s.path_version;
     QVERIFY(window.setGoal(start_tip));
     QTRY_VERIFY_WITH_TIMEOUT(s.path_version != before_second, 5000);
+    // Accepted after the refusal: the refusal no longer describes what the arm does.
+    QTRY_VERIFY(window.stagePanel()->warningLabel()->text().isEmpty());
+    QVERIFY(!window.bannerLabel()->text().contains(QStringLiteral("⚠")));
     window.mirror();
     QVERIFY(window.overlays().layer(flexirob::render::OverlayLayer::kGoalAndPath)->getNumChildren() >= 2);
     QTest::keyClick(&window, Qt::Key_F5);
