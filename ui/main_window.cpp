@@ -169,6 +169,15 @@ MainWindow::MainWindow(const std::string& robot, const std::string& scene, const
     QSettings settings;
     restoreGeometry(settings.value(QStringLiteral("window/geometry")).toByteArray());
     restoreState(settings.value(QStringLiteral("window/state")).toByteArray());
+    // A size remembered on a larger screen is cut to this one, and the window moved onto it:
+    // a status bar below the screen's edge is no status bar.
+    QRect kept = geometry();
+    kept.setSize(kept.size().boundedTo(room.size()));
+    if (kept.right() > room.right()) kept.moveRight(room.right());
+    if (kept.bottom() > room.bottom()) kept.moveBottom(room.bottom());
+    if (kept.left() < room.left()) kept.moveLeft(room.left());
+    if (kept.top() < room.top()) kept.moveTop(room.top());
+    if (kept != geometry()) setGeometry(kept);
   }
 
   display_timer_ = new QTimer(this);
@@ -224,7 +233,14 @@ void MainWindow::buildDocks() {
   stage_panel_ = new StagePanel;
   auto* stage_dock = new QDockWidget(tr("Teaching"), this);
   stage_dock->setObjectName(QStringLiteral("stage_dock"));
-  stage_dock->setWidget(stage_panel_);
+  // Scrolled, not squeezed: on a short screen the hint and a long warning keep their lines
+  // (squeezed, the labels were drawn over each other and cut).
+  auto* stage_scroll = new QScrollArea;
+  stage_scroll->setWidget(stage_panel_);
+  stage_scroll->setWidgetResizable(true);
+  stage_scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+  stage_scroll->setFrameShape(QFrame::NoFrame);
+  stage_dock->setWidget(stage_scroll);
   stage_dock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
   addDockWidget(Qt::LeftDockWidgetArea, stage_dock);
   connect(stage_panel_, &StagePanel::buttonPressed, this, [this](app::Button button) {
@@ -689,6 +705,7 @@ void MainWindow::mirror() {
       force_arrow_->hide();
     }
     if (!last_warning_.isEmpty() || banner_label_->text().isEmpty() || banner_label_->property("warning").toString() != last_warning_ ||
+        banner_label_->property("view_width").toInt() != view_->width() ||
         banner_label_->property("stage").toString() !=
             StagePanel::stageText(s.stage, s.sub_stage) + (robotMeasured() ? QString() : QStringLiteral("?"))) {
       showBanner(last_warning_);
@@ -734,13 +751,23 @@ void MainWindow::showBanner(const QString& warning) {
 
 void MainWindow::setBanner(const QString& text, const QColor& colour, const QString& key) {
   banner_label_->setProperty("stage", key);
-  banner_label_->setText(text);
+  banner_label_->setProperty("view_width", view_->width());  // a resized view centres it anew
+  const int widest = std::max(200, view_->width() - 24);
+  QString lines = text;
+  // A view narrower than "CONFIGURATION · RECORDING" (docks widened, a small screen) shows the
+  // stage and its sub-stage on two lines rather than cut at both ends.
+  const int stage_end = lines.indexOf(QLatin1Char('\n'));
+  const QString stage_line = stage_end < 0 ? lines : lines.left(stage_end);
+  if (QFontMetrics(banner_label_->font()).horizontalAdvance(stage_line) + 28 > widest) {
+    lines = QString(stage_line).replace(QStringLiteral(" · "), QStringLiteral("\n")) + (stage_end < 0 ? QString() : lines.mid(stage_end));
+  }
+  banner_label_->setText(lines);
   banner_label_->setStyleSheet(
       QStringLiteral("QLabel { background: rgba(%1,%2,%3,215); color: white; border-radius: 6px; padding: 6px 14px; }")
           .arg(colour.red())
           .arg(colour.green())
           .arg(colour.blue()));
-  banner_label_->setMaximumWidth(std::max(200, view_->width() - 24));
+  banner_label_->setMaximumWidth(widest);
   banner_label_->adjustSize();
   banner_label_->move(std::max(0, (view_->width() - banner_label_->width()) / 2), 10);
   key_map_label_->move(12, std::max(0, view_->height() - key_map_label_->height() - 12));
