@@ -359,13 +359,18 @@ void MainWindow::stopLive() {
   }
 }
 
+QString MainWindow::sessionDirectory() {
+  // ~/.local/share/flexirob/sessions: AppDataLocation would name the organization and the
+  // application, both "flexirob", one folder inside the other.
+  return QStandardPaths::writableLocation(QStandardPaths::GenericDataLocation) + QStringLiteral("/flexirob/sessions");
+}
+
 void MainWindow::startRecording() {
   recorded_itm_version_ = ~0ULL;  // a new file holds the graph and the model again
   recorded_model_.reset();
   session_file_.clear();
   if (!options_.record_sessions || !model_ || !live_) return;
-  const QString directory =
-      QStandardPaths::writableLocation(QStandardPaths::AppDataLocation) + QStringLiteral("/sessions");
+  const QString directory = sessionDirectory();
   if (!QDir().mkpath(directory)) {
     showStatusMessage(statusBar(), tr("Cannot create %1: this run is not recorded").arg(directory), 15000);
     return;
@@ -1063,7 +1068,7 @@ void MainWindow::buildMenus() {
   file->addAction(tr("&Open recording…"), QKeySequence::Open, this, [this] {
     const QString path = QFileDialog::getOpenFileName(
         this, tr("Open a session recording"),
-        QStandardPaths::writableLocation(QStandardPaths::AppDataLocation) + QStringLiteral("/sessions"),
+        sessionDirectory(),
         tr("FlexIRob sessions (*.flexirob *.sqlite *.db);;All files (*)"));
     if (!path.isEmpty() && openRecording(path) == nullptr) {
       QMessageBox::warning(this, tr("Open recording"), fullStatusMessage(statusBar()));

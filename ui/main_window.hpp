@@ -94,6 +94,8 @@ class MainWindow : public QMainWindow {
   ForceArrow* forceArrow() const { return force_arrow_.get(); }
   QLabel* keyMapLabel() const { return key_map_label_; }
   QLabel* bannerLabel() const { return banner_label_; }
+  /// Where runs are recorded: $XDG_DATA_HOME/flexirob/sessions (~/.local/share/flexirob/sessions).
+  static QString sessionDirectory();
   /// The problems the view shows (a robot, scene or backend that could not be used); hidden if none.
   QLabel* problemLabel() const { return problem_label_; }
   render::World& world() { return world_; }

@@ -368,6 +368,11 @@ class FeaturesTest : public QObject {
     QCOMPARE(window.overlays().layer(flexirob::render::OverlayLayer::kGoalAndPath)->getNumChildren(), 0U);
 
     // The run's recording in the review window: the graph and the slices of the end.
+    // Recorded into the one sessions folder, not into flexirob/flexirob/sessions.
+    QVERIFY2(window.sessionFile().startsWith(MainWindow::sessionDirectory() + QStringLiteral("/")), qPrintable(window.sessionFile()));
+    QVERIFY(MainWindow::sessionDirectory().endsWith(QStringLiteral("/share/flexirob/sessions")) ||
+            !qEnvironmentVariableIsEmpty("XDG_DATA_HOME"));
+    QVERIFY(!MainWindow::sessionDirectory().contains(QStringLiteral("flexirob/flexirob")));
     QTemporaryDir directory;
     const QString file = directory.filePath(QStringLiteral("run.flexirob"));
     QVERIFY(window.saveSession(file));
