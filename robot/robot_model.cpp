@@ -805,7 +805,22 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const fs::path& ba
          << "); the simulated link may move unlike a real one, its <inertia> is worth a check";
     model.notes_.push_back(line.str());
   }
+  // A kinematics-only URDF (no masses at all) is simulated with the assumed masses as documented;
+  // one that gives the other links' masses (0.4 kg each, say) meant something else by mass 0.
+  const bool some_given = model.bodies_.size() > 1 && std::any_of(model.bodies_.begin() + 1, model.bodies_.end(), [](const Body& body) { return body.mass > 0.0; });
   assumeInertiaOfMasslessBodies(model.bodies_, model.joints_, model.X_last_body_tip_);
+  std::string massless;
+  for (const Body& body : model.bodies_) {
+    if (body.inertia_assumed) massless += (massless.empty() ? "'" : ", '") + body.name + "'";
+  }
+  if (some_given && !massless.empty()) {
+    std::ostringstream line;
+    const bool one = massless.find(',') == std::string::npos;
+    line << (one ? "moving body " : "moving bodies ") << massless << (one ? " gives" : " give")
+         << " no mass (no <inertial>, or mass 0): each is simulated as " << kAssumedMass
+         << " kg at the middle of its link; give the links' masses for a simulation that moves like the arm";
+    model.notes_.push_back(line.str());
+  }
   return model;
 }
 

@@ -363,8 +363,8 @@ Json runReachable(const EvalOptions& options) {
     // one, not reported as a miss of the learned map with whatever the arm met on its way.
     const double beyond_reach = arm_reach.fromShoulder(target) - arm_reach.reach;
     if (beyond_reach > 0.0) {
-      std::fprintf(stderr, "note: scene target (%.3f, %.3f, %.3f) m lies %.2f m beyond the arm's reach (%.2f m from the shoulder)\n",
-                   target.x(), target.y(), target.z(), beyond_reach, arm_reach.reach);
+      std::fprintf(stderr, "note: scene target (%.3f, %.3f, %.3f) m lies %.2f m beyond the arm's reach (%.2f m from the shoulder, reach %.2f m)\n",
+                   target.x(), target.y(), target.z(), beyond_reach, arm_reach.fromShoulder(target), arm_reach.reach);
     }
     scene_targets.push_back({{"target_m", {target.x(), target.y(), target.z()}},
                              {"reached", reached},

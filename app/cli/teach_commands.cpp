@@ -507,7 +507,7 @@ Json runTeach(TeachOptions options) {
     const int signal_number = g_stop_signal.load();
     std::ostringstream message;
     message << "teach: stopped by " << (signal_number == SIGTERM ? "SIGTERM" : "SIGINT") << " after " << std::fixed
-            << std::setprecision(1) << report.simulated_time << " s of teaching; what was recorded (" << workflow.areas().size()
+            << std::setprecision(1) << wall_seconds << " s (" << report.simulated_time << " s of simulated teaching); what was recorded (" << workflow.areas().size()
             << " of " << options.areas << " areas, " << samples << " samples) was written to " << options.out;
     if (!session_error.empty()) {
       message << "; but the session file failed: " << session_error

@@ -234,6 +234,9 @@ TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   EXPECT_GT(targets[1].at("beyond_reach_m").get<double>(), 2.0) << targets[1].dump();
   EXPECT_LT(targets[1].at("beyond_reach_m").get<double>(), 2.2) << targets[1].dump();
   EXPECT_NE(result.err.find("note: scene target (-3.000, 0.000, 0.300) m lies"), std::string::npos) << result.err;
+  // Both distances, each named: the target's from the shoulder and the arm's reach.
+  EXPECT_NE(result.err.find(" m from the shoulder, reach 0."), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("beyond the arm's reach (3."), std::string::npos) << result.err;
   std::filesystem::remove(session);
   std::filesystem::remove(scene);
 }

@@ -88,6 +88,8 @@ TEST(TeachCli, StoppedBySigtermWritesWhatWasRecordedAndSaysSo) {
   ASSERT_EQ(std::system(("sh -c '" + script + "'").c_str()), 0);
   EXPECT_EQ(text(code), "143\n") << text(err);
   EXPECT_NE(text(err).find("error: teach: stopped by SIGTERM after"), std::string::npos) << text(err);
+  // The wall time the signal came after, the simulated time beside it, each named.
+  EXPECT_NE(text(err).find(" s of simulated teaching); what was recorded"), std::string::npos) << text(err);
   EXPECT_NE(text(err).find("was written to " + out.string()), std::string::npos) << text(err);
   EXPECT_NE(text(json).find("\"interrupted\": true"), std::string::npos) << text(json);
   // The session was closed as at the end of a run: one file, readable, closed cleanly.

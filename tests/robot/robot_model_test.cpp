@@ -191,6 +191,21 @@ TEST(RobotModel, SaysWhichJointsGiveAZeroEffortLimit) {
   EXPECT_TRUE(RobotModel::fromUrdfString(twoJointArm(), ".").notes().empty());
 }
 
+// mass="0" on one link of an arm whose other links weigh something is a slip, not a choice: the
+// simulated 1 kg is said. A URDF with no masses at all gets the assumed masses without a word.
+TEST(RobotModel, SaysWhichBodiesGetTheAssumedMassWhenOthersGiveTheirs) {
+  std::string urdf = twoJointArm();
+  const std::string given = R"(<mass value="2"/>)";
+  urdf.replace(urdf.find(given), given.size(), R"(<mass value="0"/>)");
+  const RobotModel model = RobotModel::fromUrdfString(urdf, ".");
+  ASSERT_EQ(model.notes().size(), 1U);
+  EXPECT_NE(model.notes()[0].find("moving body 'l1' gives no mass"), std::string::npos) << model.notes()[0];
+  EXPECT_NE(model.notes()[0].find("simulated as 1 kg"), std::string::npos) << model.notes()[0];
+  EXPECT_TRUE(model.bodies()[1].inertia_assumed);
+  EXPECT_DOUBLE_EQ(model.bodies()[1].mass, kAssumedMass);
+  EXPECT_TRUE(RobotModel::fromUrdfString(twoJointArm(), ".").notes().empty());
+}
+
 // A joint locked by its limits stays in the posture vector, and the model says it never moves.
 TEST(RobotModel, SaysWhichJointsEqualLimitsLockInPlace) {
   std::string urdf = twoJointArm();
