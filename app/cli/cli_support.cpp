@@ -190,10 +190,12 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
       empty ? std::filesystem::path() : builtin ? resourceDir() / "scenes" / (reference + ".yaml") : std::filesystem::path(reference);
   // The session stores the scene as sceneToYaml wrote it, so the file is compared in that form.
   std::optional<std::string> on_disk;
+  std::string on_disk_error;
   try {
     on_disk = robot::sceneToYaml(robot::loadScene(reference));
-  } catch (const InputError&) {
+  } catch (const InputError& error) {
     // Moved, deleted or no longer valid: the stored copy is all there is.
+    on_disk_error = error.what();
   }
   const std::filesystem::path base_dir = file.empty() ? std::filesystem::current_path() : file.parent_path();
   robot::Scene scene;
@@ -201,7 +203,8 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
     scene = robot::parseScene(stored_scene_text, base_dir, "scene stored in the session", robot::UnknownParameters::kIgnore);
   } catch (const InputError& damaged) {
     // A damaged session file: the scene file, where it still reads, is the next best.
-    if (!on_disk) throw InputError(std::string(damaged.what()) + ", and '" + reference + "' cannot be read either");
+    // Both reasons: the same missing mesh fails both, and the file named alone would be blamed.
+    if (!on_disk) throw InputError(std::string(damaged.what()) + "; the scene file does not read either: " + on_disk_error);
     std::fprintf(stderr, "note: the scene stored in the session does not read (%s); '%s' is used instead\n", damaged.what(),
                  reference.c_str());
     return loadSceneNoting(reference);

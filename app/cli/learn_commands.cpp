@@ -51,6 +51,7 @@ bool isOutputName(const std::string& name) {
 // Reads and validates a learning CSV; every problem is an InputError naming file, line and column.
 LearningCsv readLearningCsv(const std::string& path, bool outputs_required) {
   std::error_code error;
+  if (std::filesystem::is_directory(path, error)) throw InputError("data file '" + path + "' is a directory");
   if (!std::filesystem::is_regular_file(path, error)) throw InputError("data file '" + path + "' does not exist");
   if (std::filesystem::file_size(path, error) > kMaxCsvBytes) throw InputError("data file '" + path + "' is larger than 512 MiB");
   std::ifstream in(path);

@@ -204,6 +204,39 @@ TEST(EvalCli, EveryResultNamesTheSessionRobotAndSceneItWasMeasuredIn) {
   std::filesystem::remove(session);
 }
 
+// The stored scene and the scene file both name a mesh that has gone: the error says that both
+// fail, and why each does, rather than blame a scene file that is itself fine.
+TEST(EvalReachableCli, AMeshGoneFromBesideTheSceneIsNamedAsTheCause) {
+  const auto directory = scratchDir() / "mesh_gone";
+  std::filesystem::create_directories(directory);
+  const auto mesh = directory / "wedge.stl";
+  writeText(mesh,
+            "solid wedge\n"
+            "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\nvertex 0 0.1 0\nendloop\nendfacet\n"
+            "facet normal 0 -1 0\nouter loop\nvertex 0 0 0\nvertex 0 0 0.1\nvertex 0.1 0 0\nendloop\nendfacet\n"
+            "facet normal -1 0 0\nouter loop\nvertex 0 0 0\nvertex 0 0.1 0\nvertex 0 0 0.1\nendloop\nendfacet\n"
+            "facet normal 1 1 1\nouter loop\nvertex 0.1 0 0\nvertex 0 0 0.1\nvertex 0 0.1 0\nendloop\nendfacet\n"
+            "endsolid wedge\n");
+  const auto scene = directory / "cell.yaml";
+  writeText(scene, "name: cell\nobstacles:\n  - {name: wedge, shape: mesh, file: wedge.stl, position: [-2.0, 0.0, 0.3]}\n");
+  const auto session = tinySession(scene.string(), "mesh-gone.json");
+  {
+    // The copy of the scene a taught session keeps, as teach stores it.
+    std::ifstream in(session);
+    nlohmann::json json = nlohmann::json::parse(in);
+    json["scene_text"] = robot::sceneToYaml(robot::loadScene(scene.string()));
+    writeText(session, json.dump());
+  }
+  std::filesystem::remove(mesh);
+  const auto result = runCliBinary("eval reachable --spacing 0.3 --session " + session.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("mesh file"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("; the scene file does not read either: "), std::string::npos) << result.err;
+  EXPECT_EQ(result.err.find("cannot be read"), std::string::npos) << result.err;
+  std::filesystem::remove(session);
+  std::filesystem::remove_all(directory);
+}
+
 TEST(EvalReachableCli, EvaluatesTheScenesSingleTargetsToo) {
   // One target where the first area's posture puts the tip, one far beyond the arm's reach.
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
