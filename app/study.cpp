@@ -355,7 +355,22 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
         members.push_back(i);
       }
     }
-    if (members.empty()) continue;
+    if (members.empty()) {
+      // Centres that fit no session are said, not dropped without a word.
+      std::size_t taught = 0;
+      Eigen::Index posture_joints = 0;
+      for (const auto& participant : study.participants) {
+        const auto found = participant.q_fixed.find(seeds.area);
+        if (participant.robot != robot || found == participant.q_fixed.end()) continue;
+        ++taught;
+        posture_joints = found->second.size();
+      }
+      study.not_clustered.push_back(
+          taught == 0 ? "area " + std::to_string(seeds.area) + ": its centres name an area no session of '" + robot + "' taught"
+                      : "area " + std::to_string(seeds.area) + ": its centres hold " + std::to_string(joints) + " joint values, the postures " +
+                            std::to_string(posture_joints));
+      continue;
+    }
     clustering.postures.resize(joints, static_cast<Eigen::Index>(members.size()));
     for (std::size_t m = 0; m < members.size(); ++m) {
       clustering.postures.col(static_cast<Eigen::Index>(m)) =

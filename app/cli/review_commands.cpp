@@ -265,7 +265,10 @@ Json reviewStudy(const StudyArguments& arguments) {
   }
   out["combinations"] = combinations;
   std::vector<app::OutputFile> plot;
-  if (!arguments.plot.empty()) {
+  // Nothing clustered is nothing to draw: a blank picture named in the JSON would pass for one.
+  const bool plotted = !arguments.plot.empty() && !study.clusterings.empty();
+  if (!arguments.plot.empty() && !plotted) std::cerr << "note: --plot: no area was clustered, so no picture was written\n";
+  if (plotted) {
     const app::ScatterImage scatter = app::renderMdsScatter(study, 360 * std::max<int>(1, static_cast<int>(study.clusterings.size())), 360);
     render::Image image;
     image.width = scatter.width;
@@ -281,7 +284,7 @@ Json reviewStudy(const StudyArguments& arguments) {
   } else {
     app::writeFilesTogether(plot);
   }
-  if (!arguments.plot.empty()) out["plot"] = arguments.plot;
+  if (!arguments.plot.empty()) out["plot"] = plotted ? Json(arguments.plot) : Json(nullptr);
   return out;
 }
 

@@ -356,6 +356,31 @@ TEST(StudyClusters, ClustersTheRobotMostParticipantsUsedAndNamesTheOthers) {
   EXPECT_EQ(study.clusterings[0].participants, (std::vector<std::string>{"p1", "other"}));
 }
 
+// Centres of an area no session taught, or of more joints than the postures hold (given with
+// --centres for another arm): nothing to cluster, and the study says why for each area.
+TEST(StudyClusters, SaysWhichGivenCentresFitNoSession) {
+  const auto seeds = thesisClusterSeeds();
+  StudyResult study;
+  study.participants = {participant("p1", near(seeds[0].centres[0], 0.05), near(seeds[1].centres[5], -0.04), 0.004, 0),
+                        participant("p2", near(seeds[0].centres[0], -0.1), near(seeds[1].centres[5], 0.02), 0.006, 0)};
+  for (auto& p : study.participants) p.robot = "lwr4";
+  StudyOptions options;
+  options.seeds_robot.clear();
+  AreaClusterSeeds too_long;
+  too_long.area = 0;
+  too_long.names = {"A", "B"};
+  too_long.centres = {Eigen::VectorXd::Zero(9), Eigen::VectorXd::Ones(9)};
+  AreaClusterSeeds untaught = too_long;
+  untaught.area = 5;
+  untaught.centres = {Eigen::VectorXd::Zero(3), Eigen::VectorXd::Ones(3)};
+  options.seeds = {too_long, untaught};
+  clusterStudy(study, options);
+  EXPECT_TRUE(study.clusterings.empty());
+  ASSERT_EQ(study.not_clustered.size(), 2U);
+  EXPECT_EQ(study.not_clustered[0], "area 0: its centres hold 9 joint values, the postures 7");
+  EXPECT_EQ(study.not_clustered[1], "area 5: its centres name an area no session of 'lwr4' taught");
+}
+
 TEST(StudyReplay, CountsContactsOfTheRecordedPosturesInTheRecordedScene) {
   const auto dir = scratchDir("replay");
   Eigen::VectorXd free_q(7), touching_q(7);

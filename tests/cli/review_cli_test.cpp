@@ -137,6 +137,24 @@ TEST_F(ReviewCli, StudyReadsTheGuisRecordingsAndSkipsAForeignFile) {
   for (const auto& csv : json.at("csv_files")) EXPECT_TRUE(fs::exists(csv.get<std::string>())) << csv;
 }
 
+// Centres of an area no session taught: the study says so, and --plot writes no blank picture.
+TEST_F(ReviewCli, StudyCentresThatFitNoSessionAreNamedAndNoBlankPlotIsWritten) {
+  writeSession("alice.flexirob", "alice", 0.0);
+  writeSession("bob.flexirob", "bob", 0.3);
+  const fs::path centres = dir_ / "centres.csv";
+  { std::ofstream(centres) << "7,A,0,0,0,0,0,0\n7,B,1,1,1,1,1,1\n"; }
+  const fs::path plot = dir_ / "mds.png";
+  const auto result = runCliBinary("review --study " + dir_.string() + " --centres " + centres.string() + " --plot " + plot.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto json = result.json();
+  EXPECT_TRUE(json.at("clusterings").empty());
+  EXPECT_TRUE(json.at("plot").is_null()) << json.at("plot");
+  EXPECT_FALSE(fs::exists(plot));
+  EXPECT_NE(result.err.find("note: not clustered: area 7: its centres name an area no session of 'lwr4' taught"), std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("note: --plot: no area was clustered, so no picture was written"), std::string::npos) << result.err;
+}
+
 TEST_F(ReviewCli, RefusesTruncatedForeignAndMissingFilesWithOneLine) {
   const fs::path file = writeSession("cut.flexirob", "carol", 0.0);
   fs::resize_file(file, fs::file_size(file) / 2);
