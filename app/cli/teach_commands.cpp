@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <iomanip>
 #include <cstdio>
@@ -337,7 +338,8 @@ Json runTeach(TeachOptions options) {
                            {"scene_posture_offset_rad", area.q_chosen.size() > 0 && area.q_chosen.size() == area.q_suggested.size()
                                                             ? Json((area.q_chosen - area.q_suggested).norm())
                                                             : Json()},
-                           {"clearance_m", area.clearance},
+                           // null: not taught (no posture shown), or nothing within 0.5 m of the arm.
+                           {"clearance_m", area.taught && std::isfinite(area.clearance) ? Json(area.clearance) : Json()},
                            {"failure", area.failure},
                            {"automatic", area.automatic},
                            {"map_failures_before", area.map_failures_before},

@@ -262,6 +262,10 @@ TEST(TeachCli, TeachesNoPlaceOfItsOwnInsideTheGridsExcludedBoxes) {
   EXPECT_EQ(json.at("areas").get<int>(), 1);
   ASSERT_EQ(json.at("tutor").size(), 2U);
   EXPECT_FALSE(json.at("tutor").at(1).at("taught").get<bool>());
+  // An area never taught has no posture whose clearance could be 0 m ("touching").
+  EXPECT_TRUE(json.at("tutor").at(1).at("clearance_m").is_null()) << json.at("tutor").at(1).dump();
+  const auto& taught_clearance = json.at("tutor").at(0).at("clearance_m");
+  EXPECT_TRUE(taught_clearance.is_null() || taught_clearance.get<double>() > 0.0) << taught_clearance;
   // Every random point is counted under why it was passed over: here the excluded box, for
   // all 200 (beyond the box the arm cannot reach them either, so the box is what is said).
   const std::string failure = json.at("tutor").at(1).at("failure").get<std::string>();
