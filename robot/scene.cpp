@@ -555,6 +555,9 @@ class SceneReader {
         fs::path resolved(file);
         if (resolved.is_relative()) resolved = base_dir_ / resolved;
         std::error_code error;
+        if (fs::is_directory(resolved, error)) {
+          fail(node["file"], join(path, "file"), "mesh file '" + printable(file) + "' is a folder, not a mesh file");
+        }
         if (!fs::is_regular_file(resolved, error)) {
           fail(node["file"], join(path, "file"), "mesh file '" + printable(file) + "' not found (relative paths start at the scene file's folder)");
         }

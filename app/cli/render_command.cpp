@@ -261,6 +261,17 @@ Json renderPicture(const RenderOptions& options) {
   // Scene and robot: the options', else the session's, else an empty scene and the scene's robot.
   const std::string scene_name = !options.scene.empty() ? options.scene : session ? session->scene : "";
   robot::Scene scene = options.scene.empty() && session ? loadSessionScene(session->scene, session->scene_text) : loadSceneNoting(scene_name);
+  if (session && !options.scene.empty() && !session->scene.empty()) {
+    // The session's areas and postures are drawn in another scene than the one they were taught
+    // in: worth drawing (the same cell changed), not worth drawing unsaid.
+    const std::string taught_in = std::filesystem::path(session->scene).stem().string();
+    const bool same = options.scene == session->scene || std::filesystem::path(options.scene).stem().string() == taught_in ||
+                      taught_in == scene.name;
+    if (!same) {
+      std::cerr << "note: the session was taught in the scene '" << printable(session->scene, 200) << "'; drawn in '"
+                << printable(scene.name, 200) << "' as --scene asks" << (options.robot.empty() ? ", with the session's robot" : "") << "\n";
+    }
+  }
   const std::string robot_name = !options.robot.empty() ? options.robot : session ? session->robot : robot::robotFor("", scene);
   if (session && !options.robot.empty()) {
     // The session's postures and samples belong to its robot: drawn on another arm of the same

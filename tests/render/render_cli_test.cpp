@@ -379,6 +379,17 @@ TEST(RenderCommandOverlays, DrawsASessionOnlyOnItsOwnRobot) {
   const Result same = run({"render", "--session", session.string(), "--robot", "lwr4", "--out", file.string(), "--width", "64",
                            "--height", "48"});
   EXPECT_EQ(same.exit_code, 0) << same.err;
+  EXPECT_EQ(same.err.find("was taught in the scene"), std::string::npos) << same.err;
+  // Drawn in another scene than the one it was taught in: said, once.
+  const Result elsewhere = run({"render", "--session", session.string(), "--scene", "setup_I", "--out", file.string(), "--width", "64",
+                                "--height", "48"});
+  EXPECT_EQ(elsewhere.exit_code, 0) << elsewhere.err;
+  EXPECT_NE(elsewhere.err.find("note: the session was taught in the scene 'empty'; drawn in 'setup_I' as --scene asks, with the session's robot"),
+            std::string::npos)
+      << elsewhere.err;
+  const Result own_scene = run({"render", "--session", session.string(), "--scene", "empty", "--out", file.string(), "--width", "64",
+                                "--height", "48"});
+  EXPECT_EQ(own_scene.err.find("was taught in the scene"), std::string::npos) << own_scene.err;
   for (const auto& path : {session, file, other}) std::filesystem::remove(path);
 }
 

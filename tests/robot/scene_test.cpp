@@ -759,7 +759,9 @@ TEST_F(SceneFileTest, RefusesMissingAndBrokenMeshFilesNamingTheLine) {
   expectOneLineNamingFile(message, "broken.yaml:2");
   EXPECT_NE(message.find("nowhere.stl"), std::string::npos) << message;
   fs::create_directories(dir_ / "folder.stl");
-  expectOneLineNamingFile(refusal("obstacles:\n  - {shape: mesh, file: folder.stl}\n"), "broken.yaml");
+  const std::string folder = refusal("obstacles:\n  - {shape: mesh, file: folder.stl}\n");
+  expectOneLineNamingFile(folder, "broken.yaml");
+  EXPECT_NE(folder.find("'folder.stl' is a folder, not a mesh file"), std::string::npos) << folder;
   // A mesh that cannot be read is reported at the scene line that names it, with the mesh's reason.
   write("meshes/readme.stl", "These meshes are exported from the fixture's CAD model in millimetres.\n");
   const std::string broken = refusal("name: cell\nobstacles:\n  - {shape: mesh, file: meshes/readme.stl}\n");
