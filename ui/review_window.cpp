@@ -304,6 +304,7 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     for (render::OverlayLayer layer : render::kAllOverlayLayers) world_->overlays().setContent(layer, nullptr);
     world_->overlays().itm().clear();
     kinematics_ = std::make_unique<robot::Kinematics>(*model);
+    collision_world_ = std::make_unique<robot::CollisionWorld>(*model, scene);
 
     auto events = std::make_unique<Events>();
     events->samples = reader->samples();
@@ -502,6 +503,17 @@ void ReviewWindow::updateOverlays() {
     touching.push_back(collision.body_a);
     touching.push_back(collision.body_b);
   }
+  // A posture held in contact (posed through the table) is red as long as it is shown, as it
+  // was live.
+  if (collision_world_ && shown_q_.size() == model_->dof()) {
+    collision_world_->update(shown_q_);
+    for (const robot::Contact& contact : collision_world_->contacts()) {
+      touching.push_back(model_->bodies()[static_cast<std::size_t>(contact.body)].name);
+      if (contact.isSelfCollision()) touching.push_back(model_->bodies()[static_cast<std::size_t>(contact.other_body)].name);
+    }
+  }
+  std::sort(touching.begin(), touching.end());
+  touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
   if (touching != shown_collisions_) {
     render::showCollisions(*world_->robot(), touching);
     shown_collisions_ = touching;

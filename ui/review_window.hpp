@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "render/world.hpp"
+#include "robot/collision.hpp"
 #include "robot/kinematics.hpp"
 #include "robot/robot_model.hpp"
 
@@ -128,6 +129,8 @@ class ReviewWindow : public QMainWindow {
 
   /// The posture shown now (empty before a recording is open).
   const Eigen::VectorXd& shownPosture() const { return shown_q_; }
+  /// The links drawn red: in a contact recorded lately, or touching something in the posture shown.
+  const std::vector<std::string>& linksShownInContact() const { return shown_collisions_; }
   /// The stage band at the current time (empty label if none).
   std::string stageAt(double time) const;
 
@@ -161,6 +164,9 @@ class ReviewWindow : public QMainWindow {
   std::unique_ptr<app::SessionReader> reader_;
   std::unique_ptr<robot::RobotModel> model_;
   std::unique_ptr<robot::Kinematics> kinematics_;
+  /// The recorded scene with the recorded arm: which links touch something in the posture shown
+  /// (the recording holds a contact's start, not how long the arm stayed in it).
+  std::unique_ptr<robot::CollisionWorld> collision_world_;
   struct Events;  // the recording's events, read once when opened
   std::unique_ptr<Events> events_;
   std::vector<StageBand> bands_;

@@ -38,7 +38,8 @@ Eigen::VectorXd postureAt(const robot::RobotModel& model, double t) {
 // training area with samples, a teach-in trajectory and the robot's states at 1 kHz.
 // `robot_name` names the robot in the metadata (the states are the LWR IV's in any case);
 // a non-empty `model_text` is stored as a learned model.
-void writeRecording(const std::filesystem::path& file, const std::string& robot_name = "lwr4", const std::string& model_text = "") {
+void writeRecording(const std::filesystem::path& file, const std::string& robot_name = "lwr4", const std::string& model_text = "",
+                    const std::string& scene_text = "") {
   const auto path = resolveRobotPath("lwr4");
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(path);
   app::SessionMetadata meta;
@@ -48,6 +49,7 @@ void writeRecording(const std::filesystem::path& file, const std::string& robot_
   meta.robot_urdf = urdf.str();
   meta.tip_link = model.tipLink();
   meta.software_version = "test";
+  meta.scene_text = scene_text;
   app::SessionRecorder recorder(file, meta);
   recorder.recordStage({0.0, "IDLE", ""});
   recorder.recordStage({1.0, "CONFIGURATION", "APPROACHING"});
@@ -281,6 +283,21 @@ class ReviewWindowTest : public QObject {
     QVERIFY2(window.damage().startsWith(QStringLiteral("On tree page")), qPrintable(window.damage()));
     QVERIFY(window.windowTitle().contains(QStringLiteral("(damaged)")));
     QCOMPARE(window.reader()->stateCount(), static_cast<std::int64_t>(kDuration * 1000) + 1);
+  }
+
+  // A posture held inside an obstacle for the whole recording (no contact event recorded): its
+  // links are red whenever it is shown, as they were live.
+  void linksInsideAnObstacleAreRedWhereverThePostureIsShown() {
+    const auto boxed = std::filesystem::path(dir_.path().toStdString()) / "boxed.db";
+    writeRecording(boxed, "lwr4", "", "name: boxed\nobstacles:\n  - {name: block, shape: box, size: [0.3, 0.3, 0.3], position: [0, 0, 0.6]}\n");
+    ui::ReviewWindow window;
+    QVERIFY2(window.open(boxed), qPrintable(window.errorString()));
+    window.setTime(3.0);
+    QVERIFY(!window.linksShownInContact().empty());
+    ui::ReviewWindow clear;
+    QVERIFY(clear.open(file_));
+    clear.setTime(3.0);
+    QVERIFY(clear.linksShownInContact().empty());
   }
 
   // The states of a 7-joint arm under the name of the 9-joint one: refused, not replayed as a
