@@ -56,6 +56,24 @@ TimePlot::TimePlot(const QString& title, const QString& value_label, QWidget* pa
   value_axis_->setRange(0.0, 1.0);
 }
 
+void TimePlot::resizeEvent(QResizeEvent* event) {
+  QChartView::resizeEvent(event);
+  // The legend does not wrap: on a narrow chart (a small screen) its names were cut to nothing
+  // and only the colour squares showed. The font shrinks with the room each entry has, to 60 %.
+  int shown = 0;
+  for (QLegendMarker* marker : chart_->legend()->markers()) shown += marker->isVisible() ? 1 : 0;
+  if (shown == 0) return;
+  if (legend_point_size_ <= 0.0) legend_point_size_ = chart_->legend()->font().pointSizeF();
+  if (legend_point_size_ <= 0.0) return;  // a font sized in pixels is left alone
+  constexpr double kRoomPerEntry = 64.0;  // [px] a marker, a name of a few letters and a gap
+  const double per_entry = std::max(0.0, width() - 16.0) / shown;
+  const double wanted = legend_point_size_ * std::clamp(per_entry / kRoomPerEntry, 0.6, 1.0);
+  QFont font = chart_->legend()->font();
+  if (std::abs(font.pointSizeF() - wanted) < 0.05) return;
+  font.setPointSizeF(wanted);
+  chart_->legend()->setFont(font);
+}
+
 int TimePlot::addSeries(const QString& name, const QColor& color, Qt::PenStyle style, qreal width) {
   auto* series = new QLineSeries;
   series->setName(name);

@@ -76,6 +76,7 @@ class TimePlot : public QChartView {
   void cursorRequested(double time);
 
  protected:
+  void resizeEvent(QResizeEvent* event) override;
   void mousePressEvent(QMouseEvent* event) override;
   void mouseMoveEvent(QMouseEvent* event) override;
 
@@ -92,6 +93,7 @@ class TimePlot : public QChartView {
   double cursor_time_ = 0.0;
   bool fixed_values_ = false;
   double minimum_span_ = 0.0;
+  double legend_point_size_ = 0.0;  ///< the legend font's size before a narrow chart shrank it [pt]
 };
 
 /// The tick interval of 1, 2 or 5 times a power of ten that divides `span` into nearest
