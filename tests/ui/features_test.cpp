@@ -203,6 +203,27 @@ class FeaturesTest : public QObject {
     QCOMPARE(plots->taskErrorPlot()->valueRange().first, 0.0);
   }
 
+  // A narrow joint chart (a 1024 px screen) shrinks its legend's font rather than cut the names.
+  void aNarrowChartShrinksItsLegendInsteadOfCuttingTheNames() {
+    flexirob::ui::PlotPanel plots;
+    plots.setJoints({"A1", "A2", "A3", "A4", "A5", "A6", "A7"}, Eigen::VectorXd::Constant(7, -1.0), Eigen::VectorXd::Constant(7, 1.0));
+    flexirob::ui::TimePlot* joints = plots.jointPlot();
+    joints->setParent(nullptr);  // sized alone, not by the panel's layout
+    joints->show();
+    joints->resize(1200, 300);
+    QCoreApplication::processEvents();
+    const double wide = joints->chart()->legend()->font().pointSizeF();
+    joints->resize(300, 300);
+    QCoreApplication::processEvents();
+    const double narrow = joints->chart()->legend()->font().pointSizeF();
+    QVERIFY2(narrow < 0.8 * wide, qPrintable(QStringLiteral("%1 pt, then %2 pt").arg(wide).arg(narrow)));
+    QVERIFY(narrow >= 0.6 * wide - 1e-9);
+    joints->resize(1200, 300);
+    QCoreApplication::processEvents();
+    QCOMPARE(joints->chart()->legend()->font().pointSizeF(), wide);
+    delete joints;
+  }
+
   // Another scene restarts the robot's clock: the new run's curves start afresh, not joined to
   // the old run's by a line back to zero, and the old peak leaves the axis.
   void aRestartedRobotStartsThePlotsAfresh() {
