@@ -282,9 +282,10 @@ std::vector<SampleRecord> SessionReader::samples(int area) const {
   return out;
 }
 
-std::string SessionReader::damage() const {
+std::string SessionReader::damageOf(const std::filesystem::path& file) {
   try {
-    SqliteStatement check(impl_->db, "PRAGMA quick_check(1)");
+    const SqliteDatabase db(file.string(), SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX);
+    SqliteStatement check(db, "PRAGMA quick_check(1)");
     if (!check.step()) return "the check returned nothing";
     std::string finding = check.columnText(0);
     if (finding == "ok") return {};
@@ -295,7 +296,9 @@ std::string SessionReader::damage() const {
     const auto first = finding.find_first_not_of(' ');
     return first == std::string::npos ? std::string("damaged") : finding.substr(first);
   } catch (const SqliteError& error) {
-    return error.what();
+    // Only what says the pages are bad is damage; a busy file or too little memory is not.
+    if (error.code() == SQLITE_CORRUPT || error.code() == SQLITE_NOTADB) return error.what();
+    return {};
   }
 }
 

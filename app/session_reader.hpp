@@ -35,8 +35,10 @@ class SessionReader {
 
   /// What SQLite's quick check finds wrong with the file's pages (its first finding), empty when
   /// it finds nothing. Reads the whole file once: a reader that reads only part of it (the review
-  /// window seeks states by time) would otherwise never learn of damage elsewhere.
-  std::string damage() const;
+  /// window seeks states by time) would otherwise never learn of damage elsewhere. A connection
+  /// of its own, so that it may run on another thread than the reader's.
+  static std::string damageOf(const std::filesystem::path& file);
+  std::string damage() const { return damageOf(file_); }
 
   // --- Robot state at control rate.
   std::int64_t stateCount() const { return state_count_; }

@@ -1086,7 +1086,7 @@ std::optional<Eigen::Vector3d> SimulatedTutor::nextAutomaticTarget(const robot::
     } else if (near_tried(target)) {
       ++places_passed_over_["near a place tried before"];
     } else if (!accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds, &place_posture_)) {
-      ++places_passed_over_["where no posture found reaches it without a contact (none reached it, or each touched something)"];
+      ++places_passed_over_["where no posture found reaches it clear of contact, or none reaches it at all"];
     } else {
       return target;
     }

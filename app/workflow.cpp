@@ -418,8 +418,10 @@ RequestResult Workflow::replayTeachIn(int k) {
 RequestResult Workflow::planTo(const Eigen::Vector3d& goal) {
   if (stage_ != Stage::kExecution) return refuse("plan", std::string("plan: not in EXECUTION but ") + stateName());
   if (!goal.allFinite()) return refuse("plan", "plan: the goal must be three finite numbers");
-  // A map that never grew was mostly taught in contact: then the goal is not what is wrong.
-  const bool mostly_in_contact = itm_positions_in_contact_ > 0 && itm_positions_in_contact_ >= static_cast<std::size_t>(itm_.nodeCount());
+  // A map that never grew was mostly taught in contact: then the goal is not what is wrong. A
+  // brush of a few seconds in a long configuration is not that (the positions, not the nodes,
+  // compare: the ITM keeps far fewer nodes than the positions it is fed).
+  const bool mostly_in_contact = itm_positions_in_contact_ > 0 && itm_positions_in_contact_ >= itm_positions_inserted_;
   const std::string left_out = mostly_in_contact ? "; " + std::to_string(itm_positions_in_contact_) +
                                                        " positions of CONFIGURATION were left out of it because the arm touched something"
                                                  : std::string();
@@ -873,6 +875,7 @@ void Workflow::recordSample() {
       ++itm_positions_in_contact_;
     } else {
       itm_.insert(p, state_.q);
+      ++itm_positions_inserted_;
       ++itm_version_;
     }
   }

@@ -340,6 +340,7 @@ class Workflow {
   bool recording_full_ = false;
   Eigen::Index recording_contacts_ = 0;  ///< samples of this recording taken in contact
   std::size_t itm_positions_in_contact_ = 0;  ///< CONFIGURATION positions kept out of the ITM
+  std::size_t itm_positions_inserted_ = 0;    ///< CONFIGURATION positions fed to the ITM
   int reteach_index_ = -1;
   std::string next_area_name_;
   std::vector<Eigen::MatrixXd> teach_ins_;

@@ -124,16 +124,21 @@ int main(int argc, char** argv) {
   }
   // Without a window system Qt aborts (exit 134, a core dump) before any option is read: one
   // line saying what is missing, and the exit code of every other bad start.
-  const bool asks_for_text = [&] {
+  // Qt's own -platform option names a platform that needs no display variable (offscreen).
+  const bool asks_for_text_or_platform = [&] {
     for (int i = 1; i < argc; ++i) {
       const std::string argument = argv[i];
-      if (argument == "--help" || argument == "-h" || argument == "--help-all" || argument == "--version" || argument == "-v") return true;
+      if (argument == "--help" || argument == "-h" || argument == "--help-all" || argument == "--version" || argument == "-v" ||
+          argument == "-platform" || argument == "--platform" || argument.rfind("-platform=", 0) == 0 ||
+          argument.rfind("--platform=", 0) == 0) {
+        return true;
+      }
     }
     return false;
   }();
   const char* platform = std::getenv("QT_QPA_PLATFORM");
-  if (!asks_for_text && std::getenv("DISPLAY") == nullptr && std::getenv("WAYLAND_DISPLAY") == nullptr &&
-      (platform == nullptr || *platform == '\0')) {
+  if (!asks_for_text_or_platform && std::getenv("DISPLAY") == nullptr && std::getenv("WAYLAND_DISPLAY") == nullptr &&
+      std::getenv("WAYLAND_SOCKET") == nullptr && (platform == nullptr || *platform == '\0')) {
     std::fprintf(stderr,
                  "error: no display to open the window on (DISPLAY and WAYLAND_DISPLAY are unset); run it on a desktop, "
                  "under xvfb-run, or with QT_QPA_PLATFORM=offscreen\n");

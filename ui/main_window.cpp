@@ -16,6 +16,7 @@
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QScreen>
+#include <QStyle>
 #include <QScrollArea>
 #include <QSettings>
 #include <QStandardPaths>
@@ -171,12 +172,15 @@ MainWindow::MainWindow(const std::string& robot, const std::string& scene, const
     restoreState(settings.value(QStringLiteral("window/state")).toByteArray());
     // A size remembered on a larger screen is cut to this one, and the window moved onto it:
     // a status bar below the screen's edge is no status bar.
+    // The screen the window was remembered on, where that screen is still attached.
+    const QScreen* remembered = QGuiApplication::screenAt(geometry().center());
+    const QRect room_there = remembered != nullptr ? remembered->availableGeometry() : room;
     QRect kept = geometry();
-    kept.setSize(kept.size().boundedTo(room.size()));
-    if (kept.right() > room.right()) kept.moveRight(room.right());
-    if (kept.bottom() > room.bottom()) kept.moveBottom(room.bottom());
-    if (kept.left() < room.left()) kept.moveLeft(room.left());
-    if (kept.top() < room.top()) kept.moveTop(room.top());
+    kept.setSize(kept.size().boundedTo(room_there.size()));
+    if (kept.right() > room_there.right()) kept.moveRight(room_there.right());
+    if (kept.bottom() > room_there.bottom()) kept.moveBottom(room_there.bottom());
+    if (kept.left() < room_there.left()) kept.moveLeft(room_there.left());
+    if (kept.top() < room_there.top()) kept.moveTop(room_there.top());
     if (kept != geometry()) setGeometry(kept);
   }
 
@@ -240,6 +244,10 @@ void MainWindow::buildDocks() {
   stage_scroll->setWidgetResizable(true);
   stage_scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
   stage_scroll->setFrameShape(QFrame::NoFrame);
+  // As wide as the panel needs with the vertical bar beside it: the bar must not take the
+  // buttons' right edge, with no horizontal bar to reach it.
+  stage_scroll->setMinimumWidth(stage_panel_->minimumSizeHint().width() +
+                                stage_scroll->style()->pixelMetric(QStyle::PM_ScrollBarExtent));
   stage_dock->setWidget(stage_scroll);
   stage_dock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
   addDockWidget(Qt::LeftDockWidgetArea, stage_dock);

@@ -1,5 +1,7 @@
 #include "ui/review_window.hpp"
 
+#include <QThread>
+
 #include "ui/stage_panel.hpp"
 
 #include <QComboBox>
@@ -268,14 +270,36 @@ ReviewWindow::ReviewWindow(QWidget* parent)
 }
 
 ReviewWindow::~ReviewWindow() {
+  // A check still reading a large file is waited for: it writes into what it was given only.
+  for (QThread* check : damage_checks_) check->wait();
   // The view draws the world: detach it before the world goes.
   view_->setSceneRoot(nullptr);
+}
+
+void ReviewWindow::checkForDamage(const std::filesystem::path& file) {
+  // The quick check reads every page (seconds for a long recording at 1 kHz): on a thread of its
+  // own, so that the window plays at once; the verdict comes when the check ends.
+  auto finding = std::make_shared<std::string>();
+  QThread* check = QThread::create([file, finding] { *finding = app::SessionReader::damageOf(file); });
+  damage_checks_.push_back(check);
+  connect(check, &QThread::finished, this, [this, check, finding, file] {
+    std::erase(damage_checks_, check);
+    check->deleteLater();
+    if (finding->empty() || !reader_ || reader_->file() != file) return;
+    damage_ = QString::fromUtf8(printable(*finding, 300).c_str());
+    setWindowTitle(QStringLiteral("FlexIRob review — %1 (damaged)").arg(QString::fromStdString(file.filename().string())));
+    // Played as far as it reads: a file damaged at its end still holds the session before.
+    const QString status = QStringLiteral("session file %1 is damaged (%2); what could be read is shown")
+                               .arg(QString::fromStdString(file.string()), damage_);
+    qWarning("warning: %s", qPrintable(status));
+    showStatusMessage(statusBar(), status, 30000);
+  });
+  check->start();
 }
 
 bool ReviewWindow::open(const std::filesystem::path& file) {
   try {
     auto reader = std::make_unique<app::SessionReader>(file);
-    const std::string damage = reader->damage();
     const std::string name = file.filename().string();
     std::unique_ptr<robot::RobotModel> model;
     std::vector<std::string> left_out;
@@ -298,14 +322,10 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
                          " joint values, its robot '" + model->name() + "' has " + std::to_string(model->dof()) + " joints");
       }
     }
-    pause();
-    world_->setRobot(*model);
-    world_->setScene(scene);
-    for (render::OverlayLayer layer : render::kAllOverlayLayers) world_->overlays().setContent(layer, nullptr);
-    world_->overlays().itm().clear();
-    kinematics_ = std::make_unique<robot::Kinematics>(*model);
-    collision_world_ = std::make_unique<robot::CollisionWorld>(*model, scene);
-
+    // Everything is read before anything shown changes: a read that fails (a damaged page) leaves
+    // the open recording as it was, not half replaced, with objects on a model that is gone.
+    auto kinematics = std::make_unique<robot::Kinematics>(*model);
+    auto collision_world = std::make_unique<robot::CollisionWorld>(*model, scene);
     auto events = std::make_unique<Events>();
     events->samples = reader->samples();
     events->areas = reader->areas();
@@ -325,21 +345,18 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
       }
       events->itm = std::move(kept);
     }
-    std::vector<app::StageRecord> stages = reader->stages();
-    bands_.clear();
+    const std::vector<app::StageRecord> stages = reader->stages();
+    std::vector<StageBand> bands;
     for (std::size_t i = 0; i < stages.size(); ++i) {
       const double t1 = i + 1 < stages.size() ? stages[i + 1].time : reader->endTime();
-      bands_.push_back({stages[i].time, std::max(t1, stages[i].time), bandLabel(stages[i])});
+      bands.push_back({stages[i].time, std::max(t1, stages[i].time), bandLabel(stages[i])});
     }
     const double t0 = reader->startTime();
     const double t1 = std::max(reader->endTime(), t0 + 1e-3);
-    timeline_->setRange(t0, t1);
-    timeline_->setBands(bands_);
     std::vector<TimelineMarker> markers;
-    for (const app::SignalRecord& signal : reader->signals()) {
+    for (const app::SignalRecord& signal : events->signals) {
       markers.push_back({signal.time, signal.kind == app::SignalKind::Trigger, signal.name});
     }
-    timeline_->setMarkers(std::move(markers));
 
     // Plots from states picked through the time index (never a scan of the whole table).
     std::vector<std::string> names;
@@ -351,7 +368,6 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
       lower[j] = joint.limits.lower;
       upper[j] = joint.limits.upper;
     }
-    plots_->setJoints(names, lower, upper);
     std::vector<PlotSample> samples;
     const int points = reader->stateCount() > 0 ? static_cast<int>(std::min<std::int64_t>(kPlotPoints, reader->stateCount())) : 0;
     double last_time = -1e300;
@@ -366,12 +382,26 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
       // No desired task position is recorded with the states: the task error shown is how far
       // the commanded posture's tip is from the measured one, |FK(q_cmd) - FK(q)|.
       if (sample.q.size() == model->dof()) {
-        kinematics_->update(state->qCmdVector());
-        const Eigen::Vector3d commanded = kinematics_->p_WT();
+        kinematics->update(state->qCmdVector());
+        const Eigen::Vector3d commanded = kinematics->p_WT();
         sample.task_error = (commanded - state->position()).norm();
       }
       samples.push_back(std::move(sample));
     }
+
+    // Shown from here on: nothing below reads the file.
+    pause();
+    world_->setRobot(*model);
+    world_->setScene(scene);
+    for (render::OverlayLayer layer : render::kAllOverlayLayers) world_->overlays().setContent(layer, nullptr);
+    world_->overlays().itm().clear();
+    kinematics_ = std::move(kinematics);
+    collision_world_ = std::move(collision_world);
+    bands_ = std::move(bands);
+    timeline_->setRange(t0, t1);
+    timeline_->setBands(bands_);
+    timeline_->setMarkers(std::move(markers));
+    plots_->setJoints(names, lower, upper);
     plots_->setSamples(samples);
     // Not the live plot's |x - x_des|: the title says which error this is.
     plots_->taskErrorPlot()->setTitle(QStringLiteral("Tip from the commanded posture's tip"));
@@ -387,11 +417,10 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     confidence_slices_ = 0;
     operator_heights_ = false;
     error_.clear();
-    damage_ = QString::fromUtf8(printable(damage, 300).c_str());
+    damage_.clear();
     view_->setHomeCamera(world_->defaultCamera(static_cast<double>(std::max(1, view_->width())) /
                                                std::max(1, view_->height())));
-    setWindowTitle(QStringLiteral("FlexIRob review — %1%2")
-                       .arg(QString::fromStdString(file.filename().string()), damage_.isEmpty() ? QString() : QStringLiteral(" (damaged)")));
+    setWindowTitle(QStringLiteral("FlexIRob review — %1").arg(QString::fromStdString(file.filename().string())));
     QString status = QStringLiteral("%1: %2 states, %3 s, robot %4")
                          .arg(QString::fromStdString(file.string()))
                          .arg(reader_->stateCount())
@@ -404,13 +433,8 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
                     .arg(QString::fromStdString(left_out.front()));
       qWarning("note: %s", qPrintable(status));
     }
-    if (!damage_.isEmpty()) {
-      // Played as far as it reads: a file damaged at its end still holds the session before.
-      status = QStringLiteral("session file %1 is damaged (%2); what could be read is shown — %3")
-                   .arg(QString::fromStdString(file.string()), damage_, status);
-      qWarning("warning: %s", qPrintable(status));
-    }
     showStatusMessage(statusBar(), status);
+    checkForDamage(file);
     time_ = t0 - 1.0;  // force a redraw
     setTime(t0);
     return true;

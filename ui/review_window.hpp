@@ -14,6 +14,7 @@
 // Started by `flexirob --review FILE` (ui/main.cpp) or from the main window's File menu.
 #include <QKeyEvent>
 #include <QMainWindow>
+#include <QThread>
 #include <QWidget>
 
 #include <Eigen/Core>
@@ -113,6 +114,8 @@ class ReviewWindow : public QMainWindow {
   /// Why the open file is damaged (SQLite's quick check), empty when it is not; a damaged file
   /// is still shown as far as it can be read.
   const QString& damage() const { return damage_; }
+  /// Whether a damage check of an opened file is still reading it.
+  bool checkingForDamage() const { return !damage_checks_.empty(); }
   bool isOpen() const { return reader_ != nullptr; }
 
   /// Shows the recording at `time` (clamped to the recording).
@@ -139,6 +142,7 @@ class ReviewWindow : public QMainWindow {
   OsgView* view() const { return view_; }
   render::World& world() { return *world_; }
   const app::SessionReader* reader() const { return reader_.get(); }
+  const robot::RobotModel* robotModel() const { return model_.get(); }
   ConfidencePanel* confidencePanel() const { return confidence_panel_; }
   /// ITM snapshots kept from the recording (thinned to at most kMaxItmSnapshots), and nodes drawn now.
   int itmSnapshots() const;
@@ -157,6 +161,7 @@ class ReviewWindow : public QMainWindow {
   void advance();
   void updateOverlays();
   void updateItm();
+  void checkForDamage(const std::filesystem::path& file);
   void updateConfidence(bool force);
   void updateLabels();
 
@@ -181,6 +186,7 @@ class ReviewWindow : public QMainWindow {
   QTimer* timer_ = nullptr;
   QString error_;
   QString damage_;
+  std::vector<QThread*> damage_checks_;  ///< quick checks still running (checkForDamage)
 
   double time_ = 0.0;
   double speed_ = 1.0;

@@ -267,7 +267,7 @@ Json reviewStudy(const StudyArguments& arguments) {
   std::vector<app::OutputFile> plot;
   // Nothing clustered is nothing to draw: a blank picture named in the JSON would pass for one.
   const bool plotted = !arguments.plot.empty() && !study.clusterings.empty();
-  if (!arguments.plot.empty() && !plotted) std::cerr << "note: --plot: no area was clustered, so no picture was written\n";
+  if (!arguments.plot.empty() && !plotted) std::cerr << "note: --plot: no area was clustered, so no picture was written (a file already there is left as it was)\n";
   if (plotted) {
     const app::ScatterImage scatter = app::renderMdsScatter(study, 360 * std::max<int>(1, static_cast<int>(study.clusterings.size())), 360);
     render::Image image;

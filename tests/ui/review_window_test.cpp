@@ -13,6 +13,9 @@
 #include <sstream>
 
 #include "app/session_reader.hpp"
+#include "app/session_schema.hpp"
+
+#include <sqlite3.h>
 #include "ui/stage_panel.hpp"
 #include "app/session_recorder.hpp"
 #include "robot/resources.hpp"
@@ -260,6 +263,7 @@ class ReviewWindowTest : public QObject {
   void saysAFileWithADamagedPageIsDamagedAndShowsWhatReads() {
     ui::ReviewWindow whole;
     QVERIFY(whole.open(file_));
+    QTRY_VERIFY(!whole.checkingForDamage());
     QVERIFY2(whole.damage().isEmpty(), qPrintable(whole.damage()));
     QVERIFY(!whole.windowTitle().contains(QStringLiteral("damaged")));
 
@@ -280,6 +284,7 @@ class ReviewWindowTest : public QObject {
     }
     ui::ReviewWindow window;
     QVERIFY2(window.open(damaged), qPrintable(window.errorString()));
+    QTRY_VERIFY(!window.checkingForDamage());
     QVERIFY2(window.damage().startsWith(QStringLiteral("On tree page")), qPrintable(window.damage()));
     QVERIFY(window.windowTitle().contains(QStringLiteral("(damaged)")));
     QCOMPARE(window.reader()->stateCount(), static_cast<std::int64_t>(kDuration * 1000) + 1);
@@ -298,6 +303,28 @@ class ReviewWindowTest : public QObject {
     QVERIFY(clear.open(file_));
     clear.setTime(3.0);
     QVERIFY(clear.linksShownInContact().empty());
+  }
+
+  // A file that fails while its rows are read (a sample's posture of 2 bytes) leaves the open
+  // recording whole: its robot, its timeline, and a scrub that still moves its arm.
+  void aFileFailingMidwayLeavesTheOpenRecordingWhole() {
+    const auto broken = std::filesystem::path(dir_.path().toStdString()) / "broken_row.db";
+    writeRecording(broken);
+    {
+      app::SqliteDatabase database(broken.string(), SQLITE_OPEN_READWRITE);
+      database.exec("UPDATE sample SET q = x'0102' WHERE id = (SELECT MIN(id) FROM sample)");
+    }
+    ui::ReviewWindow window;
+    QVERIFY(window.open(file_));
+    const QString title = window.windowTitle();
+    QVERIFY(!window.open(broken));
+    QVERIFY(window.errorString().contains(QStringLiteral("broken_row.db")));
+    QCOMPARE(window.reader()->file(), file_);
+    QCOMPARE(window.windowTitle(), title);
+    QCOMPARE(window.timeline()->t1(), kDuration);
+    window.setTime(0.5);
+    QCOMPARE(window.shownPosture().size(), 7);
+    QVERIFY(std::abs(window.shownPosture()[0] - postureAt(*window.robotModel(), 0.5)[0]) < 1e-3);
   }
 
   // The states of a 7-joint arm under the name of the 9-joint one: refused, not replayed as a
