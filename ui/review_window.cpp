@@ -281,6 +281,7 @@ void ReviewWindow::checkForDamage(const std::filesystem::path& file) {
   // own, so that the window plays at once; the verdict comes when the check ends.
   auto finding = std::make_shared<std::string>();
   QThread* check = QThread::create([file, finding] { *finding = app::SessionReader::damageOf(file); });
+  check->setParent(this);  // freed with the window if it closes before the verdict is taken
   damage_checks_.push_back(check);
   connect(check, &QThread::finished, this, [this, check, finding, file] {
     std::erase(damage_checks_, check);
