@@ -329,7 +329,8 @@ void armPoints(robot::Kinematics& kinematics, int dof, std::vector<Eigen::Vector
 bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::ParameterSet& parameters,
                                 robot::CollisionWorld& world, const Eigen::Vector3d& p_W,
                                 const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random,
-                                Eigen::VectorXd* posture_found) {
+                                Eigen::VectorXd* posture_found, int* postures_reaching) {
+  if (postures_reaching != nullptr) *postures_reaching = 0;
   const int dof = model.dof();
   const Eigen::VectorXd lower = model.softLowerLimits();
   const Eigen::VectorXd upper = model.softUpperLimits();
@@ -353,6 +354,7 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
     }
     kinematics.update(q);
     if ((kinematics.p_WT() - p_W).norm() > 1e-3) continue;
+    if (postures_reaching != nullptr) ++*postures_reaching;
     world.update(q);
     if (world.contacts().empty()) {
       if (posture_found != nullptr) *posture_found = q;

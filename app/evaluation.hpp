@@ -189,10 +189,13 @@ const Eigen::VectorXd& nearestStandingPosture(const std::vector<std::pair<Eigen:
 /// postures). Sect. 3.3.2 keeps in T only the targets "theoretically accessible without
 /// colliding" (for setup I it names those above the board); this is the scene-independent test.
 /// `posture_found`, if given, receives the collision-free posture that reaches p_W.
+/// `postures_reaching`, if given, receives how many of the searches put the tip on p_W, with a
+/// contact or without: where the answer is false, 0 says no posture was found that reaches p_W
+/// at all, more says every one found makes a contact.
 bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::ParameterSet& parameters,
                                 robot::CollisionWorld& world, const Eigen::Vector3d& p_W,
                                 const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random,
-                                Eigen::VectorXd* posture_found = nullptr);
+                                Eigen::VectorXd* posture_found = nullptr, int* postures_reaching = nullptr);
 
 /// Where the arm starts when the reachability evaluation commands it to a target. Sect. 3.3.2
 /// evaluates the learned map as "the inverse kinematic mapping from 3-D task-space to 7-D

@@ -75,13 +75,6 @@ std::string utcNow() {
   return buffer;
 }
 
-void removeDatabaseFiles(const std::filesystem::path& file) {
-  std::error_code ignored;
-  std::filesystem::remove(file, ignored);
-  std::filesystem::remove(file.string() + "-wal", ignored);
-  std::filesystem::remove(file.string() + "-shm", ignored);
-}
-
 // Prepared inserts of one connection.
 struct Inserts {
   SqliteStatement state, stage, signal, area, sample, model, itm, trajectory, collision, meta;
@@ -200,6 +193,13 @@ void createSchema(SqliteDatabase& db, const SessionMetadata& metadata) {
 }
 
 }  // namespace
+
+void removeDatabaseFiles(const std::filesystem::path& file) {
+  std::error_code ignored;
+  std::filesystem::remove(file, ignored);
+  std::filesystem::remove(file.string() + "-wal", ignored);
+  std::filesystem::remove(file.string() + "-shm", ignored);
+}
 
 struct SessionRecorder::Impl {
   RecorderOptions options;

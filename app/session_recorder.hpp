@@ -174,6 +174,9 @@ struct RecorderStatus {
   std::uint64_t commits = 0;
 };
 
+/// Removes an SQLite database file and its journal files (-wal, -shm), where they exist.
+void removeDatabaseFiles(const std::filesystem::path& file);
+
 /// Writes one session database. Construction opens (creates) the file and starts the
 /// recorder thread; destruction flushes, checkpoints and closes it.
 class SessionRecorder {

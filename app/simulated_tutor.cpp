@@ -1085,8 +1085,9 @@ std::optional<Eigen::Vector3d> SimulatedTutor::nextAutomaticTarget(const robot::
       ++places_passed_over_[why];
     } else if (near_tried(target)) {
       ++places_passed_over_["near a place tried before"];
-    } else if (!accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds, &place_posture_)) {
-      ++places_passed_over_["where no posture found reaches it clear of contact, or none reaches it at all"];
+    } else if (int reaching = 0; !accessibleWithoutCollision(*model_, parameters_, *world_, target, q_home, 8, ik_seeds,
+                                                             &place_posture_, &reaching)) {
+      ++places_passed_over_[reaching == 0 ? "where no posture found reaches it" : "where every posture found that reaches it makes a contact"];
     } else {
       return target;
     }

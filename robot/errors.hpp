@@ -3,6 +3,7 @@
 // as a one-line message and exit code 2; they are never a crash.
 #include <algorithm>
 #include <cstddef>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -28,6 +29,14 @@ inline std::string printable(const std::string& text, std::size_t max_length = 6
     out += (byte < 0x20 || byte == 0x7F) ? '?' : c;
   }
   return out;
+}
+
+/// A number from the user's input as a message shows it: six significant digits at most, so a
+/// value such as 1e300 reads "1e+300" rather than its 300 digits.
+inline std::string printableNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
 }
 
 /// The name among `names` that `given` most likely meant, for "did you mean ...?" in a one-line

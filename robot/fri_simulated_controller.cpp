@@ -19,8 +19,8 @@ constexpr double kKrcMaxStiffness = 5000.0;  // [Nm/rad] what this stand-in acce
 
 void requireRange(double value, double low, double high, const std::string& what) {
   if (!(value >= low && value <= high)) {
-    throw InputError("simulated controller: expected " + what + " in [" + std::to_string(low) + ", " +
-                     std::to_string(high) + "], got " + std::to_string(value));
+    throw InputError("simulated controller: expected " + what + " in [" + printableNumber(low) + ", " +
+                     printableNumber(high) + "], got " + printableNumber(value));
   }
 }
 

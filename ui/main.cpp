@@ -231,6 +231,24 @@ int main(int argc, char** argv) {
     }
   }
 
+  // A robot or scene named on the command line that cannot be read is refused as a bad option
+  // is: a window on the default scene, with the reason in a panel, hides the typing mistake.
+  // The menus keep the window's own behaviour (the robot or scene before stays).
+  if (!parser.isSet(review)) {
+    try {
+      if (parser.isSet(scene)) flexirob::ui::MainWindow::readScene(parser.value(scene).toStdString());
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "error: --scene: %s\n", error.what());
+      return 2;
+    }
+    try {
+      if (parser.isSet(robot)) flexirob::ui::MainWindow::readRobot(parser.value(robot).toStdString());
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "error: --robot: %s\n", error.what());
+      return 2;
+    }
+  }
+
   int exit_code = 0;
   if (parser.isSet(review)) {
     if (parser.isSet(robot) || parser.isSet(scene) || parser.isSet(backend)) {

@@ -479,7 +479,7 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
                                                    : tr("; no robot runs (choose one in the Robot menu)")));
   };
   try {
-    model = std::make_unique<robot::RobotModel>(robot::RobotModel::fromUrdfFile(resolveRobotPath(name_or_path)));
+    model = std::make_unique<robot::RobotModel>(readRobot(name_or_path));
   } catch (const std::exception& error) {
     refuse(error);
     return false;
@@ -506,9 +506,8 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
   kinematics_->update(q);
   world_.robot()->setPosture(*kinematics_);
   frameView();
-  for (QAction* action : robot_menu_->actions()) {
-    action->setChecked(action->data().toString().toStdString() == name_or_path);
-  }
+  loaded_robot_ = name_or_path;
+  markLoadedChoices();
   key_map_label_->setText(TeleopKeys::keyMapText(model_->dof()));
   {
     std::vector<std::string> names;
@@ -529,12 +528,24 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
   return true;
 }
 
+robot::RobotModel MainWindow::readRobot(const std::string& name_or_path) {
+  robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath(name_or_path));
+  const robot::Kinematics chain_check(model);  // a chain the kinematics refuse is refused here too
+  static_cast<void>(chain_check);
+  return model;
+}
+
+robot::Scene MainWindow::readScene(const std::string& name_or_path) {
+  robot::Scene scene = robot::loadScene(name_or_path);
+  // A parameter out of its range refuses the scene, with the scene shown kept as it was.
+  robot::ParameterSet(robot::sceneTunableParameters()).applyOverrides(scene.parameters, robot::sceneOrigin(scene));
+  return scene;
+}
+
 bool MainWindow::loadScene(const std::string& name_or_path) {
   robot::Scene scene;
   try {
-    scene = robot::loadScene(name_or_path);
-    // A parameter out of its range refuses the scene here, with the scene kept as it was.
-    robot::ParameterSet(declarations_).applyOverrides(scene.parameters, robot::sceneOrigin(scene));
+    scene = readScene(name_or_path);
   } catch (const std::exception& error) {
     refuseScene(name_or_path, error);
     return false;
@@ -558,12 +569,33 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
     world_.robot()->setPosture(*kinematics_);
   }
   frameView();
-  const std::string shown = name_or_path.empty() ? std::string("empty") : name_or_path;
-  for (QAction* action : scene_menu_->actions()) action->setChecked(action->data().toString().toStdString() == shown);
+  loaded_scene_ = name_or_path.empty() ? std::string("empty") : name_or_path;
+  markLoadedChoices();
   resetParameters();
   startLive();
   updateStatus();
   return true;
+}
+
+bool MainWindow::mayDiscardTeaching(const QString& what) {
+  if (!live_) return true;
+  const LiveSnapshot& now = live_->snapshot();
+  if (now.areas == 0 && now.teach_ins == 0) return true;
+  // A new robot or scene restarts the workflow: what was taught in this window is gone from it
+  // (the session file keeps it). One click in a menu must not cost a person's teaching.
+  const auto count = [](int n, const QString& one, const QString& many) { return n == 1 ? one : many.arg(n); };
+  QString taught = count(now.areas, tr("1 training area"), tr("%1 training areas"));
+  if (now.teach_ins > 0) taught += tr(" and ") + count(now.teach_ins, tr("1 teach-in"), tr("%1 teach-ins"));
+  return QMessageBox::question(this, tr("Discard the teaching?"),
+                               tr("Loading the %1 starts the teaching afresh: the %2 taught in this run, and what was "
+                                  "learned from them, leave the window (the session file keeps them). Load it?")
+                                   .arg(what, taught),
+                               QMessageBox::Yes | QMessageBox::Cancel, QMessageBox::Cancel) == QMessageBox::Yes;
+}
+
+void MainWindow::markLoadedChoices() {
+  for (QAction* action : robot_menu_->actions()) action->setChecked(action->data().toString().toStdString() == loaded_robot_);
+  for (QAction* action : scene_menu_->actions()) action->setChecked(action->data().toString().toStdString() == loaded_scene_);
 }
 
 void MainWindow::refuseScene(const std::string& name_or_path, const std::exception& error) {
@@ -1113,7 +1145,13 @@ void MainWindow::buildMenus() {
   robot_menu_ = menuBar()->addMenu(tr("&Robot"));
   auto* robots = new QActionGroup(this);
   for (const std::string& name : builtinRobotNames()) {
-    QAction* action = robot_menu_->addAction(QString::fromStdString(name), this, [this, name] { loadRobot(name); });
+    QAction* action = robot_menu_->addAction(QString::fromStdString(name), this, [this, name] {
+      if (mayDiscardTeaching(tr("robot '%1'").arg(QString::fromStdString(name)))) {
+        loadRobot(name);
+      } else {
+        markLoadedChoices();
+      }
+    });
     action->setData(QString::fromStdString(name));
     action->setCheckable(true);
     robots->addAction(action);
@@ -1122,7 +1160,13 @@ void MainWindow::buildMenus() {
   scene_menu_ = menuBar()->addMenu(tr("&Scene"));
   auto* scenes = new QActionGroup(this);
   for (const std::string& name : robot::builtinSceneNames()) {
-    QAction* action = scene_menu_->addAction(QString::fromStdString(name), this, [this, name] { loadScene(name); });
+    QAction* action = scene_menu_->addAction(QString::fromStdString(name), this, [this, name] {
+      if (mayDiscardTeaching(tr("scene '%1'").arg(QString::fromStdString(name)))) {
+        loadScene(name);
+      } else {
+        markLoadedChoices();
+      }
+    });
     action->setData(QString::fromStdString(name));
     action->setCheckable(true);
     scenes->addAction(action);

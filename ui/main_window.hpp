@@ -75,6 +75,13 @@ class MainWindow : public QMainWindow {
   bool loadRobot(const std::string& name_or_path);
   /// Loads a scene (built-in name or file). Returns false and shows why on failure.
   bool loadScene(const std::string& name_or_path);
+  /// Whether loading `what` (a robot or scene, named for the question) may discard what was
+  /// taught in this window: true at once where nothing was, else the person's answer.
+  bool mayDiscardTeaching(const QString& what);
+  /// What loadRobot() and loadScene() read, without a window: throws with the reason the robot
+  /// or scene cannot be shown (the command line refuses such an argument before a window opens).
+  static robot::RobotModel readRobot(const std::string& name_or_path);
+  static robot::Scene readScene(const std::string& name_or_path);
   /// Switches the backend ("sim" or "fri://HOST:PORT"); false and the reason shown on failure.
   bool setBackend(const std::string& choice);
   /// Poses the robot shown (size dof(), radians / metres): view, joint panel and status bar.
@@ -172,6 +179,8 @@ class MainWindow : public QMainWindow {
   void showNotes(Problem kind, const std::vector<std::string>& notes);
   void showProblems();
   void refuseScene(const std::string& name_or_path, const std::exception& error);
+  /// Checks the Robot and Scene menus' entries of what is loaded (after a choice taken back).
+  void markLoadedChoices();
   /// Points the home camera at the robot from a side obstacles do not hide it from, or draws
   /// those that hide it from every side see-through.
   void frameView();
@@ -214,6 +223,7 @@ class MainWindow : public QMainWindow {
   std::unique_ptr<robot::RobotModel> model_;
   std::unique_ptr<robot::Kinematics> kinematics_;
   robot::Scene scene_;
+  std::string loaded_robot_, loaded_scene_;  ///< as named when loaded (menu entries' data)
   robot::Scene live_scene_;  ///< scene_ as the live robot runs in it (sceneFitFor); outlives live_
   std::vector<robot::ParameterDeclaration> declarations_;
   std::unique_ptr<robot::ParameterSet> parameters_;

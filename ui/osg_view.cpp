@@ -18,7 +18,8 @@ namespace flexirob::ui {
 
 OsgView::OsgView(QWidget* parent)
     : QWidget(parent), viewer_(new osgViewer::Viewer), manipulator_(new osgGA::OrbitManipulator) {
-  setMinimumSize(320, 200);
+  // Beside the docks' own minimum widths the window still fits an 800 px screen.
+  setMinimumSize(300, 200);
   // Every pixel comes from the frame: Qt need not clear behind it.
   setAttribute(Qt::WA_OpaquePaintEvent);
   setFocusPolicy(Qt::StrongFocus);

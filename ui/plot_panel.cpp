@@ -1,6 +1,7 @@
 #include "ui/plot_panel.hpp"
 
 #include <QChart>
+#include <QFontMetricsF>
 #include <QLegend>
 #include <QLegendMarker>
 #include <QLineSeries>
@@ -39,7 +40,7 @@ TimePlot::TimePlot(const QString& title, const QString& value_label, QWidget* pa
   time_axis_->setLabelFormat(QStringLiteral("%.1f"));
   value_axis_ = new QValueAxis;
   value_axis_->setTitleText(value_label);
-  value_axis_->setLabelFormat(QStringLiteral("%.3g"));
+  value_axis_->setLabelFormat(QStringLiteral("%.4g"));  // 4000 us, not 4e+03
   chart_->addAxis(time_axis_, Qt::AlignBottom);
   chart_->addAxis(value_axis_, Qt::AlignLeft);
   cursor_ = new QLineSeries;
@@ -54,24 +55,72 @@ TimePlot::TimePlot(const QString& title, const QString& value_label, QWidget* pa
   setMinimumHeight(120);
   setTimeRange(0.0, 1.0);
   value_axis_->setRange(0.0, 1.0);
+  // Qt Charts cuts a value label to "..." where the plot's height per tick is less than the
+  // label's: a short chart (a small screen) gets fewer ticks instead.
+  connect(chart_, &QChart::plotAreaChanged, this, [this](const QRectF& area) {
+    const double label_height = QFontMetricsF(value_axis_->labelsFont()).height() + 4.0;  // and Qt's padding
+    const int room = std::max(2, static_cast<int>(area.height() / label_height));
+    if (room == value_ticks_room_) return;
+    value_ticks_room_ = room;
+    roundValueTicks();
+  });
 }
 
 void TimePlot::resizeEvent(QResizeEvent* event) {
   QChartView::resizeEvent(event);
+  fitLegend();
+}
+
+void TimePlot::fitLegend() {
   // The legend does not wrap: on a narrow chart (a small screen) its names were cut to nothing
-  // and only the colour squares showed. The font shrinks with the room each entry has, to 60 %.
-  int shown = 0;
-  for (QLegendMarker* marker : chart_->legend()->markers()) shown += marker->isVisible() ? 1 : 0;
-  if (shown == 0) return;
+  // and only the colour squares showed. The font shrinks with the room each entry has, to 60 %;
+  // where even that is too little, the entries take their narrow names.
+  constexpr double kRoomPerEntry = 64.0;  // [px] a marker, a name of a few letters and a gap
+  constexpr double kSmallestFont = 0.6;
+  const auto entries = [this](bool narrow) {
+    int shown = 0;
+    for (int i = 0; i < seriesCount(); ++i) {
+      if (hidden_from_legend_.count(i) != 0) continue;
+      const auto narrow_name = narrow_names_.find(i);
+      if (narrow && narrow_name != narrow_names_.end() && narrow_name->second.isEmpty()) continue;
+      ++shown;
+    }
+    return shown;
+  };
+  const double room = std::max(0.0, width() - 16.0);
+  const int shown_wide = entries(false);
+  if (shown_wide == 0) return;
+  const bool narrow = !narrow_names_.empty() && room / shown_wide < kSmallestFont * kRoomPerEntry;
+  if (narrow != narrow_legend_) {
+    for (int i = 0; i < seriesCount(); ++i) {
+      const auto narrow_name = narrow_names_.find(i);
+      if (narrow_name == narrow_names_.end()) continue;
+      for (QLegendMarker* marker : chart_->legend()->markers(series_[static_cast<std::size_t>(i)])) {
+        marker->setVisible(hidden_from_legend_.count(i) == 0 && !(narrow && narrow_name->second.isEmpty()));
+        marker->setLabel(narrow ? narrow_name->second : series_[static_cast<std::size_t>(i)]->name());
+      }
+    }
+    narrow_legend_ = narrow;
+  }
   if (legend_point_size_ <= 0.0) legend_point_size_ = chart_->legend()->font().pointSizeF();
   if (legend_point_size_ <= 0.0) return;  // a font sized in pixels is left alone
-  constexpr double kRoomPerEntry = 64.0;  // [px] a marker, a name of a few letters and a gap
-  const double per_entry = std::max(0.0, width() - 16.0) / shown;
-  const double wanted = legend_point_size_ * std::clamp(per_entry / kRoomPerEntry, 0.6, 1.0);
+  const int shown = entries(narrow);
+  if (shown == 0) return;
+  const double per_entry = room / shown;
+  const double wanted = legend_point_size_ * std::clamp(per_entry / kRoomPerEntry, kSmallestFont, 1.0);
   QFont font = chart_->legend()->font();
   if (std::abs(font.pointSizeF() - wanted) < 0.05) return;
   font.setPointSizeF(wanted);
   chart_->legend()->setFont(font);
+}
+
+void TimePlot::setNarrowLegendName(int series, const QString& name) {
+  narrow_names_[series] = name;
+  narrow_legend_ = false;
+  for (QLegendMarker* marker : chart_->legend()->markers(series_.at(static_cast<std::size_t>(series)))) {
+    marker->setLabel(series_.at(static_cast<std::size_t>(series))->name());
+  }
+  fitLegend();
 }
 
 int TimePlot::addSeries(const QString& name, const QColor& color, Qt::PenStyle style, qreal width) {
@@ -92,6 +141,7 @@ void TimePlot::setSeriesData(int series, const QList<QPointF>& points) {
 }
 
 void TimePlot::hideFromLegend(int series) {
+  hidden_from_legend_.insert(series);
   for (QLegendMarker* marker : chart_->legend()->markers(series_.at(static_cast<std::size_t>(series)))) marker->setVisible(false);
 }
 
@@ -110,10 +160,27 @@ double niceTickInterval(double span, int intervals) {
   return best;
 }
 
+double niceTickIntervalFor(double span, int max_ticks) {
+  double interval = niceTickInterval(span);
+  if (interval <= 0.0 || max_ticks < 2) return interval;
+  // Widen through the 1-2-5 steps (0.2 -> 0.5 -> 1 -> 2 ...), but never to a single tick: a
+  // lone "0" says nothing of the scale.
+  while (std::floor(span / interval + 1e-9) + 1.0 > max_ticks) {
+    const double decade = std::pow(10.0, std::floor(std::log10(interval) + 1e-9));
+    const double factor = interval / decade;
+    const double wider = (factor < 1.5 ? 2.0 : factor < 3.5 ? 5.0 : 10.0) * decade;
+    if (std::floor(span / wider + 1e-9) + 1.0 < 2.0) break;
+    interval = wider;
+  }
+  return interval;
+}
+
 namespace {
-// Ticks at round values (multiples of a 1-2-5 interval from zero), wherever the range ends.
-void roundTicks(QValueAxis* axis) {
-  const double interval = niceTickInterval(axis->max() - axis->min());
+// Ticks at round values (multiples of a 1-2-5 interval from zero), wherever the range ends;
+// at most `max_ticks` of them where that is positive.
+void roundTicks(QValueAxis* axis, int max_ticks = 0) {
+  const double span = axis->max() - axis->min();
+  const double interval = max_ticks > 0 ? niceTickIntervalFor(span, max_ticks) : niceTickInterval(span);
   if (interval <= 0.0) return;
   axis->setTickType(QValueAxis::TicksDynamic);
   axis->setTickAnchor(0.0);
@@ -151,8 +218,23 @@ QStringList TimePlot::timeTickLabels() const {
 void TimePlot::setValueRange(double lower, double upper) {
   fixed_values_ = true;
   value_axis_->setRange(lower, upper);
-  roundTicks(value_axis_);
+  roundValueTicks();
   updateCursorLine();
+}
+
+void TimePlot::roundValueTicks() { roundTicks(value_axis_, value_ticks_room_); }
+
+QStringList TimePlot::valueTickLabels() const {
+  // As QValueAxis draws dynamic ticks: multiples of the interval from the anchor, within range.
+  QStringList labels;
+  const double interval = value_axis_->tickInterval();
+  if (!(interval > 0.0)) return labels;
+  const double anchor = value_axis_->tickAnchor();
+  for (double k = std::ceil((value_axis_->min() - anchor) / interval - 1e-9);
+       anchor + k * interval <= value_axis_->max() + 1e-9 * interval; k += 1.0) {
+    labels << QString::asprintf(value_axis_->labelFormat().toLatin1().constData(), anchor + k * interval);
+  }
+  return labels;
 }
 
 void TimePlot::autoscale() {
@@ -170,7 +252,7 @@ void TimePlot::autoscale() {
   // A quantity that cannot be negative (an error norm, a compute time) is read against zero:
   // its axis starts there, never below, and not above either where all its values are large.
   value_axis_->setRange(lower >= 0.0 ? 0.0 : lower - margin, upper + margin);
-  roundTicks(value_axis_);
+  roundValueTicks();
   updateCursorLine();
 }
 
@@ -246,15 +328,12 @@ void PlotPanel::setJoints(const std::vector<std::string>& names, const Eigen::Ve
   // would be cut to "…", so then every entry is the joint's number.
   const bool short_names = std::all_of(names.begin(), names.end(), [](const std::string& name) { return name.size() <= 4; });
   for (std::size_t j = 0; j < names.size(); ++j) {
-    fresh->addSeries(short_names ? QString::fromStdString(names[j]) : QStringLiteral("q%1").arg(j + 1),
-                     jointColor(static_cast<int>(j)));
+    const int added = fresh->addSeries(short_names ? QString::fromStdString(names[j]) : QStringLiteral("q%1").arg(j + 1),
+                                       jointColor(static_cast<int>(j)));
+    fresh->setNarrowLegendName(added, QString::number(j + 1));
   }
-  if (names.size() > 7) {
-    // The legend does not wrap: beyond seven joints its labels would be elided to nothing.
-    QFont font = fresh->chart()->legend()->font();
-    font.setPointSizeF(font.pointSizeF() * 7.0 / static_cast<double>(names.size()));
-    fresh->chart()->legend()->setFont(font);
-  }
+  // The dashed red lines at 0 and 1 need no name where there is room for few.
+  fresh->setNarrowLegendName(0, QString());
   static_cast<QVBoxLayout*>(layout())->replaceWidget(joints_, fresh);
   joints_->deleteLater();
   joints_ = fresh;

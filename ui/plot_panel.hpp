@@ -15,6 +15,8 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <map>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,6 +53,13 @@ class TimePlot : public QChartView {
   void setTitle(const QString& title);
   QString title() const;
   void hideFromLegend(int series);
+  /// The legend's name for `series` when the chart is too narrow for the full names (the joint
+  /// chart's "A3" becomes "3"); an empty name leaves the entry out of a narrow legend.
+  void setNarrowLegendName(int series, const QString& name);
+  /// Whether the legend shows the narrow names now.
+  bool narrowLegend() const { return narrow_legend_; }
+  /// The value axis' tick labels as drawn (at most as many as the plot's height has room for).
+  QStringList valueTickLabels() const;
   int seriesCount() const { return static_cast<int>(series_.size()); }
   const QLineSeries* series(int index) const { return series_.at(static_cast<std::size_t>(index)); }
   /// Shows t0..t1 [s]; a recording of one instant (t1 <= t0) is shown over the second after it,
@@ -83,6 +92,8 @@ class TimePlot : public QChartView {
  private:
   void updateCursorLine();
   void autoscale();
+  void roundValueTicks();
+  void fitLegend();
 
   QChart* chart_ = nullptr;
   QValueAxis* time_axis_ = nullptr;
@@ -94,11 +105,18 @@ class TimePlot : public QChartView {
   bool fixed_values_ = false;
   double minimum_span_ = 0.0;
   double legend_point_size_ = 0.0;  ///< the legend font's size before a narrow chart shrank it [pt]
+  std::set<int> hidden_from_legend_;
+  std::map<int, QString> narrow_names_;
+  bool narrow_legend_ = false;
+  int value_ticks_room_ = 0;  ///< value tick labels the plot's height has room for (0: not laid out yet)
 };
 
 /// The tick interval of 1, 2 or 5 times a power of ten that divides `span` into nearest
 /// `intervals` parts (0 for an empty or non-finite span).
 double niceTickInterval(double span, int intervals = 4);
+/// As niceTickInterval, widened to the next 1-2-5 step until the span holds at most `max_ticks`
+/// ticks (a short chart has no room for more labels: Qt Charts cuts each to "...").
+double niceTickIntervalFor(double span, int max_ticks);
 
 class PlotPanel : public QWidget {
   Q_OBJECT

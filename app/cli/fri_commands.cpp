@@ -49,7 +49,7 @@ robot::RobotModel loadLwr4() { return robot::RobotModel::fromUrdfFile(resolveRob
 
 void checkSeconds(double seconds) {
   if (!(seconds > 0.0 && seconds <= kMaxSeconds)) {
-    throw InputError("--seconds: expected a duration in (0, 86400], got " + std::to_string(seconds));
+    throw InputError("--seconds: expected a duration in (0, 86400], got " + printableNumber(seconds));
   }
 }
 

@@ -214,6 +214,12 @@ Json runTeach(TeachOptions options) {
 
   // The session: SQLite through the session recorder, or JSON for a path ending in .json.
   const bool json_session = endsWith(options.out, ".json");
+  // --overwrite: the run records beside the file it replaces, and takes its place only once it
+  // has taught something. A mistaken re-run stopped with Ctrl-C, or one that taught no area,
+  // leaves the earlier recording as it was.
+  std::error_code out_status;
+  const bool replacing = std::filesystem::is_regular_file(options.out, out_status);
+  const std::string recording_path = replacing ? options.out + ".new" : options.out;
   std::unique_ptr<app::SessionRecorder> recorder;
   std::unique_ptr<app::WorkflowSessionWriter> writer;
   if (!json_session) {
@@ -228,7 +234,7 @@ Json runTeach(TeachOptions options) {
                                {"diameter_m", options.diameter}, {"backend", options.backend}}.dump();
     app::RecorderOptions recorder_options;
     recorder_options.overwrite = true;
-    recorder = std::make_unique<app::SessionRecorder>(options.out, metadata, recorder_options);
+    recorder = std::make_unique<app::SessionRecorder>(recording_path, metadata, recorder_options);
     // Written as it happens (areas, samples, models, ITM snapshots, collisions): a crash or
     // kill -9 loses at most the last second.
     writer = std::make_unique<app::WorkflowSessionWriter>(*recorder, workflow, &sim);
@@ -269,8 +275,7 @@ Json runTeach(TeachOptions options) {
     if (workflow.stage() == app::Stage::kIdle && workflow.areas().empty() && recorder) {
       writer.reset();
       recorder.reset();
-      std::error_code ignored;
-      std::filesystem::remove(options.out, ignored);
+      app::removeDatabaseFiles(recording_path);
     }
     throw;
   }
@@ -381,8 +386,17 @@ Json runTeach(TeachOptions options) {
   }
   std::uint64_t states_dropped = 0;
   std::string session_error, session_copy;
+  // Where the session is when the run ends: --out, or beside it where the run replaced nothing.
+  std::string session_path = options.out;
+  std::string kept_note;
+  const bool keep_earlier = replacing && samples == 0;
   if (json_session) {
-    app::writeFileReplacing(options.out, session.dump(), "--out");
+    if (keep_earlier && report.interrupted) {
+      session_path.clear();
+    } else {
+      if (keep_earlier) session_path = recording_path;
+      app::writeFileReplacing(session_path, session.dump(), "--out");
+    }
   } else {
     writer->finish();
     recorder->close();
@@ -401,6 +415,32 @@ Json runTeach(TeachOptions options) {
         session_error += std::string("; no copy either: ") + e.what();
       }
     }
+    if (replacing && session_error.empty()) {
+      std::error_code error;
+      if (keep_earlier && report.interrupted) {
+        app::removeDatabaseFiles(recording_path);  // the seconds before the stop, nothing taught
+        session_path.clear();
+      } else if (keep_earlier) {
+        session_path = recording_path;
+      } else {
+        // The earlier file's journal would be read as the new file's own.
+        std::filesystem::remove(options.out + "-wal", error);
+        std::filesystem::remove(options.out + "-shm", error);
+        std::filesystem::rename(recording_path, options.out, error);
+        if (error) {
+          session_error = "cannot replace '" + options.out + "' with the new recording: " + error.message();
+          session_path = recording_path;
+        }
+      }
+    } else if (replacing) {
+      session_path = recording_path;
+    }
+  }
+  if (session_path != options.out) {
+    kept_note = "; '" + options.out + "' was left as it was (nothing was taught" +
+                (session_path.empty() ? std::string()
+                                      : ", the new recording is '" + session_path + "'") +
+                ")";
   }
   // The tutor's feedback (joint limits, transition checks) is what a person would have read on
   // the screen: said on stderr too, each distinct line once, not only counted in the JSON.
@@ -487,7 +527,7 @@ Json runTeach(TeachOptions options) {
                  {"colliding_steps", report.colliding_steps},
                  {"collision_events", collision_events},
                  {"approach_max_lead_rad", report.max_approach_lead},
-                 {"session", options.out},
+                 {"session", session_path.empty() ? Json(nullptr) : Json(session_path)},
                  {"session_format", json_session ? "json" : "sqlite"},
                  {"states_dropped", states_dropped},
                  {"session_error", session_error},
@@ -510,7 +550,12 @@ Json runTeach(TeachOptions options) {
     std::ostringstream message;
     message << "teach: stopped by " << (signal_number == SIGTERM ? "SIGTERM" : "SIGINT") << " after " << std::fixed
             << std::setprecision(1) << wall_seconds << " s (" << report.simulated_time << " s of simulated teaching); what was recorded (" << workflow.areas().size()
-            << " of " << options.areas << " areas, " << samples << " samples) was written to " << options.out;
+            << " of " << options.areas << " areas, " << samples << " samples) ";
+    if (session_path.empty()) {
+      message << "was not written" << kept_note;
+    } else {
+      message << "was written to " << session_path << kept_note;
+    }
     if (!session_error.empty()) {
       message << "; but the session file failed: " << session_error
               << (session_copy.empty() ? std::string() : "; the whole session was saved to " + session_copy);
@@ -530,7 +575,7 @@ Json runTeach(TeachOptions options) {
     const std::string kinds = report.areas.size() > 1 ? ": " + app::failureKinds(report.areas) : std::string();
     throw CommandFailed("teach: no training area could be taught" + (start_sags.empty() ? "" : ": " + start_sags) + " (" +
                             std::to_string(report.areas.size()) + " tried" + kinds + "; the first: " + reason +
-                            "); the session was written to " + options.out,
+                            "); the session was written to " + session_path + kept_note,
                         std::move(result));
   }
   return result;

@@ -110,6 +110,26 @@ TEST(Experiments, TargetsAboveTheBoardOfSetupIAreNotAccessibleButTargetsInFrontA
   EXPECT_FALSE(accessibleWithoutCollision(lwr4(), parameters, world, Eigen::Vector3d(-0.6, 0.4, 0.6), ready(), 8, random));
 }
 
+TEST(Experiments, SaysWhetherAnInaccessibleTargetIsBlockedOrBeyondEveryPosture) {
+  const robot::Scene scene = robot::loadScene("setup_I");
+  const robot::ParameterSet parameters = sceneParameters(scene);
+  robot::CollisionWorld world(lwr4(), scene);
+  learning::UniformRandom random(7);
+  int reaching = -1;
+  // Above the board: postures reach it, every one through the board or the box.
+  EXPECT_FALSE(accessibleWithoutCollision(lwr4(), parameters, world, Eigen::Vector3d(-0.6, 0.4, 0.6), ready(), 8, random,
+                                          nullptr, &reaching));
+  EXPECT_GT(reaching, 0);
+  // About 2 m from the shoulder, twice the arm's reach: no posture puts the tip there.
+  EXPECT_FALSE(accessibleWithoutCollision(lwr4(), parameters, world, Eigen::Vector3d(-2.0, 0.0, 0.3), ready(), 8, random,
+                                          nullptr, &reaching));
+  EXPECT_EQ(reaching, 0);
+  // Reached clear of contact: at least the posture returned reaches it.
+  EXPECT_TRUE(accessibleWithoutCollision(lwr4(), parameters, world, Eigen::Vector3d(-0.5, -0.1, 0.3), ready(), 8, random,
+                                         nullptr, &reaching));
+  EXPECT_GE(reaching, 1);
+}
+
 TEST(Experiments, SceneModelEnclosesAnObstacleTheArmNeverComesNear) {
   // The arm rests in the ready posture (tip about 0.5 m in front); a box far to the side and
   // one around the tip. Eq. 4.1: S holds the grid points farther than 0.1 m from the arm.

@@ -130,6 +130,8 @@ TEST_F(HostileCli, NonFiniteAndOverflowingNumbersAreRefused) {
 TEST_F(HostileCli, ReachRefusesTargetsUnderTheTableAndPosturesOutsideTheLimits) {
   expectRefused(runCliBinary("reach --target -0.5,0.2,-0.4"), "below the table top");
   expectRefused(runCliBinary("reach --target 1e300,0,0.5"), "--target: coordinates beyond 1000 m");
+  // The value as given, not its 300 digits.
+  expectRefused(runCliBinary("fri simulate --peer 127.0.0.1:49999 --seconds 1e300"), "--seconds: expected a duration in (0, 86400], got 1e+300");
   expectRefused(runCliBinary("bench --filter ["), "--filter: '[' is not a valid regular expression");
   expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --posture 0,0,0,0,0,0,10"), "--posture: joint 7");
   expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --from 0,0,0,0,0,0,10"), "--from: joint 7");

@@ -73,9 +73,35 @@ TEST(TeachCli, NeverWritesOverAnExistingFileUnlessToldToAndNeverOverItsOwnScene)
   std::stringstream written;
   written << std::ifstream(upper).rdbuf();
   EXPECT_NE(written.str().find("flexirob-session-json"), std::string::npos);
+  // A recording replaces the old file once the run has taught: nothing is left beside it.
+  const auto recorded = runCliBinary("teach --scene setup_A --areas 1 --seed 3 --check-points 0 --overwrite --out " + notes.string());
+  ASSERT_EQ(recorded.exit_code, 0) << recorded.err;
+  EXPECT_NE(recorded.out.find("\"session\": \"" + notes.string() + "\""), std::string::npos) << recorded.out;
+  EXPECT_EQ(runCliBinary("review --session " + notes.string()).exit_code, 0);
+  EXPECT_FALSE(fs::exists(notes.string() + ".new"));
   fs::remove(notes);
   fs::remove(scene);
   fs::remove(upper);
+}
+
+// A mistaken re-run with --overwrite, stopped before it taught anything, must not cost the
+// recording it was about to replace (paced at wall-clock speed: 2 s teach nothing).
+TEST(TeachCli, AnOverwritingRunStoppedBeforeItTaughtLeavesTheEarlierFileAsItWas) {
+  const fs::path out = scratch("earlier.flexirob");
+  const fs::path err = scratch("earlier.err"), code = scratch("earlier.code");
+  std::ofstream(out) << "last week's recording";
+  const std::string script = std::string(FLEXIROB_CLI_EXECUTABLE) + " teach --scene setup_I --areas 12 --seed 1 --realtime --overwrite --out " +
+                             out.string() + " > /dev/null 2> " + err.string() + " & p=$!; sleep 2; kill -TERM $p; wait $p; echo $? > " +
+                             code.string();
+  ASSERT_EQ(std::system(("sh -c '" + script + "'").c_str()), 0);
+  EXPECT_EQ(text(code), "143\n") << text(err);
+  EXPECT_NE(text(err).find("(0 of 12 areas, 0 samples) was not written; '" + out.string() + "' was left as it was (nothing was taught)"),
+            std::string::npos)
+      << text(err);
+  EXPECT_TRUE(text(out) == "last week's recording");  // not printed: it may be a database
+  EXPECT_FALSE(fs::exists(out.string() + ".new"));
+  EXPECT_FALSE(fs::exists(out.string() + ".new-wal"));
+  for (const fs::path& file : {out, err, code}) fs::remove(file);
 }
 
 TEST(TeachCli, StoppedBySigtermWritesWhatWasRecordedAndSaysSo) {

@@ -7,13 +7,18 @@
 #include <QDockWidget>
 #include <QFile>
 #include <QGuiApplication>
+#include <QChart>
+#include <QFontMetricsF>
 #include <QLabel>
+#include <QLegend>
+#include <QLegendMarker>
 #include <QLineSeries>
 #include <QMouseEvent>
 #include <QSpinBox>
 #include <QStandardPaths>
 #include <QStatusBar>
 #include <QTemporaryDir>
+#include <QAbstractAxis>
 #include <limits>
 #include <QSet>
 #include <QTest>
@@ -218,10 +223,44 @@ class FeaturesTest : public QObject {
     const double narrow = joints->chart()->legend()->font().pointSizeF();
     QVERIFY2(narrow < 0.8 * wide, qPrintable(QStringLiteral("%1 pt, then %2 pt").arg(wide).arg(narrow)));
     QVERIFY(narrow >= 0.6 * wide - 1e-9);
+    // Too narrow for "A1" at the smallest font (an 800 px screen): the joints' numbers, and no
+    // entry for the dashed limit lines.
+    const auto labels = [joints] {
+      QStringList shown;
+      for (QLegendMarker* marker : joints->chart()->legend()->markers()) {
+        if (marker->isVisible()) shown << marker->label();
+      }
+      return shown;
+    };
+    QVERIFY(joints->narrowLegend());
+    QCOMPARE(labels(), (QStringList{"1", "2", "3", "4", "5", "6", "7"}));
     joints->resize(1200, 300);
     QCoreApplication::processEvents();
     QCOMPARE(joints->chart()->legend()->font().pointSizeF(), wide);
+    QVERIFY(!joints->narrowLegend());
+    QCOMPARE(labels(), (QStringList{"limits", "A1", "A2", "A3", "A4", "A5", "A6", "A7"}));
     delete joints;
+  }
+
+  // A short chart (a 600 px screen) gets as many value ticks as its height has room for: Qt
+  // Charts cut every label of a crowded axis to "...". Never fewer than two.
+  void aShortChartHasFewerValueTicksSoThatTheirLabelsShow() {
+    flexirob::ui::TimePlot plot(QStringLiteral("joints"), QString());
+    plot.setValueRange(-0.05, 1.05);
+    plot.show();
+    plot.resize(400, 600);
+    QCoreApplication::processEvents();
+    QCOMPARE(plot.valueTickLabels(), (QStringList{"0", "0.2", "0.4", "0.6", "0.8", "1"}));
+    plot.resize(400, 170);
+    QCoreApplication::processEvents();
+    const QStringList short_labels = plot.valueTickLabels();
+    QVERIFY2(short_labels.size() >= 2 && short_labels.size() <= 4, qPrintable(short_labels.join(QLatin1Char(' '))));
+    const double room = plot.chart()->plotArea().height() / short_labels.size();
+    QVERIFY2(room >= QFontMetricsF(plot.chart()->axes(Qt::Vertical).front()->labelsFont()).height(),
+             qPrintable(QStringLiteral("%1 px per tick").arg(room)));
+    plot.resize(400, 600);
+    QCoreApplication::processEvents();
+    QCOMPARE(plot.valueTickLabels().size(), 6);
   }
 
   // Another scene restarts the robot's clock: the new run's curves start afresh, not joined to

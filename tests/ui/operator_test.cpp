@@ -9,12 +9,14 @@
 #include <QFile>
 #include <QGuiApplication>
 #include <QLabel>
+#include <QMessageBox>
 #include <QMouseEvent>
 #include <QPushButton>
 #include <QStandardPaths>
 #include <QStatusBar>
 #include <QTemporaryDir>
 #include <QTest>
+#include <QTimer>
 #include <chrono>
 #include <thread>
 
@@ -229,6 +231,27 @@ class OperatorTest : public QObject {
     QTest::mouseClick(panel->removeAreaButton(), Qt::LeftButton);
     QTRY_COMPARE(s.areas, 1);
     QTRY_COMPARE(panel->areaChoice()->count(), 1);
+
+    // Another scene from the menu would start the teaching afresh: asked first; Cancel keeps it.
+    QAction* other_scene = nullptr;
+    for (QAction* action : window.findChildren<QAction*>()) {
+      if (action->data().toString() == QStringLiteral("setup_A")) other_scene = action;
+    }
+    QVERIFY(other_scene != nullptr);
+    QString question;
+    QTimer answer;
+    connect(&answer, &QTimer::timeout, &window, [&question, &answer] {
+      auto* box = qobject_cast<QMessageBox*>(QApplication::activeModalWidget());
+      if (box == nullptr) return;
+      question = box->text();
+      answer.stop();
+      box->button(QMessageBox::Cancel)->click();
+    });
+    answer.start(50);
+    other_scene->trigger();
+    QVERIFY2(question.contains(QStringLiteral("the 1 training area taught in this run")), qPrintable(question));
+    QCOMPARE(s.areas, 1);
+    QVERIFY(!other_scene->isChecked());
     QTest::keyClick(&window, Qt::Key_F6);
     QTRY_VERIFY_WITH_TIMEOUT(s.model_ready && s.stage == Stage::kIdle, 30000);
     QTRY_VERIFY(hintSays("Start programming (F7)"));
