@@ -432,8 +432,8 @@ RequestResult Workflow::planTo(const Eigen::Vector3d& goal) {
   if (!path->found) return refuse("plan", "plan: no path through the ITM graph (start and goal in different components)");
   if (path->goal_gap > options_.max_goal_gap) {
     std::ostringstream reason;
-    reason << "plan: the goal is " << path->goal_gap * 1e3 << " mm from the nearest explored position (at most "
-           << options_.max_goal_gap * 1e3 << " mm)";
+    reason << std::fixed << std::setprecision(1) << "plan: the goal is " << path->goal_gap * 1e3
+           << " mm from the nearest explored position (at most " << options_.max_goal_gap * 1e3 << " mm)";
     if (mostly_in_contact) reason << "; the map holds " << itm_.nodeCount() << (itm_.nodeCount() == 1 ? " node" : " nodes") << left_out;
     return refuse("plan", reason.str());
   }

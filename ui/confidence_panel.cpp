@@ -112,6 +112,11 @@ ConfidenceColourBar::ConfidenceColourBar(QWidget* parent) : QWidget(parent) {
   setAttribute(Qt::WA_TransparentForMouseEvents);
 }
 
+QSize ConfidenceColourBar::sizeHint() const {
+  const QFontMetrics metrics(font());
+  return {std::max(90, metrics.horizontalAdvance(tr("Confidence C(x)")) + 20), 170};
+}
+
 void ConfidenceColourBar::paintEvent(QPaintEvent* /*event*/) {
   QPainter painter(this);
   painter.setRenderHint(QPainter::Antialiasing);
@@ -129,7 +134,10 @@ void ConfidenceColourBar::paintEvent(QPaintEvent* /*event*/) {
   painter.setPen(QColor(40, 40, 40));
   painter.drawRect(bar);
   painter.drawText(QPoint(8, 4 + metrics.ascent()), tr("Confidence C(x)"));
+  // Five labels where the bar has room for them, else three.
+  const bool roomy = bar.height() >= 4 * (metrics.height() + 2);
   for (const double value : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+    if (!roomy && (value == 0.25 || value == 0.75)) continue;
     const int y = bar.bottom() - static_cast<int>(std::lround(value * bar.height()));
     painter.drawLine(bar.right(), y, bar.right() + 5, y);
     painter.drawText(QPoint(bar.right() + 9, y + metrics.ascent() / 2 - 1), QString::number(value, 'g', 2));

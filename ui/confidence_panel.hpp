@@ -58,7 +58,8 @@ class ConfidenceColourBar : public QWidget {
 
  public:
   explicit ConfidenceColourBar(QWidget* parent = nullptr);
-  QSize sizeHint() const override { return {150, 170}; }
+  /// The title's width and a bar of five labels; the main window lowers it on a short view.
+  QSize sizeHint() const override;
 
  protected:
   void paintEvent(QPaintEvent* event) override;

@@ -24,6 +24,7 @@
 #include <QThread>
 #include <QTimer>
 #include <QVBoxLayout>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -840,7 +841,7 @@ void MainWindow::handleEvents() {
     }
     if (event.kind == K::kRefused && event.name == "plan") clearGoal();  // the ball was drawn at the click
     if (event.kind == K::kWarning || event.kind == K::kRefused) {
-      last_warning_ = QString::fromStdString(event.detail.empty() ? event.name : event.detail);
+      last_warning_ = operatorWording(QString::fromStdString(event.detail.empty() ? event.name : event.detail));
       last_warning_refused_ = event.kind == K::kRefused;
       stage_panel_->showWarning(last_warning_);
       showStatusMessage(statusBar(), last_warning_, 15000);
@@ -1288,6 +1289,9 @@ QWidget* MainWindow::confidenceLegend() const { return confidence_legend_; }
 void MainWindow::placeViewLabels() {
   const bool legend = confidence_slices_ > 0 && overlays_->visible(render::OverlayLayer::kConfidence);
   if (legend != confidence_legend_->isVisible()) confidence_legend_->setVisible(legend);
+  // A key, not a panel: at most 30 % of the view's height (on a 600 px screen it hid the arm).
+  const int legend_height = std::clamp(view_->height() * 3 / 10, 90, confidence_legend_->sizeHint().height());
+  if (confidence_legend_->height() != legend_height) confidence_legend_->resize(confidence_legend_->sizeHint().width(), legend_height);
   QPoint corner(std::max(0, view_->width() - confidence_legend_->width() - 12),
                std::max(0, view_->height() - confidence_legend_->height() - 12));
   // The key map (lower left) can be wide, the 9-DoF arm's above all: the colour bar then

@@ -58,8 +58,10 @@ TimePlot::TimePlot(const QString& title, const QString& value_label, QWidget* pa
   // Qt Charts cuts a value label to "..." where the plot's height per tick is less than the
   // label's: a short chart (a small screen) gets fewer ticks instead.
   connect(chart_, &QChart::plotAreaChanged, this, [this](const QRectF& area) {
-    const double label_height = QFontMetricsF(value_axis_->labelsFont()).height() + 4.0;  // and Qt's padding
-    const int room = std::max(2, static_cast<int>(area.height() / label_height));
+    // Labels centred on their ticks, one label's height apart at least; the end ones may reach
+    // half a label beyond the plot.
+    const double label_height = QFontMetricsF(value_axis_->labelsFont()).height();
+    const int room = std::max(2, static_cast<int>(area.height() / label_height) + 1);
     if (room == value_ticks_room_) return;
     value_ticks_room_ = room;
     roundValueTicks();

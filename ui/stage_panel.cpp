@@ -1,5 +1,7 @@
 #include "ui/stage_panel.hpp"
 
+#include <QCoreApplication>
+
 #include <algorithm>
 
 #include <QFontMetrics>
@@ -314,6 +316,34 @@ void StagePanel::showWarning(const QString& text) {
 void StagePanel::clearWarning() {
   warning_label_->clear();
   warning_label_->setVisible(false);
+}
+
+QString operatorWording(const QString& message) {
+  // The workflow names its requests as the session file records them; the window says which
+  // button, key or click they came from.
+  static const struct {
+    const char* request;
+    const char* operator_name;
+  } kNames[] = {
+      {"start_configuration", QT_TRANSLATE_NOOP("StagePanel", "Start configuration")},
+      {"finished_configuration", QT_TRANSLATE_NOOP("StagePanel", "Finish configuration")},
+      {"start_programming", QT_TRANSLATE_NOOP("StagePanel", "Start programming")},
+      {"finished_programming", QT_TRANSLATE_NOOP("StagePanel", "Finish programming")},
+      {"replay", QT_TRANSLATE_NOOP("StagePanel", "Replay")},
+      {"plan", QT_TRANSLATE_NOOP("StagePanel", "Goal (Ctrl+click)")},
+      {"execute", QT_TRANSLATE_NOOP("StagePanel", "Execute")},
+      {"remove_area", QT_TRANSLATE_NOOP("StagePanel", "Remove area")},
+      {"reteach_area", QT_TRANSLATE_NOOP("StagePanel", "Re-teach area")},
+      {"nudge_joint", QT_TRANSLATE_NOOP("StagePanel", "Joint key")},
+      {"nudge_task", QT_TRANSLATE_NOOP("StagePanel", "Tip key")},
+  };
+  for (const auto& name : kNames) {
+    const QString prefix = QString::fromLatin1(name.request) + QStringLiteral(": ");
+    if (message.startsWith(prefix)) {
+      return QCoreApplication::translate("StagePanel", name.operator_name) + QStringLiteral(": ") + message.mid(prefix.size());
+    }
+  }
+  return message;
 }
 
 }  // namespace flexirob::ui

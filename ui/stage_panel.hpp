@@ -22,6 +22,10 @@ class QSpinBox;
 
 namespace flexirob::ui {
 
+/// A workflow message as the operator reads it: a leading request name ("finished_configuration:",
+/// "plan:") becomes what the operator pressed ("Finish configuration:", "Goal:"); the rest stays.
+QString operatorWording(const QString& message);
+
 class StagePanel : public QWidget {
   Q_OBJECT
 

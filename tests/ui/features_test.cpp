@@ -20,6 +20,8 @@
 #include <QTemporaryDir>
 #include <QAbstractAxis>
 #include <limits>
+#include <QScrollArea>
+#include <QScrollBar>
 #include <QSet>
 #include <QTest>
 
@@ -242,6 +244,53 @@ class FeaturesTest : public QObject {
     delete joints;
   }
 
+  // A long warning in the scrolled Teaching panel keeps every line: the panel's vertical bar
+  // narrows the text after its lines were counted, and the last line was cut.
+  void aLongWarningInTheTeachingPanelShowsWhole() {
+    MainWindow window("lwr4", "setup_I", quietOptions());
+    window.resize(1280, 600);  // the panel scrolls
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    QTRY_VERIFY(window.live() != nullptr);
+    QTest::keyClick(&window, Qt::Key_F5);  // CONFIGURATION: the hint and the area controls grow the panel
+    QTRY_COMPARE(window.live()->snapshot().stage, flexirob::app::Stage::kConfiguration);
+    QTest::qWait(300);
+    const QString warning = QStringLiteral(
+        "area_2: 171 of 171 samples were recorded with the arm touching something (drawn red); the map of free space "
+        "keeps none of them and the learned postures lead into the contact: re-teach the area with the arm clear of it");
+    window.stagePanel()->showWarning(warning);
+    QTRY_VERIFY(window.stagePanel()->warningLabel()->isVisible());
+    QTest::qWait(200);
+    QLabel* label = window.stagePanel()->warningLabel();
+    auto* scroll = window.findChild<QScrollArea*>();
+    QVERIFY(scroll != nullptr);
+    QVERIFY(scroll->verticalScrollBar()->isVisible());
+    QVERIFY2(label->height() >= label->heightForWidth(label->width()),
+             qPrintable(QStringLiteral("%1 px high, %2 px needed at %3 px wide")
+                            .arg(label->height())
+                            .arg(label->heightForWidth(label->width()))
+                            .arg(label->width())));
+    // Wrapped as it is drawn, inside the frame and padding of its style sheet.
+    const QRect text = label->fontMetrics().boundingRect(QRect(0, 0, label->contentsRect().width(), 100000),
+                                                         Qt::TextWordWrap, warning);
+    QVERIFY2(label->contentsRect().height() >= text.height(),
+             qPrintable(QStringLiteral("%1 px inside the frame, %2 px of text").arg(label->contentsRect().height()).arg(text.height())));
+    // And the panel holds it: below the panel's edge it could not be scrolled to.
+    const int bottom = label->mapTo(window.stagePanel(), QPoint(0, label->height())).y();
+    QVERIFY2(bottom <= window.stagePanel()->height(),
+             qPrintable(QStringLiteral("the warning ends at %1 px, the panel at %2 px").arg(bottom).arg(window.stagePanel()->height())));
+  }
+
+  void aRefusalNamesWhatTheOperatorPressed() {
+    using flexirob::ui::operatorWording;
+    QCOMPARE(operatorWording(QStringLiteral("finished_configuration: not in CONFIGURATION but EXECUTION")),
+             QStringLiteral("Finish configuration: not in CONFIGURATION but EXECUTION"));
+    QCOMPARE(operatorWording(QStringLiteral("plan: the goal is 796.2 mm from the nearest explored position")),
+             QStringLiteral("Goal (Ctrl+click): the goal is 796.2 mm from the nearest explored position"));
+    // A warning about an area keeps its name.
+    QCOMPARE(operatorWording(QStringLiteral("area_2: near a joint limit")), QStringLiteral("area_2: near a joint limit"));
+  }
+
   // A short chart (a 600 px screen) gets as many value ticks as its height has room for: Qt
   // Charts cut every label of a crowded axis to "...". Never fewer than two.
   void aShortChartHasFewerValueTicksSoThatTheirLabelsShow() {
@@ -255,9 +304,9 @@ class FeaturesTest : public QObject {
     QCoreApplication::processEvents();
     const QStringList short_labels = plot.valueTickLabels();
     QVERIFY2(short_labels.size() >= 2 && short_labels.size() <= 4, qPrintable(short_labels.join(QLatin1Char(' '))));
-    const double room = plot.chart()->plotArea().height() / short_labels.size();
-    QVERIFY2(room >= QFontMetricsF(plot.chart()->axes(Qt::Vertical).front()->labelsFont()).height(),
-             qPrintable(QStringLiteral("%1 px per tick").arg(room)));
+    const double apart = plot.chart()->plotArea().height() / (short_labels.size() - 1);
+    QVERIFY2(apart >= QFontMetricsF(plot.chart()->axes(Qt::Vertical).front()->labelsFont()).height(),
+             qPrintable(QStringLiteral("ticks %1 px apart").arg(apart)));
     plot.resize(400, 600);
     QCoreApplication::processEvents();
     QCOMPARE(plot.valueTickLabels().size(), 6);
@@ -344,6 +393,9 @@ class FeaturesTest : public QObject {
       window.mirror();
       QVERIFY(window.confidenceLegend()->isVisible());
       QVERIFY(window.view()->geometry().contains(window.confidenceLegend()->geometry().translated(window.view()->pos())));
+      // A key, not a panel over the arm: at most 30 % of the view's height (90 px at least).
+      QVERIFY2(window.confidenceLegend()->height() <= std::max(90, window.view()->height() * 3 / 10),
+               qPrintable(QStringLiteral("%1 px of %2").arg(window.confidenceLegend()->height()).arg(window.view()->height())));
       // The slices are drawn where they are: hiding the layer changes the picture.
       const QImage with = window.view()->grabFramebuffer();
       window.overlays().setVisible(flexirob::render::OverlayLayer::kConfidence, false);
