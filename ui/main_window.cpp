@@ -34,6 +34,7 @@
 #include "app/workflow_session.hpp"
 #include "learning/confidence.hpp"
 #include "planning/itm_file.hpp"
+#include "robot/errors.hpp"
 #include "robot/resources.hpp"
 #include "robot/sim/reach.hpp"
 #include "ui/confidence_panel.hpp"
@@ -592,6 +593,25 @@ bool MainWindow::mayDiscardTeaching(const QString& what) {
                                   "learned from them, leave the window (the session file keeps them). Load it?")
                                    .arg(what, taught),
                                QMessageBox::Yes | QMessageBox::Cancel, QMessageBox::Cancel) == QMessageBox::Yes;
+}
+
+void MainWindow::loadTheScenesRobotWhereTheLoadedOneDoesNotFit() {
+  // As the command line starts a scene without --robot: a scene made for another arm, whose
+  // postures the loaded one cannot take (another joint count), brings its own robot. A robot
+  // that fits stays, the operator's own URDF included.
+  if (!model_ || scene_.robot.empty() || scene_.robot == loaded_robot_) return;
+  try {
+    robot::checkPosturesFit(scene_, model_->dof(), model_->name());
+    return;
+  } catch (const InputError&) {
+  }
+  const QString before = QString::fromStdString(model_->name());
+  if (loadRobot(scene_.robot)) {
+    showStatusMessage(statusBar(),
+                      tr("Scene '%1' is made for the robot '%2', loaded with it ('%3' has another number of joints)")
+                          .arg(QString::fromStdString(scene_.name), QString::fromStdString(scene_.robot), before),
+                      15000);
+  }
 }
 
 void MainWindow::markLoadedChoices() {
@@ -1163,7 +1183,7 @@ void MainWindow::buildMenus() {
   for (const std::string& name : robot::builtinSceneNames()) {
     QAction* action = scene_menu_->addAction(QString::fromStdString(name), this, [this, name] {
       if (mayDiscardTeaching(tr("scene '%1'").arg(QString::fromStdString(name)))) {
-        loadScene(name);
+        if (loadScene(name)) loadTheScenesRobotWhereTheLoadedOneDoesNotFit();
       } else {
         markLoadedChoices();
       }

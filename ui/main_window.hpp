@@ -181,6 +181,8 @@ class MainWindow : public QMainWindow {
   void refuseScene(const std::string& name_or_path, const std::exception& error);
   /// Checks the Robot and Scene menus' entries of what is loaded (after a choice taken back).
   void markLoadedChoices();
+  /// After a scene chosen in the menu: its own robot where the loaded one cannot take its postures.
+  void loadTheScenesRobotWhereTheLoadedOneDoesNotFit();
   /// Points the home camera at the robot from a side obstacles do not hide it from, or draws
   /// those that hide it from every side see-through.
   void frameView();

@@ -3,6 +3,7 @@
 // with their legend; in EXECUTION a goal (set, or Ctrl+clicked on the ITM graph) is planned and
 // executed; the run's recording opens in a review window with the ITM graph and the slices of
 // the moment; keyboard triggers are counted.
+#include <QAction>
 #include <QApplication>
 #include <QDockWidget>
 #include <QFile>
@@ -279,6 +280,30 @@ class FeaturesTest : public QObject {
     const int bottom = label->mapTo(window.stagePanel(), QPoint(0, label->height())).y();
     QVERIFY2(bottom <= window.stagePanel()->height(),
              qPrintable(QStringLiteral("the warning ends at %1 px, the panel at %2 px").arg(bottom).arg(window.stagePanel()->height())));
+  }
+
+  // The Scene menu's arm9_areas with the LWR IV loaded: the scene's postures have nine joints,
+  // so its own robot comes with it (as the command line starts it); setup_A keeps the robot.
+  void aSceneChosenInTheMenuBringsItsRobotWhereTheLoadedOneDoesNotFit() {
+    MainWindow window("lwr4", "setup_I", quietOptions());
+    window.show();
+    const auto choose = [&window](const QString& scene) {
+      for (QAction* action : window.findChildren<QAction*>()) {
+        if (action->data().toString() == scene && action->isCheckable()) {
+          action->trigger();
+          return true;
+        }
+      }
+      return false;
+    };
+    QVERIFY(choose(QStringLiteral("arm9_areas")));
+    QVERIFY(window.robotModel() != nullptr);
+    QCOMPARE(window.robotModel()->dof(), 9);
+    QVERIFY(flexirob::ui::fullStatusMessage(window.statusBar()).contains(QStringLiteral("made for the robot 'arm9'")));
+    QVERIFY(choose(QStringLiteral("setup_I")));
+    QCOMPARE(window.robotModel()->dof(), 7);
+    QVERIFY(choose(QStringLiteral("empty")));  // made for the LWR IV, no posture to fit: it stays
+    QCOMPARE(window.robotModel()->dof(), 7);
   }
 
   void aRefusalNamesWhatTheOperatorPressed() {

@@ -310,9 +310,9 @@ class OperatorTest : public QObject {
   void aRefusedRequestIsShownAsAWarning() {
     MainWindow window("lwr4", "empty", quietOptions());
     waitRunning(window);
-    // F6 (finish configuration) in IDLE: the workflow refuses and says why.
+    // F6 (finish configuration) in IDLE: the workflow refuses and says why, naming the button.
     QTest::keyClick(&window, Qt::Key_F6);
-    QTRY_VERIFY(window.stagePanel()->warningLabel()->text().contains(QStringLiteral("finished_configuration")));
+    QTRY_VERIFY(window.stagePanel()->warningLabel()->text().startsWith(QStringLiteral("Finish configuration: not in CONFIGURATION")));
     QCOMPARE(window.live()->snapshot().stage, Stage::kIdle);
   }
 
