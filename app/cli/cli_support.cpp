@@ -168,7 +168,7 @@ robot::RobotModel loadSessionRobot(const std::string& reference, const std::stri
   try {
     robot::RobotModel stored = robot::RobotModel::fromUrdfString(stored_urdf, file.parent_path(), tip);
     if (on_disk != stored_urdf) {
-      std::fprintf(stderr, "note: the robot '%s' is not the one the session was taught with (changed or missing); the session's stored copy is used\n",
+      std::fprintf(stderr, "note: the robot '%s' differs from the copy the session stores (changed or missing since, or the stored copy edited); the stored copy is used\n",
                    reference.c_str());
     }
     return noted(std::move(stored), reference, tip);
@@ -210,7 +210,7 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
     return loadSceneNoting(reference);
   }
   if (on_disk != stored_scene_text) {
-    std::fprintf(stderr, "note: the scene '%s' is not the one the session was taught with (changed or missing); the session's stored copy is used\n",
+    std::fprintf(stderr, "note: the scene '%s' differs from the copy the session stores (changed or missing since, or the stored copy edited); the stored copy is used\n",
                  reference.c_str());
   }
   for (const std::string& note : robot::sceneNotes(scene)) std::fprintf(stderr, "note: %s\n", note.c_str());

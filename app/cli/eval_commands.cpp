@@ -79,8 +79,10 @@ void checkPosturesWithinLimits(const Session& session) {
 // teach writes each sample's tip position as the forward kinematics of its posture: a JSON
 // session whose positions disagree was edited or belongs to another robot, and its map would
 // be learned from pairs that never were (positions 5 m away were evaluated without a word).
-// A recorded SQLite session from the real robot keeps the controller's own Cartesian
-// measurement, which a tool frame set on the robot may offset; it is not held to this.
+// So is an SQLite session teach recorded in the simulation (its stored robot edited to another
+// geometry was planned with). A session from the real robot, or over FRI, keeps the
+// controller's own Cartesian measurement, which a tool frame set on the robot may offset; it
+// is not held to this.
 void checkTipPositionsMatchPostures(const Session& session) {
   constexpr double kToleranceM = 0.01;
   robot::Kinematics kinematics(*session.model);
@@ -161,6 +163,7 @@ Session loadRecordedSession(const std::string& file) {
   if (!teaching.itm) throw InputError("session: no ITM graph recorded");
   session.itm = std::make_unique<planning::Itm>(std::move(*teaching.itm));
   checkPosturesWithinLimits(session);
+  if (parameters.is_object() && parameters.value("backend", Json()) == Json("sim")) checkTipPositionsMatchPostures(session);
   return session;
 }
 

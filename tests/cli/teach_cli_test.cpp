@@ -14,6 +14,7 @@
 #include <regex>
 #include <vector>
 
+#include "app/session_schema.hpp"
 #include "app/session_write_lock.hpp"
 #include "cli_test_support.hpp"
 #include "robot/resources.hpp"
@@ -82,6 +83,29 @@ TEST(TeachCli, NeverWritesOverAnExistingFileUnlessToldToAndNeverOverItsOwnScene)
   fs::remove(notes);
   fs::remove(scene);
   fs::remove(upper);
+}
+
+// A session teach recorded in the simulation holds tip positions that are its robot's forward
+// kinematics; its stored robot edited to another geometry (the forearm 10 cm longer) no longer
+// fits them, and plan refuses it as it refuses such a JSON session, rather than planning the
+// other arm to positions taught with this one.
+TEST(TeachCli, ASimulatedSessionWhoseStoredRobotWasEditedIsRefused) {
+  const fs::path out = scratch("edited_robot.flexirob");
+  const auto taught = runCliBinary("teach --scene setup_A --areas 1 --seed 3 --check-points 0 --out " + out.string());
+  ASSERT_EQ(taught.exit_code, 0) << taught.err;
+  const auto intact = runCliBinary("plan --session " + out.string() + " --goals 1 --seed 1");
+  ASSERT_EQ(intact.exit_code, 0) << intact.err;
+  {
+    app::SqliteDatabase db(out.string(), 0x00000002);  // SQLITE_OPEN_READWRITE
+    db.exec("UPDATE meta SET value = replace(value, '<origin xyz=\"0 0 0.3900\"', '<origin xyz=\"0 0 0.4900\"') "
+            "WHERE key = 'robot_urdf'");
+    ASSERT_NE(db.queryText("SELECT value FROM meta WHERE key = 'robot_urdf'").find("0 0 0.4900"), std::string::npos);
+  }
+  const auto edited = runCliBinary("plan --session " + out.string() + " --goals 1 --seed 1");
+  EXPECT_EQ(edited.exit_code, 2) << edited.err;
+  EXPECT_NE(edited.err.find("from where its joint values put the tip"), std::string::npos) << edited.err;
+  EXPECT_NE(edited.err.find("differs from the copy the session stores"), std::string::npos) << edited.err;
+  fs::remove(out);
 }
 
 // A mistaken re-run with --overwrite, stopped before it taught anything, must not cost the
