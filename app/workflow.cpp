@@ -432,7 +432,8 @@ RequestResult Workflow::planTo(const Eigen::Vector3d& goal) {
   if (!path->found) return refuse("plan", "plan: no path through the ITM graph (start and goal in different components)");
   if (path->goal_gap > options_.max_goal_gap) {
     std::ostringstream reason;
-    reason << std::fixed << std::setprecision(1) << "plan: the goal is " << path->goal_gap * 1e3
+    // Rounded up: a gap just over the limit must not read as the limit itself.
+    reason << std::fixed << std::setprecision(1) << "plan: the goal is " << std::ceil(path->goal_gap * 1e4) / 10.0
            << " mm from the nearest explored position (at most " << options_.max_goal_gap * 1e3 << " mm)";
     if (mostly_in_contact) reason << "; the map holds " << itm_.nodeCount() << (itm_.nodeCount() == 1 ? " node" : " nodes") << left_out;
     return refuse("plan", reason.str());

@@ -242,6 +242,7 @@ void MainWindow::buildDocks() {
   // Scrolled, not squeezed: on a short screen the hint and a long warning keep their lines
   // (squeezed, the labels were drawn over each other and cut).
   auto* stage_scroll = new QScrollArea;
+  stage_scroll->setObjectName(QStringLiteral("stage_scroll"));
   stage_scroll->setWidget(stage_panel_);
   stage_scroll->setWidgetResizable(true);
   stage_scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
@@ -292,7 +293,9 @@ void MainWindow::buildDocks() {
   tabifyDockWidget(joints_dock, parameter_dock);
   joints_dock->raise();
   connect(parameter_panel_, &ParameterPanel::applyRequested, this,
-          [this](const std::map<std::string, double>& values) { applyParameters(values); });
+          [this](const std::map<std::string, double>& values) {
+            if (mayDiscardTeaching(tr("parameter change"))) applyParameters(values);
+          });
 
   // The confidence field's slices (Fig. 6.5): heights and the colour map's legend.
   confidence_panel_ = new ConfidencePanel;
@@ -544,7 +547,7 @@ robot::Scene MainWindow::readScene(const std::string& name_or_path) {
   return scene;
 }
 
-bool MainWindow::loadScene(const std::string& name_or_path) {
+bool MainWindow::loadScene(const std::string& name_or_path, bool start_live) {
   robot::Scene scene;
   try {
     scene = readScene(name_or_path);
@@ -574,7 +577,7 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
   loaded_scene_ = name_or_path.empty() ? std::string("empty") : name_or_path;
   markLoadedChoices();
   resetParameters();
-  startLive();
+  if (start_live) startLive();
   updateStatus();
   return true;
 }
@@ -582,36 +585,54 @@ bool MainWindow::loadScene(const std::string& name_or_path) {
 bool MainWindow::mayDiscardTeaching(const QString& what) {
   if (!live_) return true;
   const LiveSnapshot& now = live_->snapshot();
-  if (now.areas == 0 && now.teach_ins == 0) return true;
+  const bool recording = now.sub_stage == app::SubStage::kRecording || now.sub_stage == app::SubStage::kTeachIn;
+  if (now.areas == 0 && now.teach_ins == 0 && !recording) return true;
   // A new robot or scene restarts the workflow: what was taught in this window is gone from it
   // (the session file keeps it). One click in a menu must not cost a person's teaching.
   const auto count = [](int n, const QString& one, const QString& many) { return n == 1 ? one : many.arg(n); };
-  QString taught = count(now.areas, tr("1 training area"), tr("%1 training areas"));
-  if (now.teach_ins > 0) taught += tr(" and ") + count(now.teach_ins, tr("1 teach-in"), tr("%1 teach-ins"));
+  QStringList taught;
+  if (now.areas > 0) taught << count(now.areas, tr("1 training area"), tr("%1 training areas"));
+  if (now.teach_ins > 0) taught << count(now.teach_ins, tr("1 teach-in"), tr("%1 teach-ins"));
+  if (recording) taught << (now.sub_stage == app::SubStage::kRecording ? tr("the area being recorded") : tr("the teach-in being taught"));
+  const QString kept = recorder_ ? tr("the session file keeps what was finished") : tr("this run is not recorded: they are lost");
   return QMessageBox::question(this, tr("Discard the teaching?"),
-                               tr("Loading the %1 starts the teaching afresh: the %2 taught in this run, and what was "
-                                  "learned from them, leave the window (the session file keeps them). Load it?")
-                                   .arg(what, taught),
+                               tr("The %1 starts the teaching afresh: %2 of this run, and what was learned, leave the "
+                                  "window (%3). Go on?")
+                                   .arg(what, taught.join(tr(", ")), kept),
                                QMessageBox::Yes | QMessageBox::Cancel, QMessageBox::Cancel) == QMessageBox::Yes;
 }
 
-void MainWindow::loadTheScenesRobotWhereTheLoadedOneDoesNotFit() {
+void MainWindow::chooseScene(const std::string& name) {
   // As the command line starts a scene without --robot: a scene made for another arm, whose
   // postures the loaded one cannot take (another joint count), brings its own robot. A robot
-  // that fits stays, the operator's own URDF included.
-  if (!model_ || scene_.robot.empty() || scene_.robot == loaded_robot_) return;
+  // that fits stays, the operator's own URDF included. The arm restarts once, with both.
+  std::string own_robot;
   try {
-    robot::checkPosturesFit(scene_, model_->dof(), model_->name());
+    const robot::Scene chosen = readScene(name);
+    if (model_ && !chosen.robot.empty() && chosen.robot != loaded_robot_) {
+      try {
+        robot::checkPosturesFit(chosen, model_->dof(), model_->name());
+      } catch (const InputError&) {
+        own_robot = chosen.robot;
+      }
+    }
+  } catch (const std::exception&) {
+    // loadScene() says why.
+  }
+  if (own_robot.empty()) {
+    loadScene(name);
     return;
-  } catch (const InputError&) {
   }
   const QString before = QString::fromStdString(model_->name());
-  if (loadRobot(scene_.robot)) {
-    showStatusMessage(statusBar(),
-                      tr("Scene '%1' is made for the robot '%2', loaded with it ('%3' has another number of joints)")
-                          .arg(QString::fromStdString(scene_.name), QString::fromStdString(scene_.robot), before),
-                      15000);
+  if (!loadScene(name, false)) return;  // refused: the arm before runs on
+  if (!loadRobot(own_robot)) {
+    startLive();  // the robot before, in the new scene (its postures left out, said by the notes)
+    return;
   }
+  showStatusMessage(statusBar(),
+                    tr("Scene '%1' is made for the robot '%2', loaded with it ('%3' has another number of joints)")
+                        .arg(QString::fromStdString(scene_.name), QString::fromStdString(scene_.robot), before),
+                    15000);
 }
 
 void MainWindow::markLoadedChoices() {
@@ -1118,12 +1139,12 @@ void MainWindow::buildMenus() {
   file->addAction(tr("Open robot &URDF…"), this, [this] {
     const QString path = QFileDialog::getOpenFileName(this, tr("Open robot description"), QString(),
                                                       tr("URDF (*.urdf *.xml);;All files (*)"));
-    if (!path.isEmpty()) loadRobot(path.toStdString());
+    if (!path.isEmpty() && mayDiscardTeaching(tr("robot '%1'").arg(path))) loadRobot(path.toStdString());
   });
   file->addAction(tr("Open &scene…"), this, [this] {
     const QString path = QFileDialog::getOpenFileName(this, tr("Open scene"), QString(),
                                                       tr("Scenes (*.yaml *.yml);;All files (*)"));
-    if (!path.isEmpty()) loadScene(path.toStdString());
+    if (!path.isEmpty() && mayDiscardTeaching(tr("scene '%1'").arg(path))) loadScene(path.toStdString());
   });
   file->addSeparator();
   file->addAction(tr("&Open recording…"), QKeySequence::Open, this, [this] {
@@ -1183,7 +1204,7 @@ void MainWindow::buildMenus() {
   for (const std::string& name : robot::builtinSceneNames()) {
     QAction* action = scene_menu_->addAction(QString::fromStdString(name), this, [this, name] {
       if (mayDiscardTeaching(tr("scene '%1'").arg(QString::fromStdString(name)))) {
-        if (loadScene(name)) loadTheScenesRobotWhereTheLoadedOneDoesNotFit();
+        chooseScene(name);
       } else {
         markLoadedChoices();
       }
@@ -1195,20 +1216,31 @@ void MainWindow::buildMenus() {
 
   backend_menu_ = menuBar()->addMenu(tr("&Backend"));
   auto* backends = new QActionGroup(this);
-  QAction* sim = backend_menu_->addAction(tr("&Simulation"), this, [this] { setBackend("sim"); });
+  // A new backend restarts the teaching as a new robot does; taken back, the menu shows the
+  // backend that runs.
+  const auto markBackend = [this] {
+    for (QAction* action : backend_menu_->actions()) {
+      if (action->data().toString() == QStringLiteral("sim")) action->setChecked(backend_.kind == app::BackendKind::kSimulation);
+      if (action->data().toString() == QStringLiteral("fri")) action->setChecked(backend_.kind == app::BackendKind::kFri);
+    }
+  };
+  const auto switchBackend = [this, markBackend](const std::string& choice, const QString& what) {
+    if (!mayDiscardTeaching(what) || !setBackend(choice)) markBackend();
+  };
+  QAction* sim = backend_menu_->addAction(tr("&Simulation"), this, [switchBackend, this] { switchBackend("sim", tr("simulation")); });
   sim->setData(QStringLiteral("sim"));
   sim->setCheckable(true);
   sim->setChecked(backend_.kind == app::BackendKind::kSimulation);
   backends->addAction(sim);
-  QAction* fri = backend_menu_->addAction(tr("&Connect to the LWR IV over FRI…"), this, [this] {
+  QAction* fri = backend_menu_->addAction(tr("&Connect to the LWR IV over FRI…"), this, [this, switchBackend, markBackend] {
     bool ok = false;
     const QString address = QInputDialog::getText(this, tr("Connect to the robot"),
                                                   tr("Robot controller (fri://ADDRESS:PORT):"), QLineEdit::Normal,
                                                   QStringLiteral("fri://192.168.0.20:49938"), &ok);
-    if (ok && !address.isEmpty() && !setBackend(address.toStdString())) {
-      for (QAction* action : backend_menu_->actions()) {
-        if (action->data().toString() == QStringLiteral("sim")) action->setChecked(backend_.kind == app::BackendKind::kSimulation);
-      }
+    if (ok && !address.isEmpty()) {
+      switchBackend(address.toStdString(), tr("robot at %1").arg(address));
+    } else {
+      markBackend();
     }
   });
   fri->setData(QStringLiteral("fri"));
@@ -1216,7 +1248,8 @@ void MainWindow::buildMenus() {
   fri->setChecked(backend_.kind == app::BackendKind::kFri);
   backends->addAction(fri);
   backend_menu_->addSeparator();
-  backend_menu_->addAction(tr("&Disconnect (back to the simulation)"), this, [this] { setBackend("sim"); });
+  backend_menu_->addAction(tr("&Disconnect (back to the simulation)"), this,
+                           [switchBackend, this] { switchBackend("sim", tr("simulation")); });
   reconnect_action_ = backend_menu_->addAction(tr("&Confirm reconnect after a fault"), this, [this] {
     if (!live_) return;
     if (QMessageBox::question(this, tr("Reconnect"),

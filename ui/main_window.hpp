@@ -73,8 +73,13 @@ class MainWindow : public QMainWindow {
   /// Loads a robot (built-in name or URDF path). Returns false and shows why on failure; the
   /// previous robot stays.
   bool loadRobot(const std::string& name_or_path);
-  /// Loads a scene (built-in name or file). Returns false and shows why on failure.
-  bool loadScene(const std::string& name_or_path);
+  /// Loads a scene (built-in name or file). Returns false and shows why on failure (the arm
+  /// before runs on). Without `start_live` the arm is left stopped after a scene that loaded,
+  /// for a robot to follow (chooseScene).
+  bool loadScene(const std::string& name_or_path, bool start_live = true);
+  /// The Scene menu's choice: the scene, and its own robot where the loaded one cannot take its
+  /// postures.
+  void chooseScene(const std::string& name);
   /// Whether loading `what` (a robot or scene, named for the question) may discard what was
   /// taught in this window: true at once where nothing was, else the person's answer.
   bool mayDiscardTeaching(const QString& what);
@@ -181,8 +186,6 @@ class MainWindow : public QMainWindow {
   void refuseScene(const std::string& name_or_path, const std::exception& error);
   /// Checks the Robot and Scene menus' entries of what is loaded (after a choice taken back).
   void markLoadedChoices();
-  /// After a scene chosen in the menu: its own robot where the loaded one cannot take its postures.
-  void loadTheScenesRobotWhereTheLoadedOneDoesNotFit();
   /// Points the home camera at the robot from a side obstacles do not hide it from, or draws
   /// those that hide it from every side see-through.
   void frameView();

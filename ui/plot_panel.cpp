@@ -162,16 +162,21 @@ double niceTickInterval(double span, int intervals) {
   return best;
 }
 
-double niceTickIntervalFor(double span, int max_ticks) {
+double niceTickIntervalFor(double lower, double upper, int max_ticks) {
+  const double span = upper - lower;
   double interval = niceTickInterval(span);
   if (interval <= 0.0 || max_ticks < 2) return interval;
+  // Ticks at the multiples of the interval within [lower, upper], as QValueAxis draws them.
+  const auto ticks = [lower, upper](double step) {
+    return std::floor(upper / step + 1e-9) - std::ceil(lower / step - 1e-9) + 1.0;
+  };
   // Widen through the 1-2-5 steps (0.2 -> 0.5 -> 1 -> 2 ...), but never to a single tick: a
   // lone "0" says nothing of the scale.
-  while (std::floor(span / interval + 1e-9) + 1.0 > max_ticks) {
+  while (ticks(interval) > max_ticks) {
     const double decade = std::pow(10.0, std::floor(std::log10(interval) + 1e-9));
     const double factor = interval / decade;
     const double wider = (factor < 1.5 ? 2.0 : factor < 3.5 ? 5.0 : 10.0) * decade;
-    if (std::floor(span / wider + 1e-9) + 1.0 < 2.0) break;
+    if (ticks(wider) < 2.0) break;
     interval = wider;
   }
   return interval;
@@ -182,7 +187,7 @@ namespace {
 // at most `max_ticks` of them where that is positive.
 void roundTicks(QValueAxis* axis, int max_ticks = 0) {
   const double span = axis->max() - axis->min();
-  const double interval = max_ticks > 0 ? niceTickIntervalFor(span, max_ticks) : niceTickInterval(span);
+  const double interval = max_ticks > 0 ? niceTickIntervalFor(axis->min(), axis->max(), max_ticks) : niceTickInterval(span);
   if (interval <= 0.0) return;
   axis->setTickType(QValueAxis::TicksDynamic);
   axis->setTickAnchor(0.0);

@@ -114,9 +114,10 @@ class TimePlot : public QChartView {
 /// The tick interval of 1, 2 or 5 times a power of ten that divides `span` into nearest
 /// `intervals` parts (0 for an empty or non-finite span).
 double niceTickInterval(double span, int intervals = 4);
-/// As niceTickInterval, widened to the next 1-2-5 step until the span holds at most `max_ticks`
-/// ticks (a short chart has no room for more labels: Qt Charts cuts each to "...").
-double niceTickIntervalFor(double span, int max_ticks);
+/// As niceTickInterval, widened to the next 1-2-5 step until [lower, upper] holds at most
+/// `max_ticks` ticks at the interval's multiples (a short chart has no room for more labels: Qt
+/// Charts cuts each to "..."), but never to fewer than two.
+double niceTickIntervalFor(double lower, double upper, int max_ticks);
 
 class PlotPanel : public QWidget {
   Q_OBJECT

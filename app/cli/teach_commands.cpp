@@ -74,16 +74,24 @@ bool endsWith(const std::string& text, const std::string& suffix) {
 
 // A recording, a scene or anything else already at --out is data a run must not destroy; the
 // scene and URDF the run reads (as resolved: a built-in name, the scene's own robot) never.
+void checkNoInputIsAt(const std::filesystem::path& output, const robot::Scene& scene, const robot::RobotModel& model,
+                      const std::string& named) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (!fs::exists(output, error)) return;
+  const std::pair<fs::path, const char*> inputs[] = {{scene.source, "the scene"}, {model.urdfPath(), "the robot's URDF"}};
+  for (const auto& [input, what] : inputs) {
+    if (!input.empty() && fs::equivalent(input, output, error)) {
+      throw InputError("--out: " + named + " is " + what + " the run reads; give another file");
+    }
+  }
+}
+
 void checkNothingIsOverwritten(const TeachOptions& options, const robot::Scene& scene, const robot::RobotModel& model) {
   namespace fs = std::filesystem;
   std::error_code error;
   if (!fs::exists(options.out, error)) return;
-  const std::pair<fs::path, const char*> inputs[] = {{scene.source, "the scene"}, {model.urdfPath(), "the robot's URDF"}};
-  for (const auto& [input, what] : inputs) {
-    if (!input.empty() && fs::equivalent(input, options.out, error)) {
-      throw InputError("--out: '" + options.out + "' is " + what + " the run reads; give another file");
-    }
-  }
+  checkNoInputIsAt(options.out, scene, model, "'" + options.out + "'");
   if (!options.overwrite) {
     throw InputError("--out: '" + options.out + "' exists; teach does not write over a file (give --overwrite to replace it)");
   }
@@ -214,12 +222,19 @@ Json runTeach(TeachOptions options) {
 
   // The session: SQLite through the session recorder, or JSON for a path ending in .json.
   const bool json_session = endsWith(options.out, ".json");
-  // --overwrite: the run records beside the file it replaces, and takes its place only once it
-  // has taught something. A mistaken re-run stopped with Ctrl-C, or one that taught no area,
-  // leaves the earlier recording as it was.
+  // --overwrite: the run records beside the file it replaces (through a symbolic link, the file
+  // it names), and takes its place only once it has taught something. A mistaken re-run stopped
+  // with Ctrl-C, or one that taught no area, leaves the earlier recording as it was.
   std::error_code out_status;
-  const bool replacing = std::filesystem::is_regular_file(options.out, out_status);
-  const std::string recording_path = replacing ? options.out + ".new" : options.out;
+  const std::filesystem::path out_file = app::followLinks(options.out);
+  const bool replacing = std::filesystem::is_regular_file(out_file, out_status);
+  const std::string recording_path = replacing ? out_file.string() + ".new" : options.out;
+  std::optional<app::SessionWriteLock> recording_lock;
+  if (replacing) {
+    // The file beside is written as --out is: never by two runs, never over what the run reads.
+    recording_lock.emplace(recording_path, "--out");
+    checkNoInputIsAt(recording_path, scene, model, "the file '" + recording_path + "', where the run records before replacing --out,");
+  }
   std::unique_ptr<app::SessionRecorder> recorder;
   std::unique_ptr<app::WorkflowSessionWriter> writer;
   if (!json_session) {
@@ -423,13 +438,21 @@ Json runTeach(TeachOptions options) {
       } else if (keep_earlier) {
         session_path = recording_path;
       } else {
-        // The earlier file's journal would be read as the new file's own.
-        std::filesystem::remove(options.out + "-wal", error);
-        std::filesystem::remove(options.out + "-shm", error);
-        std::filesystem::rename(recording_path, options.out, error);
+        // The earlier file's journal would be read as the new file's own: set aside, and put
+        // back should the file stay (a killed run's journal holds its last commits).
+        const std::string journal = out_file.string() + "-wal";
+        const std::string set_aside = journal + ".replaced";
+        std::error_code ignored;
+        const bool had_journal = std::filesystem::exists(journal, ignored);
+        if (had_journal) std::filesystem::rename(journal, set_aside, error);
+        if (!error) std::filesystem::rename(recording_path, out_file, error);
         if (error) {
+          if (had_journal) std::filesystem::rename(set_aside, journal, ignored);
           session_error = "cannot replace '" + options.out + "' with the new recording: " + error.message();
           session_path = recording_path;
+        } else {
+          std::filesystem::remove(set_aside, ignored);
+          std::filesystem::remove(out_file.string() + "-shm", ignored);  // an index of the journal set aside
         }
       }
     } else if (replacing) {
@@ -437,10 +460,12 @@ Json runTeach(TeachOptions options) {
     }
   }
   if (session_path != options.out) {
-    kept_note = "; '" + options.out + "' was left as it was (nothing was taught" +
-                (session_path.empty() ? std::string()
-                                      : ", the new recording is '" + session_path + "'") +
-                ")";
+    if (keep_earlier) {
+      kept_note = "; '" + options.out + "' was left as it was (nothing was taught" +
+                  (session_path.empty() ? std::string() : ", the new recording is '" + session_path + "'") + ")";
+    } else {
+      kept_note = "; '" + options.out + "' was left as it was (the new recording is '" + session_path + "')";
+    }
   }
   // The tutor's feedback (joint limits, transition checks) is what a person would have read on
   // the screen: said on stderr too, each distinct line once, not only counted in the JSON.

@@ -249,7 +249,8 @@ class OperatorTest : public QObject {
     });
     answer.start(50);
     other_scene->trigger();
-    QVERIFY2(question.contains(QStringLiteral("the 1 training area taught in this run")), qPrintable(question));
+    QVERIFY2(question.contains(QStringLiteral("The scene 'setup_A' starts the teaching afresh: 1 training area of this run")),
+             qPrintable(question));
     QCOMPARE(s.areas, 1);
     QVERIFY(!other_scene->isChecked());
     QTest::keyClick(&window, Qt::Key_F6);
