@@ -93,7 +93,7 @@ void TimePlot::fitLegend() {
   const int shown_wide = entries(false);
   if (shown_wide == 0) return;
   const bool narrow = !narrow_names_.empty() && room / shown_wide < kSmallestFont * kRoomPerEntry;
-  if (narrow != narrow_legend_) {
+  if (narrow != narrow_legend_ || legend_names_changed_) {
     for (int i = 0; i < seriesCount(); ++i) {
       const auto narrow_name = narrow_names_.find(i);
       if (narrow_name == narrow_names_.end()) continue;
@@ -103,6 +103,7 @@ void TimePlot::fitLegend() {
       }
     }
     narrow_legend_ = narrow;
+    legend_names_changed_ = false;
   }
   if (legend_point_size_ <= 0.0) legend_point_size_ = chart_->legend()->font().pointSizeF();
   if (legend_point_size_ <= 0.0) return;  // a font sized in pixels is left alone
@@ -118,10 +119,7 @@ void TimePlot::fitLegend() {
 
 void TimePlot::setNarrowLegendName(int series, const QString& name) {
   narrow_names_[series] = name;
-  narrow_legend_ = false;
-  for (QLegendMarker* marker : chart_->legend()->markers(series_.at(static_cast<std::size_t>(series)))) {
-    marker->setLabel(series_.at(static_cast<std::size_t>(series))->name());
-  }
+  legend_names_changed_ = true;
   fitLegend();
 }
 

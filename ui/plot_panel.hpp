@@ -108,6 +108,7 @@ class TimePlot : public QChartView {
   std::set<int> hidden_from_legend_;
   std::map<int, QString> narrow_names_;
   bool narrow_legend_ = false;
+  bool legend_names_changed_ = false;  ///< a narrow name given since the legend's names were set
   int value_ticks_room_ = 0;  ///< value tick labels the plot's height has room for (0: not laid out yet)
 };
 
