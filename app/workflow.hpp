@@ -225,6 +225,8 @@ class Workflow {
   std::shared_ptr<const planning::PlannedPath> plannedPath() const { return planned_path_; }
   /// The interaction controller's task target x_des [m, W] and α of assistance blending.
   const Eigen::Vector3d& taskTarget() const { return interaction_.taskTarget(); }
+  /// Whether the controller in force steers the tip to taskTarget() (not π_q or π_rec by hand).
+  bool tracksTaskTarget() const { return interaction_.tracksTaskTarget(); }
   /// The null-space posture the map gave in the last cycle of hierarchical control: q_c(x_des),
   /// or along a planned path the postures shown along it [rad].
   const Eigen::VectorXd& mapPosture() const { return interaction_.mapPosture(); }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <limits>
 #include <string_view>
 
 #include "app/realtime.hpp"
@@ -294,7 +295,11 @@ void WorkflowThread::publish(const CycleStatistics& statistics) {
   copyInto(snapshot.q_cmd, workflow.lastCommand().q_cmd);
   copyInto(snapshot.tau_ext, state.tau_ext);
   copyInto(snapshot.p_WT, state.X_WT.translation());
-  copyInto(snapshot.p_des, workflow.taskTarget());
+  if (workflow.tracksTaskTarget()) {
+    copyInto(snapshot.p_des, workflow.taskTarget());
+  } else {
+    snapshot.p_des.fill(std::numeric_limits<double>::quiet_NaN());
+  }
 
   snapshot.stage = workflow.stage();
   snapshot.sub_stage = workflow.subStage();

@@ -96,7 +96,9 @@ struct WorkflowSnapshot {
   int dof = 0;
   std::array<double, kMaxDof> q{}, qd{}, q_cmd{}, tau_ext{};
   std::array<double, 3> p_WT{};   ///< measured tip [m, W]
-  std::array<double, 3> p_des{};  ///< task target x_des of the controller [m, W]
+  /// Task target x_des of the controller [m, W]; NaN where the controller in force holds a
+  /// posture instead (π_q and π_rec under the hand).
+  std::array<double, 3> p_des{};
 
   // The workflow.
   Stage stage = Stage::kIdle;

@@ -112,6 +112,11 @@ class InteractionController {
   void update(const RobotState& state, JointImpedanceCommand& command);
 
   const Eigen::Vector3d& taskTarget() const { return p_des_; }
+  /// Whether the mode in force steers the tip to x_des. π_q and π_rec under the hand hold a
+  /// posture instead; their x_des stays where the tip was when they began (Sect. 4.1).
+  bool tracksTaskTarget() const {
+    return keyboard_ || (mode_ != InteractionMode::kGravityCompensation && mode_ != InteractionMode::kCompliantRecording);
+  }
   const Eigen::VectorXd& nullSpaceTarget() const { return q_c_; }
   /// The redundancy map's posture at x_des in the last cycle that asked it (hierarchical
   /// control and the assisted modes) [rad].

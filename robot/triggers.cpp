@@ -69,6 +69,9 @@ std::optional<TriggerEvent> InteractionTriggers::update(const RobotState& state)
   }
   if (affected_ && !moving && state.time - last_moving_time_ >= converged_time_ - 1e-9) {
     affected_ = false;
+    // A hand still on the arm now began no new touch: the next on_affected waits for it to let
+    // go (a grip that loosened for a moment during the phase re-armed the trigger).
+    armed_ = !touched;
     ++converged_count_;
     return TriggerEvent{TriggerKind::kOnConverged, state.time};
   }

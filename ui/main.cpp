@@ -234,15 +234,17 @@ int main(int argc, char** argv) {
   // A robot or scene named on the command line that cannot be read is refused as a bad option
   // is: a window on the default scene, with the reason in a panel, hides the typing mistake.
   // The menus keep the window's own behaviour (the robot or scene before stays).
+  // What was read here is what the window shows.
+  flexirob::ui::MainWindow::Options window_options;
   if (!parser.isSet(review)) {
     try {
-      if (parser.isSet(scene)) flexirob::ui::MainWindow::readScene(parser.value(scene).toStdString());
+      if (parser.isSet(scene)) window_options.scene_read = flexirob::ui::MainWindow::readScene(parser.value(scene).toStdString());
     } catch (const std::exception& error) {
       std::fprintf(stderr, "error: --scene: %s\n", error.what());
       return 2;
     }
     try {
-      if (parser.isSet(robot)) flexirob::ui::MainWindow::readRobot(parser.value(robot).toStdString());
+      if (parser.isSet(robot)) window_options.robot_read = flexirob::ui::MainWindow::readRobot(parser.value(robot).toStdString());
     } catch (const std::exception& error) {
       std::fprintf(stderr, "error: --robot: %s\n", error.what());
       return 2;
@@ -271,7 +273,6 @@ int main(int argc, char** argv) {
     return exit_code != 0 ? exit_code : code;
   }
 
-  flexirob::ui::MainWindow::Options window_options;
   window_options.backend = parser.value(backend).toStdString();
   window_options.restore_layout = !parser.isSet(fresh_layout) && !parser.isSet(screenshot);
   window_options.record_sessions = !parser.isSet(no_record);

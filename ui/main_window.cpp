@@ -162,9 +162,21 @@ MainWindow::MainWindow(const std::string& robot, const std::string& scene, const
   buildDocks();
   buildMenus();
 
-  loadScene(scene);
+  if (options_.scene_read) {
+    robot::Scene read = std::move(*options_.scene_read);
+    options_.scene_read.reset();
+    loadScene(scene, std::move(read));
+  } else {
+    loadScene(scene);
+  }
   // Without an explicit robot, the robot the scene was made for.
-  loadRobot(robot.empty() ? (scene_.robot.empty() ? std::string("lwr4") : scene_.robot) : robot);
+  if (options_.robot_read && !robot.empty()) {
+    robot::RobotModel read = std::move(*options_.robot_read);
+    options_.robot_read.reset();
+    loadRobot(robot, std::move(read));
+  } else {
+    loadRobot(robot.empty() ? (scene_.robot.empty() ? std::string("lwr4") : scene_.robot) : robot);
+  }
   // 1280 x 800, or what the screen has room for (a small screen keeps the window whole).
   const QRect room = screen() != nullptr ? screen()->availableGeometry() : QRect(0, 0, 1280, 800);
   resize(std::min(1280, room.width()), std::min(800, room.height()));
@@ -475,20 +487,24 @@ bool MainWindow::saveSession(const QString& file) {
   return ok;
 }
 
+void MainWindow::refuseRobot(const std::string& name_or_path, const std::exception& error) {
+  reportProblem(Problem::kRobot, tr("Cannot load robot '%1': %2%3")
+                                     .arg(QString::fromStdString(name_or_path), QString::fromUtf8(error.what()),
+                                          model_ ? tr("; the robot stays '%1'").arg(QString::fromStdString(model_->name()))
+                                                 : tr("; no robot runs (choose one in the Robot menu)")));
+}
+
 bool MainWindow::loadRobot(const std::string& name_or_path) {
-  std::unique_ptr<robot::RobotModel> model;
-  const auto refuse = [&](const std::exception& error) {
-    reportProblem(Problem::kRobot, tr("Cannot load robot '%1': %2%3")
-                                       .arg(QString::fromStdString(name_or_path), QString::fromUtf8(error.what()),
-                                            model_ ? tr("; the robot stays '%1'").arg(QString::fromStdString(model_->name()))
-                                                   : tr("; no robot runs (choose one in the Robot menu)")));
-  };
   try {
-    model = std::make_unique<robot::RobotModel>(readRobot(name_or_path));
+    return loadRobot(name_or_path, readRobot(name_or_path));
   } catch (const std::exception& error) {
-    refuse(error);
+    refuseRobot(name_or_path, error);
     return false;
   }
+}
+
+bool MainWindow::loadRobot(const std::string& name_or_path, robot::RobotModel read) {
+  auto model = std::make_unique<robot::RobotModel>(std::move(read));
   stopLive();
   try {
     auto kinematics = std::make_unique<robot::Kinematics>(*model);
@@ -497,7 +513,7 @@ bool MainWindow::loadRobot(const std::string& name_or_path) {
     kinematics_ = std::move(kinematics);
   } catch (const std::exception& error) {
     startLive();  // the robot before runs on; its start clears the robot's problems, so say it after
-    refuse(error);
+    refuseRobot(name_or_path, error);
     return false;
   }
   coloured_links_.clear();
@@ -555,6 +571,10 @@ bool MainWindow::loadScene(const std::string& name_or_path, bool start_live) {
     refuseScene(name_or_path, error);
     return false;
   }
+  return loadScene(name_or_path, std::move(scene), start_live);
+}
+
+bool MainWindow::loadScene(const std::string& name_or_path, robot::Scene scene, bool start_live) {
   stopLive();
   try {
     world_.setScene(scene);
@@ -606,25 +626,27 @@ void MainWindow::chooseScene(const std::string& name) {
   // As the command line starts a scene without --robot: a scene made for another arm, whose
   // postures the loaded one cannot take (another joint count), brings its own robot. A robot
   // that fits stays, the operator's own URDF included. The arm restarts once, with both.
-  std::string own_robot;
+  robot::Scene chosen;
   try {
-    const robot::Scene chosen = readScene(name);
-    if (model_ && !chosen.robot.empty() && chosen.robot != loaded_robot_) {
-      try {
-        robot::checkPosturesFit(chosen, model_->dof(), model_->name());
-      } catch (const InputError&) {
-        own_robot = chosen.robot;
-      }
+    chosen = readScene(name);
+  } catch (const std::exception& error) {
+    refuseScene(name, error);
+    return;
+  }
+  std::string own_robot;
+  if (model_ && !chosen.robot.empty() && chosen.robot != loaded_robot_) {
+    try {
+      robot::checkPosturesFit(chosen, model_->dof(), model_->name());
+    } catch (const InputError&) {
+      own_robot = chosen.robot;
     }
-  } catch (const std::exception&) {
-    // loadScene() says why.
   }
   if (own_robot.empty()) {
-    loadScene(name);
+    loadScene(name, std::move(chosen));
     return;
   }
   const QString before = QString::fromStdString(model_->name());
-  if (!loadScene(name, false)) return;  // refused: the arm before runs on
+  if (!loadScene(name, std::move(chosen), false)) return;  // refused: the arm before runs on
   if (!loadRobot(own_robot)) {
     startLive();  // the robot before, in the new scene (its postures left out, said by the notes)
     return;
@@ -1292,7 +1314,8 @@ void MainWindow::updatePlots(const LiveSnapshot& s) {
   plot_clock_.start();
   PlotSample sample;
   sample.time = s.time;
-  // Task error of the interaction controller: |x_des − x| of the tip [m].
+  // Task error of the interaction controller: |x_des − x| of the tip [m]; none (NaN, not drawn)
+  // while π_q or π_rec holds a posture under the hand: x_des is then only where the tip began.
   sample.task_error = std::sqrt((s.p_des[0] - s.p_WT[0]) * (s.p_des[0] - s.p_WT[0]) +
                                 (s.p_des[1] - s.p_WT[1]) * (s.p_des[1] - s.p_WT[1]) +
                                 (s.p_des[2] - s.p_WT[2]) * (s.p_des[2] - s.p_WT[2]));

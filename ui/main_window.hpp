@@ -61,6 +61,10 @@ class MainWindow : public QMainWindow {
     std::string backend = "sim";  ///< "sim" or "fri://HOST:PORT"
     bool record_sessions = true;  ///< record every run into a session file
     bool restore_layout = true;   ///< restore the window layout of the last run (QSettings)
+    /// The robot and scene named in the constructor, already read by the caller (the command
+    /// line checks them before a window opens): shown without reading their files again.
+    std::optional<robot::RobotModel> robot_read;
+    std::optional<robot::Scene> scene_read;
   };
 
   /// robot: built-in name or URDF path; scene: built-in name or scene file ("" = empty).
@@ -73,10 +77,14 @@ class MainWindow : public QMainWindow {
   /// Loads a robot (built-in name or URDF path). Returns false and shows why on failure; the
   /// previous robot stays.
   bool loadRobot(const std::string& name_or_path);
+  /// Shows a robot readRobot() has read from `name_or_path`.
+  bool loadRobot(const std::string& name_or_path, robot::RobotModel read);
   /// Loads a scene (built-in name or file). Returns false and shows why on failure (the arm
   /// before runs on). Without `start_live` the arm is left stopped after a scene that loaded,
   /// for a robot to follow (chooseScene).
   bool loadScene(const std::string& name_or_path, bool start_live = true);
+  /// Shows a scene readScene() has read from `name_or_path`.
+  bool loadScene(const std::string& name_or_path, robot::Scene read, bool start_live = true);
   /// The Scene menu's choice: the scene, and its own robot where the loaded one cannot take its
   /// postures.
   void chooseScene(const std::string& name);
@@ -184,6 +192,7 @@ class MainWindow : public QMainWindow {
   void showNotes(Problem kind, const std::vector<std::string>& notes);
   void showProblems();
   void refuseScene(const std::string& name_or_path, const std::exception& error);
+  void refuseRobot(const std::string& name_or_path, const std::exception& error);
   /// Checks the Robot and Scene menus' entries of what is loaded (after a choice taken back).
   void markLoadedChoices();
   /// Points the home camera at the robot from a side obstacles do not hide it from, or draws

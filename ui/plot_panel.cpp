@@ -191,6 +191,32 @@ void roundTicks(QValueAxis* axis, int max_ticks = 0) {
   axis->setTickAnchor(0.0);
   axis->setTickInterval(interval);
 }
+// The labels QValueAxis draws with dynamic ticks: multiples of the interval from the anchor,
+// within the range, in the axis' label format.
+QStringList drawnTickLabels(const QValueAxis* axis) {
+  QStringList labels;
+  const double interval = axis->tickInterval();
+  if (!(interval > 0.0)) return labels;
+  const double anchor = axis->tickAnchor();
+  // The plots' formats are "%.<precision><f|g>"; QString::number writes them as printf does.
+  const QString format = axis->labelFormat();
+  char conversion = 'g';
+  int precision = 6;
+  if (format.size() >= 4 && format.startsWith(QLatin1String("%.")) && QStringLiteral("fgeFGE").contains(format.back())) {
+    bool ok = false;
+    const int written = format.mid(2, format.size() - 3).toInt(&ok);
+    if (ok) {
+      precision = written;
+      conversion = format.back().toLatin1();
+    }
+  }
+  for (double k = std::ceil((axis->min() - anchor) / interval - 1e-9); anchor + k * interval <= axis->max() + 1e-9 * interval;
+       k += 1.0) {
+    labels << QString::number(anchor + k * interval, conversion, precision);
+  }
+  return labels;
+}
+
 }  // namespace
 
 void TimePlot::setTimeRange(double t0, double t1) {
@@ -201,24 +227,12 @@ void TimePlot::setTimeRange(double t0, double t1) {
   const double interval = niceTickInterval(t1 - t0);
   const int decimals = interval > 0.0 ? std::clamp(static_cast<int>(std::ceil(-std::log10(interval) - 1e-9)), 0, 3) : 1;
   time_axis_->setLabelFormat(QStringLiteral("%.%1f").arg(decimals));
-  time_decimals_ = decimals;
   updateCursorLine();
 }
 
 std::pair<double, double> TimePlot::timeRange() const { return {time_axis_->min(), time_axis_->max()}; }
 
-QStringList TimePlot::timeTickLabels() const {
-  // As QValueAxis draws dynamic ticks: multiples of the interval from the anchor, within range.
-  QStringList labels;
-  const double interval = time_axis_->tickInterval();
-  if (!(interval > 0.0)) return labels;
-  const double anchor = time_axis_->tickAnchor();
-  for (double k = std::ceil((time_axis_->min() - anchor) / interval - 1e-9); anchor + k * interval <= time_axis_->max() + 1e-9 * interval;
-       k += 1.0) {
-    labels << QString::number(anchor + k * interval, 'f', time_decimals_);
-  }
-  return labels;
-}
+QStringList TimePlot::timeTickLabels() const { return drawnTickLabels(time_axis_); }
 
 void TimePlot::setValueRange(double lower, double upper) {
   fixed_values_ = true;
@@ -229,18 +243,7 @@ void TimePlot::setValueRange(double lower, double upper) {
 
 void TimePlot::roundValueTicks() { roundTicks(value_axis_, value_ticks_room_); }
 
-QStringList TimePlot::valueTickLabels() const {
-  // As QValueAxis draws dynamic ticks: multiples of the interval from the anchor, within range.
-  QStringList labels;
-  const double interval = value_axis_->tickInterval();
-  if (!(interval > 0.0)) return labels;
-  const double anchor = value_axis_->tickAnchor();
-  for (double k = std::ceil((value_axis_->min() - anchor) / interval - 1e-9);
-       anchor + k * interval <= value_axis_->max() + 1e-9 * interval; k += 1.0) {
-    labels << QString::asprintf(value_axis_->labelFormat().toLatin1().constData(), anchor + k * interval);
-  }
-  return labels;
-}
+QStringList TimePlot::valueTickLabels() const { return drawnTickLabels(value_axis_); }
 
 void TimePlot::autoscale() {
   double lower = std::numeric_limits<double>::infinity();

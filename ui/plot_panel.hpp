@@ -97,7 +97,6 @@ class TimePlot : public QChartView {
 
   QChart* chart_ = nullptr;
   QValueAxis* time_axis_ = nullptr;
-  int time_decimals_ = 1;  // of the time axis' labels
   QValueAxis* value_axis_ = nullptr;
   QLineSeries* cursor_ = nullptr;
   std::vector<QLineSeries*> series_;

@@ -10,6 +10,7 @@
 #include <QComboBox>
 #include <QHBoxLayout>
 #include <QPushButton>
+#include <QResizeEvent>
 #include <QSpinBox>
 #include <QVBoxLayout>
 
@@ -198,10 +199,15 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
     case Stage::kConfiguration:
       switch (s.sub_stage) {
         case SubStage::kApproaching:
+          if (s.keyboard_mode) return tr("Move the arm with the keys to the posture wanted here, then press Enter (or leave the keys for 2 s).");
           return tr("Move the arm to the posture wanted here, then let go and keep still for 2 s (or press Enter).");
         case SubStage::kPosed:
           return tr("Posture fixed. To record the area, %1 again and move the tip around inside it.").arg(touch);
         case SubStage::kRecording:
+          if (s.keyboard_mode) {
+            return tr("Recording: move the tip around inside the area with the keys; press Enter (or leave the keys for 2 s) to "
+                      "store it.");
+          }
           return tr("Recording: move the tip around inside the area; let go and keep still (or press Enter) to store it.");
         default:
           if (s.areas == 0) return tr("First area: %1 and move the arm to the posture wanted there.").arg(touch);
@@ -210,11 +216,19 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
     case Stage::kProgramming:
       switch (s.sub_stage) {
         case SubStage::kApproaching:
+          if (s.keyboard_mode) {
+            return tr("Move the tip with the keys to where the motion starts (the learned map keeps the posture), then press "
+                      "Enter (or leave the keys for 2 s).");
+          }
           return tr("Guide the tip to where the motion starts (the learned map keeps the posture); keep still for 2 s "
                     "(or press Enter).");
         case SubStage::kPosed:
           return tr("At the start. To record the motion, %1 again and guide the tip along it.").arg(touch);
         case SubStage::kTeachIn:
+          if (s.keyboard_mode) {
+            return tr("Recording the motion: move the tip along it with the keys; press Enter (or leave the keys for 2 s) to "
+                      "store it.");
+          }
           return tr("Recording the motion: guide the tip along it; let go and keep still (or press Enter) to store it.");
         default:
           return tr("To teach a motion, %1 and guide the tip to its start — or Finish programming (F8) to execute.")
@@ -226,6 +240,62 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
                              : tr("Ctrl+click a point in the view to send the arm there.");
   }
   return {};
+}
+
+namespace {
+
+// Every text the hint shows, for the height it reserves.
+const QStringList& everyHint() {
+  static const QStringList hints = [] {
+    QStringList all{StagePanel::tr("Choose a robot in the Robot menu."),
+                    StagePanel::tr("Teaching starts when the robot sends its first measurement.")};
+    LiveSnapshot s;
+    for (const app::Stage stage : {app::Stage::kIdle, app::Stage::kConfiguration, app::Stage::kProgramming, app::Stage::kExecution}) {
+      for (const app::SubStage sub : {app::SubStage::kNone, app::SubStage::kWaiting, app::SubStage::kApproaching, app::SubStage::kPosed,
+                                      app::SubStage::kRecording, app::SubStage::kTeachIn}) {
+        for (const int flags : {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15}) {
+          for (const int areas : {0, 1, 12}) {
+            s.stage = stage;
+            s.sub_stage = sub;
+            s.keyboard_mode = (flags & 1) != 0;
+            s.learning = (flags & 2) != 0;
+            s.model_ready = (flags & 4) != 0;
+            s.execution_done = (flags & 8) != 0;
+            s.areas = areas;
+            s.teach_ins = areas > 0 ? 1 : 0;
+            for (const bool hand_can_pull : {false, true}) {
+              const QString hint = StagePanel::nextStepHint(s, hand_can_pull);
+              if (!all.contains(hint)) all << hint;
+            }
+          }
+        }
+      }
+    }
+    return all;
+  }();
+  return hints;
+}
+
+}  // namespace
+
+void StagePanel::resizeEvent(QResizeEvent* event) {
+  QWidget::resizeEvent(event);
+  if (event->size().width() != hint_reserved_for_width_) reserveHintHeight();
+}
+
+void StagePanel::reserveHintHeight() {
+  // From the panel's width: the label itself may not be laid out yet.
+  const QMargins margins = layout()->contentsMargins();
+  const int frame_width = hint_label_->width() - hint_label_->contentsRect().width();
+  const int inner_width = width() - margins.left() - margins.right() - frame_width;
+  if (inner_width <= 0) return;
+  hint_reserved_for_width_ = width();
+  int tallest = 0;
+  for (const QString& hint : everyHint()) {
+    tallest = std::max(tallest, hint_label_->fontMetrics().boundingRect(QRect(0, 0, inner_width, 100000), Qt::TextWordWrap, hint).height());
+  }
+  // The frame and padding of the label's style sheet around the text.
+  hint_label_->setMinimumHeight(tallest + hint_label_->height() - hint_label_->contentsRect().height());
 }
 
 void StagePanel::showNoRobot(const QString& reason) {

@@ -73,7 +73,15 @@ class StagePanel : public QWidget {
   void removeAreaRequested(int area);
   void reteachAreaRequested(int area);
 
+ protected:
+  void resizeEvent(QResizeEvent* event) override;
+
  private:
+  /// Keeps the hint as tall as the longest hint needs at the panel's width, so that the buttons
+  /// under it stay where the operator's hand is as the hint changes.
+  void reserveHintHeight();
+
+  int hint_reserved_for_width_ = -1;
   QPushButton* buttons_[4] = {};
   QLabel* stage_label_ = nullptr;
   QLabel* controller_label_ = nullptr;

@@ -438,6 +438,28 @@ TEST(InteractionControllers, GravityCompensationFollowsTheHandAndStopsWhenReleas
   EXPECT_GT((rig.state.q - restPosture()).norm(), 0.05);
 }
 
+// A plot of |x_des − x| must not read the hand's pull away from where π_q began as a task
+// error: under the hand π_q and π_rec hold a posture and have no task target.
+TEST(InteractionControllers, OnlyTheModesThatSteerTheTipHaveATaskTarget) {
+  InteractionRig rig(restPosture(), InteractionMode::kGravityCompensation);
+  const Eigen::Vector3d started_at = rig.controller.taskTarget();
+  rig.sim.setHandForce(7, rig.state.p_WT(), Eigen::Vector3d(0.0, 10.0, 0.0));
+  rig.run(1000);
+  EXPECT_GT((rig.state.p_WT() - started_at).norm(), 0.05);
+  EXPECT_TRUE(rig.controller.taskTarget().isApprox(started_at));
+  EXPECT_FALSE(rig.controller.tracksTaskTarget());
+  rig.controller.setKeyboardMode(true);  // the keys move x_des (Fig. 8.1(a))
+  EXPECT_TRUE(rig.controller.tracksTaskTarget());
+  rig.controller.setKeyboardMode(false);
+  rig.controller.start(InteractionMode::kCompliantRecording, rig.state);
+  EXPECT_FALSE(rig.controller.tracksTaskTarget());
+  for (const InteractionMode mode : {InteractionMode::kHierarchicalControl, InteractionMode::kAssistedGravityCompensation,
+                                     InteractionMode::kAssistanceBlending}) {
+    rig.controller.start(mode, rig.state);
+    EXPECT_TRUE(rig.controller.tracksTaskTarget());
+  }
+}
+
 TEST(InteractionControllers, CompliantRecordingSpringsBackToTheFixedPosture) {
   InteractionRig rig(restPosture(), InteractionMode::kCompliantRecording);
   rig.controller.setFixedPosture(restPosture());

@@ -61,6 +61,28 @@ TEST(InteractionTriggers, NeitherFiresWhileMovingNorTwiceForOneTouch) {
 
 // A compliant arm yields to the hand at once, and a measured τ_ext shows the push one cycle (or
 // more) after it acted: the touch counts when it began on a still robot (triggers.onset_window).
+// A hand (or a held mouse pull) that keeps still for 2 s ends the phase; held on after that,
+// it starts no new one: the touch must end first. Its grip loosened for a moment during the
+// phase (a pull going round in circles passes near zero force) must not count as that end.
+TEST(InteractionTriggers, AHandHeldOnThroughOnConvergedStartsNothingUntilItLetsGo) {
+  InteractionTriggers triggers{ParameterSet(triggerParameters())};
+  std::vector<TriggerEvent> events;
+  for (int k = 0; k <= 7000; ++k) {
+    const double t = k * 1e-3;
+    const bool loosened = t >= 1.5 && t < 1.6;
+    const bool let_go = t >= 5.0 && t < 5.5;
+    const double torque = t < 1.0 ? 0.0 : (loosened || let_go ? 0.5 : 4.0);
+    if (auto event = triggers.update(stateAt(t, 0.0, torque))) events.push_back(*event);
+  }
+  ASSERT_EQ(events.size(), 3U);
+  EXPECT_EQ(events[0].kind, TriggerKind::kOnAffected);
+  EXPECT_NEAR(events[0].time, 1.0, 1e-9);
+  EXPECT_EQ(events[1].kind, TriggerKind::kOnConverged);
+  EXPECT_NEAR(events[1].time, 3.0, 1e-9);
+  EXPECT_EQ(events[2].kind, TriggerKind::kOnAffected);  // the next touch, after letting go
+  EXPECT_NEAR(events[2].time, 5.5, 1e-9);
+}
+
 TEST(InteractionTriggers, ATouchThatBeganOnAStillRobotFiresEvenWhenTheArmYieldsFirst) {
   const ParameterSet parameters(triggerParameters());
   const double window = parameters.get("triggers.onset_window");

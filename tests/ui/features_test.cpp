@@ -15,6 +15,7 @@
 #include <QLegendMarker>
 #include <QLineSeries>
 #include <QMouseEvent>
+#include <QPushButton>
 #include <QSpinBox>
 #include <QStandardPaths>
 #include <QStatusBar>
@@ -286,6 +287,49 @@ class FeaturesTest : public QObject {
     const int bottom = label->mapTo(window.stagePanel(), QPoint(0, label->height())).y();
     QVERIFY2(bottom <= window.stagePanel()->height(),
              qPrintable(QStringLiteral("the warning ends at %1 px, the panel at %2 px").arg(bottom).arg(window.stagePanel()->height())));
+  }
+
+  // The hint above the Teaching panel's buttons grows and shrinks by a line or two as the stage
+  // changes; the buttons under it stay put, where the operator's hand is.
+  void theTeachingButtonsStayPutAsTheHintChanges() {
+    QScrollArea scroll;  // as the window holds the panel
+    auto* panel_owned = new flexirob::ui::StagePanel;
+    flexirob::ui::StagePanel& panel = *panel_owned;
+    scroll.setWidget(panel_owned);
+    scroll.setWidgetResizable(true);
+    scroll.resize(panel.minimumSizeHint().width() + 30, 900);
+    scroll.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&scroll));
+    flexirob::ui::LiveSnapshot s;
+    s.dof = 7;
+    const struct {
+      Stage stage;
+      SubStage sub_stage;
+      bool execution_done;
+    } states[] = {{Stage::kIdle, SubStage::kNone, true},
+                  {Stage::kExecution, SubStage::kNone, false},
+                  {Stage::kProgramming, SubStage::kApproaching, true},
+                  {Stage::kConfiguration, SubStage::kPosed, true},
+                  {Stage::kExecution, SubStage::kNone, true}};
+    QPushButton* first = panel.button(flexirob::app::Button::kStartConfiguration);
+    QSet<int> button_tops;
+    QSet<int> text_heights;
+    for (const auto& state : states) {
+      s.stage = state.stage;
+      s.sub_stage = state.sub_stage;
+      s.execution_done = state.execution_done;
+      panel.showSnapshot(s);
+      QCoreApplication::sendPostedEvents(nullptr, QEvent::LayoutRequest);
+      QLabel* hint = panel.hintLabel();
+      const int text_height = hint->fontMetrics()
+                                  .boundingRect(QRect(0, 0, hint->contentsRect().width(), 100000), Qt::TextWordWrap, hint->text())
+                                  .height();
+      text_heights << text_height;
+      button_tops << first->mapTo(&panel, QPoint(0, 0)).y();
+      QVERIFY2(hint->contentsRect().height() >= text_height, qPrintable(hint->text()));  // and the hint shows whole
+    }
+    QVERIFY2(text_heights.size() > 1, "every hint took as many lines: nothing to keep the buttons from");
+    QCOMPARE(button_tops.size(), 1);
   }
 
   // The Scene menu's arm9_areas with the LWR IV loaded: the scene's postures have nine joints,
