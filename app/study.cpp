@@ -277,7 +277,7 @@ ParticipantResult analyseSession(const SessionReader& reader, double replay_inte
     const robot::Scene scene = meta.scene_text.empty()
                                    ? robot::Scene{}
                                    : robot::parseScene(meta.scene_text, resourceDir() / "scenes",
-                                                       "scene recorded in " + result.file, robot::UnknownParameters::kIgnore);
+                                                       "scene recorded in " + result.file, robot::SceneText::kSessionCopy);
     robot::CollisionWorld world(model, scene);
     robot::CollisionMonitor monitor;
     const double interval = std::max(replay_interval, 0.0);

@@ -230,8 +230,8 @@ class Node {
 // InputError "<origin>:<line>: <key path>: <reason>".
 class SceneReader {
  public:
-  SceneReader(std::string origin, fs::path base_dir, UnknownParameters unknown = UnknownParameters::kRefuse)
-      : origin_(std::move(origin)), base_dir_(std::move(base_dir)), unknown_(unknown) {}
+  SceneReader(std::string origin, fs::path base_dir, SceneText source = SceneText::kFile)
+      : origin_(std::move(origin)), base_dir_(std::move(base_dir)), source_(source) {}
 
   Scene read(const Node& root) {
     if (!root.IsDefined() || root.IsNull()) fail(root, "", "the file holds no scene (it is empty)");
@@ -449,7 +449,7 @@ class SceneReader {
     fs::path file(value);
     if (file.is_relative()) file = base_dir_ / file;
     std::error_code error;
-    if (!fs::is_regular_file(file, error)) {
+    if (source_ == SceneText::kFile && !fs::is_regular_file(file, error)) {
       fail(node, path, "'" + printable(value) + "' is neither a built-in robot (lwr4, arm9) nor an existing URDF file");
     }
     return file.lexically_normal().string();
@@ -694,7 +694,7 @@ class SceneReader {
       if (!valid) fail(key_node, path, "'" + printable(key) + "' is not a parameter name (letters, digits, '_' and '.')");
       // A misspelt name would otherwise tune nothing without a word.
       const std::string undeclared = undeclaredParameterReason(key, tunable);
-      if (!undeclared.empty() && unknown_ == UnknownParameters::kIgnore) {
+      if (!undeclared.empty() && source_ == SceneText::kSessionCopy) {
         ignored_parameters_.push_back(key);
         continue;
       }
@@ -715,7 +715,7 @@ class SceneReader {
 
   std::string origin_;
   fs::path base_dir_;
-  UnknownParameters unknown_ = UnknownParameters::kRefuse;
+  SceneText source_ = SceneText::kFile;
   std::vector<std::string> ignored_parameters_;
   std::size_t visited_ = 0;
   std::size_t waypoint_count_ = 0;
@@ -885,7 +885,7 @@ const std::vector<std::string>& builtinSceneNames() {
   return names;
 }
 
-Scene parseScene(const std::string& yaml_text, const fs::path& base_dir, const std::string& origin, UnknownParameters unknown) {
+Scene parseScene(const std::string& yaml_text, const fs::path& base_dir, const std::string& origin, SceneText source) {
   if (yaml_text.find('\0') != std::string::npos || !isValidUtf8(yaml_text)) {
     throw InputError(origin + ": not a text file (binary data or invalid UTF-8)");
   }
@@ -903,7 +903,7 @@ Scene parseScene(const std::string& yaml_text, const fs::path& base_dir, const s
     if (!error.mark.is_null()) where += ":" + std::to_string(error.mark.line + 1);
     throw InputError(where + ": malformed YAML: " + printable(error.msg, 200));
   }
-  SceneReader reader(origin, base_dir, unknown);
+  SceneReader reader(origin, base_dir, source);
   return reader.read(Node(&document, document.root));
 }
 

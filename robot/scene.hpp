@@ -107,7 +107,7 @@ struct Scene {
   std::vector<Trajectory> trajectories;
   std::map<std::string, double> parameters;  ///< overrides of declared parameters, by name
   int home_posture_line = 0;                 ///< line of `home_posture` in the file (1-based; 0: not from a file)
-  std::vector<std::string> ignored_parameters;  ///< names no component declares, left out (UnknownParameters::kIgnore)
+  std::vector<std::string> ignored_parameters;  ///< names no component declares, left out (SceneText::kSessionCopy)
 };
 
 /// True if p_W (world frame, metres) lies inside the obstacle or within `margin` [m] of its
@@ -145,15 +145,17 @@ const std::vector<std::string>& builtinSceneNames();
 /// line) for malformed YAML, unknown keys, wrong types, non-finite numbers, missing meshes.
 Scene loadSceneFile(const std::filesystem::path& file);
 
-/// What the reader does with a parameter name no component declares: refuse it (a file being
-/// written), or leave it out and list it in Scene::ignored_parameters (a copy a session stored
-/// before names were checked, which must still read).
-enum class UnknownParameters { kRefuse, kIgnore };
+/// Whose text the reader reads. A file being written: a parameter name no component declares is
+/// refused, and `robot:` must name a built-in robot or an existing URDF. A copy a session stored,
+/// which must still read: such a name is left out and listed in Scene::ignored_parameters (stored
+/// before names were checked), and `robot:` may name a file gone since (the session stores the
+/// URDF too).
+enum class SceneText { kFile, kSessionCopy };
 
 /// Parses scene text as loadSceneFile does; relative mesh and robot paths are resolved against
 /// base_dir, and errors name `origin` (e.g. a file name) instead of a file.
 Scene parseScene(const std::string& yaml_text, const std::filesystem::path& base_dir,
-                 const std::string& origin, UnknownParameters unknown = UnknownParameters::kRefuse);
+                 const std::string& origin, SceneText source = SceneText::kFile);
 
 /// The scene as scene-file text that parseScene reads back to an equal scene (numbers with 17
 /// significant digits, rotations as quaternions, mesh and robot paths as stored).

@@ -313,7 +313,7 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     if (!reader->metadata().scene_text.empty()) {
       // Lines are counted in the stored scene text, not in the session file.
       scene = robot::parseScene(reader->metadata().scene_text, resourceDir() / "scenes", "the scene stored in " + name,
-                                robot::UnknownParameters::kIgnore);
+                                robot::SceneText::kSessionCopy);
     }
     // States of another arm would be replayed as nothing at all.
     if (reader->stateCount() > 0) {

@@ -200,7 +200,7 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
   const std::filesystem::path base_dir = file.empty() ? std::filesystem::current_path() : file.parent_path();
   robot::Scene scene;
   try {
-    scene = robot::parseScene(stored_scene_text, base_dir, "scene stored in the session", robot::UnknownParameters::kIgnore);
+    scene = robot::parseScene(stored_scene_text, base_dir, "scene stored in the session", robot::SceneText::kSessionCopy);
   } catch (const InputError& damaged) {
     // A damaged session file: the scene file, where it still reads, is the next best.
     // Both reasons: the same missing mesh fails both, and the file named alone would be blamed.

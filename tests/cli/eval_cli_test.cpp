@@ -338,14 +338,16 @@ TEST(EvalReachableCli, EvaluatesTheRobotAndSceneTheSessionStoresNotTheFilesChang
   const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
   const Eigen::Vector3d taught = robot::tipPose(model, tinySessionPostures().front()).translation();
   const auto scene = scratchDir() / "edited_after_teaching.yaml";
-  std::ostringstream text;
-  text << "name: edited_after_teaching\ntargets: [[" << taught.x() << ", " << taught.y() << ", " << taught.z() << "], [-3.0, 0.0, 0.3]]\n";
-  writeText(scene, text.str());
   // The robot as a file of its own, with its meshes beside it as package://lwr4 expects.
   const auto robot_dir = scratchDir() / "moved-robot" / "lwr4";
   std::filesystem::remove_all(robot_dir.parent_path());
   std::filesystem::create_directories(robot_dir.parent_path());
   std::filesystem::copy(resolveRobotPath("lwr4").parent_path(), robot_dir, std::filesystem::copy_options::recursive);
+  // The scene names the robot's file, which the stored scene copy keeps naming after it has gone.
+  std::ostringstream text;
+  text << "name: edited_after_teaching\nrobot: " << (robot_dir / "lwr4.urdf").string() << "\ntargets: [[" << taught.x() << ", "
+       << taught.y() << ", " << taught.z() << "], [-3.0, 0.0, 0.3]]\n";
+  writeText(scene, text.str());
   // Taught with link1 drawn only: the stored copy's notes are said as a file's are.
   std::ostringstream urdf_text;
   urdf_text << std::ifstream(robot_dir / "lwr4.urdf").rdbuf();

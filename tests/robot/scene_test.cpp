@@ -690,7 +690,7 @@ TEST_F(SceneFileTest, RefusesAParameterNoComponentDeclaresNamingTheOneMeant) {
   expectOneLineNamingFile(range, "broken.yaml:2");
   EXPECT_NE(range.find("parameters: parameter 'hierarchical.kappa_q': expected a value in [0, 100] 1/s, got 1000"), std::string::npos) << range;
   // A copy a session stored before names were checked still reads: the name is left out and said.
-  const Scene stored = parseScene("parameters: {hierarchical.kapa_q: 4, sim.gravity: 9}\n", dir_, "stored", UnknownParameters::kIgnore);
+  const Scene stored = parseScene("parameters: {hierarchical.kapa_q: 4, sim.gravity: 9}\n", dir_, "stored", SceneText::kSessionCopy);
   EXPECT_EQ(stored.ignored_parameters, std::vector<std::string>{"hierarchical.kapa_q"});
   EXPECT_EQ(stored.parameters.count("hierarchical.kapa_q"), 0U);
   EXPECT_DOUBLE_EQ(stored.parameters.at("sim.gravity"), 9.0);
