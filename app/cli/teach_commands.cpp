@@ -405,8 +405,11 @@ Json runTeach(TeachOptions options) {
   std::string session_path = options.out;
   std::string kept_note;
   const bool keep_earlier = replacing && samples == 0;
+  // Stopped before anything was taught: no file, which would only stand in the way of the run
+  // started again (an --out that exists is refused).
+  const bool stopped_untaught = report.interrupted && samples == 0;
   if (json_session) {
-    if (keep_earlier && report.interrupted) {
+    if (stopped_untaught) {
       session_path.clear();
     } else {
       if (keep_earlier) session_path = recording_path;
@@ -430,12 +433,12 @@ Json runTeach(TeachOptions options) {
         session_error += std::string("; no copy either: ") + e.what();
       }
     }
-    if (replacing && session_error.empty()) {
+    if (stopped_untaught && session_error.empty()) {
+      app::removeDatabaseFiles(recording_path);  // the seconds before the stop, nothing taught
+      session_path.clear();
+    } else if (replacing && session_error.empty()) {
       std::error_code error;
-      if (keep_earlier && report.interrupted) {
-        app::removeDatabaseFiles(recording_path);  // the seconds before the stop, nothing taught
-        session_path.clear();
-      } else if (keep_earlier) {
+      if (keep_earlier) {
         session_path = recording_path;
       } else {
         // The earlier file's journal would be read as the new file's own: set aside, and put
@@ -459,7 +462,9 @@ Json runTeach(TeachOptions options) {
       session_path = recording_path;
     }
   }
-  if (session_path != options.out) {
+  if (session_path.empty() && !replacing) {
+    kept_note = " (nothing was taught)";
+  } else if (session_path != options.out) {
     if (keep_earlier) {
       kept_note = "; '" + options.out + "' was left as it was (nothing was taught" +
                   (session_path.empty() ? std::string() : ", the new recording is '" + session_path + "'") + ")";

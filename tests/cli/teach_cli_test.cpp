@@ -191,6 +191,10 @@ TEST(TeachCli, AStopEndsTheSearchForCheckPointsAtOnce) {
   EXPECT_EQ(text(code), "143\n") << text(err);
   const std::string said = text(err);
   EXPECT_NE(said.find("\nerror: teach: stopped by SIGTERM"), std::string::npos) << said;
+  // Nothing taught: no file that would refuse the run started again (--out exists).
+  EXPECT_NE(said.find("(0 of 3 areas, 0 samples) was not written (nothing was taught)"), std::string::npos) << said;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(out.string() + "-wal"));
   for (const fs::path& file : {robot, scene, out, err, code}) fs::remove(file);
 }
 
