@@ -151,6 +151,26 @@ Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& 
 
 FittedScene fitSceneToRobot(const robot::Scene& scene, const robot::RobotModel& model) {
   FittedScene fitted{scene, {}};
+  // Postures of another joint count (a scene made for another arm) are one reason, not one
+  // line per posture: twelve near-equal lines hid the arm and said nothing more.
+  int other_count = 0;
+  long written_count = 0;
+  const auto dropOtherCount = [&](std::optional<Eigen::VectorXd>& posture) {
+    if (!posture || posture->size() == model.dof()) return;
+    written_count = posture->size();
+    ++other_count;
+    posture.reset();
+  };
+  dropOtherCount(fitted.scene.home_posture);
+  for (robot::Area& area : fitted.scene.training_areas) dropOtherCount(area.posture);
+  for (robot::Area& area : fitted.scene.working_areas) dropOtherCount(area.posture);
+  fitted.other_joint_count = other_count;
+  if (other_count > 0) {
+    fitted.left_out.push_back(
+        "scene '" + printable(scene.name, 200) + "': " + (other_count == 1 ? std::string("1 posture has ") : std::to_string(other_count) + " postures have ") +
+        std::to_string(written_count) + " joint values, the robot '" + printable(model.name(), 200) + "' has " + std::to_string(model.dof()) +
+        " joints" + (scene.robot.empty() ? std::string() : " (the scene was made for '" + printable(scene.robot, 200) + "')"));
+  }
   // Each posture checked alone, in a scene holding only it: one that does not fit costs no other.
   const auto fits = [&](const auto& place_only_it) {
     robot::Scene single;
@@ -165,7 +185,7 @@ FittedScene fitSceneToRobot(const robot::Scene& scene, const robot::RobotModel& 
       return false;
     }
   };
-  if (scene.home_posture && !fits([&](robot::Scene& single) {
+  if (fitted.scene.home_posture && !fits([&](robot::Scene& single) {
         single.home_posture = scene.home_posture;
         single.home_posture_in_degrees = scene.home_posture_in_degrees;
       })) {

@@ -70,11 +70,13 @@ Eigen::VectorXd homePosture(const robot::RobotModel& model, const robot::Scene& 
 
 /// A scene as `model` can run in it: each posture (home, training and working areas) that does
 /// not fit the arm (another joint count, beyond a limit, an area posture putting the tip outside
-/// its area; robot::checkPosturesFit) left out, and why, one line each. The CLI refuses such a
+/// its area; robot::checkPosturesFit) left out, and why: one line for all postures of another
+/// joint count, one line each for the others. The CLI refuses such a
 /// scene; the GUI runs the arm without those postures and says so.
 struct FittedScene {
   robot::Scene scene;
   std::vector<std::string> left_out;
+  int other_joint_count = 0;  ///< postures left out for another joint count (said in left_out's first line)
 };
 FittedScene fitSceneToRobot(const robot::Scene& scene, const robot::RobotModel& model);
 

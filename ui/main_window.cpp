@@ -79,6 +79,25 @@ robot::Scene sceneFitFor(const robot::Scene& scene, const robot::RobotModel& mod
   app::FittedScene fitted = app::fitSceneToRobot(scene, model);
   QStringList lines;
   for (const std::string& reason : fitted.left_out) {
+    if (lines.isEmpty() && fitted.other_joint_count > 0) {
+      // A scene made for another arm: the scenes made for this one are the way out.
+      QStringList made_for_this;
+      for (const std::string& name : robot::builtinSceneNames()) {
+        try {
+          if (robot::loadScene(name).robot == model.name()) made_for_this << QString::fromStdString(name);
+        } catch (const std::exception&) {
+          // A built-in scene that does not read is no suggestion.
+        }
+      }
+      lines << QCoreApplication::translate("MainWindow", "%1; %2 not used, the arm starts free%3")
+                   .arg(QString::fromStdString(reason),
+                        fitted.other_joint_count == 1 ? QCoreApplication::translate("MainWindow", "that posture is")
+                                                      : QCoreApplication::translate("MainWindow", "those postures are"),
+                        made_for_this.isEmpty() ? QString()
+                                                : QCoreApplication::translate("MainWindow", " (made for it: Scene ▸ %1)")
+                                                      .arg(made_for_this.join(QStringLiteral(", "))));
+      continue;
+    }
     lines << QCoreApplication::translate("MainWindow", "%1; that posture is not used").arg(QString::fromStdString(reason));
   }
   *problem = lines.join(QLatin1Char('\n'));

@@ -376,6 +376,21 @@ class OperatorTest : public QObject {
     QVERIFY(window.problemLabel()->isHidden());
   }
 
+  // The nine-joint arm in a scene made for the LWR IV: the scene's 13 postures do not fit, said
+  // once (thirteen near-equal lines had filled the view over the arm), with the scene made for it.
+  void aSceneMadeForAnotherArmIsOneLineNamingTheSceneMadeForThisOne() {
+    MainWindow window("arm9", "setup_I", quietOptions());
+    waitRunning(window);
+    const QString text = window.problemLabel()->text();
+    QVERIFY2(text.contains(QStringLiteral("postures have 7 joint values, the robot 'arm9' has 9 joints (the scene was made for 'lwr4')")),
+             qPrintable(text));
+    QCOMPARE(text.count(QStringLiteral("joint values")), 1);
+    QVERIFY2(text.contains(QStringLiteral("made for it: Scene ▸ arm9_areas")), qPrintable(text));
+    QVERIFY(!text.contains(QStringLiteral("--tip")));
+    window.mirror();
+    QVERIFY(window.stagePanel()->button(Button::kStartConfiguration)->isEnabled());
+  }
+
   void aScenesHomePostureBeyondTheLimitsIsLeftOutAndTheArmRuns() {
     QTemporaryDir dir;
     const std::string file = writeScene(dir, QStringLiteral("beyond.yaml"), "name: beyond\nrobot: lwr4\nhome_posture: [0, 3.0, 0, 0, 0, 0, 0]\n");
