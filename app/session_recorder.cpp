@@ -1,6 +1,7 @@
 #include "app/session_recorder.hpp"
 
 #include <pthread.h>
+#include <sys/stat.h>
 
 #include <sqlite3.h>
 
@@ -203,6 +204,11 @@ void removeDatabaseFiles(const std::filesystem::path& file) {
 
 struct SessionRecorder::Impl {
   RecorderOptions options;
+  // The file the connection writes, to notice it removed or replaced while the run records
+  // (its folder deleted): the connection would go on writing into a file nobody can open.
+  bool file_identity_known = false;
+  dev_t file_device = 0;
+  ino_t file_inode = 0;
   SessionMetadata metadata;
   SpscRing<StateRecord> states;
   BoundedMpmcQueue<std::unique_ptr<Event>> events;
@@ -251,6 +257,12 @@ struct SessionRecorder::Impl {
       }
       createSchema(db, metadata);
       inserts = std::make_unique<Inserts>(db);
+      struct stat opened {};
+      if (::stat(file.c_str(), &opened) == 0) {
+        file_identity_known = true;
+        file_device = opened.st_dev;
+        file_inode = opened.st_ino;
+      }
     } catch (const SqliteError& e) {
       inserts.reset();
       db.close();
@@ -471,6 +483,13 @@ void SessionRecorder::close() {
       meta.bind(1, std::string("events_dropped")).bind(2, std::to_string(stats.events_dropped)).run();
     } catch (const SqliteError&) {
       // The file is full or gone: its content up to the last commit stays valid.
+    }
+    struct stat now {};
+    if (impl_->file_identity_known &&
+        (::stat(file_.c_str(), &now) != 0 || now.st_dev != impl_->file_device || now.st_ino != impl_->file_inode)) {
+      // Still readable through the connection: copied into memory, for saveCopy().
+      impl_->startInMemory(&impl_->db, "the session file " + file_.string() + " was removed or replaced while the run recorded");
+      return;
     }
     // Fold the WAL into the database so the file stands alone, and leave WAL mode: readers of
     // a WAL file create -wal and -shm files beside it (and, read-only, leave them behind).

@@ -413,7 +413,22 @@ Json runTeach(TeachOptions options) {
       session_path.clear();
     } else {
       if (keep_earlier) session_path = recording_path;
-      app::writeFileReplacing(session_path, session.dump(), "--out");
+      const std::string text = session.dump();
+      try {
+        app::writeFileReplacing(session_path, text, "--out");
+      } catch (const InputError& error) {
+        // The folder removed or the disk full at the end of the run: what was taught is kept
+        // in the temporary directory, as for an SQLite session that failed, and said.
+        session_error = error.what();
+        const std::filesystem::path copy =
+            std::filesystem::temp_directory_path() / ("flexirob-teach-" + std::to_string(::getpid()) + ".json");
+        try {
+          app::writeFileReplacing(copy.string(), text, "the session's copy");
+          session_copy = copy.string();
+        } catch (const InputError& also) {
+          session_error += std::string("; no copy either: ") + also.what();
+        }
+      }
     }
   } else {
     writer->finish();
@@ -462,7 +477,11 @@ Json runTeach(TeachOptions options) {
       session_path = recording_path;
     }
   }
-  if (session_path.empty() && !replacing) {
+  if (!session_error.empty()) {
+    // Removed with its folder: only the copy holds the session.
+    std::error_code gone;
+    if (!session_path.empty() && !std::filesystem::exists(session_path, gone)) session_path.clear();
+  } else if (session_path.empty() && !replacing) {
     kept_note = " (nothing was taught)";
   } else if (session_path != options.out) {
     if (keep_earlier) {

@@ -77,9 +77,18 @@ TEST(Evaluation, FittingASceneToARobotLeavesOutOnlyThePosturesThatDoNotFit) {
   EXPECT_FALSE(fitted.scene.training_areas[1].posture.has_value());
   EXPECT_FALSE(fitted.scene.training_areas[2].posture.has_value());
   ASSERT_EQ(fitted.left_out.size(), 2U);
-  EXPECT_NE(fitted.left_out[0].find("outside its limits"), std::string::npos) << fitted.left_out[0];
-  EXPECT_NE(fitted.left_out[1].find("has 6 joint values"), std::string::npos) << fitted.left_out[1];
+  EXPECT_EQ(fitted.other_joint_count, 1);
+  EXPECT_NE(fitted.left_out[0].find("1 posture has 6 joint values, the robot 'lwr4' has 7 joints"), std::string::npos) << fitted.left_out[0];
+  EXPECT_NE(fitted.left_out[1].find("outside its limits"), std::string::npos) << fitted.left_out[1];
   EXPECT_TRUE(fitSceneToRobot(robot::loadScene("setup_I"), lwr4()).left_out.empty());
+  // Every posture of another arm: one line, not one per posture.
+  scene.home_posture = Eigen::VectorXd::Zero(6);
+  scene.training_areas[0].posture = Eigen::VectorXd::Zero(6);
+  const FittedScene other_arm = fitSceneToRobot(scene, lwr4());
+  EXPECT_EQ(other_arm.other_joint_count, 3);
+  ASSERT_EQ(other_arm.left_out.size(), 2U);
+  EXPECT_NE(other_arm.left_out[0].find("3 postures have 6 joint values"), std::string::npos) << other_arm.left_out[0];
+  EXPECT_FALSE(other_arm.scene.home_posture.has_value());
 }
 
 TEST(Evaluation, AStartPostureThatTouchesSomethingGivesWayToTheNearestFreeOne) {

@@ -128,6 +128,38 @@ TEST(TeachCli, AnOverwritingRunStoppedBeforeItTaughtLeavesTheEarlierFileAsItWas)
   for (const fs::path& file : {out, err, code}) fs::remove(file);
 }
 
+// The output's folder deleted while the run teaches: what was taught is kept in a copy in the
+// temporary directory, named with the failure (exit 1: the command ran), not lost with an error
+// of bad input (JSON) or reported as written to a file nobody can open (SQLite).
+TEST(TeachCli, AnOutputFolderRemovedDuringTheRunLeavesTheSessionInACopy) {
+  for (const std::string name : {"v.json", "v.flexirob"}) {
+    const fs::path folder = scratch("vanishing-" + name);
+    const fs::path out = folder / name, json = scratch("vanishing.out"), err = scratch("vanishing.err"), code = scratch("vanishing.code");
+    fs::create_directories(folder);
+    const std::string script = std::string(FLEXIROB_CLI_EXECUTABLE) + " teach --scene setup_I --areas 3 --seed 1 --out " + out.string() +
+                               " > " + json.string() + " 2> " + err.string() + " & p=$!; for i in $(seq 300); do [ -n \"$(ls " +
+                               folder.string() + ")\" ] && break; sleep 0.02; done; rm -rf " + folder.string() + "; wait $p; echo $? > " +
+                               code.string();
+    ASSERT_EQ(std::system(("sh -c '" + script + "'").c_str()), 0);
+    EXPECT_EQ(text(code), "1\n") << name << ": " << text(err);
+    const nlohmann::json result = nlohmann::json::parse(text(json));
+    EXPECT_TRUE(result.at("session").is_null()) << result.dump();
+    const std::string copy = result.at("session_copy").get<std::string>();
+    EXPECT_NE(text(err).find("the whole session was saved to " + copy), std::string::npos) << text(err);
+    int areas_in_copy = -1;
+    if (name == "v.json") {
+      areas_in_copy = static_cast<int>(nlohmann::json::parse(text(copy)).at("areas").size());
+    } else {
+      const auto review = runCliBinary("review --session " + copy);
+      ASSERT_EQ(review.exit_code, 0) << review.err;
+      areas_in_copy = review.json().at("areas").get<int>();
+    }
+    EXPECT_EQ(areas_in_copy, result.at("areas").get<int>()) << name;
+    EXPECT_GT(areas_in_copy, 0) << name;
+    for (const fs::path& file : {fs::path(copy), json, err, code}) fs::remove(file);
+  }
+}
+
 TEST(TeachCli, StoppedBySigtermWritesWhatWasRecordedAndSaysSo) {
   const fs::path out = scratch("interrupted.db");
   const fs::path json = scratch("interrupted.json"), err = scratch("interrupted.err"), code = scratch("interrupted.code");
