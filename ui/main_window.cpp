@@ -349,6 +349,9 @@ void MainWindow::buildDocks() {
   auto* plot_dock = new QDockWidget(tr("Plots"), this);
   plot_dock->setObjectName(QStringLiteral("plots_dock"));
   plot_dock->setWidget(plot_panel_);
+  // The Teaching panel runs down to the window's bottom, beside the plots: its warnings are
+  // what the tutor must read, and under the plots they needed scrolling at 1280 x 800.
+  setCorner(Qt::BottomLeftCorner, Qt::LeftDockWidgetArea);
   addDockWidget(Qt::BottomDockWidgetArea, plot_dock);
   resizeDocks({plot_dock}, {240}, Qt::Vertical);
 }

@@ -421,8 +421,7 @@ void PlotPanel::rebuild() {
   cycles_->setSeriesData(compute_series_, compute);
   cycles_->setSeriesData(max_compute_series_, max_compute);
   cycles_->setSeriesName(compute_series_, std::isfinite(misses)
-                                              ? (misses == 1.0 ? QStringLiteral("compute (1 deadline miss)")
-                                                                : QStringLiteral("compute (%1 deadline misses)").arg(static_cast<qint64>(misses)))
+                                              ? QStringLiteral("compute (%1 late)").arg(static_cast<qint64>(misses))
                                               : QStringLiteral("compute"));
   if (joints_->seriesCount() == joints + 2) {
     joints_->setSeriesData(0, {{t0, 0.0}, {t1, 0.0}});
