@@ -7,6 +7,7 @@
 #include <QDateTime>
 #include <QDir>
 #include <QDockWidget>
+#include <QResizeEvent>
 #include <QFile>
 #include <QFileDialog>
 #include <QFontMetrics>
@@ -1107,6 +1108,18 @@ void MainWindow::focusOutEvent(QFocusEvent* event) {
   // A key released while another window has the focus never arrives: let go of everything.
   teleop_.clear();
   QMainWindow::focusOutEvent(event);
+}
+
+void MainWindow::resizeEvent(QResizeEvent* event) {
+  QMainWindow::resizeEvent(event);
+  // Every pixel a window gains goes to the 3D view: grown back after a small screen, the Joints
+  // dock had kept its squeezed width, its angles and ranges cut. It gets the width it asks for
+  // back, at most 30 % of the window.
+  if (!event->oldSize().isValid() || event->size().width() <= event->oldSize().width()) return;
+  auto* joints_dock = findChild<QDockWidget*>(QStringLiteral("joints_dock"));
+  if (joints_dock == nullptr || joints_dock->isFloating() || !joints_dock->isVisible()) return;
+  const int wanted = std::min(joints_dock->sizeHint().width(), event->size().width() * 3 / 10);
+  if (joints_dock->width() < wanted) resizeDocks({joints_dock}, {wanted}, Qt::Horizontal);
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {

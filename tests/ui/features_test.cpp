@@ -289,6 +289,28 @@ class FeaturesTest : public QObject {
              qPrintable(QStringLiteral("the warning ends at %1 px, the panel at %2 px").arg(bottom).arg(window.stagePanel()->height())));
   }
 
+  // A window squeezed onto a small screen and grown back: the Joints dock gets its width back
+  // (the 3D view had taken every pixel gained, the joint angles stayed cut).
+  void theJointsDockGetsItsWidthBackWhenTheWindowGrows() {
+    MainWindow window("lwr4", "setup_I", quietOptions());
+    window.resize(1280, 800);
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    auto* dock = window.findChild<QDockWidget*>(QStringLiteral("joints_dock"));
+    QVERIFY(dock != nullptr);
+    QTRY_COMPARE(window.width(), 1280);
+    QTest::qWait(200);
+    const int roomy = dock->width();
+    window.resize(800, 600);
+    QTRY_COMPARE(window.width(), 800);
+    QTest::qWait(200);
+    if (dock->width() >= roomy - 2) QSKIP("the dock kept its width at 800 px with this font");
+    window.resize(1280, 800);
+    QTRY_COMPARE(window.width(), 1280);
+    QTRY_VERIFY2(dock->width() >= std::min(roomy, 1280 * 3 / 10) - 2,
+                 qPrintable(QStringLiteral("%1 px, %2 px before").arg(dock->width()).arg(roomy)));
+  }
+
   // The hint above the Teaching panel's buttons grows and shrinks by a line or two as the stage
   // changes; the buttons under it stay put, where the operator's hand is.
   void theTeachingButtonsStayPutAsTheHintChanges() {
