@@ -154,10 +154,10 @@ FittedScene fitSceneToRobot(const robot::Scene& scene, const robot::RobotModel& 
   // Postures of another joint count (a scene made for another arm) are one reason, not one
   // line per posture: twelve near-equal lines hid the arm and said nothing more.
   int other_count = 0;
-  long written_count = 0;
+  std::set<long> written_counts;
   const auto dropOtherCount = [&](std::optional<Eigen::VectorXd>& posture) {
     if (!posture || posture->size() == model.dof()) return;
-    written_count = posture->size();
+    written_counts.insert(posture->size());
     ++other_count;
     posture.reset();
   };
@@ -166,9 +166,11 @@ FittedScene fitSceneToRobot(const robot::Scene& scene, const robot::RobotModel& 
   for (robot::Area& area : fitted.scene.working_areas) dropOtherCount(area.posture);
   fitted.other_joint_count = other_count;
   if (other_count > 0) {
+    std::string counts;
+    for (const long count : written_counts) counts += (counts.empty() ? "" : " or ") + std::to_string(count);
     fitted.left_out.push_back(
         "scene '" + printable(scene.name, 200) + "': " + (other_count == 1 ? std::string("1 posture has ") : std::to_string(other_count) + " postures have ") +
-        std::to_string(written_count) + " joint values, the robot '" + printable(model.name(), 200) + "' has " + std::to_string(model.dof()) +
+        counts + " joint values, the robot '" + printable(model.name(), 200) + "' has " + std::to_string(model.dof()) +
         " joints" + (scene.robot.empty() ? std::string() : " (the scene was made for '" + printable(scene.robot, 200) + "')"));
   }
   // Each posture checked alone, in a scene holding only it: one that does not fit costs no other.

@@ -206,8 +206,8 @@ struct SessionRecorder::Impl {
   RecorderOptions options;
   // The file the connection writes, to notice it removed or replaced while the run records
   // (its folder deleted): the connection would go on writing into a file nobody can open.
-  bool file_identity_known = false;
-  dev_t file_device = 0;
+  bool file_identity_known = false;  // the file opened (else recording in memory from the start)
+  dev_t file_device = 0;             // 0 and 0 where the file was gone by the time it was looked at
   ino_t file_inode = 0;
   SessionMetadata metadata;
   SpscRing<StateRecord> states;
@@ -257,9 +257,9 @@ struct SessionRecorder::Impl {
       }
       createSchema(db, metadata);
       inserts = std::make_unique<Inserts>(db);
+      file_identity_known = true;
       struct stat opened {};
       if (::stat(file.c_str(), &opened) == 0) {
-        file_identity_known = true;
         file_device = opened.st_dev;
         file_inode = opened.st_ino;
       }
@@ -484,8 +484,13 @@ void SessionRecorder::close() {
     } catch (const SqliteError&) {
       // The file is full or gone: its content up to the last commit stays valid.
     }
+    bool still_recording = false;
+    {
+      std::lock_guard lock(impl_->mutex);
+      still_recording = impl_->status.health == RecorderHealth::Recording;
+    }
     struct stat now {};
-    if (impl_->file_identity_known &&
+    if (still_recording && impl_->file_identity_known &&
         (::stat(file_.c_str(), &now) != 0 || now.st_dev != impl_->file_device || now.st_ino != impl_->file_inode)) {
       // Still readable through the connection: copied into memory, for saveCopy().
       impl_->startInMemory(&impl_->db, "the session file " + file_.string() + " was removed or replaced while the run recorded");

@@ -244,6 +244,10 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
 
 namespace {
 
+QString controllerText(app::InteractionController controller, bool keyboard) {
+  return StagePanel::tr("controller: %1%2").arg(QString::fromLatin1(app::toString(controller)), keyboard ? StagePanel::tr(" (keyboard)") : QString());
+}
+
 // Every text the hint shows, for the height it reserves.
 const QStringList& everyHint() {
   static const QStringList hints = [] {
@@ -296,6 +300,20 @@ void StagePanel::reserveHintHeight() {
   }
   // The frame and padding of the label's style sheet around the text.
   hint_label_->setMinimumHeight(tallest + hint_label_->height() - hint_label_->contentsRect().height());
+  // The controller's line above it wraps too ("assisted_gravity_compensation (keyboard)").
+  int tallest_controller = 0;
+  QStringList controllers{tr("waiting for the robot's first measurement")};
+  for (const app::InteractionController controller :
+       {robot::InteractionMode::kGravityCompensation, robot::InteractionMode::kCompliantRecording, robot::InteractionMode::kHierarchicalControl,
+        robot::InteractionMode::kAssistedGravityCompensation, robot::InteractionMode::kAssistanceBlending}) {
+    for (const bool keyboard : {false, true}) controllers << controllerText(controller, keyboard);
+  }
+  const int controller_width = width() - margins.left() - margins.right();
+  for (const QString& text : controllers) {
+    tallest_controller = std::max(
+        tallest_controller, controller_label_->fontMetrics().boundingRect(QRect(0, 0, controller_width, 100000), Qt::TextWordWrap, text).height());
+  }
+  controller_label_->setMinimumHeight(tallest_controller);
 }
 
 void StagePanel::showNoRobot(const QString& reason) {
@@ -327,9 +345,7 @@ void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured, bool h
     stage_label_->setStyleSheet(QStringLiteral("QLabel { background: %1; color: white; border-radius: 6px; }")
                                     .arg(colour.name()));
   }
-  controller_label_->setText(robot_measured ? tr("controller: %1%2").arg(QString::fromLatin1(app::toString(s.controller)),
-                                                                       s.keyboard_mode ? tr(" (keyboard)") : QString())
-                                           : tr("waiting for the robot's first measurement"));
+  controller_label_->setText(robot_measured ? controllerText(s.controller, s.keyboard_mode) : tr("waiting for the robot's first measurement"));
   for (int b = 0; b < 4; ++b) {
     buttons_[b]->setEnabled(robot_measured && s.running && buttonMakesSense(static_cast<app::Button>(b), s));
   }

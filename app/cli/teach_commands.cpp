@@ -6,7 +6,10 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cerrno>
 #include <csignal>
+#include <cstdlib>
+#include <cstring>
 #include <iomanip>
 #include <cstdio>
 #include <filesystem>
@@ -104,6 +107,16 @@ constexpr std::size_t kWarningsOnStderr = 20;
 // written as usual. The handler gives both signals back their defaults, so a second one ends the
 // process at once. Lock-free atomic: the signal may land on any of the run's threads.
 std::atomic<int> g_stop_signal{0};
+
+// A file of this run's own in the temporary directory (created exclusively, never through a
+// link another user planted there), for a session its --out could not take.
+std::string newTemporaryFile(const std::string& suffix) {
+  std::string name = (std::filesystem::temp_directory_path() / ("flexirob-teach-XXXXXX" + suffix)).string();
+  const int fd = ::mkstemps(name.data(), static_cast<int>(suffix.size()));
+  if (fd < 0) throw InputError("cannot create a file in " + std::filesystem::temp_directory_path().string() + ": " + std::strerror(errno));
+  ::close(fd);
+  return name;
+}
 static_assert(std::atomic<int>::is_always_lock_free);
 
 extern "C" void stopOnSignal(int signal_number) {
@@ -420,11 +433,10 @@ Json runTeach(TeachOptions options) {
         // The folder removed or the disk full at the end of the run: what was taught is kept
         // in the temporary directory, as for an SQLite session that failed, and said.
         session_error = error.what();
-        const std::filesystem::path copy =
-            std::filesystem::temp_directory_path() / ("flexirob-teach-" + std::to_string(::getpid()) + ".json");
         try {
-          app::writeFileReplacing(copy.string(), text, "the session's copy");
-          session_copy = copy.string();
+          const std::string copy = newTemporaryFile(".json");
+          app::writeFileReplacing(copy, text, "the session's copy");
+          session_copy = copy;
         } catch (const InputError& also) {
           session_error += std::string("; no copy either: ") + also.what();
         }
@@ -435,23 +447,22 @@ Json runTeach(TeachOptions options) {
     recorder->close();
     const app::RecorderStatus status = recorder->status();
     states_dropped = status.states_dropped;
-    if (!status.message.empty()) {
+    if (stopped_untaught) {
+      // Nothing taught to keep, whether or not the file failed meanwhile.
+      app::removeDatabaseFiles(recording_path);
+      session_path.clear();
+    } else if (!status.message.empty()) {
       // The file failed during the run: keep the whole session (file content + what followed
       // in memory) in the temporary directory, and say where.
       session_error = status.message;
-      const std::filesystem::path copy =
-          std::filesystem::temp_directory_path() / ("flexirob-teach-" + std::to_string(::getpid()) + ".flexirob");
       try {
+        const std::string copy = newTemporaryFile(".flexirob");
         recorder->saveCopy(copy);
-        session_copy = copy.string();
+        session_copy = copy;
       } catch (const InputError& e) {
         session_error += std::string("; no copy either: ") + e.what();
       }
-    }
-    if (stopped_untaught && session_error.empty()) {
-      app::removeDatabaseFiles(recording_path);  // the seconds before the stop, nothing taught
-      session_path.clear();
-    } else if (replacing && session_error.empty()) {
+    } else if (replacing) {
       std::error_code error;
       if (keep_earlier) {
         session_path = recording_path;
@@ -467,20 +478,18 @@ Json runTeach(TeachOptions options) {
         if (error) {
           if (had_journal) std::filesystem::rename(set_aside, journal, ignored);
           session_error = "cannot replace '" + options.out + "' with the new recording: " + error.message();
-          session_path = recording_path;
+          session_copy = recording_path;  // whole, beside it
         } else {
           std::filesystem::remove(set_aside, ignored);
           std::filesystem::remove(out_file.string() + "-shm", ignored);  // an index of the journal set aside
         }
       }
-    } else if (replacing) {
-      session_path = recording_path;
     }
   }
   if (!session_error.empty()) {
-    // Removed with its folder: only the copy holds the session.
-    std::error_code gone;
-    if (!session_path.empty() && !std::filesystem::exists(session_path, gone)) session_path.clear();
+    // What --out names (gone with its folder, cut short, or an earlier run's file) is not this
+    // run's session: the copy, where there is one, is the whole of it.
+    session_path.clear();
   } else if (session_path.empty() && !replacing) {
     kept_note = " (nothing was taught)";
   } else if (session_path != options.out) {
@@ -600,14 +609,13 @@ Json runTeach(TeachOptions options) {
     message << "teach: stopped by " << (signal_number == SIGTERM ? "SIGTERM" : "SIGINT") << " after " << std::fixed
             << std::setprecision(1) << wall_seconds << " s (" << report.simulated_time << " s of simulated teaching); what was recorded (" << workflow.areas().size()
             << " of " << options.areas << " areas, " << samples << " samples) ";
-    if (session_path.empty()) {
+    if (!session_error.empty()) {
+      message << "was not written to " << options.out << ": " << session_error
+              << (session_copy.empty() ? std::string() : "; the whole session was saved to " + session_copy);
+    } else if (session_path.empty()) {
       message << "was not written" << kept_note;
     } else {
       message << "was written to " << session_path << kept_note;
-    }
-    if (!session_error.empty()) {
-      message << "; but the session file failed: " << session_error
-              << (session_copy.empty() ? std::string() : "; the whole session was saved to " + session_copy);
     }
     throw CommandFailed(message.str(), std::move(result), 128 + signal_number);
   }

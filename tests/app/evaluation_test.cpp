@@ -89,6 +89,8 @@ TEST(Evaluation, FittingASceneToARobotLeavesOutOnlyThePosturesThatDoNotFit) {
   ASSERT_EQ(other_arm.left_out.size(), 2U);
   EXPECT_NE(other_arm.left_out[0].find("3 postures have 6 joint values"), std::string::npos) << other_arm.left_out[0];
   EXPECT_FALSE(other_arm.scene.home_posture.has_value());
+  scene.home_posture = Eigen::VectorXd::Zero(9);
+  EXPECT_NE(fitSceneToRobot(scene, lwr4()).left_out[0].find("3 postures have 6 or 9 joint values"), std::string::npos);
 }
 
 TEST(Evaluation, AStartPostureThatTouchesSomethingGivesWayToTheNearestFreeOne) {

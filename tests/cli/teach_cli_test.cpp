@@ -136,18 +136,22 @@ TEST(TeachCli, AnOutputFolderRemovedDuringTheRunLeavesTheSessionInACopy) {
     const fs::path folder = scratch("vanishing-" + name);
     const fs::path out = folder / name, json = scratch("vanishing.out"), err = scratch("vanishing.err"), code = scratch("vanishing.code");
     fs::create_directories(folder);
+    // The run's lock first, then (SQLite) the database: the folder goes once the database is open.
+    const bool json_session = name == "v.json";
+    const fs::path waited = json_session ? fs::path(out.string() + ".lock") : out;
     const std::string script = std::string(FLEXIROB_CLI_EXECUTABLE) + " teach --scene setup_I --areas 3 --seed 1 --out " + out.string() +
-                               " > " + json.string() + " 2> " + err.string() + " & p=$!; for i in $(seq 300); do [ -n \"$(ls " +
-                               folder.string() + ")\" ] && break; sleep 0.02; done; rm -rf " + folder.string() + "; wait $p; echo $? > " +
-                               code.string();
+                               " > " + json.string() + " 2> " + err.string() + " & p=$!; for i in $(seq 600); do [ -e " + waited.string() +
+                               " ] && break; sleep 0.02; done; mv " + folder.string() + " " + folder.string() + ".gone; rm -rf " +
+                               folder.string() + ".gone; wait $p; echo $? > " + code.string();
     ASSERT_EQ(std::system(("sh -c '" + script + "'").c_str()), 0);
     EXPECT_EQ(text(code), "1\n") << name << ": " << text(err);
     const nlohmann::json result = nlohmann::json::parse(text(json));
     EXPECT_TRUE(result.at("session").is_null()) << result.dump();
     const std::string copy = result.at("session_copy").get<std::string>();
     EXPECT_NE(text(err).find("the whole session was saved to " + copy), std::string::npos) << text(err);
+    if (!json_session) EXPECT_NE(text(err).find("was removed or replaced while the run recorded"), std::string::npos) << text(err);
     int areas_in_copy = -1;
-    if (name == "v.json") {
+    if (json_session) {
       areas_in_copy = static_cast<int>(nlohmann::json::parse(text(copy)).at("areas").size());
     } else {
       const auto review = runCliBinary("review --session " + copy);
@@ -163,10 +167,13 @@ TEST(TeachCli, AnOutputFolderRemovedDuringTheRunLeavesTheSessionInACopy) {
 TEST(TeachCli, StoppedBySigtermWritesWhatWasRecordedAndSaysSo) {
   const fs::path out = scratch("interrupted.db");
   const fs::path json = scratch("interrupted.json"), err = scratch("interrupted.err"), code = scratch("interrupted.code");
-  // The run would take tens of seconds; SIGTERM after 2 s (SIGINT, Ctrl-C, takes the same way, but
-  // a job started in the background by a shell ignores it).
-  const std::string script = std::string(FLEXIROB_CLI_EXECUTABLE) + " teach --scene setup_I --areas 12 --seed 1 --out " + out.string() +
-                             " > " + json.string() + " 2> " + err.string() + " & p=$!; sleep 2; kill -TERM $p; wait $p; echo $? > " + code.string();
+  // The run would take tens of seconds; SIGTERM once its first area is stored (the progress line
+  // past 0 %; a run stopped before that writes nothing). SIGINT, Ctrl-C, takes the same way, but a
+  // job started in the background by a shell ignores it.
+  const std::string script = "FLEXIROB_PROGRESS=1 " + std::string(FLEXIROB_CLI_EXECUTABLE) + " teach --scene setup_I --areas 12 --seed 1 --out " +
+                             out.string() + " > " + json.string() + " 2> " + err.string() +
+                             " & p=$!; for i in $(seq 1200); do grep -qE \"teach: +[1-9]\" " + err.string() +
+                             " && break; sleep 0.05; done; kill -TERM $p; wait $p; echo $? > " + code.string();
   ASSERT_EQ(std::system(("sh -c '" + script + "'").c_str()), 0);
   EXPECT_EQ(text(code), "143\n") << text(err);
   EXPECT_NE(text(err).find("error: teach: stopped by SIGTERM after"), std::string::npos) << text(err);

@@ -324,15 +324,19 @@ class FeaturesTest : public QObject {
     QVERIFY(QTest::qWaitForWindowExposed(&scroll));
     flexirob::ui::LiveSnapshot s;
     s.dof = 7;
+    using Controller = flexirob::app::InteractionController;
     const struct {
       Stage stage;
       SubStage sub_stage;
       bool execution_done;
-    } states[] = {{Stage::kIdle, SubStage::kNone, true},
-                  {Stage::kExecution, SubStage::kNone, false},
-                  {Stage::kProgramming, SubStage::kApproaching, true},
-                  {Stage::kConfiguration, SubStage::kPosed, true},
-                  {Stage::kExecution, SubStage::kNone, true}};
+      Controller controller;
+      bool keyboard;
+    } states[] = {{Stage::kIdle, SubStage::kNone, true, Controller::kHierarchicalControl, false},
+                  {Stage::kExecution, SubStage::kNone, false, Controller::kHierarchicalControl, false},
+                  {Stage::kProgramming, SubStage::kApproaching, true, Controller::kAssistedGravityCompensation, false},
+                  {Stage::kProgramming, SubStage::kApproaching, true, Controller::kAssistedGravityCompensation, true},
+                  {Stage::kConfiguration, SubStage::kPosed, true, Controller::kCompliantRecording, false},
+                  {Stage::kExecution, SubStage::kNone, true, Controller::kHierarchicalControl, true}};
     QPushButton* first = panel.button(flexirob::app::Button::kStartConfiguration);
     QSet<int> button_tops;
     QSet<int> text_heights;
@@ -340,6 +344,8 @@ class FeaturesTest : public QObject {
       s.stage = state.stage;
       s.sub_stage = state.sub_stage;
       s.execution_done = state.execution_done;
+      s.controller = state.controller;
+      s.keyboard_mode = state.keyboard;
       panel.showSnapshot(s);
       QCoreApplication::sendPostedEvents(nullptr, QEvent::LayoutRequest);
       QLabel* hint = panel.hintLabel();
