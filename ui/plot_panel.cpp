@@ -140,6 +140,37 @@ void TimePlot::setSeriesData(int series, const QList<QPointF>& points) {
   if (!fixed_values_) autoscale();
 }
 
+void TimePlot::setSeriesStretches(int series, const QList<QList<QPointF>>& stretches) {
+  QLineSeries* first = series_.at(static_cast<std::size_t>(series));
+  first->replace(stretches.isEmpty() ? QList<QPointF>() : stretches.front());
+  std::vector<QLineSeries*>& more = stretches_[series];
+  for (qsizetype k = 1; k < stretches.size(); ++k) {
+    const auto index = static_cast<std::size_t>(k - 1);
+    if (index == more.size()) {
+      auto* piece = new QLineSeries;
+      piece->setPen(first->pen());
+      piece->setUseOpenGL(false);
+      chart_->addSeries(piece);
+      piece->attachAxis(time_axis_);
+      piece->attachAxis(value_axis_);
+      for (QLegendMarker* marker : chart_->legend()->markers(piece)) marker->setVisible(false);
+      more.push_back(piece);
+    }
+    more[index]->replace(stretches[k]);
+  }
+  for (std::size_t k = static_cast<std::size_t>(std::max<qsizetype>(stretches.size() - 1, 0)); k < more.size(); ++k) more[k]->clear();
+  if (!fixed_values_) autoscale();
+}
+
+int TimePlot::drawnStretches(int series) const {
+  int drawn = series_.at(static_cast<std::size_t>(series))->count() > 0 ? 1 : 0;
+  const auto more = stretches_.find(series);
+  if (more != stretches_.end()) {
+    for (const QLineSeries* piece : more->second) drawn += piece->count() > 0 ? 1 : 0;
+  }
+  return drawn;
+}
+
 void TimePlot::hideFromLegend(int series) {
   hidden_from_legend_.insert(series);
   for (QLegendMarker* marker : chart_->legend()->markers(series_.at(static_cast<std::size_t>(series)))) marker->setVisible(false);
@@ -248,11 +279,15 @@ QStringList TimePlot::valueTickLabels() const { return drawnTickLabels(value_axi
 void TimePlot::autoscale() {
   double lower = std::numeric_limits<double>::infinity();
   double upper = -lower;
-  for (const QLineSeries* series : series_) {
+  const auto include = [&](const QLineSeries* series) {
     for (const QPointF& p : series->points()) {
       lower = std::min(lower, p.y());
       upper = std::max(upper, p.y());
     }
+  };
+  for (const QLineSeries* series : series_) include(series);
+  for (const auto& [series, pieces] : stretches_) {
+    for (const QLineSeries* piece : pieces) include(piece);
   }
   if (!(upper >= lower)) return;
   if (upper - lower < minimum_span_) upper = lower + minimum_span_;
@@ -397,14 +432,18 @@ void PlotPanel::setCursorTime(double time) {
 }
 
 void PlotPanel::rebuild() {
-  QList<QPointF> error;
+  QList<QList<QPointF>> error{{}};  // stretches: no line across the times without a task target
   QList<QPointF> compute;
   QList<QPointF> max_compute;
   const auto joints = static_cast<int>(joint_names_.size());
   std::vector<QList<QPointF>> normalized(static_cast<std::size_t>(joints));
   double misses = std::numeric_limits<double>::quiet_NaN();
   for (const PlotSample& s : samples_) {
-    if (std::isfinite(s.task_error)) error.append({s.time, s.task_error});
+    if (std::isfinite(s.task_error)) {
+      error.back().append({s.time, s.task_error});
+    } else if (!error.back().isEmpty()) {
+      error.append(QList<QPointF>());
+    }
     if (std::isfinite(s.compute_us)) compute.append({s.time, s.compute_us});
     if (std::isfinite(s.max_compute_us)) max_compute.append({s.time, s.max_compute_us});
     if (std::isfinite(s.deadline_misses)) misses = s.deadline_misses;
@@ -417,7 +456,8 @@ void PlotPanel::rebuild() {
   double t0 = samples_.empty() ? 0.0 : samples_.front().time;
   const double t1 = samples_.empty() ? 1.0 : samples_.back().time;
   if (live_) t0 = std::max(t0, t1 - window_seconds_);
-  task_error_->setSeriesData(0, error);
+  if (error.back().isEmpty()) error.removeLast();
+  task_error_->setSeriesStretches(0, error);
   cycles_->setSeriesData(compute_series_, compute);
   cycles_->setSeriesData(max_compute_series_, max_compute);
   cycles_->setSeriesName(compute_series_, std::isfinite(misses)

@@ -60,6 +60,11 @@ class TimePlot : public QChartView {
   bool narrowLegend() const { return narrow_legend_; }
   /// The value axis' tick labels as drawn (at most as many as the plot's height has room for).
   QStringList valueTickLabels() const;
+  /// The series drawn as separate stretches, unjoined across the gaps between them (times with
+  /// no value, such as the task error while no controller steers the tip).
+  void setSeriesStretches(int series, const QList<QList<QPointF>>& stretches);
+  /// How many line pieces draw `series` (1 + the stretches after its first).
+  int drawnStretches(int series) const;
   int seriesCount() const { return static_cast<int>(series_.size()); }
   const QLineSeries* series(int index) const { return series_.at(static_cast<std::size_t>(index)); }
   /// Shows t0..t1 [s]; a recording of one instant (t1 <= t0) is shown over the second after it,
@@ -100,6 +105,9 @@ class TimePlot : public QChartView {
   QValueAxis* value_axis_ = nullptr;
   QLineSeries* cursor_ = nullptr;
   std::vector<QLineSeries*> series_;
+  /// Further stretches of a series broken by gaps (setSeriesStretches), drawn with its pen and
+  /// left out of the legend.
+  std::map<int, std::vector<QLineSeries*>> stretches_;
   double cursor_time_ = 0.0;
   bool fixed_values_ = false;
   double minimum_span_ = 0.0;

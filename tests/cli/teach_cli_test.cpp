@@ -136,9 +136,10 @@ TEST(TeachCli, AnOutputFolderRemovedDuringTheRunLeavesTheSessionInACopy) {
     const fs::path folder = scratch("vanishing-" + name);
     const fs::path out = folder / name, json = scratch("vanishing.out"), err = scratch("vanishing.err"), code = scratch("vanishing.code");
     fs::create_directories(folder);
-    // The run's lock first, then (SQLite) the database: the folder goes once the database is open.
+    // The run's lock first, then (SQLite) the database and its journal: the folder goes once
+    // the database writes (before that, a journal that cannot be created is another failure).
     const bool json_session = name == "v.json";
-    const fs::path waited = json_session ? fs::path(out.string() + ".lock") : out;
+    const fs::path waited = json_session ? fs::path(out.string() + ".lock") : fs::path(out.string() + "-wal");
     const std::string script = std::string(FLEXIROB_CLI_EXECUTABLE) + " teach --scene setup_I --areas 3 --seed 1 --out " + out.string() +
                                " > " + json.string() + " 2> " + err.string() + " & p=$!; for i in $(seq 600); do [ -e " + waited.string() +
                                " ] && break; sleep 0.02; done; mv " + folder.string() + " " + folder.string() + ".gone; rm -rf " +

@@ -289,6 +289,31 @@ class FeaturesTest : public QObject {
              qPrintable(QStringLiteral("the warning ends at %1 px, the panel at %2 px").arg(bottom).arg(window.stagePanel()->height())));
   }
 
+  // The task error has no value while π_q or π_rec holds a posture under the hand; the line
+  // stops there and starts again after, instead of joining the two sides with one made up.
+  void theTaskErrorIsNotJoinedAcrossTimesWithoutATarget() {
+    flexirob::ui::PlotPanel panel;
+    panel.show();  // a hidden panel keeps its samples for later
+    for (int k = 0; k <= 30; ++k) {
+      flexirob::ui::PlotSample sample;
+      sample.time = 0.1 * k;
+      if (k < 10 || k > 20) sample.task_error = 0.001 * (k % 4);
+      panel.append(sample);
+    }
+    flexirob::ui::TimePlot* plot = panel.taskErrorPlot();
+    QCOMPARE(plot->drawnStretches(0), 2);
+    QCOMPARE(plot->series(0)->count(), 10);  // the first stretch, 0-0.9 s
+    for (const QPointF& p : plot->series(0)->points()) QVERIFY(p.x() < 1.0);
+    // Values again throughout: one line.
+    flexirob::ui::PlotSample sample;
+    sample.time = 3.1;
+    sample.task_error = 0.002;
+    std::vector<flexirob::ui::PlotSample> later(2, sample);
+    later[1].time = 3.2;
+    panel.setSamples(later);
+    QCOMPARE(plot->drawnStretches(0), 1);
+  }
+
   // A window squeezed onto a small screen and grown back: the Joints dock gets its width back
   // (the 3D view had taken every pixel gained, the joint angles stayed cut).
   void theJointsDockGetsItsWidthBackWhenTheWindowGrows() {
