@@ -108,6 +108,8 @@ constexpr std::size_t kWarningsOnStderr = 20;
 // process at once. Lock-free atomic: the signal may land on any of the run's threads.
 std::atomic<int> g_stop_signal{0};
 
+static_assert(std::atomic<int>::is_always_lock_free);
+
 // A file of this run's own in the temporary directory (created exclusively, never through a
 // link another user planted there), for a session its --out could not take.
 std::string newTemporaryFile(const std::string& suffix) {
@@ -117,7 +119,6 @@ std::string newTemporaryFile(const std::string& suffix) {
   ::close(fd);
   return name;
 }
-static_assert(std::atomic<int>::is_always_lock_free);
 
 extern "C" void stopOnSignal(int signal_number) {
   g_stop_signal.store(signal_number);
