@@ -244,6 +244,12 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
 
 namespace {
 
+// The texts shown besides nextStepHint() and controllerText(), one place each: the heights
+// reserved for them (reserveHintHeight) must be those of the texts shown.
+QString noRobotHint() { return StagePanel::tr("Choose a robot in the Robot menu."); }
+QString unmeasuredHint() { return StagePanel::tr("Teaching starts when the robot sends its first measurement."); }
+QString unmeasuredController() { return StagePanel::tr("waiting for the robot's first measurement"); }
+
 QString controllerText(app::InteractionController controller, bool keyboard) {
   return StagePanel::tr("controller: %1%2").arg(QString::fromLatin1(app::toString(controller)), keyboard ? StagePanel::tr(" (keyboard)") : QString());
 }
@@ -251,8 +257,7 @@ QString controllerText(app::InteractionController controller, bool keyboard) {
 // Every text the hint shows, for the height it reserves.
 const QStringList& everyHint() {
   static const QStringList hints = [] {
-    QStringList all{StagePanel::tr("Choose a robot in the Robot menu."),
-                    StagePanel::tr("Teaching starts when the robot sends its first measurement.")};
+    QStringList all{noRobotHint(), unmeasuredHint()};
     LiveSnapshot s;
     for (const app::Stage stage : {app::Stage::kIdle, app::Stage::kConfiguration, app::Stage::kProgramming, app::Stage::kExecution}) {
       for (const app::SubStage sub : {app::SubStage::kNone, app::SubStage::kWaiting, app::SubStage::kApproaching, app::SubStage::kPosed,
@@ -302,7 +307,7 @@ void StagePanel::reserveHintHeight() {
   hint_label_->setMinimumHeight(tallest + hint_label_->height() - hint_label_->contentsRect().height());
   // The controller's line above it wraps too ("assisted_gravity_compensation (keyboard)").
   int tallest_controller = 0;
-  QStringList controllers{tr("waiting for the robot's first measurement")};
+  QStringList controllers{unmeasuredController()};
   for (const app::InteractionController controller :
        {robot::InteractionMode::kGravityCompensation, robot::InteractionMode::kCompliantRecording, robot::InteractionMode::kHierarchicalControl,
         robot::InteractionMode::kAssistedGravityCompensation, robot::InteractionMode::kAssistanceBlending}) {
@@ -331,7 +336,7 @@ void StagePanel::showNoRobot(const QString& reason) {
   area_choice_->setEnabled(false);
   remove_area_button_->setEnabled(false);
   reteach_area_button_->setEnabled(false);
-  hint_label_->setText(tr("Choose a robot in the Robot menu."));
+  hint_label_->setText(noRobotHint());
   learning_bar_->setVisible(false);
   counts_label_->clear();
 }
@@ -345,7 +350,7 @@ void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured, bool h
     stage_label_->setStyleSheet(QStringLiteral("QLabel { background: %1; color: white; border-radius: 6px; }")
                                     .arg(colour.name()));
   }
-  controller_label_->setText(robot_measured ? controllerText(s.controller, s.keyboard_mode) : tr("waiting for the robot's first measurement"));
+  controller_label_->setText(robot_measured ? controllerText(s.controller, s.keyboard_mode) : unmeasuredController());
   for (int b = 0; b < 4; ++b) {
     buttons_[b]->setEnabled(robot_measured && s.running && buttonMakesSense(static_cast<app::Button>(b), s));
   }
@@ -379,7 +384,7 @@ void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured, bool h
   area_choice_->setEnabled(can_remove || can_reteach);
   remove_area_button_->setEnabled(can_remove);
   reteach_area_button_->setEnabled(can_reteach);
-  const QString hint = robot_measured ? nextStepHint(s, hand_can_pull) : tr("Teaching starts when the robot sends its first measurement.");
+  const QString hint = robot_measured ? nextStepHint(s, hand_can_pull) : unmeasuredHint();
   if (hint_label_->text() != hint) hint_label_->setText(hint);
   learning_bar_->setVisible(s.learning);
   counts_label_->setText(tr("areas %1   teach-ins %2   model %3\non_affected %4   on_converged %5\nITM nodes %6, edges %7   "
