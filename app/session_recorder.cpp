@@ -529,6 +529,9 @@ void SessionRecorder::saveCopy(const std::filesystem::path& target) {
   const int rc = sqlite3_backup_step(backup, -1);
   sqlite3_backup_finish(backup);
   if (rc != SQLITE_DONE) throw InputError("cannot copy the recording to " + target.string() + ": " + sqlite3_errstr(rc));
+  // The backup carries the WAL mode of the recording it came from; a finished session leaves
+  // it (close() above), so that readers leave no -wal and -shm files beside the copy.
+  sqlite3_exec(out.handle(), "PRAGMA journal_mode=DELETE", nullptr, nullptr, nullptr);
 }
 
 }  // namespace flexirob::app

@@ -161,7 +161,10 @@ TEST(TeachCli, AnOutputFolderRemovedDuringTheRunLeavesTheSessionInACopy) {
     }
     EXPECT_EQ(areas_in_copy, result.at("areas").get<int>()) << name;
     EXPECT_GT(areas_in_copy, 0) << name;
-    for (const fs::path& file : {fs::path(copy), json, err, code}) fs::remove(file);
+    // A finished session stands alone: its readers leave nothing beside it.
+    EXPECT_FALSE(fs::exists(copy + "-wal")) << name;
+    EXPECT_FALSE(fs::exists(copy + "-shm")) << name;
+    for (const fs::path& file : {fs::path(copy), fs::path(copy + "-wal"), fs::path(copy + "-shm"), json, err, code}) fs::remove(file);
   }
 }
 
