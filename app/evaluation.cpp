@@ -27,6 +27,10 @@ namespace {
 // the grid's tolerance, so that a looser "reached" does not shrink T.
 constexpr double kReachEdgeMargin = 0.01;
 
+// Grid points computed as lower + i * spacing land a rounding error off an obstacle's face; a
+// point this close to one lies on it (and the tip cannot stand there without touching it).
+constexpr double kOnObstacleFace = 1e-6;
+
 }  // namespace
 
 MotionOutcome executeMotion(const robot::RobotModel& model, const robot::ParameterSet& parameters,
@@ -351,7 +355,7 @@ void armPoints(robot::Kinematics& kinematics, int dof, std::vector<Eigen::Vector
 bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::ParameterSet& parameters,
                                 robot::CollisionWorld& world, const Eigen::Vector3d& p_W,
                                 const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random,
-                                Eigen::VectorXd* posture_found, int* postures_reaching) {
+                                Eigen::VectorXd* posture_found, int* postures_reaching, double tolerance_m) {
   if (postures_reaching != nullptr) *postures_reaching = 0;
   const int dof = model.dof();
   const Eigen::VectorXd lower = model.softLowerLimits();
@@ -375,7 +379,7 @@ bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::Par
       if (controller.taskError() < 1e-4 && it > 30) break;
     }
     kinematics.update(q);
-    if ((kinematics.p_WT() - p_W).norm() > 1e-3) continue;
+    if ((kinematics.p_WT() - p_W).norm() > tolerance_m) continue;
     if (postures_reaching != nullptr) ++*postures_reaching;
     world.update(q);
     if (world.contacts().empty()) {
@@ -443,6 +447,82 @@ const Eigen::VectorXd& nearestStandingPosture(const std::vector<std::pair<Eigen:
   return *best;
 }
 
+namespace {
+
+// Which of the grid points `candidates` (within reach and outside the obstacles) some
+// collision-free posture puts the tip at. T belongs to the scene, the robot and the grid
+// (Sect. 3.3.2: T_I, T_II), never to the session evaluated, so the learned map plays no part and
+// the search is made thorough enough not to depend on the order or the random draws: each point
+// starts at the posture found for its nearest grid neighbour already accessible, then at the scene's home
+// posture and 24 seeded random postures; then, until nothing changes, every point still without
+// one starts at the postures found for its grid neighbours (a neighbour's posture is a small
+// step from one for the point, where a random start may fall in another redundancy family).
+std::vector<bool> accessibleGridPoints(const robot::RobotModel& model, const robot::ParameterSet& parameters,
+                                       const robot::Scene& scene, robot::CollisionWorld& world,
+                                       const std::vector<Eigen::Vector3d>& candidates, double spacing,
+                                       double tolerance_m, const ProgressCallback& progress) {
+  if (candidates.empty()) return {};
+  learning::UniformRandom random(7);
+  const Eigen::VectorXd q_home =
+      scene.home_posture && scene.home_posture->size() == model.dof() ? *scene.home_posture : model.midPosture();
+  // Grid neighbours: the 26 points of the surrounding cube, by integer cell.
+  std::map<std::tuple<long, long, long>, std::size_t> by_cell;
+  const auto cellOf = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d cell = ((p - candidates.front()) / spacing).array().round();
+    return std::make_tuple(std::lround(cell.x()), std::lround(cell.y()), std::lround(cell.z()));
+  };
+  for (std::size_t i = 0; i < candidates.size(); ++i) by_cell.emplace(cellOf(candidates[i]), i);
+  std::vector<std::vector<std::size_t>> neighbours(candidates.size());
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const auto [x, y, z] = cellOf(candidates[i]);
+    for (long dx = -1; dx <= 1; ++dx) {
+      for (long dy = -1; dy <= 1; ++dy) {
+        for (long dz = -1; dz <= 1; ++dz) {
+          const auto it = by_cell.find({x + dx, y + dy, z + dz});
+          if (it != by_cell.end() && it->second != i) neighbours[i].push_back(it->second);
+        }
+      }
+    }
+    std::sort(neighbours[i].begin(), neighbours[i].end(), [&](std::size_t a, std::size_t b) {
+      return (candidates[a] - candidates[i]).squaredNorm() < (candidates[b] - candidates[i]).squaredNorm();
+    });
+  }
+  std::vector<std::optional<Eigen::VectorXd>> found(candidates.size());
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    if (progress && i % 100 == 0) progress(0.8 * static_cast<double>(i) / static_cast<double>(candidates.size()));
+    const Eigen::Vector3d& p = candidates[i];
+    const auto nearest_found = std::find_if(neighbours[i].begin(), neighbours[i].end(), [&](std::size_t j) { return found[j].has_value(); });
+    Eigen::VectorXd q;
+    if ((nearest_found != neighbours[i].end() &&
+         accessibleWithoutCollision(model, parameters, world, p, *found[*nearest_found], 1, random, &q, nullptr, tolerance_m)) ||
+        accessibleWithoutCollision(model, parameters, world, p, q_home, 24, random, &q, nullptr, tolerance_m)) {
+      found[i] = q;
+    }
+  }
+  std::vector<std::set<std::size_t>> tried(candidates.size());
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      if (found[i]) continue;
+      for (const std::size_t j : neighbours[i]) {
+        if (!found[j] || !tried[i].insert(j).second) continue;
+        Eigen::VectorXd q;
+        if (accessibleWithoutCollision(model, parameters, world, candidates[i], *found[j], 1, random, &q, nullptr, tolerance_m)) {
+          found[i] = q;
+          grew = true;
+          break;
+        }
+      }
+    }
+  }
+  if (progress) progress(1.0);
+  std::vector<bool> accessible(candidates.size());
+  for (std::size_t i = 0; i < candidates.size(); ++i) accessible[i] = found[i].has_value();
+  return accessible;
+}
+
+}  // namespace
+
 ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::Scene& scene,
                                   const robot::ParameterSet& parameters, const learning::Learner& map,
                                   const Eigen::VectorXd& q_start, const robot::EvaluationGrid& grid,
@@ -471,36 +551,33 @@ ReachableResult evaluateReachable(const robot::RobotModel& model, const robot::S
   }
   ReachableResult result;
   result.grid_points = static_cast<int>(points.size());
-  std::vector<Eigen::Vector3d> targets;
-  learning::UniformRandom random(7);  // the IK seeds of the accessibility test: fixed, T must not vary
   // Progress: the IK searches that find T take about as long as driving to its targets.
   constexpr double kFindingShare = 0.3;
+  std::vector<Eigen::Vector3d> candidates;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d& p = points[i];
-    if (progress && i % 200 == 0) progress(kFindingShare * static_cast<double>(i) / static_cast<double>(points.size()));
     if (arm_reach.fromShoulder(p) > arm_reach.reach - kReachEdgeMargin) {
       ++result.out_of_reach;
-      continue;
-    }
-    if (robot::obstacleAt(scene, p) != nullptr) {
+    } else if (robot::obstacleAt(scene, p, kOnObstacleFace) != nullptr) {
+      // A point on an obstacle's face (x = -0.29999999999999993 for a face at -0.3 m) is no
+      // more a free target than one inside.
       ++result.in_obstacles;
-      continue;
-    }
-    if (grid.excludes(p)) {
+    } else if (grid.excludes(p)) {
       ++result.excluded;
-      continue;
+    } else {
+      candidates.push_back(p);
     }
-    // The IK search is not exhaustive: a target the learned map itself reaches without a contact
-    // is accessible whatever the search found. Joint limits and self-contacts bound the
-    // workspace without obstacles too, so the test runs in every scene.
-    if (!accessibleWithoutCollision(model, parameters, world, p, q_start, 24, random)) {
-      const MotionOutcome proof = approachTarget(model, parameters, map, learnedPosture(model, map, p), p, &world);
-      if (proof.collided || proof.final_error_m > grid.tolerance) {
-        ++result.inaccessible;
-        continue;
-      }
+  }
+  const std::vector<bool> accessible = accessibleGridPoints(
+      model, parameters, scene, world, candidates, grid.spacing, grid.tolerance,
+      progress ? ProgressCallback([&](double done) { progress(kFindingShare * done); }) : ProgressCallback());
+  std::vector<Eigen::Vector3d> targets;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    if (accessible[i]) {
+      targets.push_back(candidates[i]);
+    } else {
+      ++result.inaccessible;
     }
-    targets.push_back(p);
   }
   result.targets = static_cast<int>(targets.size());
   const bool from_nearest = approach == ApproachFrom::kNearestReached || approach == ApproachFrom::kNearestVisited;

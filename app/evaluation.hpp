@@ -186,7 +186,7 @@ struct ReachableResult {
 const Eigen::VectorXd& nearestStandingPosture(const std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>>& standing,
                                               const Eigen::Vector3d& p_W, const Eigen::VectorXd& fallback);
 
-/// Whether some collision-free posture puts the tip on p_W (within 1 mm): IK with the
+/// Whether some collision-free posture puts the tip on p_W (within `tolerance_m`): IK with the
 /// hierarchical controller from `seeds` null-space targets (q_start first, then seeded random
 /// postures). Sect. 3.3.2 keeps in T only the targets "theoretically accessible without
 /// colliding" (for setup I it names those above the board); this is the scene-independent test.
@@ -197,7 +197,8 @@ const Eigen::VectorXd& nearestStandingPosture(const std::vector<std::pair<Eigen:
 bool accessibleWithoutCollision(const robot::RobotModel& model, const robot::ParameterSet& parameters,
                                 robot::CollisionWorld& world, const Eigen::Vector3d& p_W,
                                 const Eigen::VectorXd& q_start, int seeds, learning::UniformRandom& random,
-                                Eigen::VectorXd* posture_found = nullptr, int* postures_reaching = nullptr);
+                                Eigen::VectorXd* posture_found = nullptr, int* postures_reaching = nullptr,
+                                double tolerance_m = 1e-3);
 
 /// Where the arm starts when the reachability evaluation commands it to a target. Sect. 3.3.2
 /// evaluates the learned map as "the inverse kinematic mapping from 3-D task-space to 7-D

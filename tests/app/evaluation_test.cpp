@@ -595,6 +595,33 @@ TEST(Evaluation, PointsNoPostureReachesAreNoTargetsInAnEmptySceneEither) {
   EXPECT_TRUE(result.target_points[0].isApprox(Eigen::Vector3d(-0.5, 0.0, 0.1)));
 }
 
+// -0.9 + 6 * 0.1 = -0.29999999999999993: a grid point a rounding error outside a face at
+// x = -0.3 m lies on the face, and the tip cannot stand there without touching it.
+TEST(Evaluation, AGridPointOnAnObstaclesFaceIsNoTarget) {
+  Parameters s;
+  const auto map = constantMap();
+  robot::EvaluationGrid grid;
+  grid.lower = Eigen::Vector3d(-0.9, -0.1, 0.3);
+  grid.upper = Eigen::Vector3d(-0.1, -0.1, 0.3);
+  grid.spacing = 0.1;
+  const std::vector<Eigen::Vector3d> points = grid.points();
+  ASSERT_EQ(points.size(), 9U);
+  robot::Obstacle wall;
+  wall.name = "wall";
+  wall.size = Eigen::Vector3d(0.2, 0.4, 0.4);
+  wall.X_WO.translation() = Eigen::Vector3d(-0.4, -0.1, 0.3);  // x in [-0.5, -0.3]
+  robot::Scene scene;
+  scene.obstacles = {wall};
+  ASSERT_EQ(robot::obstacleAt(scene, points[6]), nullptr) << "the rounding case this is about";
+  ASSERT_LT(std::abs(points[6].x() + 0.3), 1e-12);
+  const ReachableResult result = evaluateReachable(lwr4(), scene, s.parameters, *map, ready(), grid, {});
+  for (const Eigen::Vector3d& p : result.target_points) {
+    const Eigen::Vector3d outside = ((p - wall.X_WO.translation()).cwiseAbs() - wall.size / 2).cwiseMax(0.0);
+    EXPECT_GT(outside.norm(), 1e-6) << p.transpose();
+  }
+  EXPECT_EQ(result.in_obstacles, 3);  // x = -0.5 and -0.3 on the faces, -0.4 inside
+}
+
 // IK with the hierarchical controller (Eq. 2.11) from q0 with q0 as null-space target: an
 // independent posture for a tip position, not the map's.
 Eigen::VectorXd solveIk(const Eigen::VectorXd& q0, const Eigen::Vector3d& p_W) {
@@ -620,6 +647,41 @@ std::unique_ptr<learning::Learner> mapOf(const Eigen::VectorXd& q, const Eigen::
   auto elm = std::make_unique<learning::Elm>(3, 7);
   elm->fit(data);
   return elm;
+}
+
+// T is the scene's and the grid's (Sect. 3.3.2: T_I, T_II): two maps that resolve the arm in
+// different postures, driven from different start postures, are judged on the same targets.
+TEST(Evaluation, TheTargetsDoNotDependOnTheLearnedMapOrTheStartPosture) {
+  Parameters s;
+  robot::EvaluationGrid grid;
+  grid.lower = Eigen::Vector3d(-0.7, -0.3, 0.1);
+  grid.upper = Eigen::Vector3d(-0.3, 0.3, 0.5);
+  grid.spacing = 0.1;
+  robot::Obstacle pillar;
+  pillar.name = "pillar";
+  pillar.size = Eigen::Vector3d(0.1, 0.1, 0.6);
+  pillar.X_WO.translation() = Eigen::Vector3d(-0.45, 0.05, 0.3);
+  robot::Scene scene;
+  scene.obstacles = {pillar};
+  Eigen::VectorXd leaning_back = ready();
+  leaning_back[1] = -0.6;
+  leaning_back[3] = 1.6;
+  leaning_back[5] = -0.9;
+  const auto ready_map = constantMap();
+  const auto elbow_up_map = mapOf(solveIk(leaning_back, Eigen::Vector3d(-0.5, 0.0, 0.3)), Eigen::Vector3d(-0.5, 0.0, 0.3));
+  const ReachableResult a = evaluateReachable(lwr4(), scene, s.parameters, *ready_map, ready(), grid, {});
+  const ReachableResult b = evaluateReachable(lwr4(), scene, s.parameters, *elbow_up_map, leaning_back, grid, {});
+  ASSERT_GT(a.targets, 0);
+  EXPECT_NE(a.reached, b.reached) << "maps this different should not reach the same targets";
+  EXPECT_EQ(a.targets, b.targets);
+  EXPECT_EQ(a.inaccessible, b.inaccessible);
+  std::vector<Eigen::Vector3d> targets_a = a.target_points, targets_b = b.target_points;
+  const auto byPosition = [](const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+    return std::lexicographical_compare(u.data(), u.data() + 3, v.data(), v.data() + 3);
+  };
+  std::sort(targets_a.begin(), targets_a.end(), byPosition);
+  std::sort(targets_b.begin(), targets_b.end(), byPosition);
+  EXPECT_EQ(targets_a, targets_b);
 }
 
 TEST(Evaluation, ReachabilityStartsEachTargetInTheLearnedPostureUnlessAskedForTheStartPosture) {
