@@ -560,15 +560,20 @@ void Workflow::checkJointLimits(const Eigen::VectorXd& q_fixed, int area) {
       // name for it, else the one it gets when created.
       const bool reteaching = area < static_cast<int>(areas_.size());
       const std::string name = reteaching                 ? areas_[static_cast<std::size_t>(area)].name
-                               : next_area_name_.empty() ? "area_" + std::to_string(area + 1)
+                               : next_area_name_.empty() ? freshAreaName()
                                                          : next_area_name_;
       detail << "posture near the joint limit at area '" << name << "': joint " << (j + 1) << " (" << joint.name << ") is ";
       if (shown == 0.0) {
         detail << "at its limit";
       } else {
         detail << std::fixed << std::setprecision(1) << shown << (sliding ? " mm" : " deg")
-               << (margin < 0.0 ? " beyond its software limit" : " from its limit");
+               << (margin < 0.0 ? " beyond" : " from");
       }
+      // Named with its value: the software limit lies inside the range the Joints panel shows.
+      const double limit = q_fixed[j] - lower[j] < upper[j] - q_fixed[j] ? lower[j] : upper[j];
+      detail << (shown == 0.0 ? " (" : " its software limit (") << std::fixed << std::setprecision(1)
+             << limit * (sliding ? 1000.0 : 180.0 / std::numbers::pi) << (sliding ? " mm" : " deg")
+             << "): the controller has no room left to move that joint there; re-teach the area with the joint farther from it";
       emit(WorkflowEvent::Kind::kWarning, "joint_limit", detail.str(), area);
     }
   }
@@ -583,7 +588,18 @@ void Workflow::finishTeachIn() {
   ++teach_ins_version_;
   std::ostringstream detail;
   detail << "teach-in " << teach_ins_.size() - 1 << ": " << recording_samples_ << " samples";
-  emit(WorkflowEvent::Kind::kTeachIn, "teach_in", detail.str(), static_cast<int>(teach_ins_.size()) - 1);
+  const int index = static_cast<int>(teach_ins_.size()) - 1;
+  emit(WorkflowEvent::Kind::kTeachIn, "teach_in", detail.str(), index);
+  // A teach-in recorded without moving the tip (keys that only turned the wrist, a hand that
+  // let go at once) replays as standing still: kept, as a person may mean it, but said.
+  const Eigen::MatrixXd path = teach_ins_.back().topRows(3);
+  const double extent = (path.colwise() - path.col(0)).colwise().norm().maxCoeff();
+  if (extent < kSmallestAreaExtent * arm_scale_.length) {
+    std::ostringstream warning;
+    warning << std::fixed << std::setprecision(1) << "teach-in " << index << ": the tip moved at most " << extent * 1e3
+            << " mm, so replaying it moves nothing; guide the tip along the path while TEACH-IN records, or teach it again";
+    emit(WorkflowEvent::Kind::kWarning, "small_teach_in", warning.str(), index);
+  }
 }
 
 int Workflow::finishArea() {
@@ -608,7 +624,7 @@ int Workflow::finishArea() {
     checks_.clear();
     if (options_.learner == LearnerKind::kOsElm) startLearning();  // refit what the online learner cannot forget
   } else {
-    area.name = next_area_name_.empty() ? "area_" + std::to_string(index + 1) : next_area_name_;
+    area.name = next_area_name_.empty() ? freshAreaName() : next_area_name_;
     areas_.push_back(std::move(area));
   }
   next_area_name_.clear();
@@ -623,6 +639,15 @@ int Workflow::finishArea() {
          << created.centre.y() << ", " << created.centre.z() << ") m";
   emit(WorkflowEvent::Kind::kAreaCreated, created.name, detail.str(), index);
   return index;
+}
+
+std::string Workflow::freshAreaName() const {
+  // After a removal the count no longer names a free number (area_1 removed, area_2 kept: a
+  // third area counted as area_2 would share its name).
+  for (std::size_t number = areas_.size() + 1;; ++number) {
+    const std::string name = "area_" + std::to_string(number);
+    if (std::none_of(areas_.begin(), areas_.end(), [&](const TrainingArea& area) { return area.name == name; })) return name;
+  }
 }
 
 void Workflow::warnIfTheAreaIsSmall(int index) {

@@ -304,6 +304,7 @@ class Workflow {
   void onTrigger(Trigger trigger);
   /// Stores the RECORDING as an area; its index, or -1 when it held no sample.
   int finishArea();
+  std::string freshAreaName() const;  ///< area_N with the lowest N from the area count on that no area bears
   void warnIfTheAreaIsSmall(int index);
   void warnIfTheAreaWasTaughtInContact(int index, Eigen::Index contacts);
   void finishTeachIn();
