@@ -10,7 +10,9 @@
 #include <array>
 #include <atomic>
 #include <cstddef>
+#include <cstring>
 #include <Eigen/Core>
+#include <string_view>
 #include <thread>
 
 namespace flexirob::app::realtime {
@@ -67,6 +69,30 @@ template <typename Array>
 void copyInto(Array& destination, const Eigen::VectorXd& source) {
   const auto n = std::min<std::size_t>(destination.size(), static_cast<std::size_t>(source.size()));
   for (std::size_t i = 0; i < n; ++i) destination[i] = source[static_cast<Eigen::Index>(i)];
+}
+
+/// Copies text into a fixed, zero-terminated snapshot buffer. A text too long for it is cut
+/// after its last whole word that fits, with "…" after it: never inside a word or a UTF-8
+/// character, so that what a person reads is visibly shortened and not silently wrong.
+template <std::size_t N>
+void copyText(std::array<char, N>& destination, std::string_view text) {
+  static_assert(N > 8);
+  if (text.size() <= N - 1) {
+    std::memcpy(destination.data(), text.data(), text.size());
+    destination[text.size()] = '\0';
+    return;
+  }
+  constexpr std::string_view kEllipsis = "\u2026";
+  std::size_t n = N - 1 - kEllipsis.size();
+  const std::size_t space = text.rfind(' ', n);
+  if (space != std::string_view::npos && space > n / 2) {
+    n = space;
+  } else {
+    while (n > 0 && (static_cast<unsigned char>(text[n]) & 0xC0) == 0x80) --n;  // not inside a character
+  }
+  std::memcpy(destination.data(), text.data(), n);
+  std::memcpy(destination.data() + n, kEllipsis.data(), kEllipsis.size());
+  destination[n + kEllipsis.size()] = '\0';
 }
 
 }  // namespace flexirob::app::realtime

@@ -18,16 +18,9 @@ namespace {
 using realtime::advance;
 using realtime::atomicMax;
 using realtime::copyInto;
+using realtime::copyText;
 using realtime::microsBetween;
 using realtime::now;
-
-/// Copies text into a fixed, zero-terminated buffer (cut if too long).
-template <std::size_t N>
-void copyText(std::array<char, N>& destination, std::string_view text) {
-  const std::size_t n = std::min(text.size(), N - 1);
-  std::memcpy(destination.data(), text.data(), n);
-  destination[n] = '\0';
-}
 
 void copyInto(std::array<double, 3>& destination, const Eigen::Vector3d& source) {
   for (int i = 0; i < 3; ++i) destination[static_cast<std::size_t>(i)] = source[i];

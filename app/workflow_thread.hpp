@@ -75,14 +75,16 @@ struct WorkflowRequest {
 };
 const char* toString(WorkflowRequest::Kind kind);
 
-/// A workflow event in the snapshot's ring (fixed size; longer texts are cut).
+/// A workflow event in the snapshot's ring (fixed size; longer texts are cut with "…"). The
+/// detail holds the longest warnings the workflow gives (a transition between two long area
+/// names with its first contact; a contact warning with what to do) whole.
 struct EventRecord {
   std::uint64_t sequence = 0;  ///< 1, 2, 3, ... in order of occurrence
   double time = 0.0;           ///< [s] backend time
   WorkflowEvent::Kind kind = WorkflowEvent::Kind::kStage;
   int area = -1;
   std::array<char, 48> name{};
-  std::array<char, 208> detail{};
+  std::array<char, 448> detail{};
 };
 
 inline constexpr int kEventRingSize = 64;     ///< events kept in the snapshot

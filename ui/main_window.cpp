@@ -1,5 +1,7 @@
 #include "ui/main_window.hpp"
 
+#include <set>
+
 #include <QAction>
 #include <QActionGroup>
 #include <QApplication>
@@ -484,6 +486,7 @@ void MainWindow::startLive() {
   startRecording();
   live_->start();
   last_warning_.clear();
+  standing_warning_events_.clear();
   stage_panel_->clearWarning();
   mirror();
 }
@@ -905,6 +908,38 @@ void MainWindow::setBanner(const QString& text, const QColor& colour, const QStr
   key_map_label_->move(12, std::max(0, view_->height() - key_map_label_->height() - 12));
 }
 
+void MainWindow::rememberForStandingWarnings(const LiveEvent& event) {
+  // What app::standingWarnings() reads: the warnings about an area or the map, and the events
+  // that take them back (an area removed or made anew, a new map, a pose given up).
+  using K = app::WorkflowEvent::Kind;
+  static const std::set<std::string> kAboutAreasAndMap = {"joint_limit", "small_area", "area_in_contact",
+                                                          "transition_inconsistent"};
+  const bool kept = event.kind == K::kWarning ? kAboutAreasAndMap.count(event.name) != 0
+                                              : event.kind == K::kAreaRemoved || event.kind == K::kAreaCreated ||
+                                                    event.kind == K::kModelLearned || event.kind == K::kStage ||
+                                                    event.kind == K::kButton;
+  if (!kept) return;
+  app::WorkflowEvent remembered;
+  remembered.time = event.time;
+  remembered.kind = event.kind;
+  remembered.area = event.area;
+  remembered.name = event.name;
+  remembered.detail = event.detail;
+  standing_warning_events_.push_back(std::move(remembered));
+}
+
+void MainWindow::showWarnings() {
+  // Every warning that still stands, not only the newest: a tutor who taught one area in
+  // contact and the next near a joint limit must see both, until each area is re-taught or
+  // removed. The last warning or refusal follows, until the stage changes.
+  const QString text = standingWarningText(standing_warning_events_, last_warning_);
+  if (text.isEmpty()) {
+    stage_panel_->clearWarning();
+  } else {
+    stage_panel_->showWarning(text);
+  }
+}
+
 void MainWindow::handleEvents() {
   if (!live_) return;
   for (const LiveEvent& event : live_->takeEvents()) {
@@ -926,17 +961,18 @@ void MainWindow::handleEvents() {
       ++chimes_;
     }
     if (event.kind == K::kRefused && event.name == "plan") clearGoal();  // the ball was drawn at the click
+    rememberForStandingWarnings(event);
     if (event.kind == K::kWarning || event.kind == K::kRefused) {
       last_warning_ = operatorWording(QString::fromStdString(event.detail.empty() ? event.name : event.detail));
       last_warning_refused_ = event.kind == K::kRefused;
-      stage_panel_->showWarning(last_warning_);
+      showWarnings();
       showStatusMessage(statusBar(), last_warning_, 15000);
     } else if (event.kind == K::kStage || event.kind == K::kButton) {
-      // A new stage: the old warning no longer applies to what the operator sees, in the panel
-      // or in the status bar.
+      // A new stage: the last warning no longer applies to what the operator sees, in the
+      // banner or in the status bar; the warnings about the areas and the map stand.
       if (!last_warning_.isEmpty() && fullStatusMessage(statusBar()) == last_warning_) statusBar()->clearMessage();
       last_warning_.clear();
-      stage_panel_->clearWarning();
+      showWarnings();
       // Out of EXECUTION a goal and its path are no motion any more.
       if (event.kind == K::kStage && event.name.rfind(app::toString(app::Stage::kExecution), 0) != 0) clearGoal();
       if (event.kind == K::kButton && event.name == "reteach_area") {
@@ -945,7 +981,7 @@ void MainWindow::handleEvents() {
     } else if (event.kind == K::kAreaRemoved) {
       // A warning about the area, or about the map it made, goes with it.
       last_warning_.clear();
-      stage_panel_->clearWarning();
+      showWarnings();
       showStatusMessage(statusBar(), tr("Area '%1' removed").arg(QString::fromStdString(event.detail)), 10000);
     } else if (event.kind == K::kExecution) {
       // A replay is no motion to the goal drawn; a plan accepted is, from now until it ends.
@@ -954,7 +990,7 @@ void MainWindow::handleEvents() {
       if (last_warning_refused_ && !last_warning_.isEmpty()) {
         if (fullStatusMessage(statusBar()) == last_warning_) statusBar()->clearMessage();
         last_warning_.clear();
-        stage_panel_->clearWarning();
+        showWarnings();
       }
       if (event.name == "plan") {
         goal_moving_ = goal_.has_value();

@@ -271,6 +271,9 @@ class MainWindow : public QMainWindow {
   TeleopKeys teleop_;
   bool keyboard_mode_ = false;
   QElapsedTimer key_clock_;
+  void rememberForStandingWarnings(const LiveEvent& event);
+  void showWarnings();
+  std::vector<app::WorkflowEvent> standing_warning_events_;  ///< read by app::standingWarnings()
   QString last_warning_;
   bool last_warning_refused_ = false;  ///< last_warning_ is a refused request's reason
   QElapsedTimer deadline_clock_;

@@ -26,6 +26,11 @@ namespace flexirob::ui {
 /// "plan:") becomes what the operator pressed ("Finish configuration:", "Goal:"); the rest stays.
 QString operatorWording(const QString& message);
 
+/// The Teaching panel's warning box: every warning about an area or the map that still stands
+/// (app::standingWarnings over `events`), then `last`, the newest warning or refusal, unless it
+/// is one of them; one per line, bulleted when there are several. Empty when none stands.
+QString standingWarningText(const std::vector<app::WorkflowEvent>& events, const QString& last);
+
 class StagePanel : public QWidget {
   Q_OBJECT
 

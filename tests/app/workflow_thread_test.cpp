@@ -10,6 +10,7 @@
 #include <thread>
 #include <unistd.h>
 
+#include "app/realtime.hpp"
 #include "app/session_reader.hpp"
 #include "app/session_recorder.hpp"
 #include "app/session_teaching.hpp"
@@ -94,6 +95,33 @@ class WaitingBackend final : public robot::RobotBackend {
   robot::RobotBackend& arm_;
   std::chrono::microseconds wait_;
 };
+
+// The GUI reads warnings from the snapshot's fixed buffers: a warning cut there lost its
+// advice mid-word ("re-teach the area with the arm cle").
+TEST(WorkflowThread, TextTooLongForASnapshotBufferIsCutAfterAWholeWordWithAnEllipsis) {
+  std::array<char, 24> buffer{};
+  realtime::copyText(buffer, "short text");
+  EXPECT_STREQ(buffer.data(), "short text");
+  realtime::copyText(buffer, "re-teach the area with the arm clear of it");
+  EXPECT_STREQ(buffer.data(), "re-teach the area\u2026");
+  // One word longer than the buffer: cut, but never inside a UTF-8 character.
+  realtime::copyText(buffer, "\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4");
+  EXPECT_STREQ(buffer.data(), "\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u00e4\u2026");
+  // Exactly as long as the buffer holds: whole.
+  realtime::copyText(buffer, std::string(23, 'x'));
+  EXPECT_EQ(std::string(buffer.data()), std::string(23, 'x'));
+}
+
+// The contact warning with a long area name, what a tutor may type, arrives whole.
+TEST(WorkflowThread, TheLongestAreaWarningFitsTheSnapshotsEventText) {
+  const std::string area_name(40, 'n');
+  const std::string warning = area_name + ": 1234 of 1234 samples were recorded with the arm touching something (drawn red); the map of "
+                                          "free space keeps none of them and the learned postures lead into the contact: re-teach the area "
+                                          "with the arm clear";
+  EventRecord record;
+  realtime::copyText(record.detail, warning);
+  EXPECT_EQ(std::string(record.detail.data()), warning);
+}
 
 TEST(WorkflowThread, ARobotThatPacesTheLoopIsWaitedForWithoutCountingTheWaitAsComputing) {
   Rig rig;

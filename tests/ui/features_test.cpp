@@ -419,6 +419,37 @@ class FeaturesTest : public QObject {
     QCOMPARE(operatorWording(QStringLiteral("area_2: near a joint limit")), QStringLiteral("area_2: near a joint limit"));
   }
 
+  // The warning box lists every warning that stands, not only the newest: an area taught in
+  // contact stays warned about while the next area warns of a joint limit, until it is removed.
+  void theWarningBoxListsEveryStandingWarningUntilItsAreaGoes() {
+    using Kind = flexirob::app::WorkflowEvent::Kind;
+    std::vector<flexirob::app::WorkflowEvent> events;
+    const auto add = [&](Kind kind, const std::string& name, const std::string& detail, int area) {
+      flexirob::app::WorkflowEvent event;
+      event.kind = kind;
+      event.name = name;
+      event.detail = detail;
+      event.area = area;
+      events.push_back(event);
+    };
+    add(Kind::kAreaCreated, "area_created", "area_1", 0);
+    add(Kind::kWarning, "area_in_contact", "area_1: touching", 0);
+    add(Kind::kStage, "CONFIGURATION/POSED", "", -1);
+    add(Kind::kWarning, "joint_limit", "area_2: near a limit", 1);
+    add(Kind::kAreaCreated, "area_created", "area_2", 1);
+    using flexirob::ui::standingWarningText;
+    QCOMPARE(standingWarningText(events, QString()), QStringLiteral("\u2022 area_1: touching\n\u2022 area_2: near a limit"));
+    // The newest refusal follows once; a warning that stands is not said twice.
+    QCOMPARE(standingWarningText(events, QStringLiteral("Replay: no teach-in")),
+             QStringLiteral("\u2022 area_1: touching\n\u2022 area_2: near a limit\n\u2022 Replay: no teach-in"));
+    QCOMPARE(standingWarningText(events, QStringLiteral("area_2: near a limit")),
+             QStringLiteral("\u2022 area_1: touching\n\u2022 area_2: near a limit"));
+    add(Kind::kAreaRemoved, "area_removed", "area_1", 0);
+    QCOMPARE(standingWarningText(events, QString()), QStringLiteral("area_2: near a limit"));
+    add(Kind::kAreaRemoved, "area_removed", "area_2", 0);
+    QCOMPARE(standingWarningText(events, QString()), QString());
+  }
+
   // A short chart (a 600 px screen) gets as many value ticks as its height has room for: Qt
   // Charts cut every label of a crowded axis to "...". Never fewer than two.
   void aShortChartHasFewerValueTicksSoThatTheirLabelsShow() {
