@@ -174,7 +174,11 @@ ConfidencePanel::ConfidencePanel(QWidget* parent) : QWidget(parent) {
   form->addRow(tr("Spacing"), spacing_box_);
   layout->addLayout(form);
   status_label_ = new QLabel(this);
+  status_label_->setObjectName(QStringLiteral("confidence_status"));
   status_label_->setWordWrap(true);
+  // The panel is as wide as its controls: a status that asked for its own width would widen
+  // the dock, and shift the 3D view beside it, each time the text changes while a review plays.
+  status_label_->setSizePolicy(QSizePolicy::Ignored, QSizePolicy::Preferred);
   layout->addWidget(status_label_);
   auto* legend_row = new QHBoxLayout();
   legend_row->addWidget(new ConfidenceColourBar(this));

@@ -21,6 +21,7 @@
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "ui/plot_panel.hpp"
+#include "ui/confidence_panel.hpp"
 #include "ui/review_window.hpp"
 
 using namespace flexirob;
@@ -130,6 +131,26 @@ class ReviewWindowTest : public QObject {
       if (std::abs(p.x() - 0.5) < 0.004) at_half = p.y();
     }
     QVERIFY(std::abs(at_half - expected) < 1e-3);
+  }
+
+  // Scrubbing changes the Confidence panel's status between a short and a long text: the 3D
+  // view beside it must not move sideways with it.
+  void theConfidenceStatusDoesNotResizeTheViewBesideIt() {
+    ui::ReviewWindow window;
+    window.resize(1280, 760);
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    QVERIFY2(window.open(file_), qPrintable(window.errorString()));
+    window.confidencePanel()->setStatus(QStringLiteral("No training area complete at this moment."));
+    QTest::qWait(100);
+    QWidget* view = window.centralWidget();
+    const QRect before = view->geometry();
+    window.confidencePanel()->setStatus(QStringLiteral("4 areas complete at this moment; the slices show the confidence of all of them"));
+    QTest::qWait(100);
+    QCOMPARE(view->geometry(), before);
+    window.confidencePanel()->setStatus(QStringLiteral("1"));
+    QTest::qWait(100);
+    QCOMPARE(view->geometry(), before);
   }
 
   void steppingFramesMovesTheArmToTheRecordedPosture() {
