@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 #include <system_error>
+#include <unordered_map>
 
 #include "robot/errors.hpp"
 
@@ -171,6 +172,49 @@ void fillMissingNormals(TriangleMesh& mesh) {
   }
 }
 
+// assimp joins identical vertices and smooths normals by comparing each vertex with every
+// other at its position: about the sum of k^2 over the positions k vertices share. Real meshes
+// meet a few dozen triangles at a corner (a finely divided cone's tip a few thousand), a few
+// 10^7 comparisons for millions of triangles; one face copied 200 000 times (a broken or hostile
+// export) needs 4 * 10^10, hours. Counted on the file as read, before any post-processing.
+constexpr double kMaxCornerComparisons = 2e8;
+
+void refuseStackedCorners(const aiScene& scene, const fs::path& file) {
+  struct PositionHash {
+    std::size_t operator()(const std::array<float, 3>& p) const {
+      std::size_t h = 0;
+      for (const float c : p) {
+        std::uint32_t bits = 0;
+        std::memcpy(&bits, &c, sizeof bits);
+        h = h * 1000003U ^ bits;
+      }
+      return h;
+    }
+  };
+  std::unordered_map<std::array<float, 3>, std::uint32_t, PositionHash> sharing;
+  double comparisons = 0.0;
+  std::uint32_t most = 0;
+  std::array<float, 3> most_at{};
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh& mesh = *scene.mMeshes[m];
+    for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+      // +0.0f: -0 and 0 are one position.
+      const std::array<float, 3> p{mesh.mVertices[v].x + 0.0F, mesh.mVertices[v].y + 0.0F, mesh.mVertices[v].z + 0.0F};
+      const std::uint32_t k = ++sharing[p];
+      comparisons += 2.0 * k - 1.0;  // k^2 - (k - 1)^2
+      if (k > most) {
+        most = k;
+        most_at = p;
+      }
+    }
+  }
+  if (comparisons <= kMaxCornerComparisons) return;
+  std::ostringstream message;
+  message << "mesh '" << file.string() << "' has " << most << " corners at the one point (" << most_at[0] << ", " << most_at[1]
+          << ", " << most_at[2] << "): copies of the same faces, which would take hours to join; export it without them";
+  throw InputError(message.str());
+}
+
 }  // namespace
 
 TriangleMesh loadMesh(const fs::path& file, const MeshLimits& limits) {
@@ -198,7 +242,12 @@ TriangleMesh loadMesh(const fs::path& file, const MeshLimits& limits) {
   unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
                    aiProcess_SortByPType | aiProcess_FindDegenerates | aiProcess_FindInvalidData;
   if (ext == ".stl") flags |= aiProcess_ForceGenNormals;
-  const aiScene* scene = importer.ReadFile(file.string(), flags);
+  const aiScene* scene = importer.ReadFile(file.string(), 0);
+  if (scene == nullptr) {
+    throw InputError("cannot load mesh '" + file.string() + "': " + oneLine(importer.GetErrorString()));
+  }
+  refuseStackedCorners(*scene, file);
+  scene = importer.ApplyPostProcessing(flags);
   if (scene == nullptr) {
     throw InputError("cannot load mesh '" + file.string() + "': " + oneLine(importer.GetErrorString()));
   }

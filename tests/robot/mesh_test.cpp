@@ -341,6 +341,31 @@ TEST(MeshLoader, RefusesHeadersThatDeclareAbsurdCountsWithoutAllocating) {
   fs::remove_all(dir);
 }
 
+// One triangle copied 30 000 times: assimp's joining of identical vertices compares every
+// copy with every other (minutes for 10^5 copies, hours for 10^6); refused at once, by name.
+TEST(MeshLoader, RefusesAFileOfOneFaceCopiedOverAndOverWithoutJoiningIt) {
+  const fs::path dir = scratchDir();
+  {
+    std::ofstream stl(dir / "copies.stl", std::ios::binary);
+    stl << std::string(80, '\0');
+    const std::uint32_t count = 30000;
+    stl.write(reinterpret_cast<const char*>(&count), 4);
+    const float facet[12] = {0, 0, 1, 0, 0, 0, 0.01F, 0, 0, 0, 0.01F, 0};
+    for (std::uint32_t t = 0; t < count; ++t) {
+      stl.write(reinterpret_cast<const char*>(facet), sizeof facet);
+      stl.write("\0\0", 2);
+    }
+  }
+  expectOneLineInputError([&] { loadMesh(dir / "copies.stl"); }, "has 30000 corners at the one point (0, 0, 0)");
+  // A face written twice stays a mesh (SCENES.md: it counts once).
+  {
+    std::ofstream obj(dir / "twice.obj");
+    obj << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\nf 3 1 4\n";
+  }
+  EXPECT_EQ(loadMesh(dir / "twice.obj").triangleCount(), 5U);
+  fs::remove_all(dir);
+}
+
 TEST(MeshLoader, CachesByPathUntilTheFileChanges) {
   clearMeshCache();
   const fs::path dir = scratchDir();
