@@ -54,17 +54,10 @@ std::string exactNumber(double value) {
   return text;
 }
 
-// The `learn fit` options that learn the session's model again from the exported samples, byte
-// for byte, or null with the reason why none do.
-void describeRefit(const std::vector<std::uint8_t>& model_bytes, Json& entry) {
+// The `learn fit` options that learn the session's model (read from the session) again from
+// the exported samples, byte for byte, or null with the reason why none do.
+void describeRefit(const std::unique_ptr<learning::Learner>& learner, Json& entry) {
   entry["learn_fit_arguments"] = nullptr;
-  std::unique_ptr<learning::Learner> learner;
-  try {
-    learner = learning::readLearner(learning::ModelReader(bytesText(model_bytes), "the session's model"));
-  } catch (const learning::ModelFileError& error) {
-    entry["learn_fit_note"] = std::string("the recorded model does not read: ") + error.what();
-    return;
-  }
   if (const auto* elm = dynamic_cast<const learning::Elm*>(learner.get())) {
     const learning::ElmParams& p = elm->params();
     const learning::ElmParams defaults;
@@ -212,8 +205,15 @@ Json exportSession(const ExportOptions& options) {
     const std::vector<app::ModelRecord> models = reader.models();
     if (models.empty()) throw InputError("--model: the session recorded no learned model (learning runs after finished_configuration)");
     const app::ModelRecord& last = models.back();
+    // Read as learn predict will read it: a damaged model is not handed on (as --graph).
+    std::unique_ptr<learning::Learner> learner;
+    try {
+      learner = learning::readLearner(learning::ModelReader(bytesText(last.bytes), options.session + " (learned model)"));
+    } catch (const learning::ModelFileError& error) {
+      throw InputError(std::string("--model: the session's last model does not read: ") + error.what());
+    }
     result["model"] = {{"file", options.model}, {"learner", last.learner_kind}, {"samples", last.samples}, {"time_s", last.time}};
-    describeRefit(last.bytes, result["model"]);
+    describeRefit(learner, result["model"]);
     files.push_back({"--model", options.model, bytesText(last.bytes)});
   }
 

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "app/session_recorder.hpp"
+#include "app/session_schema.hpp"
 #include "app/table_text.hpp"
 #include "cli_test_support.hpp"
 #include "robot/kinematics.hpp"
@@ -208,6 +209,24 @@ TEST_F(ExportCli, BadRequestsAreRefusedWithOneLineAndWriteNothing) {
   // The null device is the one file that takes several outputs: nothing is kept of any.
   const auto discarded = runCliBinary("export --session " + session_->string() + " --samples /dev/null --stream /dev/null");
   EXPECT_EQ(discarded.exit_code, 0) << discarded.err;
+}
+
+// A model damaged in the file is not handed on as one learn predict would refuse, as a damaged
+// ITM snapshot is not: refused with the reason, and nothing written.
+TEST_F(ExportCli, ADamagedModelIsRefusedAndNotWritten) {
+  const fs::path damaged = scratchDir() / "damaged-model.flexirob";
+  const fs::path out = scratchDir() / "damaged.model";
+  fs::copy_file(*session_, damaged, fs::copy_options::overwrite_existing);
+  {
+    app::SqliteDatabase db(damaged.string(), 0x00000002);  // SQLITE_OPEN_READWRITE
+    db.exec("UPDATE model SET bytes = x'00ff00ff'");
+  }
+  const auto result = runCliBinary("export --session " + damaged.string() + " --model " + out.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("--model: the session's last model does not read"), std::string::npos) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_FALSE(fs::exists(out));
+  fs::remove(damaged);
 }
 
 // Outputs are written through temporaries renamed into place; an output that happens to be
