@@ -195,6 +195,12 @@ Session loadSession(const std::string& file) {
     session.scene_data = loadSessionScene(session.scene, json.value("scene_text", ""));
     robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
     const int n = session.model->dof();
+    // teach writes the robot's joint count; one edited to another count or type says the file
+    // was changed by hand, and whose postures then fit is not to be guessed.
+    if (json.contains("dof") && (!json.at("dof").is_number_integer() || json.at("dof").get<long long>() != n)) {
+      throw InputError("session: dof is " + json.at("dof").dump() + ", but the robot '" + session.robot + "' has " + std::to_string(n) +
+                       " joints");
+    }
     std::vector<Eigen::VectorXd> xs, qs;
     int k = 0;
     for (const Json& area : json.at("areas")) {

@@ -585,7 +585,14 @@ TEST(EvalCli, RefusesAHandEditedSessionWhosePosturesLieOutsideTheJointLimitsOrWh
   far_tip["areas"][1]["x"][7] = {5.0, 5.0, 5.0};
   nlohmann::json future = session;
   future["version"] = 99;
+  // A joint count edited to another robot's, or to a word.
+  nlohmann::json nine_joints = session;
+  nine_joints["dof"] = 9;
+  nlohmann::json dof_word = session;
+  dof_word["dof"] = "seven";
   const std::vector<std::pair<nlohmann::json, std::string>> broken = {
+      {nine_joints, "session: dof is 9, but the robot 'lwr4' has 7 joints"},
+      {dof_word, "session: dof is \"seven\", but the robot 'lwr4' has 7 joints"},
       {q_fixed, "q_fixed of area 2: joint 1 (A1) at 10 lies outside its limits"},
       {sample, "training sample 6: joint 4"},
       {node, "ITM node 2: joint 7"},
