@@ -1376,6 +1376,17 @@ void MainWindow::buildMenus() {
                                 "Ctrl+click in EXECUTION: set a goal, plan and execute"),
                              15000);
   });
+  // A menu closed with Escape leaves the menu bar holding the keys: Space and Enter then opened
+  // the File menu and ran its first entry instead of touching the arm. The keys go back to the
+  // view once no menu is open (not while the arrow keys move from one menu to the next).
+  for (QAction* entry : menuBar()->actions()) {
+    if (entry->menu() == nullptr) continue;
+    connect(entry->menu(), &QMenu::aboutToHide, this, [this] {
+      QTimer::singleShot(0, this, [this] {
+        if (QApplication::activePopupWidget() == nullptr && menuBar()->hasFocus()) view_->setFocus();
+      });
+    });
+  }
 }
 
 // --- Plots, confidence slices, goals, recordings -------------------------------------------

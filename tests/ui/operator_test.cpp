@@ -16,6 +16,8 @@
 #include <QStatusBar>
 #include <QTemporaryDir>
 #include <QTest>
+#include <QMenu>
+#include <QMenuBar>
 #include <QTimer>
 #include <chrono>
 #include <thread>
@@ -306,6 +308,29 @@ class OperatorTest : public QObject {
     // So does the button.
     QTest::mouseClick(panel->replayButton(), Qt::LeftButton);
     replayed();
+  }
+
+  // File opened and closed with Escape: the menu bar kept the keys, and Space opened File
+  // again instead of touching the arm.
+  void aMenuClosedWithEscapeGivesTheKeysBackToTheArm() {
+    MainWindow window("lwr4", "empty", quietOptions());
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    waitRunning(window);
+    window.activateWindow();
+    QVERIFY(QTest::qWaitForWindowActive(&window));
+    QAction* file_entry = window.menuBar()->actions().front();
+    QMenu* file = file_entry->menu();
+    QVERIFY(file != nullptr);
+    QTest::mouseClick(window.menuBar(), Qt::LeftButton, {}, window.menuBar()->actionGeometry(file_entry).center());
+    QTRY_VERIFY(file->isVisible());
+    QTest::keyClick(file, Qt::Key_Escape);
+    QTRY_VERIFY(!file->isVisible());
+    QTest::qWait(100);
+    QVERIFY(!window.menuBar()->hasFocus());
+    QTest::keyClick(QApplication::focusWidget() != nullptr ? QApplication::focusWidget() : static_cast<QWidget*>(&window), Qt::Key_Space);
+    QTest::qWait(200);
+    QVERIFY(!file->isVisible());
   }
 
   void aRefusedRequestIsShownAsAWarning() {
