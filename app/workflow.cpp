@@ -411,7 +411,8 @@ RequestResult Workflow::replayTeachIn(int k) {
   waypoints.reserve(static_cast<std::size_t>(trajectory.cols()));
   for (Eigen::Index i = 0; i < trajectory.cols(); ++i) waypoints.emplace_back(trajectory.col(i));
   const RequestResult result = execute(waypoints);
-  if (result) emit(WorkflowEvent::Kind::kExecution, "replay", "teach-in " + std::to_string(k), k);
+  // Named as the window's chooser and the session's trajectories name it: 1 is the first.
+  if (result) emit(WorkflowEvent::Kind::kExecution, "replay", "teach-in " + std::to_string(k + 1), k);
   return result;
 }
 
@@ -587,7 +588,7 @@ void Workflow::finishTeachIn() {
   teach_ins_.emplace_back(recording_X_.leftCols(recording_samples_));
   ++teach_ins_version_;
   std::ostringstream detail;
-  detail << "teach-in " << teach_ins_.size() - 1 << ": " << recording_samples_ << " samples";
+  detail << "teach-in " << teach_ins_.size() << ": " << recording_samples_ << " samples";
   const int index = static_cast<int>(teach_ins_.size()) - 1;
   emit(WorkflowEvent::Kind::kTeachIn, "teach_in", detail.str(), index);
   // A teach-in recorded without moving the tip (keys that only turned the wrist, a hand that
@@ -596,7 +597,7 @@ void Workflow::finishTeachIn() {
   const double extent = (path.colwise() - path.col(0)).colwise().norm().maxCoeff();
   if (extent < kSmallestAreaExtent * arm_scale_.length) {
     std::ostringstream warning;
-    warning << std::fixed << std::setprecision(1) << "teach-in " << index << ": the tip moved at most " << extent * 1e3
+    warning << std::fixed << std::setprecision(1) << "teach-in " << index + 1 << ": the tip moved at most " << extent * 1e3
             << " mm, so replaying it moves nothing; guide the tip along the path while TEACH-IN records, or teach it again";
     emit(WorkflowEvent::Kind::kWarning, "small_teach_in", warning.str(), index);
   }

@@ -985,7 +985,13 @@ void MainWindow::handleEvents() {
       showStatusMessage(statusBar(), tr("Area '%1' removed").arg(QString::fromStdString(event.detail)), 10000);
     } else if (event.kind == K::kExecution) {
       // A replay is no motion to the goal drawn; a plan accepted is, from now until it ends.
-      if (event.name == "replay") clearGoal();
+      if (event.name == "replay") {
+        clearGoal();
+        replay_moving_ = true;
+        replay_time_ = event.time;
+        replay_name_ = QString::fromStdString(event.detail);
+        showStatusMessage(statusBar(), tr("Replaying %1: to its start, then along it").arg(replay_name_), 15000);
+      }
       // A request refused before this accepted one no longer describes what the arm does.
       if (last_warning_refused_ && !last_warning_.isEmpty()) {
         if (fullStatusMessage(statusBar()) == last_warning_) statusBar()->clearMessage();
@@ -993,6 +999,7 @@ void MainWindow::handleEvents() {
         showWarnings();
       }
       if (event.name == "plan") {
+        replay_moving_ = false;
         goal_moving_ = goal_.has_value();
         goal_plan_time_ = event.time;
       }
@@ -1526,6 +1533,15 @@ void MainWindow::clearGoal() {
 }
 
 void MainWindow::updateGoalAndPath(const LiveSnapshot& s) {
+  // A replay ends as a motion to a goal does: said, so that the operator knows the arm is free.
+  if (replay_moving_ && (s.stage != app::Stage::kExecution || (s.execution_done && s.time > replay_time_))) {
+    double fastest = 0.0;
+    for (int j = 0; j < s.dof; ++j) fastest = std::max(fastest, std::abs(s.qd[static_cast<std::size_t>(j)]));
+    if (s.stage != app::Stage::kExecution || fastest < 0.01) {
+      replay_moving_ = false;
+      if (s.stage == app::Stage::kExecution) showStatusMessage(statusBar(), tr("Replay of %1 done").arg(replay_name_), 10000);
+    }
+  }
   // The motion to a goal ends: say where the tip came to rest against it (the path is done when
   // its target arrives; the arm follows a moment later).
   if (goal_ && s.stage == app::Stage::kExecution) {

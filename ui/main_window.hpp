@@ -274,6 +274,9 @@ class MainWindow : public QMainWindow {
   void rememberForStandingWarnings(const LiveEvent& event);
   void showWarnings();
   std::vector<app::WorkflowEvent> standing_warning_events_;  ///< read by app::standingWarnings()
+  bool replay_moving_ = false;  ///< a replay accepted and not yet ended
+  double replay_time_ = 0.0;     ///< [s] robot time it was accepted at
+  QString replay_name_;          ///< "teach-in k", as the workflow names it
   QString last_warning_;
   bool last_warning_refused_ = false;  ///< last_warning_ is a refused request's reason
   QElapsedTimer deadline_clock_;

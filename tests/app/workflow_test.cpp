@@ -442,7 +442,7 @@ TEST(Workflow, ATeachInThatDidNotMoveTheTipIsKeptWithAWarning) {
   teachIn(0.0);
   ASSERT_EQ(workflow.teachIns().size(), 1U);
   ASSERT_EQ(smallTeachInWarnings().size(), 1U);
-  EXPECT_NE(smallTeachInWarnings()[0].find("teach-in 0: the tip moved at most 0.0 mm"), std::string::npos) << smallTeachInWarnings()[0];
+  EXPECT_NE(smallTeachInWarnings()[0].find("teach-in 1: the tip moved at most 0.0 mm"), std::string::npos) << smallTeachInWarnings()[0];
   teachIn(0.3);  // joint 1 turned by 0.3 rad: the tip sweeps centimetres
   ASSERT_EQ(workflow.teachIns().size(), 2U);
   EXPECT_EQ(smallTeachInWarnings().size(), 1U);

@@ -292,6 +292,8 @@ class OperatorTest : public QObject {
     // closest it comes to the start is watched all along (it turns there in a moment).
     const auto replayed = [&window, &s, &start, &end] {
       QTRY_VERIFY_WITH_TIMEOUT(!s.execution_done, 5000);
+      // Said while it moves, and when it ends: a replay that looks like nothing happening is not.
+      QTRY_VERIFY(flexirob::ui::fullStatusMessage(window.statusBar()).startsWith(QStringLiteral("Replaying teach-in 1")));
       double closest = (tip(window) - start).norm();
       QElapsedTimer clock;
       clock.start();
@@ -301,6 +303,7 @@ class OperatorTest : public QObject {
       }
       QVERIFY2(closest < 0.02, qPrintable(QStringLiteral("the tip came within %1 m of the start").arg(closest)));
       QVERIFY(s.execution_done && (tip(window) - end).norm() < 0.01);
+      QTRY_VERIFY_WITH_TIMEOUT(flexirob::ui::fullStatusMessage(window.statusBar()) == QStringLiteral("Replay of teach-in 1 done"), 10000);
     };
     QTest::keyClick(&window, Qt::Key_F9);
     replayed();
