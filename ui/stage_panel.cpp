@@ -199,6 +199,12 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
     case Stage::kConfiguration:
       switch (s.sub_stage) {
         case SubStage::kApproaching:
+          // Said while the operator can still act: once posed, the area would be recorded in
+          // the contact and warned about only when stored.
+          if (s.contacts > 0) {
+            return s.keyboard_mode ? tr("The arm touches something (drawn red): move it clear with the keys before you fix the posture.")
+                                   : tr("The arm touches something (drawn red): move it clear before you let go and fix the posture.");
+          }
           if (s.keyboard_mode) return tr("Move the arm with the keys to the posture wanted here, then press Enter (or leave the keys for 2 s).");
           return tr("Move the arm to the posture wanted here, then let go and keep still for 2 s (or press Enter).");
         case SubStage::kPosed:
@@ -262,7 +268,7 @@ const QStringList& everyHint() {
     for (const app::Stage stage : {app::Stage::kIdle, app::Stage::kConfiguration, app::Stage::kProgramming, app::Stage::kExecution}) {
       for (const app::SubStage sub : {app::SubStage::kNone, app::SubStage::kWaiting, app::SubStage::kApproaching, app::SubStage::kPosed,
                                       app::SubStage::kRecording, app::SubStage::kTeachIn}) {
-        for (const int flags : {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15}) {
+        for (int flags = 0; flags < 32; ++flags) {
           for (const int areas : {0, 1, 12}) {
             s.stage = stage;
             s.sub_stage = sub;
@@ -270,6 +276,7 @@ const QStringList& everyHint() {
             s.learning = (flags & 2) != 0;
             s.model_ready = (flags & 4) != 0;
             s.execution_done = (flags & 8) != 0;
+            s.contacts = (flags & 16) != 0 ? 1 : 0;
             s.areas = areas;
             s.teach_ins = areas > 0 ? 1 : 0;
             for (const bool hand_can_pull : {false, true}) {

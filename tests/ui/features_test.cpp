@@ -419,6 +419,20 @@ class FeaturesTest : public QObject {
     QCOMPARE(operatorWording(QStringLiteral("area_2: near a joint limit")), QStringLiteral("area_2: near a joint limit"));
   }
 
+  // Links red while the arm is led to an area's posture: said then, while the operator can
+  // still move it clear, not only once the area is stored in the contact.
+  void theHintSaysToMoveClearWhileTheArmTouchesSomethingOnItsWayToAPosture() {
+    flexirob::ui::LiveSnapshot s;
+    s.stage = flexirob::app::Stage::kConfiguration;
+    s.sub_stage = flexirob::app::SubStage::kApproaching;
+    s.contacts = 0;
+    QVERIFY(!flexirob::ui::StagePanel::nextStepHint(s, true).contains(QStringLiteral("touches something")));
+    s.contacts = 2;
+    QVERIFY(flexirob::ui::StagePanel::nextStepHint(s, true).startsWith(QStringLiteral("The arm touches something (drawn red): move it clear")));
+    s.keyboard_mode = true;
+    QVERIFY(flexirob::ui::StagePanel::nextStepHint(s, true).contains(QStringLiteral("with the keys")));
+  }
+
   // The warning box lists every warning that stands, not only the newest: an area taught in
   // contact stays warned about while the next area warns of a joint limit, until it is removed.
   void theWarningBoxListsEveryStandingWarningUntilItsAreaGoes() {
