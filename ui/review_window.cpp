@@ -665,6 +665,12 @@ void ReviewWindow::stepFrames(int frames) {
 }
 
 void ReviewWindow::keyPressEvent(QKeyEvent* event) {
+  // The window has no menu to close it from: the platform's close key does (Ctrl+W).
+  if (event->matches(QKeySequence::Close)) {
+    event->accept();
+    close();
+    return;
+  }
   if (!reader_) {
     QMainWindow::keyPressEvent(event);
     return;

@@ -101,7 +101,8 @@ QString TeleopKeys::keyMapText(int dof) {
              "<b>joints 1&ndash;%1</b> (null space): %2 turn +, %3 turn &minus;<br>"
              "<b>triggers</b>: Space on_affected &nbsp; Enter on_converged<br>"
              "<b>buttons</b>: F5 start conf. &nbsp; F6 finish conf. &nbsp; F7 start prog. &nbsp; F8 finish prog. &nbsp; F9 replay<br>"
-             "<b>mouse</b>: left-drag a link to pull it; left-drag elsewhere orbits<br>"
+             "<b>mouse</b>: left-drag a link pulls it, elsewhere orbits; Ctrl+click a goal<br>"
+             "<b>view</b>: Home resets the camera &nbsp; Ctrl+O opens a recording<br>"
              "F1 / H: hide this map")
       .arg(shown)
       .arg(plus, minus);

@@ -698,6 +698,9 @@ class OperatorTest : public QObject {
     QCOMPARE(TeleopKeys::actionOf(Qt::Key_F7)->button, Button::kStartProgramming);
     QVERIFY(TeleopKeys::actionOf(Qt::Key_F9)->kind == TeleopAction::Kind::kReplay);
     QVERIFY(TeleopKeys::keyMapText(7).contains(QStringLiteral("F9 replay")));
+    // The mouse and view keys the guide lists are on the map too.
+    QVERIFY(TeleopKeys::keyMapText(7).contains(QStringLiteral("Ctrl+click a goal")));
+    QVERIFY(TeleopKeys::keyMapText(7).contains(QStringLiteral("Home resets the camera")));
     QVERIFY(!TeleopKeys::actionOf(Qt::Key_Z).has_value());
     QVERIFY(keys.release(Qt::Key_Right));
     QCOMPARE(keys.taskVelocity().x(), 0.0);

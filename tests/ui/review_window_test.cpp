@@ -133,6 +133,16 @@ class ReviewWindowTest : public QObject {
     QVERIFY(std::abs(at_half - expected) < 1e-3);
   }
 
+  // The review window has no menu: Ctrl+W closes it, as the platform's close key.
+  void theCloseKeyClosesTheWindow() {
+    ui::ReviewWindow window;
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    QVERIFY2(window.open(file_), qPrintable(window.errorString()));
+    QTest::keyClick(&window, Qt::Key_W, Qt::ControlModifier);
+    QTRY_VERIFY(!window.isVisible());
+  }
+
   // Scrubbing changes the Confidence panel's status between a short and a long text: the 3D
   // view beside it must not move sideways with it.
   void theConfidenceStatusDoesNotResizeTheViewBesideIt() {
