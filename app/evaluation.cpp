@@ -687,7 +687,7 @@ SceneModelResult evaluateSceneModel(const robot::RobotModel& model, const robot:
         }
       }
     }
-    const bool inside = robot::obstacleAt(scene, x) != nullptr;
+    const bool inside = robot::obstacleAt(scene, x, kOnObstacleFace) != nullptr;  // as T counts them
     if (inside) ++result.obstacle_points;
     if (near) continue;
     result.model.push_back(x);

@@ -620,6 +620,8 @@ TEST(Evaluation, AGridPointOnAnObstaclesFaceIsNoTarget) {
     EXPECT_GT(outside.norm(), 1e-6) << p.transpose();
   }
   EXPECT_EQ(result.in_obstacles, 3);  // x = -0.5 and -0.3 on the faces, -0.4 inside
+  // The implicit scene model (Eq. 4.1) counts the obstacle's points as T does.
+  EXPECT_EQ(evaluateSceneModel(lwr4(), scene, grid, {}).obstacle_points, 3);
 }
 
 // IK with the hierarchical controller (Eq. 2.11) from q0 with q0 as null-space target: an
