@@ -454,7 +454,7 @@ namespace {
 // (Sect. 3.3.2: T_I, T_II), never to the session evaluated, so the learned map plays no part and
 // the search is made thorough enough not to depend on the order or the random draws: each point
 // starts at the posture found for its nearest grid neighbour already accessible, then at the scene's home
-// posture and 24 seeded random postures; then, until nothing changes, every point still without
+// posture and 23 seeded random postures; then, until nothing changes, every point still without
 // one starts at the postures found for its grid neighbours (a neighbour's posture is a small
 // step from one for the point, where a random start may fall in another redundancy family).
 std::vector<bool> accessibleGridPoints(const robot::RobotModel& model, const robot::ParameterSet& parameters,

@@ -154,7 +154,7 @@ struct ReachableResult {
   int out_of_reach = 0;  ///< farther from the shoulder than the arm reaches
   int in_obstacles = 0;  ///< within reach, inside an obstacle
   int targets = 0;       ///< |T|: grid points within reach, outside the obstacles and excluded boxes, and accessible
-  int inaccessible = 0;  ///< within reach and outside the obstacles, but neither the IK search nor the learned map found a collision-free posture there
+  int inaccessible = 0;  ///< within reach and outside the obstacles, but the IK search found no collision-free posture putting the tip there within the tolerance
   int excluded = 0;      ///< within reach and outside the obstacles, but in a box the grid excludes
   int reached = 0;       ///< reached within the tolerance without collision
   int collided = 0;      ///< not reached: a contact on the way (the others not reached ended farther than the tolerance)

@@ -403,15 +403,16 @@ RequestResult Workflow::execute(const std::vector<Eigen::Vector3d>& waypoints) {
 RequestResult Workflow::replayTeachIn(int k) {
   if (stage_ != Stage::kExecution) return refuse("replay", std::string("replay: not in EXECUTION but ") + stateName());
   if (k < 0 || k >= static_cast<int>(teach_ins_.size())) {
-    return refuse("replay", "replay: expected a teach-in index in [0, " + std::to_string(teach_ins_.size()) + "), got " +
-                                std::to_string(k));
+    return refuse("replay", "replay: no teach-in " + std::to_string(k + 1) + "; " + std::to_string(teach_ins_.size()) +
+                                (teach_ins_.size() == 1 ? " was" : " were") + " recorded");
   }
   const Eigen::MatrixXd& trajectory = teach_ins_[static_cast<std::size_t>(k)];
   std::vector<Eigen::Vector3d> waypoints;
   waypoints.reserve(static_cast<std::size_t>(trajectory.cols()));
   for (Eigen::Index i = 0; i < trajectory.cols(); ++i) waypoints.emplace_back(trajectory.col(i));
   const RequestResult result = execute(waypoints);
-  // Named as the window's chooser and the session's trajectories name it: 1 is the first.
+  // Named for a person as the window's chooser names it, 1 the first (the event's index and
+  // the session's trajectory names, teach_in_<k>, count from 0).
   if (result) emit(WorkflowEvent::Kind::kExecution, "replay", "teach-in " + std::to_string(k + 1), k);
   return result;
 }
@@ -537,8 +538,9 @@ void Workflow::onTrigger(Trigger trigger) {
     case SubStage::kTeachIn: {
       if (affected) return;
       emit(WorkflowEvent::Kind::kTrigger, toString(trigger), from);
-      finishTeachIn();
+      const int stored = finishTeachIn();
       setState(stage_, SubStage::kWaiting);
+      warnAboutTheTeachIn(stored);  // after the stage's event, as the areas' warnings
       break;
     }
     case SubStage::kNone: break;
@@ -580,27 +582,31 @@ void Workflow::checkJointLimits(const Eigen::VectorXd& q_fixed, int area) {
   }
 }
 
-void Workflow::finishTeachIn() {
-  if (recording_samples_ == 0) {
-    emit(WorkflowEvent::Kind::kWarning, "empty_teach_in", "the teach-in held no sample; nothing kept");
-    return;
-  }
+int Workflow::finishTeachIn() {
+  if (recording_samples_ == 0) return -1;
   teach_ins_.emplace_back(recording_X_.leftCols(recording_samples_));
   ++teach_ins_version_;
   std::ostringstream detail;
   detail << "teach-in " << teach_ins_.size() << ": " << recording_samples_ << " samples";
   const int index = static_cast<int>(teach_ins_.size()) - 1;
   emit(WorkflowEvent::Kind::kTeachIn, "teach_in", detail.str(), index);
+  return index;
+}
+
+void Workflow::warnAboutTheTeachIn(int index) {
+  if (index < 0) {
+    emit(WorkflowEvent::Kind::kWarning, "empty_teach_in", "the teach-in held no sample; nothing kept");
+    return;
+  }
   // A teach-in recorded without moving the tip (keys that only turned the wrist, a hand that
   // let go at once) replays as standing still: kept, as a person may mean it, but said.
-  const Eigen::MatrixXd path = teach_ins_.back().topRows(3);
+  const auto path = teach_ins_[static_cast<std::size_t>(index)].topRows<3>();
   const double extent = (path.colwise() - path.col(0)).colwise().norm().maxCoeff();
-  if (extent < kSmallestAreaExtent * arm_scale_.length) {
-    std::ostringstream warning;
-    warning << std::fixed << std::setprecision(1) << "teach-in " << index + 1 << ": the tip moved at most " << extent * 1e3
-            << " mm, so replaying it moves nothing; guide the tip along the path while TEACH-IN records, or teach it again";
-    emit(WorkflowEvent::Kind::kWarning, "small_teach_in", warning.str(), index);
-  }
+  if (extent >= kSmallestAreaExtent * arm_scale_.length) return;
+  std::ostringstream warning;
+  warning << std::fixed << std::setprecision(1) << "teach-in " << index + 1 << ": the tip moved at most " << extent * 1e3
+          << " mm, so replaying it moves nothing; guide the tip along the path while TEACH-IN records, or teach it again";
+  emit(WorkflowEvent::Kind::kWarning, "small_teach_in", warning.str(), index);
 }
 
 int Workflow::finishArea() {
@@ -803,7 +809,7 @@ void Workflow::collectLearning() {
   }
 }
 
-std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& events) {
+std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& events, bool with_the_pose_in_hand) {
   // Each warning with the index its area has now. A joint-limit warning is said when a recording
   // starts and stands once the recording has made its area: a recording that makes none takes it
   // back, a re-taught area's replaces the old posture's, and a removal takes the removed area's
@@ -842,6 +848,9 @@ std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& even
       if (event.name == "empty_recording") this_recordings_limits.clear();
       standing.emplace_back(&event, event.area);
     }
+  }
+  if (with_the_pose_in_hand) {
+    for (const WorkflowEvent* limit : this_recordings_limits) standing.emplace_back(limit, limit->area);
   }
   std::vector<std::string> lines;
   for (const auto& [event, area] : standing) {

@@ -92,8 +92,10 @@ const char* toString(WorkflowEvent::Kind kind);
 /// every refit checks the transitions again (OS-ELM refits after each area), and only the last
 /// map's transition warnings stand, as Workflow::transitionChecks() holds only its checks; a
 /// joint-limit warning stands once its recording made an area, until the area is re-taught or
-/// removed.
-std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& events);
+/// removed. `with_the_pose_in_hand`: also the joint-limit warnings of the pose being recorded
+/// now, which stand once its area is made (the window shows them meanwhile; a finished run
+/// lists only what stands).
+std::vector<std::string> standingWarnings(const std::vector<WorkflowEvent>& events, bool with_the_pose_in_hand = false);
 
 /// A training area D^(k) (Sect. 3.1): the samples recorded in one RECORDING.
 struct TrainingArea {
@@ -307,7 +309,8 @@ class Workflow {
   std::string freshAreaName() const;  ///< area_N with the lowest N from the area count on that no area bears
   void warnIfTheAreaIsSmall(int index);
   void warnIfTheAreaWasTaughtInContact(int index, Eigen::Index contacts);
-  void finishTeachIn();
+  int finishTeachIn();  ///< the teach-in stored, or -1 for one without a sample
+  void warnAboutTheTeachIn(int index);
   void checkJointLimits(const Eigen::VectorXd& q_fixed, int area);
   void startLearning();
   void collectLearning();

@@ -172,8 +172,9 @@ void fillMissingNormals(TriangleMesh& mesh) {
   }
 }
 
-// assimp joins identical vertices and smooths normals by comparing each vertex with every
-// other at its position: about the sum of k^2 over the positions k vertices share. Real meshes
+// assimp joins identical vertices and smooths normals mesh by mesh, comparing each vertex with
+// every other of its mesh at its position: about the sum of k^2 over the positions k vertices
+// of one mesh share. Real meshes
 // meet a few dozen triangles at a corner (a finely divided cone's tip a few thousand), a few
 // 10^7 comparisons for millions of triangles; one face copied 200 000 times (a broken or hostile
 // export) needs 4 * 10^10, hours. Counted on the file as read, before any post-processing.
@@ -197,6 +198,7 @@ void refuseStackedCorners(const aiScene& scene, const fs::path& file) {
   std::array<float, 3> most_at{};
   for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
     const aiMesh& mesh = *scene.mMeshes[m];
+    sharing.clear();
     for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
       // +0.0f: -0 and 0 are one position.
       const std::array<float, 3> p{mesh.mVertices[v].x + 0.0F, mesh.mVertices[v].y + 0.0F, mesh.mVertices[v].z + 0.0F};
@@ -249,7 +251,9 @@ TriangleMesh loadMesh(const fs::path& file, const MeshLimits& limits) {
   refuseStackedCorners(*scene, file);
   scene = importer.ApplyPostProcessing(flags);
   if (scene == nullptr) {
-    throw InputError("cannot load mesh '" + file.string() + "': " + oneLine(importer.GetErrorString()));
+    // A failing step leaves no error string behind (assimp swallows what it threw).
+    const std::string reason = oneLine(importer.GetErrorString());
+    throw InputError("cannot load mesh '" + file.string() + "': " + (reason.empty() ? "its triangles could not be prepared" : reason));
   }
   if (scene->mRootNode == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) {
     throw InputError("cannot load mesh '" + file.string() + "': incomplete scene");

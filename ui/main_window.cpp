@@ -1005,6 +1005,7 @@ void MainWindow::handleEvents() {
       }
     } else if (event.kind == K::kCheck || event.kind == K::kModelLearned || event.kind == K::kAreaCreated) {
       showStatusMessage(statusBar(), QString::fromStdString(event.detail.empty() ? event.name : event.detail), 10000);
+      showWarnings();  // a re-taught area's warnings go, a new map's checks replace the old ones
     }
   }
 }
@@ -1384,13 +1385,20 @@ void MainWindow::buildMenus() {
                              15000);
   });
   // A menu closed with Escape leaves the menu bar holding the keys: Space and Enter then opened
-  // the File menu and ran its first entry instead of touching the arm. The keys go back to the
-  // view once no menu is open (not while the arrow keys move from one menu to the next).
+  // the File menu and ran its first entry instead of touching the arm. The keys go back where
+  // they were before the menu opened (the view if nowhere), once no menu is open (not while the
+  // arrow keys move from one menu to the next).
   for (QAction* entry : menuBar()->actions()) {
     if (entry->menu() == nullptr) continue;
+    connect(entry->menu(), &QMenu::aboutToShow, this, [this] {
+      QWidget* focus = QApplication::focusWidget();
+      if (focus != nullptr && focus != menuBar() && qobject_cast<QMenu*>(focus) == nullptr) focus_before_menu_ = focus;
+    });
     connect(entry->menu(), &QMenu::aboutToHide, this, [this] {
       QTimer::singleShot(0, this, [this] {
-        if (QApplication::activePopupWidget() == nullptr && menuBar()->hasFocus()) view_->setFocus();
+        if (QApplication::activePopupWidget() != nullptr || !menuBar()->hasFocus()) return;
+        QWidget* back = focus_before_menu_ ? focus_before_menu_.data() : view_;
+        back->setFocus(Qt::OtherFocusReason);
       });
     });
   }

@@ -274,6 +274,7 @@ class MainWindow : public QMainWindow {
   void rememberForStandingWarnings(const LiveEvent& event);
   void showWarnings();
   std::vector<app::WorkflowEvent> standing_warning_events_;  ///< read by app::standingWarnings()
+  QPointer<QWidget> focus_before_menu_;  ///< where the keys go back to when a menu closes
   bool replay_moving_ = false;  ///< a replay accepted and not yet ended
   double replay_time_ = 0.0;     ///< [s] robot time it was accepted at
   QString replay_name_;          ///< "teach-in k", as the workflow names it

@@ -446,7 +446,7 @@ QString operatorWording(const QString& message) {
 
 QString standingWarningText(const std::vector<app::WorkflowEvent>& events, const QString& last) {
   QStringList lines;
-  for (const std::string& line : app::standingWarnings(events)) lines.push_back(operatorWording(QString::fromStdString(line)));
+  for (const std::string& line : app::standingWarnings(events, true)) lines.push_back(operatorWording(QString::fromStdString(line)));
   if (!last.isEmpty() && !lines.contains(last)) lines.push_back(last);
   if (lines.size() <= 1) return lines.join(QString());
   return QStringLiteral("\u2022 ") + lines.join(QStringLiteral("\n\u2022 "));

@@ -27,7 +27,7 @@ namespace flexirob::ui {
 QString operatorWording(const QString& message);
 
 /// The Teaching panel's warning box: every warning about an area or the map that still stands
-/// (app::standingWarnings over `events`), then `last`, the newest warning or refusal, unless it
+/// (app::standingWarnings over `events`, with the pose being recorded), then `last`, the newest warning or refusal, unless it
 /// is one of them; one per line, bulleted when there are several. Empty when none stands.
 QString standingWarningText(const std::vector<app::WorkflowEvent>& events, const QString& last);
 

@@ -334,6 +334,14 @@ TEST(Workflow, OnlyTheLastMapsTransitionWarningsStand) {
   EXPECT_EQ(standingWarnings(events),
             (std::vector<std::string>{"posture near the joint limit at area 'a'", "posture near the joint limit at area 'c'",
                                       "a -> b: colliding samples 138"}));
+  // A joint-limit warning of the pose being recorded stands for the window meanwhile, not for
+  // a finished run's list (its area is not made).
+  std::vector<WorkflowEvent> posing = events;
+  posing.push_back(event(Kind::kStage, "CONFIGURATION/POSED", "controller joint impedance"));
+  posing.push_back(event(Kind::kWarning, "joint_limit", "posture near the joint limit at area 'd'", 3));
+  posing.push_back(event(Kind::kStage, "CONFIGURATION/RECORDING", "controller reconfiguration"));
+  EXPECT_EQ(standingWarnings(posing), standingWarnings(events));
+  EXPECT_EQ(standingWarnings(posing, true).back(), "posture near the joint limit at area 'd'");
   // Without a refit after them, transition warnings stand.
   const std::vector<WorkflowEvent> once(events.begin(), events.begin() + 4);
   EXPECT_EQ(standingWarnings(once),

@@ -112,17 +112,6 @@ TEST(WorkflowThread, TextTooLongForASnapshotBufferIsCutAfterAWholeWordWithAnElli
   EXPECT_EQ(std::string(buffer.data()), std::string(23, 'x'));
 }
 
-// The contact warning with a long area name, what a tutor may type, arrives whole.
-TEST(WorkflowThread, TheLongestAreaWarningFitsTheSnapshotsEventText) {
-  const std::string area_name(40, 'n');
-  const std::string warning = area_name + ": 1234 of 1234 samples were recorded with the arm touching something (drawn red); the map of "
-                                          "free space keeps none of them and the learned postures lead into the contact: re-teach the area "
-                                          "with the arm clear";
-  EventRecord record;
-  realtime::copyText(record.detail, warning);
-  EXPECT_EQ(std::string(record.detail.data()), warning);
-}
-
 TEST(WorkflowThread, ARobotThatPacesTheLoopIsWaitedForWithoutCountingTheWaitAsComputing) {
   Rig rig;
   // The robot's measurements come every 3 ms: three times the loop's period.

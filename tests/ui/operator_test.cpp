@@ -311,6 +311,26 @@ class OperatorTest : public QObject {
     // So does the button.
     QTest::mouseClick(panel->replayButton(), Qt::LeftButton);
     replayed();
+    if (QTest::currentTestFailed()) return;
+
+    // A teach-in with no motion of the tip is kept, and the warning box says so after the
+    // stage changed back to WAITING (a warning said before it was cleared with it).
+    QTest::keyClick(&window, Qt::Key_F7);
+    QTRY_COMPARE(s.stage, Stage::kProgramming);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kTeachIn);
+    QTest::qWait(300);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(s.teach_ins, 2);
+    QTRY_COMPARE(s.sub_stage, SubStage::kWaiting);
+    QTRY_VERIFY(panel->warningLabel()->text().contains(QStringLiteral("teach-in 2: the tip moved at most")));
+    QTest::qWait(300);
+    QVERIFY2(panel->warningLabel()->isVisible() && panel->warningLabel()->text().contains(QStringLiteral("teach-in 2")),
+             qPrintable(panel->warningLabel()->text()));
   }
 
   // File opened and closed with Escape: the menu bar kept the keys, and Space opened File
