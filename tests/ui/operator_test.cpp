@@ -19,6 +19,7 @@
 #include <QMenu>
 #include <QMenuBar>
 #include <QTimer>
+#include <optional>
 #include <chrono>
 #include <thread>
 
@@ -259,22 +260,28 @@ class OperatorTest : public QObject {
     QTRY_VERIFY_WITH_TIMEOUT(s.model_ready && s.stage == Stage::kIdle, 30000);
     QTRY_VERIFY(hintSays("Start programming (F7)"));
 
+    // A teach-in with the keys: F7, touch, fix the start, touch, hold `key` (none: the tip
+    // stays) for `held_ms`, store.
+    const auto teachIn = [&window, &s, &hintSays](std::optional<Qt::Key> key, int held_ms) {
+      QTest::keyClick(&window, Qt::Key_F7);
+      QTRY_COMPARE(s.stage, Stage::kProgramming);
+      QTRY_VERIFY(hintSays("To teach a motion"));
+      QTest::keyClick(&window, Qt::Key_Space);
+      QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
+      QTest::keyClick(&window, Qt::Key_Return);
+      QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
+      QTest::keyClick(&window, Qt::Key_Space);
+      QTRY_COMPARE(s.sub_stage, SubStage::kTeachIn);
+      QTRY_VERIFY(hintSays("Recording the motion"));
+      if (key) QTest::keyPress(&window, *key);
+      QTest::qWait(held_ms);
+      if (key) QTest::keyRelease(&window, *key);
+      QTest::keyClick(&window, Qt::Key_Return);
+    };
     // One teach-in: from where the arm is, 0.12 m along -x.
-    QTest::keyClick(&window, Qt::Key_F7);
-    QTRY_COMPARE(s.stage, Stage::kProgramming);
     QVERIFY(!panel->replayButton()->isEnabled());
-    QTRY_VERIFY(hintSays("To teach a motion"));
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
-    QTest::keyClick(&window, Qt::Key_Return);
-    QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTRY_COMPARE(s.sub_stage, SubStage::kTeachIn);
-    QTRY_VERIFY(hintSays("Recording the motion"));
-    QTest::keyPress(&window, Qt::Key_Left);
-    QTest::qWait(1500);
-    QTest::keyRelease(&window, Qt::Key_Left);
-    QTest::keyClick(&window, Qt::Key_Return);
+    teachIn(Qt::Key_Left, 1500);
+    if (QTest::currentTestFailed()) return;
     QTRY_COMPARE(s.teach_ins, 1);
     QTRY_VERIFY(s.teach_in_data != nullptr && s.teach_in_data->size() == 1);
     const Eigen::MatrixXd taught = s.teach_in_data->front();
@@ -315,16 +322,8 @@ class OperatorTest : public QObject {
 
     // A teach-in with no motion of the tip is kept, and the warning box says so after the
     // stage changed back to WAITING (a warning said before it was cleared with it).
-    QTest::keyClick(&window, Qt::Key_F7);
-    QTRY_COMPARE(s.stage, Stage::kProgramming);
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
-    QTest::keyClick(&window, Qt::Key_Return);
-    QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTRY_COMPARE(s.sub_stage, SubStage::kTeachIn);
-    QTest::qWait(300);
-    QTest::keyClick(&window, Qt::Key_Return);
+    teachIn(std::nullopt, 300);
+    if (QTest::currentTestFailed()) return;
     QTRY_COMPARE(s.teach_ins, 2);
     QTRY_COMPARE(s.sub_stage, SubStage::kWaiting);
     QTRY_VERIFY(panel->warningLabel()->text().contains(QStringLiteral("teach-in 2: the tip moved at most")));
