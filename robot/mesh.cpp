@@ -174,10 +174,10 @@ void fillMissingNormals(TriangleMesh& mesh) {
 
 // assimp joins identical vertices and smooths normals mesh by mesh, comparing each vertex with
 // every other of its mesh at its position: about the sum of k^2 over the positions k vertices
-// of one mesh share. Real meshes
-// meet a few dozen triangles at a corner (a finely divided cone's tip a few thousand), a few
-// 10^7 comparisons for millions of triangles; one face copied 200 000 times (a broken or hostile
-// export) needs 4 * 10^10, hours. Counted on the file as read, before any post-processing.
+// of one mesh share. Real meshes meet a few dozen triangles at a corner (a finely divided
+// cone's tip a few thousand), a few 10^7 comparisons for millions of triangles; one face copied
+// 200 000 times (a broken or hostile export) needs 4 * 10^10, hours. Counted on the file as
+// read, before any post-processing.
 constexpr double kMaxCornerComparisons = 2e8;
 
 void refuseStackedCorners(const aiScene& scene, const fs::path& file) {
