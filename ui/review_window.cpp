@@ -9,6 +9,7 @@
 #include <QDockWidget>
 #include <QFontMetrics>
 #include <QHBoxLayout>
+#include <QHelpEvent>
 #include <QKeyEvent>
 #include <QLabel>
 #include <QMenuBar>
@@ -19,6 +20,7 @@
 #include <QScreen>
 #include <QStatusBar>
 #include <QTimer>
+#include <QToolTip>
 #include <QVBoxLayout>
 
 #include <algorithm>
@@ -128,6 +130,45 @@ double Timeline::xOf(double time) const { return 4.0 + (width() - 8.0) * (time -
 
 double Timeline::timeAt(double x) const {
   return std::clamp(t0_ + (x - 4.0) / std::max(1.0, width() - 8.0) * (t1_ - t0_), t0_, t1_);
+}
+
+QString Timeline::describeAt(double x) const {
+  QStringList lines;
+  const double time = timeAt(x);
+  for (const StageBand& band : bands_) {
+    if (time < band.t0 || time > band.t1) continue;
+    lines << QStringLiteral("%1: %2 s to %3 s (%4 s)")
+                 .arg(QString::fromStdString(band.label))
+                 .arg(band.t0, 0, 'f', 1)
+                 .arg(band.t1, 0, 'f', 1)
+                 .arg(band.t1 - band.t0, 0, 'f', 1);
+    break;
+  }
+  // Within the reach of a pointer: a tick or a triangle is 2-10 px wide.
+  constexpr double kNearPixels = 5.0;
+  for (const TimelineMarker& marker : markers_) {
+    if (std::abs(xOf(marker.time) - x) > kNearPixels) continue;
+    lines << QStringLiteral("%1 %2 at %3 s")
+                 .arg(marker.trigger ? QStringLiteral("trigger") : QStringLiteral("button"))
+                 .arg(QString::fromStdString(marker.name))
+                 .arg(marker.time, 0, 'f', 2);
+  }
+  return lines.join(QLatin1Char('\n'));
+}
+
+bool Timeline::event(QEvent* event) {
+  if (event->type() == QEvent::ToolTip) {
+    auto* help = static_cast<QHelpEvent*>(event);
+    const QString text = describeAt(help->pos().x());
+    if (text.isEmpty()) {
+      QToolTip::hideText();
+      event->ignore();
+    } else {
+      QToolTip::showText(help->globalPos(), text, this);
+    }
+    return true;
+  }
+  return QWidget::event(event);
 }
 
 void Timeline::paintEvent(QPaintEvent* /*event*/) {

@@ -79,12 +79,17 @@ class Timeline : public QWidget {
   /// The widget x coordinate of a time, and back.
   double xOf(double time) const;
   double timeAt(double x) const;
+  /// What lies under widget x, as the tooltip says it: the stage band with its start, end and
+  /// length, and the triggers and buttons within a few pixels. A band too short for its label
+  /// is read this way.
+  QString describeAt(double x) const;
   QSize sizeHint() const override { return {600, 56}; }
 
  Q_SIGNALS:
   void timeRequested(double time);
 
  protected:
+  bool event(QEvent* event) override;
   void paintEvent(QPaintEvent* event) override;
   void mousePressEvent(QMouseEvent* event) override;
   void mouseMoveEvent(QMouseEvent* event) override;

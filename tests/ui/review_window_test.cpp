@@ -3,7 +3,9 @@
 // that is no recording is refused with its reason.
 #include <QApplication>
 #include <QImage>
+#include <QHelpEvent>
 #include <QKeyEvent>
+#include <QToolTip>
 #include <QLineSeries>
 #include <QTemporaryDir>
 #include <QtTest>
@@ -185,6 +187,25 @@ class ReviewWindowTest : public QObject {
     QVERIFY((window.shownPosture() - before).norm() < 1e-9);
     // The plots' cursor follows.
     QVERIFY(std::abs(window.plots()->cursorTime() - 1.0) < 1e-9);
+  }
+
+  // A phase too short for its label, and a tick or a triangle, are read by pointing at them.
+  void timelineTooltipNamesThePhaseAndTheSignalsUnderThePointer() {
+    ui::ReviewWindow window;
+    QVERIFY(window.open(file_));
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    const ui::Timeline* timeline = window.timeline();
+    QCOMPARE(timeline->describeAt(timeline->xOf(3.2)), QStringLiteral("CONFIGURATION / RECORDING: 2.5 s to 4.0 s (1.5 s)"));
+    QCOMPARE(timeline->describeAt(timeline->xOf(2.5) + 3.0),
+             QStringLiteral("CONFIGURATION / RECORDING: 2.5 s to 4.0 s (1.5 s)\ntrigger on_converged at 2.50 s"));
+    QCOMPARE(timeline->describeAt(timeline->xOf(0.9)), QStringLiteral("IDLE: 0.0 s to 1.0 s (1.0 s)\nbutton start_configuration at 0.90 s"));
+    // The widget shows that text when Qt asks for a tooltip there.
+    const QPoint at(static_cast<int>(std::lround(timeline->xOf(4.5))), timeline->height() / 2);
+    QHelpEvent help(QEvent::ToolTip, at, timeline->mapToGlobal(at));
+    QApplication::sendEvent(window.timeline(), &help);
+    QTRY_COMPARE(QToolTip::text(), QStringLiteral("PROGRAMMING / TEACH-IN: 4.0 s to 6.0 s (2.0 s)"));
+    QToolTip::hideText();
   }
 
   void timelineScreenshotShowsTheStageBandsAndTheCursor() {
