@@ -3,11 +3,13 @@
 #include <set>
 
 #include <QAction>
+#include <QPushButton>
 #include <QActionGroup>
 #include <QApplication>
 #include <QCloseEvent>
 #include <QDateTime>
 #include <QDir>
+#include <QComboBox>
 #include <QDockWidget>
 #include <QResizeEvent>
 #include <QFile>
@@ -21,6 +23,7 @@
 #include <QScreen>
 #include <QStyle>
 #include <QScrollArea>
+#include <QSpinBox>
 #include <QSettings>
 #include <QStandardPaths>
 #include <QStatusBar>
@@ -28,6 +31,7 @@
 #include <QTimer>
 #include <QVBoxLayout>
 #include <algorithm>
+#include <functional>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -1235,6 +1239,42 @@ void MainWindow::watchDeadlines(const app::CycleStatistics& stats) {
   deadline_misses_ = stats.deadline_misses;
 }
 
+void MainWindow::fillTeachingMenu() {
+  teaching_menu_->clear();
+  // Each entry clicks the panel's own control, so it is enabled exactly when that one is and
+  // does what it does.
+  const auto add = [this](QMenu* menu, const QString& text, QAbstractButton* target, const std::function<void()>& choose = {}) {
+    QAction* action = menu->addAction(text, this, [target, choose] {
+      if (choose) choose();
+      target->click();
+    });
+    action->setEnabled(target->isEnabled());
+  };
+  add(teaching_menu_, tr("&Start configuration\tF5"), stage_panel_->button(app::Button::kStartConfiguration));
+  add(teaching_menu_, tr("&Finish configuration\tF6"), stage_panel_->button(app::Button::kFinishedConfiguration));
+  add(teaching_menu_, tr("Start &programming\tF7"), stage_panel_->button(app::Button::kStartProgramming));
+  add(teaching_menu_, tr("Finish pro&gramming\tF8"), stage_panel_->button(app::Button::kFinishedProgramming));
+  teaching_menu_->addSeparator();
+  QMenu* replay = teaching_menu_->addMenu(tr("&Replay teach-in"));
+  const int teach_ins = stage_panel_->replayChoice()->maximum();
+  QSpinBox* replay_choice = stage_panel_->replayChoice();
+  for (int k = 1; k <= teach_ins; ++k) {
+    add(replay, k == teach_ins ? tr("Teach-in %1 (the newest)\tF9").arg(k) : tr("Teach-in %1").arg(k), stage_panel_->replayButton(),
+        [replay_choice, k] { replay_choice->setValue(k); });
+  }
+  replay->setEnabled(stage_panel_->replayButton()->isEnabled());
+  QComboBox* area_choice = stage_panel_->areaChoice();
+  QMenu* remove = teaching_menu_->addMenu(tr("Re&move area"));
+  QMenu* reteach = teaching_menu_->addMenu(tr("Re-&teach area"));
+  for (int k = 0; k < area_choice->count(); ++k) {
+    const auto choose = [area_choice, k] { area_choice->setCurrentIndex(k); };
+    add(remove, area_choice->itemText(k), stage_panel_->removeAreaButton(), choose);
+    add(reteach, area_choice->itemText(k), stage_panel_->reteachAreaButton(), choose);
+  }
+  remove->setEnabled(stage_panel_->removeAreaButton()->isEnabled());
+  reteach->setEnabled(stage_panel_->reteachAreaButton()->isEnabled());
+}
+
 void MainWindow::buildMenus() {
   QMenu* file = menuBar()->addMenu(tr("&File"));
   file->addAction(tr("Open robot &URDF…"), this, [this] {
@@ -1284,6 +1324,12 @@ void MainWindow::buildMenus() {
   });
   file->addSeparator();
   file->addAction(tr("&Quit"), QKeySequence::Quit, this, &QWidget::close);
+
+  // The Teaching panel's buttons take no keyboard focus (the keys tele-operate the arm): this
+  // menu reaches each of them from the keyboard (Alt+T), with the keys the panel's buttons have.
+  teaching_menu_ = menuBar()->addMenu(tr("&Teaching"));
+  connect(teaching_menu_, &QMenu::aboutToShow, this, &MainWindow::fillTeachingMenu);
+  fillTeachingMenu();
 
   robot_menu_ = menuBar()->addMenu(tr("&Robot"));
   auto* robots = new QActionGroup(this);

@@ -124,6 +124,7 @@ class MainWindow : public QMainWindow {
   const robot::Kinematics* kinematics() const { return kinematics_.get(); }
   const robot::Scene& scene() const { return scene_; }
   const robot::ParameterSet& parameters() const { return *parameters_; }
+  QMenu* teachingMenu() const { return teaching_menu_; }
   QMenu* robotMenu() const { return robot_menu_; }
   QMenu* sceneMenu() const { return scene_menu_; }
   QMenu* backendMenu() const { return backend_menu_; }
@@ -181,6 +182,8 @@ class MainWindow : public QMainWindow {
 
  private:
   void buildMenus();
+  /// The Teaching menu from the Teaching panel's controls as they are now (run as it opens).
+  void fillTeachingMenu();
   void buildDocks();
   void updateStatus();
   void reportError(const QString& what, const std::exception& error);
@@ -260,6 +263,7 @@ class MainWindow : public QMainWindow {
   std::map<Problem, QString> problems_;
   QLabel* status_label_ = nullptr;
   QLabel* link_label_ = nullptr;
+  QMenu* teaching_menu_ = nullptr;
   QMenu* robot_menu_ = nullptr;
   QMenu* scene_menu_ = nullptr;
   QMenu* backend_menu_ = nullptr;

@@ -227,13 +227,30 @@ class OperatorTest : public QObject {
     recordArea(Qt::Key_Up);
     QTRY_VERIFY(s.area_data != nullptr && (s.area_data->front().centre - first_centre).norm() > 0.01);
     QCOMPARE(s.areas, 1);
-    // A second area, removed again: the newest is the one the choice names.
+    // A second area: the newest is the one the choice names.
     recordArea(Qt::Key_Down);
     QTRY_COMPARE(s.areas, 2);
     QTRY_COMPARE(panel->chosenArea(), 1);
-    QTest::mouseClick(panel->removeAreaButton(), Qt::LeftButton);
+    // The Teaching menu reaches the panel's controls from the keyboard: it lists the areas,
+    // and removes the one it names, not the one the panel's choice names.
+    const auto teachingEntry = [&window](const QString& text) -> QAction* {
+      Q_EMIT window.teachingMenu()->aboutToShow();
+      for (QAction* action : window.teachingMenu()->actions()) {
+        if (action->text() == text) return action;
+      }
+      return nullptr;
+    };
+    QAction* remove_entry = teachingEntry(QStringLiteral("Re&move area"));
+    QVERIFY(remove_entry != nullptr && remove_entry->menu() != nullptr && remove_entry->isEnabled());
+    QCOMPARE(remove_entry->menu()->actions().size(), 2);
+    QCOMPARE(remove_entry->menu()->actions().at(0)->text(), QStringLiteral("area_1"));
+    QAction* start_programming = teachingEntry(QStringLiteral("Start &programming\tF7"));
+    QVERIFY(start_programming != nullptr);
+    QCOMPARE(start_programming->isEnabled(), panel->button(flexirob::app::Button::kStartProgramming)->isEnabled());
+    remove_entry->menu()->actions().at(0)->trigger();
     QTRY_COMPARE(s.areas, 1);
     QTRY_COMPARE(panel->areaChoice()->count(), 1);
+    QCOMPARE(panel->areaChoice()->itemText(0), QStringLiteral("area_2"));
 
     // Another scene from the menu would start the teaching afresh: asked first; Cancel keeps it.
     QAction* other_scene = nullptr;
