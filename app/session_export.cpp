@@ -10,6 +10,7 @@
 #include <cstring>
 #include <system_error>
 
+#include "app/table_text.hpp"
 #include "app/workflow.hpp"
 #include "robot/errors.hpp"
 
@@ -151,6 +152,12 @@ std::string trainingSamplesCsv(const RecordedTeaching& teaching) {
       out = "area,x,y,z" + jointHeader(joints) + "\n";
     }
     for (Eigen::Index l = 0; l < area.X.cols(); ++l) {
+      // A value learn would refuse is refused here: the file is written for it to read.
+      const double largest = std::max(area.X.col(l).cwiseAbs().maxCoeff(), area.Q.col(l).cwiseAbs().maxCoeff());
+      if (!(largest <= kLargestTableValue)) {
+        throw InputError("session: area " + std::to_string(area.index) + ", sample " + std::to_string(l + 1) +
+                         ": a value beyond ±1e6 or not finite, which learn does not read");
+      }
       out += std::to_string(area.index);
       out += ',';
       appendRow(out, area.X.col(l), area.Q.col(l));

@@ -44,6 +44,10 @@ Eigen::VectorXd vectorOf(const Json& array, Eigen::Index size, const std::string
   return v;
 }
 
+// What a session is read for: eval and plan learn and plan with it (it needs samples and a
+// graph, and its notes speak of the evaluation); render and export draw or copy what it holds.
+enum class SessionUse { kEvaluate, kCopy };
+
 struct Session {
   std::string robot, tip, scene;
   std::unique_ptr<robot::RobotModel> model;
@@ -107,8 +111,21 @@ std::string evaluableLearner(const std::string& named, const std::string& file) 
   return "elm";
 }
 
+// Two areas of one name would have their figures merged under it (eval trajectories' regions)
+// and messages could not say which one they mean: teach and the GUI never write such a file.
+void checkAreaNamesDiffer(const Session& session) {
+  for (std::size_t k = 0; k < session.taught_names.size(); ++k) {
+    for (std::size_t l = 0; l < k; ++l) {
+      if (session.taught_names[k] == session.taught_names[l]) {
+        throw InputError("session: two areas are named '" + printable(session.taught_names[k], 200) + "' (areas " + session.area_names[l] +
+                         " and " + session.area_names[k] + ")");
+      }
+    }
+  }
+}
+
 // A session recorded in SQLite by the session recorder: the complete areas' latest takes.
-Session loadRecordedSession(const std::string& file) {
+Session loadRecordedSession(const std::string& file, SessionUse use) {
   const app::SessionReader reader(file);
   app::RecordedTeaching teaching = app::readRecordedTeaching(reader);
   Session session;
@@ -120,14 +137,14 @@ Session loadRecordedSession(const std::string& file) {
   } else if (const std::vector<app::ModelRecord> models = reader.models(); !models.empty()) {
     session.learner = models.back().learner_kind;
   }
-  session.learner = evaluableLearner(session.learner, file);
+  if (use == SessionUse::kEvaluate) session.learner = evaluableLearner(session.learner, file);
   session.robot = teaching.robot;
   session.tip = teaching.tip;
   session.scene = teaching.scene;
   session.model = std::make_unique<robot::RobotModel>(loadSessionRobot(session.robot, teaching.robot_urdf, session.tip));
   session.scene_data = loadSessionScene(session.scene, teaching.scene_text);
   robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
-  if (!teaching.closed_cleanly) {
+  if (!teaching.closed_cleanly && use == SessionUse::kEvaluate) {
     std::fprintf(stderr, "note: the session '%s' was not closed cleanly (interrupted, or still being written); the evaluation covers what was recorded\n",
                  file.c_str());
   }
@@ -146,7 +163,7 @@ Session loadRecordedSession(const std::string& file) {
     session.taught_names.push_back(area.name.empty() ? std::to_string(area.index) : area.name);
     count += area.X.cols();
   }
-  if (count == 0) {
+  if (count == 0 && use == SessionUse::kEvaluate) {
     throw InputError(teaching.closed_cleanly ? "session: no training samples"
                                              : "session: '" + file + "' was interrupted before any area was finished; nothing to evaluate");
   }
@@ -160,17 +177,18 @@ Session loadRecordedSession(const std::string& file) {
     session.data.area.insert(session.data.area.end(), static_cast<std::size_t>(area.X.cols()), static_cast<int>(k));
     l += area.X.cols();
   }
-  if (!teaching.itm) throw InputError("session: no ITM graph recorded");
-  session.itm = std::make_unique<planning::Itm>(std::move(*teaching.itm));
+  if (!teaching.itm && use == SessionUse::kEvaluate) throw InputError("session: no ITM graph recorded");
+  if (teaching.itm) session.itm = std::make_unique<planning::Itm>(std::move(*teaching.itm));
+  checkAreaNamesDiffer(session);
   checkPosturesWithinLimits(session);
   if (parameters.is_object() && parameters.value("backend", Json()) == Json("sim")) checkTipPositionsMatchPostures(session);
   return session;
 }
 
-Session loadSession(const std::string& file) {
+Session loadSession(const std::string& file, SessionUse use = SessionUse::kEvaluate) {
   std::ifstream in(file);
   if (!in) throw InputError("--session: cannot read '" + file + "'");
-  if (!startsAsJson(in)) return readingSession(file, [&file] { return loadRecordedSession(file); });
+  if (!startsAsJson(in)) return readingSession(file, [&file, use] { return loadRecordedSession(file, use); });
   Json json;
   try {
     json = Json::parse(in);
@@ -189,7 +207,7 @@ Session loadSession(const std::string& file) {
     session.robot = json.at("robot").get<std::string>();
     session.tip = json.value("tip", "");
     session.scene = json.at("scene").get<std::string>();
-    session.learner = evaluableLearner(json.value("learner", "elm"), file);
+    session.learner = use == SessionUse::kEvaluate ? evaluableLearner(json.value("learner", "elm"), file) : json.value("learner", "elm");
     session.model = std::make_unique<robot::RobotModel>(
         loadSessionRobot(session.robot, json.value("robot_urdf", ""), session.tip));
     session.scene_data = loadSessionScene(session.scene, json.value("scene_text", ""));
@@ -211,6 +229,9 @@ Session loadSession(const std::string& file) {
       const Json& x = area.at("x");
       const Json& q = area.at("q");
       if (x.size() != q.size()) throw InputError("session: area samples x and q differ in count");
+      // teach writes an area once it holds samples: an empty one was emptied by hand, and the
+      // result would read as an evaluation of one area more than taught.
+      if (x.empty()) throw InputError("session: area '" + printable(session.taught_names.back(), 200) + "' holds no samples");
       for (std::size_t l = 0; l < x.size(); ++l) {
         xs.push_back(vectorOf(x[l], 3, "x"));
         qs.push_back(vectorOf(q[l], n, "q"));
@@ -218,7 +239,7 @@ Session loadSession(const std::string& file) {
       }
       ++k;
     }
-    if (xs.empty()) throw InputError("session: no training samples");
+    if (xs.empty() && use == SessionUse::kEvaluate) throw InputError("session: no training samples");
     session.data.X.resize(3, static_cast<Eigen::Index>(xs.size()));
     session.data.Y.resize(n, static_cast<Eigen::Index>(qs.size()));
     for (std::size_t l = 0; l < xs.size(); ++l) {
@@ -240,6 +261,7 @@ Session loadSession(const std::string& file) {
   } catch (const Json::exception& e) {
     throw InputError("--session: malformed session (" + std::string(e.what()) + ")");
   }
+  checkAreaNamesDiffer(session);
   checkPosturesWithinLimits(session);
   checkTipPositionsMatchPostures(session);
   return session;
@@ -449,6 +471,8 @@ Json runSceneModel(const EvalOptions& options) {
 }
 
 }  // namespace
+
+void checkSessionReads(const std::string& file) { loadSession(file, SessionUse::kCopy); }
 
 Json trajectoryRegionJson(const app::TrajectoryRegionResult& region) {
   // Null where no trajectory's start was reached: no error was measured, which 0 would hide.

@@ -219,6 +219,9 @@ SessionOverlay sessionFromRecording(const std::string& file) {
 SessionOverlay loadSessionOverlay(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError("--session: cannot read '" + file + "'");
+  // What eval and plan refuse is not drawn either (a position of 1e308 had the camera aimed at
+  // it and a blank picture written).
+  checkSessionReads(file);
   if (!startsAsJson(in)) return readingSession(file, [&file] { return sessionFromRecording(file); });
   in.close();
   return sessionFromJson(readJsonFile(file, "--session"), file);

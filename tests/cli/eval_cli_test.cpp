@@ -590,7 +590,17 @@ TEST(EvalCli, RefusesAHandEditedSessionWhosePosturesLieOutsideTheJointLimitsOrWh
   nine_joints["dof"] = 9;
   nlohmann::json dof_word = session;
   dof_word["dof"] = "seven";
+  // Two areas of one name (their figures would be merged under it), an area emptied by hand.
+  nlohmann::json same_name = session;
+  same_name["areas"][1]["name"] = "left";
+  same_name["areas"][0]["name"] = "left";
+  nlohmann::json emptied = session;
+  emptied["areas"][1]["name"] = "right";
+  emptied["areas"][1]["x"] = nlohmann::json::array();
+  emptied["areas"][1]["q"] = nlohmann::json::array();
   const std::vector<std::pair<nlohmann::json, std::string>> broken = {
+      {same_name, "session: two areas are named 'left' (areas 1 and 2)"},
+      {emptied, "session: area 'right' holds no samples"},
       {nine_joints, "session: dof is 9, but the robot 'lwr4' has 7 joints"},
       {dof_word, "session: dof is \"seven\", but the robot 'lwr4' has 7 joints"},
       {q_fixed, "q_fixed of area 2: joint 1 (A1) at 10 lies outside its limits"},
@@ -605,12 +615,17 @@ TEST(EvalCli, RefusesAHandEditedSessionWhosePosturesLieOutsideTheJointLimitsOrWh
   for (const auto& [json, expected] : broken) {
     const auto file = dir / "limits-broken.json";
     writeText(file, json.dump());
-    for (const std::string command : {"eval reachable --spacing 0.3", "plan --goals 2"}) {
+    // render draws nothing eval and plan refuse (a position of 1e308 had aimed its camera there).
+    const auto picture = dir / "limits-broken.png";
+    const std::string render = "render --width 64 --height 48 --out " + picture.string();
+    for (const std::string& command : {std::string("eval reachable --spacing 0.3"), std::string("plan --goals 2"), render}) {
       const auto result = runCliBinary(command + " --session " + file.string());
       EXPECT_EQ(result.exit_code, 2) << command << ": " << result.err;
       EXPECT_NE(result.err.find(expected), std::string::npos) << result.err;
       EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+      EXPECT_TRUE(result.out.empty()) << command << ": " << result.out;
     }
+    EXPECT_FALSE(std::filesystem::exists(picture)) << json.dump().substr(0, 80);
   }
   // The untouched session is accepted, and so is a sample 0.1 rad past a limit: sessions
   // simulated before the limit stops held have such samples and stay readable.

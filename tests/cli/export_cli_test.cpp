@@ -229,6 +229,27 @@ TEST_F(ExportCli, ADamagedModelIsRefusedAndNotWritten) {
   fs::remove(damaged);
 }
 
+// The samples are written for learn fit: a value it would refuse (a posture of 1e308 in a
+// damaged or hand-edited file) refuses the export instead of a CSV learn cannot read.
+TEST_F(ExportCli, ASampleLearnWouldRefuseIsRefusedAndNotWritten) {
+  const fs::path edited = scratchDir() / "huge-sample.flexirob";
+  const fs::path out = scratchDir() / "huge-sample.csv";
+  fs::copy_file(*session_, edited, fs::copy_options::overwrite_existing);
+  {
+    app::SqliteDatabase db(edited.string(), 0x00000002);  // SQLITE_OPEN_READWRITE
+    // 7 joint values of 1e308 (little-endian doubles) in the first sample.
+    std::string huge;
+    for (int j = 0; j < 7; ++j) huge += "a0c8eb85f3cce17f";
+    db.exec("UPDATE sample SET q = x'" + huge + "' WHERE id = (SELECT min(id) FROM sample)");
+  }
+  const auto result = runCliBinary("export --session " + edited.string() + " --samples " + out.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("sample 1: a value beyond ±1e6 or not finite, which learn does not read"), std::string::npos) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_FALSE(fs::exists(out));
+  fs::remove(edited);
+}
+
 // Outputs are written through temporaries renamed into place; an output that happens to be
 // named as another's temporary would have been replaced by it.
 TEST_F(ExportCli, AnOutputNamedLikeAnothersTemporaryIsKept) {
