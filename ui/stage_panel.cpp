@@ -208,8 +208,19 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
           if (s.keyboard_mode) return tr("Move the arm with the keys to the posture wanted here, then press Enter (or leave the keys for 2 s).");
           return tr("Move the arm to the posture wanted here, then let go and keep still for 2 s (or press Enter).");
         case SubStage::kPosed:
+          // Fixed in a contact (kept still for 2 s, or Enter, while red): the area will be
+          // warned about when stored; the operator learns it now, and how to show it again.
+          if (s.contacts > 0) {
+            return tr("Posture fixed touching something (drawn red): its area will be warned about. To record anyway, %1 "
+                      "again.")
+                .arg(touch);
+          }
           return tr("Posture fixed. To record the area, %1 again and move the tip around inside it.").arg(touch);
         case SubStage::kRecording:
+          if (s.contacts > 0) {
+            return tr("Recording touching something (drawn red): samples in the contact are warned about; move the tip "
+                      "away from it.");
+          }
           if (s.keyboard_mode) {
             return tr("Recording: move the tip around inside the area with the keys; press Enter (or leave the keys for 2 s) to "
                       "store it.");

@@ -431,6 +431,14 @@ class FeaturesTest : public QObject {
     QVERIFY(flexirob::ui::StagePanel::nextStepHint(s, true).startsWith(QStringLiteral("The arm touches something (drawn red): move it clear")));
     s.keyboard_mode = true;
     QVERIFY(flexirob::ui::StagePanel::nextStepHint(s, true).contains(QStringLiteral("with the keys")));
+    // Fixed or recording in the contact all the same: said while it lasts, not only once stored.
+    for (const auto sub_stage : {flexirob::app::SubStage::kPosed, flexirob::app::SubStage::kRecording}) {
+      s.sub_stage = sub_stage;
+      s.contacts = 1;
+      QVERIFY(flexirob::ui::StagePanel::nextStepHint(s, true).contains(QStringLiteral("touching something (drawn red)")));
+      s.contacts = 0;
+      QVERIFY(!flexirob::ui::StagePanel::nextStepHint(s, true).contains(QStringLiteral("touching")));
+    }
   }
 
   // The warning box lists every warning that stands, not only the newest: an area taught in
