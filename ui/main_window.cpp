@@ -392,6 +392,7 @@ void MainWindow::stopLive() {
   }
   if (live_ && recorder_) recordSnapshotData(live_->snapshot());
   live_.reset();
+  stage_panel_->setModelSummary(QString());  // the next run learns its own map
   if (recorder_) recorder_->close();
   recorder_.reset();
   keyboard_mode_ = false;
@@ -1009,6 +1010,7 @@ void MainWindow::handleEvents() {
       }
     } else if (event.kind == K::kCheck || event.kind == K::kModelLearned || event.kind == K::kAreaCreated) {
       showStatusMessage(statusBar(), QString::fromStdString(event.detail.empty() ? event.name : event.detail), 10000);
+      if (event.kind == K::kModelLearned) stage_panel_->setModelSummary(QString::fromStdString(event.detail));
       showWarnings();  // a re-taught area's warnings go, a new map's checks replace the old ones
     }
   }

@@ -414,8 +414,11 @@ void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured, bool h
                              .arg(s.on_converged)
                              .arg(s.itm_nodes)
                              .arg(s.itm_edges)
-                             .arg(s.collision_events));
+                             .arg(s.collision_events) +
+                         (s.model_ready && !model_summary_.isEmpty() ? tr("\nmap: %1").arg(model_summary_) : QString()));
 }
+
+void StagePanel::setModelSummary(const QString& text) { model_summary_ = text; }
 
 void StagePanel::showWarning(const QString& text) {
   warning_label_->setText(text);

@@ -47,6 +47,11 @@ class StagePanel : public QWidget {
   /// A tutor warning or a refused request, shown until the next one or until cleared.
   void showWarning(const QString& text);
   void clearWarning();
+  /// What the last learning said (learner, areas, samples, time), shown under the counts while
+  /// the map is learned: the status bar's message of it is soon replaced (by the transition
+  /// check's warning). Empty: none yet (a new robot or scene).
+  void setModelSummary(const QString& text);
+  QLabel* countsLabel() const { return counts_label_; }
 
   QPushButton* button(app::Button button) const;
   QLabel* stageLabel() const { return stage_label_; }
@@ -91,6 +96,7 @@ class StagePanel : public QWidget {
   QLabel* stage_label_ = nullptr;
   QLabel* controller_label_ = nullptr;
   QLabel* counts_label_ = nullptr;
+  QString model_summary_;
   QLabel* warning_label_ = nullptr;
   QProgressBar* learning_bar_ = nullptr;
   QLabel* hint_label_ = nullptr;

@@ -12,6 +12,7 @@
 #include <QMessageBox>
 #include <QMouseEvent>
 #include <QPushButton>
+#include <QRegularExpression>
 #include <QStandardPaths>
 #include <QStatusBar>
 #include <QTemporaryDir>
@@ -276,6 +277,9 @@ class OperatorTest : public QObject {
     QTest::keyClick(&window, Qt::Key_F6);
     QTRY_VERIFY_WITH_TIMEOUT(s.model_ready && s.stage == Stage::kIdle, 30000);
     QTRY_VERIFY(hintSays("Start programming (F7)"));
+    // What the learning said stays under the counts after the status bar moved on.
+    QTRY_VERIFY2(panel->countsLabel()->text().contains(QRegularExpression(QStringLiteral("\nmap: \\w+ from 1 area, \\d+ samples in "))),
+                 qPrintable(panel->countsLabel()->text()));
 
     // A teach-in with the keys: F7, touch, fix the start, touch, hold `key` (none: the tip
     // stays) for `held_ms`, store.
