@@ -11,6 +11,9 @@
 #include <QHBoxLayout>
 #include <QPushButton>
 #include <QResizeEvent>
+#include <QScrollArea>
+#include <QScrollBar>
+#include <QTimer>
 #include <QSpinBox>
 #include <QVBoxLayout>
 
@@ -137,8 +140,17 @@ StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
   warning_label_->setWordWrap(true);
   warning_label_->setStyleSheet(QStringLiteral("QLabel { background: #fff3c4; color: #5a4300; border: 1px solid #e0b000;"
                                                " padding: 4px; }"));
-  warning_label_->setVisible(false);
-  layout->addWidget(warning_label_);
+  // Warnings pile up (every area's, a failed transition check): in a box of their own that
+  // scrolls, the buttons above stay in view and the newest, last, is scrolled to.
+  warning_scroll_ = new QScrollArea;
+  warning_scroll_->setObjectName(QStringLiteral("warning_scroll"));
+  warning_scroll_->setWidget(warning_label_);
+  warning_scroll_->setWidgetResizable(true);
+  warning_scroll_->setFrameShape(QFrame::NoFrame);
+  warning_scroll_->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+  warning_scroll_->setFocusPolicy(Qt::NoFocus);  // the keys stay the view's
+  warning_scroll_->setVisible(false);
+  layout->addWidget(warning_scroll_);
   layout->addStretch(1);
 }
 
@@ -307,6 +319,7 @@ const QStringList& everyHint() {
 
 void StagePanel::resizeEvent(QResizeEvent* event) {
   QWidget::resizeEvent(event);
+  if (event->size().width() != event->oldSize().width()) fitWarningBox();
   if (event->size().width() != hint_reserved_for_width_) reserveHintHeight();
 }
 
@@ -423,11 +436,28 @@ void StagePanel::setModelSummary(const QString& text) { model_summary_ = text; }
 void StagePanel::showWarning(const QString& text) {
   warning_label_->setText(text);
   warning_label_->setVisible(true);
+  warning_scroll_->setVisible(true);
+  fitWarningBox();
 }
 
 void StagePanel::clearWarning() {
   warning_label_->clear();
   warning_label_->setVisible(false);
+  warning_scroll_->setVisible(false);
+}
+
+void StagePanel::fitWarningBox() {
+  if (!warning_scroll_->isVisibleTo(this)) return;
+  const QMargins margins = layout()->contentsMargins();
+  const int width = this->width() - margins.left() - margins.right();
+  if (width <= 0) return;
+  const int whole = warning_label_->heightForWidth(width);
+  const int most = kWarningLines * warning_label_->fontMetrics().lineSpacing() + 12;
+  warning_scroll_->setFixedHeight(std::min(whole, most));
+  // Once laid out at that height, the end (the newest warning) in view.
+  QTimer::singleShot(0, warning_scroll_, [scroll = warning_scroll_] {
+    scroll->verticalScrollBar()->setValue(scroll->verticalScrollBar()->maximum());
+  });
 }
 
 QString operatorWording(const QString& message) {

@@ -16,6 +16,7 @@
 
 class QComboBox;
 class QLabel;
+class QScrollArea;
 class QProgressBar;
 class QPushButton;
 class QSpinBox;
@@ -56,6 +57,9 @@ class StagePanel : public QWidget {
   QPushButton* button(app::Button button) const;
   QLabel* stageLabel() const { return stage_label_; }
   QLabel* warningLabel() const { return warning_label_; }
+  /// The warning box's own scroll area: at most kWarningLines lines tall, scrolled to the end.
+  QScrollArea* warningScroll() const { return warning_scroll_; }
+  static constexpr int kWarningLines = 10;
   QProgressBar* learningBar() const { return learning_bar_; }
   QLabel* hintLabel() const { return hint_label_; }
   QPushButton* replayButton() const { return replay_button_; }
@@ -98,6 +102,9 @@ class StagePanel : public QWidget {
   QLabel* counts_label_ = nullptr;
   QString model_summary_;
   QLabel* warning_label_ = nullptr;
+  QScrollArea* warning_scroll_ = nullptr;
+  /// The warning box as tall as its text, up to kWarningLines lines, its end in view.
+  void fitWarningBox();
   QProgressBar* learning_bar_ = nullptr;
   QLabel* hint_label_ = nullptr;
   QSpinBox* replay_choice_ = nullptr;

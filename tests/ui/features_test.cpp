@@ -336,6 +336,39 @@ class FeaturesTest : public QObject {
                  qPrintable(QStringLiteral("%1 px, %2 px before").arg(dock->width()).arg(roomy)));
   }
 
+  // Warnings pile up (every area's, a failed transition check): the box shows a short one
+  // whole, scrolls a long list within at most kWarningLines lines with the newest, last, in
+  // view, and the panel itself does not grow past them.
+  void theWarningBoxScrollsToTheNewestWithinItsLines() {
+    QScrollArea scroll;  // as the window holds the panel
+    auto* panel_owned = new flexirob::ui::StagePanel;
+    flexirob::ui::StagePanel& panel = *panel_owned;
+    scroll.setWidget(panel_owned);
+    scroll.setWidgetResizable(true);
+    scroll.resize(panel.minimumSizeHint().width() + 30, 900);
+    scroll.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&scroll));
+    panel.showWarning(QStringLiteral("area_1: near a joint limit"));
+    QTRY_VERIFY(panel.warningScroll()->isVisible());
+    QCoreApplication::sendPostedEvents(nullptr, QEvent::LayoutRequest);
+    QTRY_COMPARE(panel.warningScroll()->verticalScrollBar()->maximum(), 0);
+    const int short_height = panel.warningScroll()->height();
+    QStringList many;
+    for (int k = 1; k <= 12; ++k) {
+      many << QStringLiteral("• area_%1: 35 of 76 samples were recorded with the arm touching something (drawn red); re-teach it").arg(k);
+    }
+    panel.showWarning(many.join(QLatin1Char('\n')));
+    QCoreApplication::sendPostedEvents(nullptr, QEvent::LayoutRequest);
+    const int most = flexirob::ui::StagePanel::kWarningLines * panel.warningLabel()->fontMetrics().lineSpacing() + 12;
+    QTRY_VERIFY(panel.warningScroll()->height() > short_height);
+    QVERIFY2(panel.warningScroll()->height() <= most, qPrintable(QStringLiteral("%1 px > %2 px").arg(panel.warningScroll()->height()).arg(most)));
+    QScrollBar* bar = panel.warningScroll()->verticalScrollBar();
+    QTRY_VERIFY(bar->maximum() > 0);
+    QTRY_COMPARE(bar->value(), bar->maximum());
+    panel.clearWarning();
+    QTRY_VERIFY(!panel.warningScroll()->isVisible());
+  }
+
   // The hint above the Teaching panel's buttons grows and shrinks by a line or two as the stage
   // changes; the buttons under it stay put, where the operator's hand is.
   void theTeachingButtonsStayPutAsTheHintChanges() {
