@@ -103,6 +103,7 @@ QString TeleopKeys::keyMapText(int dof) {
              "<b>buttons</b>: F5 start conf. &nbsp; F6 finish conf. &nbsp; F7 start prog. &nbsp; F8 finish prog. &nbsp; F9 replay<br>"
              "<b>mouse</b>: left-drag a link pulls it, elsewhere orbits; Ctrl+click a goal<br>"
              "<b>view</b>: Home resets the camera &nbsp; Ctrl+O opens a recording<br>"
+             "<b>menus</b>: Alt+T Teaching (remove, re-teach, replay) &nbsp; Alt+F File<br>"
              "F1 / H: hide this map")
       .arg(shown)
       .arg(plus, minus);

@@ -741,6 +741,7 @@ class OperatorTest : public QObject {
     // The mouse and view keys the guide lists are on the map too.
     QVERIFY(TeleopKeys::keyMapText(7).contains(QStringLiteral("Ctrl+click a goal")));
     QVERIFY(TeleopKeys::keyMapText(7).contains(QStringLiteral("Home resets the camera")));
+    QVERIFY(TeleopKeys::keyMapText(7).contains(QStringLiteral("Alt+T Teaching")));
     QVERIFY(!TeleopKeys::actionOf(Qt::Key_Z).has_value());
     QVERIFY(keys.release(Qt::Key_Right));
     QCOMPARE(keys.taskVelocity().x(), 0.0);
