@@ -646,11 +646,16 @@ bool MainWindow::mayDiscardTeaching(const QString& what) {
   if (now.teach_ins > 0) taught << count(now.teach_ins, tr("1 teach-in"), tr("%1 teach-ins"));
   if (recording) taught << (now.sub_stage == app::SubStage::kRecording ? tr("the area being recorded") : tr("the teach-in being taught"));
   const QString kept = recorder_ ? tr("the session file keeps what was finished") : tr("this run is not recorded: they are lost");
-  return QMessageBox::question(this, tr("Discard the teaching?"),
-                               tr("The %1 starts the teaching afresh: %2 of this run, and what was learned, leave the "
-                                  "window (%3). Go on?")
-                                   .arg(what, taught.join(tr(", ")), kept),
-                               QMessageBox::Yes | QMessageBox::Cancel, QMessageBox::Cancel) == QMessageBox::Yes;
+  if (now.model_ready) taught << tr("the map learned from them");
+  QMessageBox question(QMessageBox::Question, tr("Discard the teaching?"),
+                       tr("The %1 starts the teaching afresh and clears the window of %2 of this run (%3). Go on?")
+                           .arg(what, taught.join(tr(", ")), kept),
+                       QMessageBox::Cancel, this);
+  // The button says what it does, not a bare "Yes".
+  QPushButton* discard = question.addButton(tr("Discard and switch"), QMessageBox::DestructiveRole);
+  question.setDefaultButton(QMessageBox::Cancel);
+  question.exec();
+  return question.clickedButton() == discard;
 }
 
 void MainWindow::chooseScene(const std::string& name) {

@@ -40,7 +40,7 @@ TimePlot::TimePlot(const QString& title, const QString& value_label, QWidget* pa
   time_axis_->setLabelFormat(QStringLiteral("%.1f"));
   value_axis_ = new QValueAxis;
   value_axis_->setTitleText(value_label);
-  value_axis_->setLabelFormat(QStringLiteral("%.4g"));  // 4000 us, not 4e+03
+  value_axis_->setLabelFormat(QStringLiteral("%.6g"));  // 4000 and 25000 us, not 4e+03 or 2.5e+04
   chart_->addAxis(time_axis_, Qt::AlignBottom);
   chart_->addAxis(value_axis_, Qt::AlignLeft);
   cursor_ = new QLineSeries;

@@ -661,7 +661,7 @@ void ReviewWindow::updateConfidence(bool force) {
 }
 
 void ReviewWindow::updateLabels() {
-  time_label_->setText(QStringLiteral("t = %1 s / %2 s").arg(time_, 0, 'f', 3).arg(reader_ ? reader_->endTime() : 0.0, 0, 'f', 1));
+  time_label_->setText(QStringLiteral("t = %1 s / %2 s").arg(time_, 0, 'f', 3).arg(reader_ ? reader_->endTime() : 0.0, 0, 'f', 3));
   const std::string stage = stageAt(time_);
   stage_label_->setText(QString::fromStdString(stage));
   const QColor color = stageColor(stage);

@@ -265,13 +265,17 @@ class OperatorTest : public QObject {
       auto* box = qobject_cast<QMessageBox*>(QApplication::activeModalWidget());
       if (box == nullptr) return;
       question = box->text();
+      for (const QAbstractButton* button : box->buttons()) question += QStringLiteral(" [%1]").arg(button->text());
       answer.stop();
       box->button(QMessageBox::Cancel)->click();
     });
     answer.start(50);
     other_scene->trigger();
-    QVERIFY2(question.contains(QStringLiteral("The scene 'setup_A' starts the teaching afresh: 1 training area of this run")),
+    QVERIFY2(question.contains(QStringLiteral("The scene 'setup_A' starts the teaching afresh and clears the window of 1 training "
+                                              "area of this run")),
              qPrintable(question));
+    // No map was learned yet, and the button names what it does.
+    QVERIFY2(!question.contains(QStringLiteral("map")) && question.contains(QStringLiteral("[Discard and switch]")), qPrintable(question));
     QCOMPARE(s.areas, 1);
     QVERIFY(!other_scene->isChecked());
     QTest::keyClick(&window, Qt::Key_F6);
