@@ -312,6 +312,7 @@ void WorkflowThread::publish(const CycleStatistics& statistics) {
   }
 
   snapshot.areas = static_cast<int>(workflow.areas().size());
+  snapshot.reteach_area = workflow.recordingArea() < snapshot.areas ? workflow.recordingArea() : -1;
   snapshot.teach_ins = static_cast<int>(workflow.teachIns().size());
   snapshot.itm_nodes = workflow.itm().nodeCount();
   snapshot.itm_edges = workflow.itm().edgeCount();

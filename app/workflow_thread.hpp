@@ -109,6 +109,7 @@ struct WorkflowSnapshot {
   double alpha = 0.0;        ///< α = C(x) of assistance blending (Eq. 6.2)
   bool keyboard_mode = false;
   bool execution_done = true;
+  int reteach_area = -1;  ///< the area the next RECORDING replaces (Re-teach); -1: it adds one
 
   // The last request handled (refused requests changed nothing).
   std::uint64_t last_request_id = 0;  ///< 0: none yet

@@ -239,6 +239,14 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
           }
           return tr("Recording: move the tip around inside the area; let go and keep still (or press Enter) to store it.");
         default:
+          // Re-teach pressed: said until the area is recorded again, not only in the status bar.
+          if (s.reteach_area >= 0 && s.reteach_area < s.areas) {
+            const bool named = s.area_data && s.reteach_area < static_cast<int>(s.area_data->size());
+            const QString name = named ? QString::fromStdString((*s.area_data)[static_cast<std::size_t>(s.reteach_area)].name)
+                                       : tr("area %1").arg(s.reteach_area + 1);
+            return tr("Re-teaching '%1': %2 and move the arm to the posture wanted there; its new recording replaces it.")
+                .arg(name, touch);
+          }
           if (s.areas == 0) return tr("First area: %1 and move the arm to the posture wanted there.").arg(touch);
           return tr("Next area: %1 — or Finish configuration (F6) to learn from %2.").arg(touch, areas);
       }
@@ -291,7 +299,7 @@ const QStringList& everyHint() {
     for (const app::Stage stage : {app::Stage::kIdle, app::Stage::kConfiguration, app::Stage::kProgramming, app::Stage::kExecution}) {
       for (const app::SubStage sub : {app::SubStage::kNone, app::SubStage::kWaiting, app::SubStage::kApproaching, app::SubStage::kPosed,
                                       app::SubStage::kRecording, app::SubStage::kTeachIn}) {
-        for (int flags = 0; flags < 32; ++flags) {
+        for (int flags = 0; flags < 64; ++flags) {
           for (const int areas : {0, 1, 12}) {
             s.stage = stage;
             s.sub_stage = sub;
@@ -301,6 +309,7 @@ const QStringList& everyHint() {
             s.execution_done = (flags & 8) != 0;
             s.contacts = (flags & 16) != 0 ? 1 : 0;
             s.areas = areas;
+            s.reteach_area = (flags & 32) != 0 && areas > 0 ? areas - 1 : -1;  // named "area 12" without area data
             s.teach_ins = areas > 0 ? 1 : 0;
             for (const bool hand_can_pull : {false, true}) {
               const QString hint = StagePanel::nextStepHint(s, hand_can_pull);

@@ -225,6 +225,8 @@ class OperatorTest : public QObject {
     const Eigen::Vector3d first_centre = s.area_data->front().centre;
     QTest::mouseClick(panel->reteachAreaButton(), Qt::LeftButton);
     QTRY_VERIFY(flexirob::ui::fullStatusMessage(window.statusBar()).contains(QStringLiteral("replaces 'area_1'")));
+    // The hint says it too, until the area is recorded again.
+    QTRY_VERIFY(hintSays("Re-teaching 'area_1'"));
     recordArea(Qt::Key_Up);
     QTRY_VERIFY(s.area_data != nullptr && (s.area_data->front().centre - first_centre).norm() > 0.01);
     QCOMPARE(s.areas, 1);
