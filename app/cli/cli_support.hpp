@@ -155,13 +155,6 @@ robot::RobotModel loadRobotNoting(const std::string& name_or_path, const std::st
 robot::RobotModel loadSessionRobot(const std::string& reference, const std::string& stored_urdf, const std::string& tip);
 robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text);
 
-/// Reads the session `file` as eval and plan do and throws the one-line InputError they refuse
-/// it with (a version or joint count it was not written with, postures beyond the limits, tip
-/// positions its postures do not give, two areas of one name, an area without samples, numbers
-/// that are not finite). A session with nothing to evaluate yet (no finished area, no graph)
-/// passes: render draws it, export copies it.
-void checkSessionReads(const std::string& file);
-
 /// The --approach option of eval reachable, eval scene-model and sweep (app::ApproachFrom),
 /// default "visited".
 CLI::Option* addApproachOption(CLI::App& command, std::string& approach);

@@ -44,10 +44,6 @@ Eigen::VectorXd vectorOf(const Json& array, Eigen::Index size, const std::string
   return v;
 }
 
-// What a session is read for: eval and plan learn and plan with it (it needs samples and a
-// graph, and its notes speak of the evaluation); render and export draw or copy what it holds.
-enum class SessionUse { kEvaluate, kCopy };
-
 struct Session {
   std::string robot, tip, scene;
   std::unique_ptr<robot::RobotModel> model;
@@ -125,7 +121,7 @@ void checkAreaNamesDiffer(const Session& session) {
 }
 
 // A session recorded in SQLite by the session recorder: the complete areas' latest takes.
-Session loadRecordedSession(const std::string& file, SessionUse use) {
+Session loadRecordedSession(const std::string& file) {
   const app::SessionReader reader(file);
   app::RecordedTeaching teaching = app::readRecordedTeaching(reader);
   Session session;
@@ -137,14 +133,14 @@ Session loadRecordedSession(const std::string& file, SessionUse use) {
   } else if (const std::vector<app::ModelRecord> models = reader.models(); !models.empty()) {
     session.learner = models.back().learner_kind;
   }
-  if (use == SessionUse::kEvaluate) session.learner = evaluableLearner(session.learner, file);
+  session.learner = evaluableLearner(session.learner, file);
   session.robot = teaching.robot;
   session.tip = teaching.tip;
   session.scene = teaching.scene;
   session.model = std::make_unique<robot::RobotModel>(loadSessionRobot(session.robot, teaching.robot_urdf, session.tip));
   session.scene_data = loadSessionScene(session.scene, teaching.scene_text);
   robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
-  if (!teaching.closed_cleanly && use == SessionUse::kEvaluate) {
+  if (!teaching.closed_cleanly) {
     std::fprintf(stderr, "note: the session '%s' was not closed cleanly (interrupted, or still being written); the evaluation covers what was recorded\n",
                  file.c_str());
   }
@@ -163,7 +159,7 @@ Session loadRecordedSession(const std::string& file, SessionUse use) {
     session.taught_names.push_back(area.name.empty() ? std::to_string(area.index) : area.name);
     count += area.X.cols();
   }
-  if (count == 0 && use == SessionUse::kEvaluate) {
+  if (count == 0) {
     throw InputError(teaching.closed_cleanly ? "session: no training samples"
                                              : "session: '" + file + "' was interrupted before any area was finished; nothing to evaluate");
   }
@@ -177,18 +173,18 @@ Session loadRecordedSession(const std::string& file, SessionUse use) {
     session.data.area.insert(session.data.area.end(), static_cast<std::size_t>(area.X.cols()), static_cast<int>(k));
     l += area.X.cols();
   }
-  if (!teaching.itm && use == SessionUse::kEvaluate) throw InputError("session: no ITM graph recorded");
-  if (teaching.itm) session.itm = std::make_unique<planning::Itm>(std::move(*teaching.itm));
+  if (!teaching.itm) throw InputError("session: no ITM graph recorded");
+  session.itm = std::make_unique<planning::Itm>(std::move(*teaching.itm));
   checkAreaNamesDiffer(session);
   checkPosturesWithinLimits(session);
   if (parameters.is_object() && parameters.value("backend", Json()) == Json("sim")) checkTipPositionsMatchPostures(session);
   return session;
 }
 
-Session loadSession(const std::string& file, SessionUse use = SessionUse::kEvaluate) {
+Session loadSession(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError("--session: cannot read '" + file + "'");
-  if (!startsAsJson(in)) return readingSession(file, [&file, use] { return loadRecordedSession(file, use); });
+  if (!startsAsJson(in)) return readingSession(file, [&file] { return loadRecordedSession(file); });
   Json json;
   try {
     json = Json::parse(in);
@@ -207,7 +203,7 @@ Session loadSession(const std::string& file, SessionUse use = SessionUse::kEvalu
     session.robot = json.at("robot").get<std::string>();
     session.tip = json.value("tip", "");
     session.scene = json.at("scene").get<std::string>();
-    session.learner = use == SessionUse::kEvaluate ? evaluableLearner(json.value("learner", "elm"), file) : json.value("learner", "elm");
+    session.learner = evaluableLearner(json.value("learner", "elm"), file);
     session.model = std::make_unique<robot::RobotModel>(
         loadSessionRobot(session.robot, json.value("robot_urdf", ""), session.tip));
     session.scene_data = loadSessionScene(session.scene, json.value("scene_text", ""));
@@ -239,7 +235,7 @@ Session loadSession(const std::string& file, SessionUse use = SessionUse::kEvalu
       }
       ++k;
     }
-    if (xs.empty() && use == SessionUse::kEvaluate) throw InputError("session: no training samples");
+    if (xs.empty()) throw InputError("session: no training samples");
     session.data.X.resize(3, static_cast<Eigen::Index>(xs.size()));
     session.data.Y.resize(n, static_cast<Eigen::Index>(qs.size()));
     for (std::size_t l = 0; l < xs.size(); ++l) {
@@ -471,8 +467,6 @@ Json runSceneModel(const EvalOptions& options) {
 }
 
 }  // namespace
-
-void checkSessionReads(const std::string& file) { loadSession(file, SessionUse::kCopy); }
 
 Json trajectoryRegionJson(const app::TrajectoryRegionResult& region) {
   // Null where no trajectory's start was reached: no error was measured, which 0 would hide.
