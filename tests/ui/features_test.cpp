@@ -75,6 +75,20 @@ int changedPixels(const QImage& a, const QImage& b) {
   return changed;
 }
 
+// A Teaching panel as the window holds it: in a scroll area, at its narrowest, shown.
+struct PanelAsTheWindowHoldsIt {
+  QScrollArea scroll;
+  flexirob::ui::StagePanel* panel = new flexirob::ui::StagePanel;  // owned by the scroll area
+  bool exposed = false;
+  PanelAsTheWindowHoldsIt() {
+    scroll.setWidget(panel);
+    scroll.setWidgetResizable(true);
+    scroll.resize(panel->minimumSizeHint().width() + 30, 900);
+    scroll.show();
+    exposed = QTest::qWaitForWindowExposed(&scroll);
+  }
+};
+
 }  // namespace
 
 class FeaturesTest : public QObject {
@@ -340,14 +354,9 @@ class FeaturesTest : public QObject {
   // whole, scrolls a long list within at most kWarningLines lines with the newest, last, in
   // view, and the panel itself does not grow past them.
   void theWarningBoxScrollsToTheNewestWithinItsLines() {
-    QScrollArea scroll;  // as the window holds the panel
-    auto* panel_owned = new flexirob::ui::StagePanel;
-    flexirob::ui::StagePanel& panel = *panel_owned;
-    scroll.setWidget(panel_owned);
-    scroll.setWidgetResizable(true);
-    scroll.resize(panel.minimumSizeHint().width() + 30, 900);
-    scroll.show();
-    QVERIFY(QTest::qWaitForWindowExposed(&scroll));
+    PanelAsTheWindowHoldsIt held;
+    QVERIFY(held.exposed);
+    flexirob::ui::StagePanel& panel = *held.panel;
     panel.showWarning(QStringLiteral("area_1: near a joint limit"));
     QTRY_VERIFY(panel.warningScroll()->isVisible());
     QCoreApplication::sendPostedEvents(nullptr, QEvent::LayoutRequest);
@@ -372,14 +381,9 @@ class FeaturesTest : public QObject {
   // The hint above the Teaching panel's buttons grows and shrinks by a line or two as the stage
   // changes; the buttons under it stay put, where the operator's hand is.
   void theTeachingButtonsStayPutAsTheHintChanges() {
-    QScrollArea scroll;  // as the window holds the panel
-    auto* panel_owned = new flexirob::ui::StagePanel;
-    flexirob::ui::StagePanel& panel = *panel_owned;
-    scroll.setWidget(panel_owned);
-    scroll.setWidgetResizable(true);
-    scroll.resize(panel.minimumSizeHint().width() + 30, 900);
-    scroll.show();
-    QVERIFY(QTest::qWaitForWindowExposed(&scroll));
+    PanelAsTheWindowHoldsIt held;
+    QVERIFY(held.exposed);
+    flexirob::ui::StagePanel& panel = *held.panel;
     flexirob::ui::LiveSnapshot s;
     s.dof = 7;
     using Controller = flexirob::app::InteractionController;
