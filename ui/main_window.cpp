@@ -642,17 +642,17 @@ bool MainWindow::mayDiscardTeaching(const QString& what) {
   // (the session file keeps it). One click in a menu must not cost a person's teaching.
   const auto count = [](int n, const QString& one, const QString& many) { return n == 1 ? one : many.arg(n); };
   QStringList taught;
-  if (now.areas > 0) taught << count(now.areas, tr("1 training area"), tr("%1 training areas"));
-  if (now.teach_ins > 0) taught << count(now.teach_ins, tr("1 teach-in"), tr("%1 teach-ins"));
+  if (now.areas > 0) taught << count(now.areas, tr("its 1 training area"), tr("its %1 training areas"));
+  if (now.teach_ins > 0) taught << count(now.teach_ins, tr("its 1 teach-in"), tr("its %1 teach-ins"));
   if (recording) taught << (now.sub_stage == app::SubStage::kRecording ? tr("the area being recorded") : tr("the teach-in being taught"));
   const QString kept = recorder_ ? tr("the session file keeps what was finished") : tr("this run is not recorded: they are lost");
-  if (now.model_ready) taught << tr("the map learned from them");
+  if (now.model_ready) taught << tr("its learned map");
   QMessageBox question(QMessageBox::Question, tr("Discard the teaching?"),
-                       tr("The %1 starts the teaching afresh and clears the window of %2 of this run (%3). Go on?")
+                       tr("The %1 starts the teaching afresh and clears this run from the window: %2 (%3). Go on?")
                            .arg(what, taught.join(tr(", ")), kept),
                        QMessageBox::Cancel, this);
   // The button says what it does, not a bare "Yes".
-  QPushButton* discard = question.addButton(tr("Discard and switch"), QMessageBox::DestructiveRole);
+  QPushButton* discard = question.addButton(tr("Discard the teaching"), QMessageBox::DestructiveRole);
   question.setDefaultButton(QMessageBox::Cancel);
   question.exec();
   return question.clickedButton() == discard;
@@ -1247,11 +1247,14 @@ void MainWindow::watchDeadlines(const app::CycleStatistics& stats) {
 }
 
 void MainWindow::fillTeachingMenu() {
+  // clear() leaves the submenus (their actions are theirs): they go with it.
+  for (QMenu* submenu : teaching_menu_->findChildren<QMenu*>(QString(), Qt::FindDirectChildrenOnly)) delete submenu;
   teaching_menu_->clear();
   // Each entry clicks the panel's own control, so it is enabled exactly when that one is and
-  // does what it does.
+  // does what it does; one picked after the control was disabled changes no choice either.
   const auto add = [this](QMenu* menu, const QString& text, QAbstractButton* target, const std::function<void()>& choose = {}) {
     QAction* action = menu->addAction(text, this, [target, choose] {
+      if (!target->isEnabled()) return;
       if (choose) choose();
       target->click();
     });
@@ -1263,11 +1266,10 @@ void MainWindow::fillTeachingMenu() {
   add(teaching_menu_, tr("Finish pro&gramming\tF8"), stage_panel_->button(app::Button::kFinishedProgramming));
   teaching_menu_->addSeparator();
   QMenu* replay = teaching_menu_->addMenu(tr("&Replay teach-in"));
-  const int teach_ins = stage_panel_->replayChoice()->maximum();
+  const int teach_ins = live_ ? live_->snapshot().teach_ins : 0;
   QSpinBox* replay_choice = stage_panel_->replayChoice();
   for (int k = 1; k <= teach_ins; ++k) {
-    add(replay, k == teach_ins ? tr("Teach-in %1 (the newest)\tF9").arg(k) : tr("Teach-in %1").arg(k), stage_panel_->replayButton(),
-        [replay_choice, k] { replay_choice->setValue(k); });
+    add(replay, tr("Teach-in %1").arg(k), stage_panel_->replayButton(), [replay_choice, k] { replay_choice->setValue(k); });
   }
   replay->setEnabled(stage_panel_->replayButton()->isEnabled());
   QComboBox* area_choice = stage_panel_->areaChoice();

@@ -9,7 +9,6 @@
 #include <QDockWidget>
 #include <QFontMetrics>
 #include <QHBoxLayout>
-#include <QHelpEvent>
 #include <QKeyEvent>
 #include <QLabel>
 #include <QMenuBar>
@@ -20,7 +19,6 @@
 #include <QScreen>
 #include <QStatusBar>
 #include <QTimer>
-#include <QToolTip>
 #include <QVBoxLayout>
 
 #include <algorithm>
@@ -100,6 +98,7 @@ QColor stageColor(const std::string& label) {
 // --- Timeline -------------------------------------------------------------------------------
 
 Timeline::Timeline(QWidget* parent) : QWidget(parent) {
+  setMouseTracking(true);  // the tooltip follows the pointer without a button held
   setMinimumHeight(48);
   setSizePolicy(QSizePolicy::Expanding, QSizePolicy::Fixed);
   setFixedHeight(56);
@@ -137,11 +136,12 @@ QString Timeline::describeAt(double x) const {
   const double time = timeAt(x);
   for (const StageBand& band : bands_) {
     if (time < band.t0 || time > band.t1) continue;
+    // To the millisecond, as the time readout: a phase of 40 ms is one of those to be read here.
     lines << QStringLiteral("%1: %2 s to %3 s (%4 s)")
                  .arg(QString::fromStdString(band.label))
-                 .arg(band.t0, 0, 'f', 1)
-                 .arg(band.t1, 0, 'f', 1)
-                 .arg(band.t1 - band.t0, 0, 'f', 1);
+                 .arg(band.t0, 0, 'f', 3)
+                 .arg(band.t1, 0, 'f', 3)
+                 .arg(band.t1 - band.t0, 0, 'f', 3);
     break;
   }
   // Within the reach of a pointer: a tick or a triangle is 2-10 px wide.
@@ -151,24 +151,9 @@ QString Timeline::describeAt(double x) const {
     lines << QStringLiteral("%1 %2 at %3 s")
                  .arg(marker.trigger ? QStringLiteral("trigger") : QStringLiteral("button"))
                  .arg(QString::fromStdString(marker.name))
-                 .arg(marker.time, 0, 'f', 2);
+                 .arg(marker.time, 0, 'f', 3);
   }
   return lines.join(QLatin1Char('\n'));
-}
-
-bool Timeline::event(QEvent* event) {
-  if (event->type() == QEvent::ToolTip) {
-    auto* help = static_cast<QHelpEvent*>(event);
-    const QString text = describeAt(help->pos().x());
-    if (text.isEmpty()) {
-      QToolTip::hideText();
-      event->ignore();
-    } else {
-      QToolTip::showText(help->globalPos(), text, this);
-    }
-    return true;
-  }
-  return QWidget::event(event);
 }
 
 void Timeline::paintEvent(QPaintEvent* /*event*/) {
@@ -218,6 +203,8 @@ void Timeline::mousePressEvent(QMouseEvent* event) {
 }
 
 void Timeline::mouseMoveEvent(QMouseEvent* event) {
+  // The tooltip Qt shows where the pointer rests says what lies there.
+  setToolTip(describeAt(event->position().x()));
   if ((event->buttons() & Qt::LeftButton) != 0) Q_EMIT timeRequested(timeAt(event->position().x()));
 }
 

@@ -223,15 +223,15 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
           // Fixed in a contact (kept still for 2 s, or Enter, while red): the area will be
           // warned about when stored; the operator learns it now, and how to show it again.
           if (s.contacts > 0) {
-            return tr("Posture fixed touching something (drawn red): its area will be warned about. To record anyway, %1 "
-                      "again.")
+            return tr("Posture fixed touching something (drawn red): an area recorded in the contact is warned about. To "
+                      "record anyway, %1 again.")
                 .arg(touch);
           }
           return tr("Posture fixed. To record the area, %1 again and move the tip around inside it.").arg(touch);
         case SubStage::kRecording:
           if (s.contacts > 0) {
-            return tr("Recording touching something (drawn red): samples in the contact are warned about; move the tip "
-                      "away from it.");
+            return tr("Recording touching something (drawn red): move the tip away from it; an area recorded in the contact "
+                      "is warned about.");
           }
           if (s.keyboard_mode) {
             return tr("Recording: move the tip around inside the area with the keys; press Enter (or leave the keys for 2 s) to "

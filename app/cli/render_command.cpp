@@ -107,15 +107,18 @@ double finiteNumber(const Json& value, const std::string& what) {
 // camera's arithmetic overflow and a blank picture written; a megametre is far beyond any cell.
 constexpr double kFarthestPointM = 1e6;
 
-Eigen::Vector3d point3(const Json& value, const std::string& what) {
-  if (!value.is_array() || value.size() != 3) throw InputError(what + ": expected [x, y, z]");
-  const Eigen::Vector3d p(finiteNumber(value[0], what), finiteNumber(value[1], what), finiteNumber(value[2], what));
-  if (p.cwiseAbs().maxCoeff() > kFarthestPointM) {
+Eigen::Vector3d withinFramingReach(const Eigen::Vector3d& p, const std::string& what) {
+  if (!(p.cwiseAbs().maxCoeff() <= kFarthestPointM)) {
     std::ostringstream message;
     message << what << ": [" << p.x() << ", " << p.y() << ", " << p.z() << "] lies beyond ±1e6 m";
     throw InputError(message.str());
   }
   return p;
+}
+
+Eigen::Vector3d point3(const Json& value, const std::string& what) {
+  if (!value.is_array() || value.size() != 3) throw InputError(what + ": expected [x, y, z]");
+  return withinFramingReach({finiteNumber(value[0], what), finiteNumber(value[1], what), finiteNumber(value[2], what)}, what);
 }
 
 Eigen::VectorXd vectorN(const Json& value, Eigen::Index n, const std::string& what) {
@@ -155,8 +158,9 @@ SessionOverlay sessionFromJson(const Json& json, const std::string& file) {
     throw InputError("--session: '" + file + "' is not a flexirob session (format flexirob-session-json)");
   }
   // As eval and plan read it: a version this build does not know is refused, not guessed at.
-  if (json.contains("version") && json.at("version") != 1) {
-    throw InputError("--session: '" + file + "' has version " + json.at("version").dump() + "; this build reads version 1");
+  if (!json.contains("version") || json.at("version") != 1) {
+    throw InputError("--session: '" + file + "' has version " + (json.contains("version") ? json.at("version").dump() : "none") +
+                     "; this build reads version 1");
   }
   SessionOverlay session;
   try {
@@ -214,8 +218,10 @@ SessionOverlay sessionFromRecording(const std::string& file) {
   for (const app::RecordedArea& area : teaching.areas) {
     render::AreaSamples cloud;
     cloud.area = area.index;
-    for (Eigen::Index l = 0; l < area.X.cols(); ++l) cloud.points_W.emplace_back(area.X.col(l));
-    for (Eigen::Index l = 0; l < area.unfinished_X.cols(); ++l) cloud.points_W.emplace_back(area.unfinished_X.col(l));
+    for (Eigen::Index l = 0; l < area.X.cols(); ++l) cloud.points_W.push_back(withinFramingReach(area.X.col(l), "--session: area sample"));
+    for (Eigen::Index l = 0; l < area.unfinished_X.cols(); ++l) {
+      cloud.points_W.push_back(withinFramingReach(area.unfinished_X.col(l), "--session: area sample"));
+    }
     session.areas.push_back(std::move(cloud));
     session.area_names.push_back(area.name);
     if (area.complete) session.q_fixed.push_back(area.q_fixed);
@@ -223,7 +229,7 @@ SessionOverlay sessionFromRecording(const std::string& file) {
   if (teaching.itm) {
     const planning::Itm& itm = *teaching.itm;
     for (const int id : itm.nodeIds()) {
-      session.nodes.emplace_back(id, Eigen::Vector3d(itm.prototype(id).head<3>()));
+      session.nodes.emplace_back(id, withinFramingReach(itm.prototype(id).head<3>(), "--session: ITM node"));
       for (const int other : itm.neighbors(id)) {
         if (other > id) session.edges.emplace_back(id, other);
       }

@@ -250,6 +250,26 @@ TEST_F(ExportCli, ASampleLearnWouldRefuseIsRefusedAndNotWritten) {
   fs::remove(edited);
 }
 
+// A recorded sample of 1e308 m had render's camera arithmetic overflow into a blank picture
+// (and OpenSceneGraph's NaN warning before the JSON); the recording is refused as the JSON is.
+TEST_F(ExportCli, RenderRefusesARecordedSampleBeyondAMegametre) {
+  const fs::path edited = scratchDir() / "far-sample.flexirob";
+  const fs::path picture = scratchDir() / "far-sample.png";
+  fs::copy_file(*session_, edited, fs::copy_options::overwrite_existing);
+  {
+    app::SqliteDatabase db(edited.string(), 0x00000002);  // SQLITE_OPEN_READWRITE
+    // x, y, z = 1e308 m (little-endian doubles) in the first sample.
+    db.exec("UPDATE sample SET x = x'a0c8eb85f3cce17fa0c8eb85f3cce17fa0c8eb85f3cce17f' WHERE id = (SELECT min(id) FROM sample)");
+  }
+  const auto result = runCliBinary("render --width 64 --height 48 --session " + edited.string() + " --out " + picture.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("--session: area sample: [1e+308, 1e+308, 1e+308] lies beyond ±1e6 m"), std::string::npos) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_TRUE(result.out.empty()) << result.out;
+  EXPECT_FALSE(fs::exists(picture));
+  fs::remove(edited);
+}
+
 // Outputs are written through temporaries renamed into place; an output that happens to be
 // named as another's temporary would have been replaced by it.
 TEST_F(ExportCli, AnOutputNamedLikeAnothersTemporaryIsKept) {

@@ -172,6 +172,7 @@ std::string tinySession() {
   for (int i = 0; i < 27; ++i) x.push_back({-0.5 + 0.02 * (i % 3 - 1), 0.02 * ((i / 3) % 3 - 1), 0.4 + 0.02 * (i / 9 - 1)});
   nlohmann::json session = {
       {"format", "flexirob-session-json"},
+      {"version", 1},
       {"robot", "lwr4"},
       {"scene", "empty"},
       {"areas", {{{"name", "front"}, {"q_fixed", {0.0, 0.5, 0.0, -1.5, 0.0, 0.8, 0.0}}, {"x", x}, {"q", nlohmann::json::array()}}}},

@@ -236,20 +236,26 @@ class OperatorTest : public QObject {
     QTRY_COMPARE(panel->chosenArea(), 1);
     // The Teaching menu reaches the panel's controls from the keyboard: it lists the areas,
     // and removes the one it names, not the one the panel's choice names.
+    // The menu is rebuilt as it opens (each opening replaces the entries of the last).
+    const auto openTeachingMenu = [&window] { Q_EMIT window.teachingMenu()->aboutToShow(); };
     const auto teachingEntry = [&window](const QString& text) -> QAction* {
-      Q_EMIT window.teachingMenu()->aboutToShow();
       for (QAction* action : window.teachingMenu()->actions()) {
         if (action->text() == text) return action;
       }
       return nullptr;
     };
+    // Opened again and again, it keeps one set of submenus.
+    for (int k = 0; k < 3; ++k) openTeachingMenu();
+    QCOMPARE(window.teachingMenu()->findChildren<QMenu*>(QString(), Qt::FindDirectChildrenOnly).size(), 3);
+    // In CONFIGURATION: finishing it is offered, programming is not.
+    QAction* start_programming = teachingEntry(QStringLiteral("Start &programming\tF7"));
+    QAction* finish_configuration = teachingEntry(QStringLiteral("&Finish configuration\tF6"));
+    QVERIFY(start_programming != nullptr && finish_configuration != nullptr);
+    QVERIFY(!start_programming->isEnabled() && finish_configuration->isEnabled());
     QAction* remove_entry = teachingEntry(QStringLiteral("Re&move area"));
     QVERIFY(remove_entry != nullptr && remove_entry->menu() != nullptr && remove_entry->isEnabled());
     QCOMPARE(remove_entry->menu()->actions().size(), 2);
     QCOMPARE(remove_entry->menu()->actions().at(0)->text(), QStringLiteral("area_1"));
-    QAction* start_programming = teachingEntry(QStringLiteral("Start &programming\tF7"));
-    QVERIFY(start_programming != nullptr);
-    QCOMPARE(start_programming->isEnabled(), panel->button(flexirob::app::Button::kStartProgramming)->isEnabled());
     remove_entry->menu()->actions().at(0)->trigger();
     QTRY_COMPARE(s.areas, 1);
     QTRY_COMPARE(panel->areaChoice()->count(), 1);
@@ -273,11 +279,11 @@ class OperatorTest : public QObject {
     });
     answer.start(50);
     other_scene->trigger();
-    QVERIFY2(question.contains(QStringLiteral("The scene 'setup_A' starts the teaching afresh and clears the window of 1 training "
-                                              "area of this run")),
+    QVERIFY2(question.contains(QStringLiteral("The scene 'setup_A' starts the teaching afresh and clears this run from the window: "
+                                              "its 1 training area (")),
              qPrintable(question));
     // No map was learned yet, and the button names what it does.
-    QVERIFY2(!question.contains(QStringLiteral("map")) && question.contains(QStringLiteral("[Discard and switch]")), qPrintable(question));
+    QVERIFY2(!question.contains(QStringLiteral("map")) && question.contains(QStringLiteral("[Discard the teaching]")), qPrintable(question));
     QCOMPARE(s.areas, 1);
     QVERIFY(!other_scene->isChecked());
     QTest::keyClick(&window, Qt::Key_F6);
