@@ -211,63 +211,52 @@ TEST_F(ExportCli, BadRequestsAreRefusedWithOneLineAndWriteNothing) {
   EXPECT_EQ(discarded.exit_code, 0) << discarded.err;
 }
 
+// A copy of the session edited with `sql`, handed to `command` with `--session COPY` and an
+// output `output_option NAME`: refused in one line naming `reason`, the output not written.
+auto expectAnEditedCopyRefused(const fs::path& session, const std::string& name, const std::string& sql, const std::string& command,
+                               const std::string& output_option, const std::string& output_name, const std::string& reason) {
+  const fs::path edited = scratchDir() / (name + ".flexirob");
+  const fs::path out = scratchDir() / output_name;
+  fs::copy_file(session, edited, fs::copy_options::overwrite_existing);
+  {
+    app::SqliteDatabase db(edited.string(), 0x00000002);  // SQLITE_OPEN_READWRITE
+    db.exec(sql);
+  }
+  const auto result = runCliBinary(command + " --session " + edited.string() + " " + output_option + " " + out.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find(reason), std::string::npos) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_FALSE(fs::exists(out));
+  fs::remove(edited);
+  return result;
+}
+
 // A model damaged in the file is not handed on as one learn predict would refuse, as a damaged
 // ITM snapshot is not: refused with the reason, and nothing written.
 TEST_F(ExportCli, ADamagedModelIsRefusedAndNotWritten) {
-  const fs::path damaged = scratchDir() / "damaged-model.flexirob";
-  const fs::path out = scratchDir() / "damaged.model";
-  fs::copy_file(*session_, damaged, fs::copy_options::overwrite_existing);
-  {
-    app::SqliteDatabase db(damaged.string(), 0x00000002);  // SQLITE_OPEN_READWRITE
-    db.exec("UPDATE model SET bytes = x'00ff00ff'");
-  }
-  const auto result = runCliBinary("export --session " + damaged.string() + " --model " + out.string());
-  EXPECT_EQ(result.exit_code, 2) << result.err;
-  EXPECT_NE(result.err.find("--model: the session's last model does not read"), std::string::npos) << result.err;
-  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
-  EXPECT_FALSE(fs::exists(out));
-  fs::remove(damaged);
+  expectAnEditedCopyRefused(*session_, "damaged-model", "UPDATE model SET bytes = x'00ff00ff'", "export", "--model", "damaged.model",
+                            "--model: the session's last model does not read");
 }
 
 // The samples are written for learn fit: a value it would refuse (a posture of 1e308 in a
 // damaged or hand-edited file) refuses the export instead of a CSV learn cannot read.
 TEST_F(ExportCli, ASampleLearnWouldRefuseIsRefusedAndNotWritten) {
-  const fs::path edited = scratchDir() / "huge-sample.flexirob";
-  const fs::path out = scratchDir() / "huge-sample.csv";
-  fs::copy_file(*session_, edited, fs::copy_options::overwrite_existing);
-  {
-    app::SqliteDatabase db(edited.string(), 0x00000002);  // SQLITE_OPEN_READWRITE
-    // 7 joint values of 1e308 (little-endian doubles) in the first sample.
-    std::string huge;
-    for (int j = 0; j < 7; ++j) huge += "a0c8eb85f3cce17f";
-    db.exec("UPDATE sample SET q = x'" + huge + "' WHERE id = (SELECT min(id) FROM sample)");
-  }
-  const auto result = runCliBinary("export --session " + edited.string() + " --samples " + out.string());
-  EXPECT_EQ(result.exit_code, 2) << result.err;
-  EXPECT_NE(result.err.find("sample 1: a value beyond ±1e6 or not finite, which learn does not read"), std::string::npos) << result.err;
-  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
-  EXPECT_FALSE(fs::exists(out));
-  fs::remove(edited);
+  // 7 joint values of 1e308 (little-endian doubles) in the first sample.
+  std::string huge;
+  for (int j = 0; j < 7; ++j) huge += "a0c8eb85f3cce17f";
+  expectAnEditedCopyRefused(*session_, "huge-sample", "UPDATE sample SET q = x'" + huge + "' WHERE id = (SELECT min(id) FROM sample)",
+                            "export", "--samples", "huge-sample.csv",
+                            "sample 1: a value beyond ±1e6 or not finite, which learn does not read");
 }
 
 // A recorded sample of 1e308 m had render's camera arithmetic overflow into a blank picture
 // (and OpenSceneGraph's NaN warning before the JSON); the recording is refused as the JSON is.
 TEST_F(ExportCli, RenderRefusesARecordedSampleBeyondAMegametre) {
-  const fs::path edited = scratchDir() / "far-sample.flexirob";
-  const fs::path picture = scratchDir() / "far-sample.png";
-  fs::copy_file(*session_, edited, fs::copy_options::overwrite_existing);
-  {
-    app::SqliteDatabase db(edited.string(), 0x00000002);  // SQLITE_OPEN_READWRITE
-    // x, y, z = 1e308 m (little-endian doubles) in the first sample.
-    db.exec("UPDATE sample SET x = x'a0c8eb85f3cce17fa0c8eb85f3cce17fa0c8eb85f3cce17f' WHERE id = (SELECT min(id) FROM sample)");
-  }
-  const auto result = runCliBinary("render --width 64 --height 48 --session " + edited.string() + " --out " + picture.string());
-  EXPECT_EQ(result.exit_code, 2) << result.err;
-  EXPECT_NE(result.err.find("--session: area sample: [1e+308, 1e+308, 1e+308] lies beyond ±1e6 m"), std::string::npos) << result.err;
-  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  // x, y, z = 1e308 m (little-endian doubles) in the first sample.
+  const auto result = expectAnEditedCopyRefused(
+      *session_, "far-sample", "UPDATE sample SET x = x'a0c8eb85f3cce17fa0c8eb85f3cce17fa0c8eb85f3cce17f' WHERE id = (SELECT min(id) FROM sample)",
+      "render --width 64 --height 48", "--out", "far-sample.png", "--session: area sample: [1e+308, 1e+308, 1e+308] lies beyond ±1e6 m");
   EXPECT_TRUE(result.out.empty()) << result.out;
-  EXPECT_FALSE(fs::exists(picture));
-  fs::remove(edited);
 }
 
 // Outputs are written through temporaries renamed into place; an output that happens to be
