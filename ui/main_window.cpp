@@ -68,6 +68,10 @@ namespace {
 constexpr int kDisplayPeriodMs = 16;  // ~60 Hz mirror
 constexpr int kPlotPeriodMs = 200;    // plots take a sample every 200 ms (5 Hz: smooth, cheap to redraw)
 constexpr qint64 kItmRecordPeriodMs = 1000;  // ITM snapshots at most once a second, rarer as it grows (app::itmSnapshotPeriod)
+// The chosen area's ghost is more opaque than the others' (0.30) yet lets the arm show through;
+// its samples are drawn larger than the default 5 px.
+constexpr float kChosenGhostAlpha = 0.45F;
+constexpr float kChosenSampleSizePx = 9.0F;
 
 std::string readText(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -1023,23 +1027,40 @@ void MainWindow::handleEvents() {
 
 void MainWindow::updateOverlays(const LiveSnapshot& s) {
   using render::OverlayLayer;
-  if (s.areas_version != shown_areas_version_) {
+  // The area the Teaching panel's controls name stands out: its ghost in the area's own colour
+  // (the colour of its samples and of its swatch in the list), its samples drawn larger, so that
+  // "Remove" and "Re-teach" name something the operator can see.
+  const int chosen_area = stage_panel_->chosenArea();
+  if (s.areas_version != shown_areas_version_ || chosen_area != shown_chosen_area_) {
     shown_areas_version_ = s.areas_version;
+    shown_chosen_area_ = chosen_area;
     std::vector<render::AreaSamples> samples;
+    render::AreaSamples chosen_samples;
     overlays_->setContent(OverlayLayer::kGhostArms, nullptr);
     if (s.area_data) {
       for (std::size_t k = 0; k < s.area_data->size(); ++k) {
         const app::TrainingArea& area = (*s.area_data)[k];
+        const bool chosen = static_cast<int>(k) == chosen_area;
         render::AreaSamples cloud;
         cloud.area = static_cast<int>(k);
         for (Eigen::Index l = 0; l < area.X.cols(); ++l) cloud.points_W.emplace_back(area.X.col(l));
+        if (chosen) chosen_samples = cloud;
         samples.push_back(std::move(cloud));
         if (area.q_fixed.size() == model_->dof()) {
-          overlays_->addContent(OverlayLayer::kGhostArms, render::makeGhostArm(*model_, area.q_fixed));
+          Eigen::Vector4f rgba = render::OverlayPalette::ghost();
+          if (chosen) {
+            rgba = render::OverlayPalette::area(static_cast<int>(k));
+            rgba[3] = kChosenGhostAlpha;
+          }
+          overlays_->addContent(OverlayLayer::kGhostArms, render::makeGhostArm(*model_, area.q_fixed, rgba));
         }
       }
     }
     overlays_->setContent(OverlayLayer::kTrainingSamples, render::makeTrainingSamples(samples));
+    if (!chosen_samples.points_W.empty()) {
+      overlays_->addContent(OverlayLayer::kTrainingSamples,
+                            render::makeTrainingSamples({chosen_samples}, kChosenSampleSizePx));
+    }
   }
   if (s.teach_ins_version != shown_teach_ins_version_) {
     shown_teach_ins_version_ = s.teach_ins_version;
@@ -1259,6 +1280,7 @@ void MainWindow::fillTeachingMenu() {
       target->click();
     });
     action->setEnabled(target->isEnabled());
+    return action;
   };
   add(teaching_menu_, tr("&Start configuration\tF5"), stage_panel_->button(app::Button::kStartConfiguration));
   add(teaching_menu_, tr("&Finish configuration\tF6"), stage_panel_->button(app::Button::kFinishedConfiguration));
@@ -1277,8 +1299,8 @@ void MainWindow::fillTeachingMenu() {
   QMenu* reteach = teaching_menu_->addMenu(tr("Re-&teach area"));
   for (int k = 0; k < area_choice->count(); ++k) {
     const auto choose = [area_choice, k] { area_choice->setCurrentIndex(k); };
-    add(remove, area_choice->itemText(k), stage_panel_->removeAreaButton(), choose);
-    add(reteach, area_choice->itemText(k), stage_panel_->reteachAreaButton(), choose);
+    add(remove, area_choice->itemText(k), stage_panel_->removeAreaButton(), choose)->setIcon(area_choice->itemIcon(k));
+    add(reteach, area_choice->itemText(k), stage_panel_->reteachAreaButton(), choose)->setIcon(area_choice->itemIcon(k));
   }
   remove->setEnabled(stage_panel_->removeAreaButton()->isEnabled());
   reteach->setEnabled(stage_panel_->reteachAreaButton()->isEnabled());

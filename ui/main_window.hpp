@@ -295,6 +295,7 @@ class MainWindow : public QMainWindow {
   std::vector<std::string> coloured_links_;
   std::unique_ptr<render::Overlays> overlays_;
   std::uint64_t shown_areas_version_ = ~0ULL, shown_teach_ins_version_ = ~0ULL, shown_itm_version_ = ~0ULL;
+  int shown_chosen_area_ = -1;
   std::uint64_t shown_model_version_ = ~0ULL, shown_path_version_ = ~0ULL, recorded_itm_version_ = ~0ULL;
   // The model last recorded: a new area raises the model version (its confidence changed)
   // without a new model, so the object, not the version, says whether it was recorded.

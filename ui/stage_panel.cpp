@@ -5,6 +5,8 @@
 #include <algorithm>
 
 #include <QFontMetrics>
+#include <QIcon>
+#include <QPixmap>
 #include <QLabel>
 #include <QProgressBar>
 #include <QComboBox>
@@ -17,7 +19,24 @@
 #include <QSpinBox>
 #include <QVBoxLayout>
 
+#include "render/overlays.hpp"
+
 namespace flexirob::ui {
+
+namespace {
+
+// A square of the area's colour in the 3D view (its samples, its ghost when chosen): the list
+// and the picture name the same area.
+constexpr int kSwatchPx = 10;  // small: the narrow panel's list keeps room for the name
+
+QIcon areaSwatch(int area) {
+  const Eigen::Vector4f rgba = render::OverlayPalette::area(area);
+  QPixmap swatch(kSwatchPx, kSwatchPx);
+  swatch.fill(QColor::fromRgbF(rgba[0], rgba[1], rgba[2]));
+  return QIcon(swatch);
+}
+
+}  // namespace
 
 StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
   auto* layout = new QVBoxLayout(this);
@@ -98,9 +117,10 @@ StagePanel::StagePanel(QWidget* parent) : QWidget(parent) {
   area_choice_ = new QComboBox;
   area_choice_->setObjectName(QStringLiteral("area_choice"));
   area_choice_->setFocusPolicy(Qt::NoFocus);  // the keys stay the view's: arrows and digits move the arm
-  area_choice_->setToolTip(tr("The training area to remove or to record again."));
+  area_choice_->setToolTip(tr("The training area to remove or to record again; the 3D view shows its posture in its colour."));
   area_choice_->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
   area_choice_->setMinimumContentsLength(6);
+  area_choice_->setIconSize(QSize(kSwatchPx, kSwatchPx));
   remove_area_button_ = new QPushButton(tr("Remove"));
   remove_area_button_->setObjectName(QStringLiteral("remove_area"));
   remove_area_button_->setToolTip(tr("Forget this area; the redundancy resolution is learned again from the others."));
@@ -410,7 +430,7 @@ void StagePanel::showSnapshot(const LiveSnapshot& s, bool robot_measured, bool h
     area_choice_->clear();
     if (s.area_data) {
       for (std::size_t k = 0; k < s.area_data->size(); ++k) {
-        area_choice_->addItem(QString::fromStdString((*s.area_data)[k].name));
+        area_choice_->addItem(areaSwatch(static_cast<int>(k)), QString::fromStdString((*s.area_data)[k].name));
       }
     }
     // A new area is the one named next; after a removal or a re-teach the choice stays put.

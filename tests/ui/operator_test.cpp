@@ -21,6 +21,7 @@
 #include <QMenuBar>
 #include <QTimer>
 #include <optional>
+#include <osg/Material>
 #include <chrono>
 #include <thread>
 
@@ -30,6 +31,7 @@
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "render/camera.hpp"
+#include "render/overlays.hpp"
 #include "robot/kinematics.hpp"
 #include "ui/joint_panel.hpp"
 #include "ui/live_teaching.hpp"
@@ -234,6 +236,38 @@ class OperatorTest : public QObject {
     recordArea(Qt::Key_Down);
     QTRY_COMPARE(s.areas, 2);
     QTRY_COMPARE(panel->chosenArea(), 1);
+    // The chosen area stands out in the 3D view: its ghost in its own colour (the colour of its
+    // samples and of its swatch in the list), its samples drawn a second time, larger.
+    const auto ghostColour = [&window](unsigned area) -> osg::Vec4 {
+      osg::Group* ghosts = window.overlays().layer(flexirob::render::OverlayLayer::kGhostArms);
+      if (area >= ghosts->getNumChildren() || ghosts->getChild(area)->getStateSet() == nullptr) return {};
+      const auto* material = dynamic_cast<const osg::Material*>(
+          ghosts->getChild(area)->getStateSet()->getAttribute(osg::StateAttribute::MATERIAL));
+      return material == nullptr ? osg::Vec4() : material->getDiffuse(osg::Material::FRONT);
+    };
+    const auto areaHue = [](int area) {
+      const Eigen::Vector4f rgba = flexirob::render::OverlayPalette::area(area);
+      return osg::Vec3(rgba[0], rgba[1], rgba[2]);
+    };
+    const auto ghostIsInItsAreasColour = [&](unsigned area) {
+      const osg::Vec4 colour = ghostColour(area);
+      return (osg::Vec3(colour.r(), colour.g(), colour.b()) - areaHue(static_cast<int>(area))).length() < 1e-3F;
+    };
+    const auto largerSamplesName = [&window]() -> std::string {
+      osg::Group* samples = window.overlays().layer(flexirob::render::OverlayLayer::kTrainingSamples);
+      if (samples->getNumChildren() != 2) return {};
+      const osg::Group* chosen = samples->getChild(1)->asGroup();
+      return chosen == nullptr || chosen->getNumChildren() != 1 ? std::string() : chosen->getChild(0)->getName();
+    };
+    QTRY_VERIFY(ghostIsInItsAreasColour(1));
+    QVERIFY(!ghostIsInItsAreasColour(0));
+    QCOMPARE(largerSamplesName(), std::string("samples:1"));
+    panel->areaChoice()->setCurrentIndex(0);
+    QTRY_VERIFY(ghostIsInItsAreasColour(0));
+    QVERIFY(!ghostIsInItsAreasColour(1));
+    QCOMPARE(largerSamplesName(), std::string("samples:0"));
+    QVERIFY(!panel->areaChoice()->itemIcon(0).isNull());
+    panel->areaChoice()->setCurrentIndex(1);
     // The Teaching menu reaches the panel's controls from the keyboard: it lists the areas,
     // and removes the one it names, not the one the panel's choice names.
     // The menu is rebuilt as it opens (each opening replaces the entries of the last).
