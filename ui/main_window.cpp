@@ -186,6 +186,7 @@ MainWindow::MainWindow(const std::string& robot, const std::string& scene, const
   }
 
   status_label_ = new QLabel;
+  status_label_->setObjectName(QStringLiteral("status_fields"));
   link_label_ = new QLabel;
   statusBar()->addPermanentWidget(link_label_);
   statusBar()->addPermanentWidget(status_label_);
@@ -1238,6 +1239,15 @@ void MainWindow::updateStatus() {
   }
   if (fps_ > 0.0) text += tr("   %1 fps").arg(fps_, 0, 'f', 1);
   status_label_->setText(text);
+  // The fields sit right-aligned: a width that follows every sign, digit and cycle count would
+  // shake them and the message beside them many times a second. The width only grows, until
+  // another robot or scene starts.
+  const QString fields_owner = QStringLiteral("%1 %2").arg(model_ ? QString::fromStdString(model_->name()) : QString(), scene_name);
+  if (fields_owner != status_fields_owner_) {
+    status_fields_owner_ = fields_owner;
+    status_label_->setMinimumWidth(0);
+  }
+  status_label_->setMinimumWidth(std::max(status_label_->minimumWidth(), status_label_->sizeHint().width()));
 }
 
 void MainWindow::watchDeadlines(const app::CycleStatistics& stats) {

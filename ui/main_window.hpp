@@ -296,6 +296,7 @@ class MainWindow : public QMainWindow {
   std::unique_ptr<render::Overlays> overlays_;
   std::uint64_t shown_areas_version_ = ~0ULL, shown_teach_ins_version_ = ~0ULL, shown_itm_version_ = ~0ULL;
   int shown_chosen_area_ = -1;
+  QString status_fields_owner_;  // the robot and scene the status fields' width was grown for
   std::uint64_t shown_model_version_ = ~0ULL, shown_path_version_ = ~0ULL, recorded_itm_version_ = ~0ULL;
   // The model last recorded: a new area raises the model version (its confidence changed)
   // without a new model, so the object, not the version, says whether it was recorded.

@@ -232,6 +232,48 @@ class FeaturesTest : public QObject {
     QCOMPARE(plots->taskErrorPlot()->valueRange().first, 0.0);
   }
 
+  // The status bar's live fields (the tip, cycles, fps) sit right-aligned: as the tip's y goes
+  // from 0.000 through negative to positive, their left edge never moves right, so they and the
+  // message beside them do not shake.
+  void theStatusFieldsKeepTheirPlaceAsTheArmMoves() {
+    MainWindow window("lwr4", "empty", quietOptions());
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    QTRY_VERIFY_WITH_TIMEOUT(window.live() != nullptr && window.live()->snapshot().running, 10000);
+    auto* fields = window.statusBar()->findChild<QLabel*>(QStringLiteral("status_fields"));
+    QVERIFY(fields != nullptr);
+    QTRY_VERIFY(fields->text().contains(QStringLiteral(" fps")));
+    // The keys move the tip while the arm approaches a posture.
+    const auto& s = window.live()->snapshot();
+    QTest::keyClick(&window, Qt::Key_F5);
+    QTRY_COMPARE(s.stage, Stage::kConfiguration);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
+    int leftmost = fields->mapTo(&window, QPoint(0, 0)).x();
+    bool saw_negative_y = false;
+    bool saw_positive_y = false;
+    const auto watch = [&](Qt::Key key, int ms) {
+      QTest::keyPress(&window, key);
+      for (int t = 0; t < ms; t += 40) {
+        QTest::qWait(40);
+        const int left = fields->mapTo(&window, QPoint(0, 0)).x();
+        QVERIFY2(left <= leftmost, qPrintable(QStringLiteral("moved right by %1 px at '%2'").arg(left - leftmost).arg(fields->text())));
+        leftmost = left;
+        const double y = s.p_WT[1];
+        saw_negative_y = saw_negative_y || (y < -0.0005 && fields->text().contains(QStringLiteral(", -0.")));
+        saw_positive_y = saw_positive_y || (y > 0.0005 && !fields->text().contains(QStringLiteral(", -0.")));
+      }
+      QTest::keyRelease(&window, key);
+    };
+    // Out of the upright start first: there the tip does not move sideways.
+    QTest::keyPress(&window, Qt::Key_Right);
+    QTest::qWait(1500);
+    QTest::keyRelease(&window, Qt::Key_Right);
+    watch(Qt::Key_Down, 1200);
+    watch(Qt::Key_Up, 2400);
+    QVERIFY2(saw_negative_y && saw_positive_y, "the tip did not cross y = 0: nothing to keep the fields from");
+  }
+
   // A narrow joint chart (a 1024 px screen) shrinks its legend's font rather than cut the names.
   void aNarrowChartShrinksItsLegendInsteadOfCuttingTheNames() {
     flexirob::ui::PlotPanel plots;
