@@ -21,6 +21,7 @@
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QScreen>
+#include <QProxyStyle>
 #include <QStyle>
 #include <QScrollArea>
 #include <QSpinBox>
@@ -1316,7 +1317,26 @@ void MainWindow::fillTeachingMenu() {
   reteach->setEnabled(stage_panel_->reteachAreaButton()->isEnabled());
 }
 
+namespace {
+
+// The menus' mnemonics underlined, so a keyboard user sees which Alt+letter opens which menu, and
+// a bare Alt press and release highlights the first menu for the arrow keys: Qt's Fusion style
+// on Linux hides the mnemonics.
+class MenuBarKeyboardStyle : public QProxyStyle {
+ public:
+  int styleHint(StyleHint hint, const QStyleOption* option, const QWidget* widget,
+                QStyleHintReturn* returned) const override {
+    if (hint == SH_MenuBar_AltKeyNavigation || hint == SH_UnderlineShortcut) return 1;
+    return QProxyStyle::styleHint(hint, option, widget, returned);
+  }
+};
+
+}  // namespace
+
 void MainWindow::buildMenus() {
+  auto* menu_bar_style = new MenuBarKeyboardStyle;
+  menu_bar_style->setParent(menuBar());  // a widget does not own its style
+  menuBar()->setStyle(menu_bar_style);
   QMenu* file = menuBar()->addMenu(tr("&File"));
   file->addAction(tr("Open robot &URDF…"), this, [this] {
     const QString path = QFileDialog::getOpenFileName(this, tr("Open robot description"), QString(),

@@ -14,11 +14,14 @@
 #include <QLegend>
 #include <QLegendMarker>
 #include <QLineSeries>
+#include <QMenu>
+#include <QMenuBar>
 #include <QMouseEvent>
 #include <QPushButton>
 #include <QSpinBox>
 #include <QStandardPaths>
 #include <QStatusBar>
+#include <QStyle>
 #include <QTemporaryDir>
 #include <QAbstractAxis>
 #include <limits>
@@ -230,6 +233,14 @@ class FeaturesTest : public QObject {
     // Times and error norms are never negative, nor are their axes.
     QCOMPARE(plots->cyclePlot()->valueRange().first, 0.0);
     QCOMPARE(plots->taskErrorPlot()->valueRange().first, 0.0);
+  }
+
+  // The menus' mnemonics are underlined on the menu bar, so a keyboard user sees which Alt+letter
+  // opens which menu (Qt's Fusion style on Linux hides them).
+  void theMenuBarUnderlinesItsMnemonics() {
+    MainWindow window("lwr4", "empty", quietOptions());
+    QCOMPARE(window.menuBar()->style()->styleHint(QStyle::SH_UnderlineShortcut, nullptr, window.menuBar()), 1);
+    QCOMPARE(window.menuBar()->style()->styleHint(QStyle::SH_MenuBar_AltKeyNavigation, nullptr, window.menuBar()), 1);
   }
 
   // The status bar's live fields (the tip, cycles, fps) sit right-aligned: as the tip's y goes
