@@ -235,14 +235,6 @@ class FeaturesTest : public QObject {
     QCOMPARE(plots->taskErrorPlot()->valueRange().first, 0.0);
   }
 
-  // The menus' mnemonics are underlined on the menu bar, so a keyboard user sees which Alt+letter
-  // opens which menu (Qt's Fusion style on Linux hides them).
-  void theMenuBarUnderlinesItsMnemonics() {
-    MainWindow window("lwr4", "empty", quietOptions());
-    QCOMPARE(window.menuBar()->style()->styleHint(QStyle::SH_UnderlineShortcut, nullptr, window.menuBar()), 1);
-    QCOMPARE(window.menuBar()->style()->styleHint(QStyle::SH_MenuBar_AltKeyNavigation, nullptr, window.menuBar()), 1);
-  }
-
   // The status bar's live fields (the tip, cycles, fps) sit right-aligned: as the tip's y goes
   // from 0.000 through negative to positive, their left edge never moves right, so they and the
   // message beside them do not shake.
