@@ -514,24 +514,61 @@ RecorderStatus SessionRecorder::status() const {
   return s;
 }
 
-void SessionRecorder::saveCopy(const std::filesystem::path& target) {
-  // The recorder thread owns the connection while it runs; copy after closing it.
-  close();
-  if (!impl_->db.isOpen()) throw InputError("no recording to copy (the in-memory database failed)");
+namespace {
+
+// SQLite online backup of `from` into `target`, which it creates or replaces.
+void copyDatabase(SqliteDatabase& from, const std::filesystem::path& target) {
   SqliteDatabase out;
   try {
     out = SqliteDatabase(target.string(), SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   } catch (const SqliteError& e) {
     throw InputError(e.what());
   }
-  sqlite3_backup* backup = sqlite3_backup_init(out.handle(), "main", impl_->db.handle(), "main");
+  sqlite3_backup* backup = sqlite3_backup_init(out.handle(), "main", from.handle(), "main");
   if (!backup) throw InputError("cannot copy the recording to " + target.string() + ": " + sqlite3_errmsg(out.handle()));
   const int rc = sqlite3_backup_step(backup, -1);
   sqlite3_backup_finish(backup);
   if (rc != SQLITE_DONE) throw InputError("cannot copy the recording to " + target.string() + ": " + sqlite3_errstr(rc));
   // The backup carries the WAL mode of the recording it came from; a finished session leaves
-  // it (close() above), so that readers leave no -wal and -shm files beside the copy.
+  // it, so that readers leave no -wal and -shm files beside the copy.
   sqlite3_exec(out.handle(), "PRAGMA journal_mode=DELETE", nullptr, nullptr, nullptr);
+}
+
+}  // namespace
+
+void SessionRecorder::saveCopy(const std::filesystem::path& target) {
+  // The recorder thread owns the connection while it runs; copy after closing it.
+  close();
+  if (!impl_->db.isOpen()) throw InputError("no recording to copy (the in-memory database failed)");
+  copyDatabase(impl_->db, target);
+}
+
+void SessionRecorder::saveSnapshot(const std::filesystem::path& target) {
+  if (!impl_->thread.joinable() || status().health != RecorderHealth::Recording) {
+    throw InputError("the recording is not on disk (" + file_.string() + "): only a copy that ends it can be saved");
+  }
+  flush();
+  // Written beside the target and renamed over it: a failure leaves the target as it was.
+  const std::filesystem::path part = target.string() + ".part";
+  removeDatabaseFiles(part);
+  try {
+    // A second connection reads the committed recording while the recorder's thread goes on
+    // writing (WAL: neither waits for the other).
+    SqliteDatabase in(file_.string(), SQLITE_OPEN_READONLY);
+    copyDatabase(in, part);
+  } catch (const SqliteError& e) {
+    removeDatabaseFiles(part);
+    throw InputError("cannot copy the recording to " + target.string() + ": " + e.what());
+  } catch (...) {
+    removeDatabaseFiles(part);
+    throw;
+  }
+  std::error_code ec;
+  std::filesystem::rename(part, target, ec);
+  if (ec) {
+    removeDatabaseFiles(part);
+    throw InputError("cannot write " + target.string() + ": " + ec.message());
+  }
 }
 
 }  // namespace flexirob::app

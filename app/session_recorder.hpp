@@ -222,6 +222,11 @@ class SessionRecorder {
   /// `target` (SQLite online backup). Use it after a disk failure to keep the session.
   /// Throws InputError on failure.
   void saveCopy(const std::filesystem::path& target);
+  /// Writes a complete copy of everything recorded so far to `target` (created or replaced)
+  /// and goes on recording into file(). The copy is written beside `target` and renamed over
+  /// it, so a failure leaves `target` as it was. Throws InputError on failure, and when the
+  /// recording is not on disk (in memory or closed: use saveCopy()).
+  void saveSnapshot(const std::filesystem::path& target);
 
  private:
   struct Impl;

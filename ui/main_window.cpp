@@ -14,6 +14,7 @@
 #include <QResizeEvent>
 #include <QFile>
 #include <QFileDialog>
+#include <QFileInfo>
 #include <QFontMetrics>
 #include <QInputDialog>
 #include <QKeyEvent>
@@ -502,26 +503,60 @@ void MainWindow::startLive() {
   mirror();
 }
 
-bool MainWindow::saveSession(const QString& file) {
+bool MainWindow::saveSession(const QString& chosen) {
   if (!recorder_ || !live_) {
     showStatusMessage(statusBar(), tr("No session is being recorded"), 10000);
     return false;
   }
-  // Everything shown so far goes in; saveCopy closes the recorder, so record on into a new file.
+  // Open recording lists *.flexirob: a typed name without a suffix gets it.
+  const QString file = QFileInfo(chosen).suffix().isEmpty() ? chosen + QStringLiteral(".flexirob") : chosen;
+  // Everything shown so far goes in.
   handleEvents();
-  recordSnapshotData(live_->snapshot());
-  live_->setRecorder(nullptr);
+  const LiveSnapshot& now = live_->snapshot();
+  recordSnapshotData(now);
+  const std::uint64_t areas_version = now.areas_version;
+  const std::uint64_t teach_ins_version = now.teach_ins_version;
   bool ok = true;
   try {
-    recorder_->saveCopy(file.toStdString());
+    if (recorder_->status().health == app::RecorderHealth::Recording) {
+      recorder_->saveSnapshot(file.toStdString());  // the run's file goes on holding the whole run
+    } else {
+      // Recording in memory (the run's file failed): the copy ends it; record on into a new file.
+      live_->setRecorder(nullptr);
+      try {
+        recorder_->saveCopy(file.toStdString());
+      } catch (...) {
+        recorder_.reset();
+        startRecording();
+        throw;
+      }
+      recorder_.reset();
+      startRecording();
+    }
+    saved_session_file_ = file;
+    saved_areas_version_ = areas_version;
+    saved_teach_ins_version_ = teach_ins_version;
     showStatusMessage(statusBar(), tr("Session saved to %1").arg(file), 10000);
   } catch (const std::exception& error) {
     reportError(tr("Cannot save the session to %1").arg(file), error);
     ok = false;
   }
-  recorder_.reset();
-  startRecording();
   return ok;
+}
+
+bool MainWindow::teachingChangedSinceSave() const {
+  if (saved_session_file_.isEmpty() || !live_) return false;
+  const LiveSnapshot& now = live_->snapshot();
+  return now.areas_version != saved_areas_version_ || now.teach_ins_version != saved_teach_ins_version_;
+}
+
+void MainWindow::saveSessionAs() {
+  QFileDialog dialog(this, tr("Save session"),
+                     saved_session_file_.isEmpty() ? QStringLiteral("session.flexirob") : saved_session_file_,
+                     tr("FlexIRob sessions (*.flexirob);;All files (*)"));
+  dialog.setAcceptMode(QFileDialog::AcceptSave);
+  dialog.setDefaultSuffix(QStringLiteral("flexirob"));
+  if (dialog.exec() == QDialog::Accepted && !dialog.selectedFiles().isEmpty()) saveSession(dialog.selectedFiles().front());
 }
 
 void MainWindow::refuseRobot(const std::string& name_or_path, const std::exception& error) {
@@ -1201,6 +1236,18 @@ void MainWindow::resizeEvent(QResizeEvent* event) {
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
+  if (teachingChangedSinceSave()) {
+    const auto answer = QMessageBox::question(
+        this, tr("Save session"),
+        tr("The teaching changed since the session was saved to %1. Save it there again?\n"
+           "(Every run is also recorded whole into %2.)")
+            .arg(saved_session_file_, session_file_.isEmpty() ? tr("no file: this run is not recorded") : session_file_),
+        QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
+    if (answer == QMessageBox::Cancel || (answer == QMessageBox::Save && !saveSession(saved_session_file_))) {
+      event->ignore();
+      return;
+    }
+  }
   if (options_.restore_layout) {
     QSettings settings;
     settings.setValue(QStringLiteral("window/geometry"), saveGeometry());
@@ -1352,7 +1399,7 @@ void MainWindow::buildMenus() {
   file->addAction(tr("&Open recording…"), QKeySequence::Open, this, [this] {
     const QString path = QFileDialog::getOpenFileName(
         this, tr("Open a session recording"),
-        sessionDirectory(),
+        saved_session_file_.isEmpty() ? sessionDirectory() : QFileInfo(saved_session_file_).absolutePath(),
         tr("FlexIRob sessions (*.flexirob *.sqlite *.db);;All files (*)"));
     if (!path.isEmpty() && openRecording(path) == nullptr) {
       QMessageBox::warning(this, tr("Open recording"), fullStatusMessage(statusBar()));
@@ -1368,11 +1415,14 @@ void MainWindow::buildMenus() {
     if (recorder_) recorder_->flush();  // the review opens what is on disk
     openRecording(session_file_);
   });
-  file->addAction(tr("Save session &as…"), QKeySequence::SaveAs, this, [this] {
-    const QString path = QFileDialog::getSaveFileName(this, tr("Save session"), QStringLiteral("session.flexirob"),
-                                                      tr("FlexIRob sessions (*.flexirob);;All files (*)"));
-    if (!path.isEmpty()) saveSession(path);
+  file->addAction(tr("&Save session"), QKeySequence::Save, this, [this] {
+    if (saved_session_file_.isEmpty()) {
+      saveSessionAs();
+    } else {
+      saveSession(saved_session_file_);
+    }
   });
+  file->addAction(tr("Save session &as…"), QKeySequence::SaveAs, this, &MainWindow::saveSessionAs);
   file->addAction(tr("Show session &folder"), this, [this] {
     QMessageBox::information(this, tr("Sessions"),
                              tr("Every run is recorded. This run: %1").arg(session_file_.isEmpty() ? tr("not recorded")

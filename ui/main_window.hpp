@@ -144,10 +144,16 @@ class MainWindow : public QMainWindow {
   /// Shows (or hides) the key map over the view.
   void toggleKeyMap(bool visible);
 
-  /// Writes a copy of the current run's session to `file` and goes on recording into a new one.
+  /// Writes everything the run recorded so far to `file` (".flexirob" added to a name without
+  /// a suffix) and goes on recording the whole run into sessionFile(); File ▸ Save session
+  /// writes it there again, and closing the window asks first when the teaching changed since.
   /// The recording holds the states at display rate, the stages, triggers, buttons, areas with
   /// their samples and ITM snapshots.
   bool saveSession(const QString& file);
+  /// The file the last saveSession() wrote (empty: none yet).
+  QString savedSessionFile() const { return saved_session_file_; }
+  /// Whether areas or teach-ins changed since the last saveSession() (false before one).
+  bool teachingChangedSinceSave() const;
 
   /// Opens a session recording in a review window of its own (File ▸ Open recording…). Null
   /// and the reason in the status bar if the file is no readable recording.
@@ -184,6 +190,7 @@ class MainWindow : public QMainWindow {
   void buildMenus();
   /// The Teaching menu from the Teaching panel's controls as they are now (run as it opens).
   void fillTeachingMenu();
+  void saveSessionAs();  // File ▸ Save session as…: the dialog, then saveSession()
   void buildDocks();
   void updateStatus();
   void reportError(const QString& what, const std::exception& error);
@@ -250,6 +257,8 @@ class MainWindow : public QMainWindow {
   std::unique_ptr<app::SessionRecorder> recorder_;
   std::unique_ptr<LiveTeaching> live_;
   QString session_file_;
+  QString saved_session_file_;
+  std::uint64_t saved_areas_version_ = 0, saved_teach_ins_version_ = 0;
   std::uint64_t shown_cycle_ = ~0ULL;
   int chimes_ = 0;
 

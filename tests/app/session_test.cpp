@@ -584,6 +584,33 @@ TEST_F(SessionTest, UnwritableLocationRecordsInMemory) {
   EXPECT_EQ(SessionReader(copy).stateCount(), 100);
 }
 
+TEST_F(SessionTest, ASnapshotHoldsWhatWasRecordedAndRecordingGoesOnIntoTheSameFile) {
+  const auto file = path("run.flexirob");
+  SessionRecorder recorder(file, exampleMetadata());
+  for (int i = 0; i < 100; ++i) ASSERT_TRUE(recorder.recordState(exampleState(i)));
+  const auto saved = path("saved.flexirob");
+  recorder.saveSnapshot(saved);
+  EXPECT_EQ(SessionReader(saved).stateCount(), 100);
+  // The recorder goes on into its own file, and a second snapshot replaces the first.
+  EXPECT_EQ(recorder.status().health, RecorderHealth::Recording);
+  for (int i = 100; i < 250; ++i) ASSERT_TRUE(recorder.recordState(exampleState(i)));
+  recorder.saveSnapshot(saved);
+  EXPECT_EQ(SessionReader(saved).stateCount(), 250);
+  EXPECT_FALSE(std::filesystem::exists(saved.string() + ".part"));
+  // A snapshot that cannot be written leaves the last one as it was.
+  std::filesystem::create_directory(path("blocker.flexirob.part"));
+  std::ofstream(path("blocker.flexirob.part") / "inside") << "x";
+  const auto blocked = path("blocker.flexirob");
+  std::filesystem::copy_file(saved, blocked);
+  for (int i = 250; i < 300; ++i) ASSERT_TRUE(recorder.recordState(exampleState(i)));
+  EXPECT_THROW(recorder.saveSnapshot(blocked), InputError);
+  EXPECT_EQ(SessionReader(blocked).stateCount(), 250);
+  recorder.close();
+  EXPECT_EQ(SessionReader(file).stateCount(), 300);
+  // Closed, it has nothing live to copy from: saveCopy() is the way.
+  EXPECT_THROW(recorder.saveSnapshot(path("late.flexirob")), InputError);
+}
+
 TEST(LockFreeQueue, SpscRingDeliversEverythingInOrderAcrossThreads) {
   SpscRing<std::uint64_t> ring(256);
   const std::uint64_t count = 200000;

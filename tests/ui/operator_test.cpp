@@ -830,9 +830,55 @@ class OperatorTest : public QObject {
     bool configuration = false;
     for (const auto& stage : reader.stages()) configuration = configuration || stage.stage == "CONFIGURATION";
     QVERIFY(configuration);
-    // Recording goes on into a new file.
-    QVERIFY(!window.sessionFile().isEmpty());
-    QVERIFY(window.sessionFile() != file);
+    // Recording goes on into the run's file, which holds the whole run: what the copy holds
+    // and what came after.
+    const QString run_file = window.sessionFile();
+    QVERIFY(!run_file.isEmpty() && run_file != file);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTest::qWait(400);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(window.live()->snapshot().areas, 1);
+    QCOMPARE(window.sessionFile(), run_file);
+    QVERIFY(window.teachingChangedSinceSave());
+    // A name typed without a suffix gets the one Open recording lists.
+    const QString typed = directory.filePath(QStringLiteral("second run"));
+    QVERIFY(window.saveSession(typed));
+    QCOMPARE(window.savedSessionFile(), typed + QStringLiteral(".flexirob"));
+    QVERIFY(!window.teachingChangedSinceSave());
+    const flexirob::app::SessionReader second((typed + QStringLiteral(".flexirob")).toStdString());
+    QCOMPARE(second.areas().size(), std::size_t{1});
+    QVERIFY(second.stateCount() > reader.stateCount());
+    // The first copy is as it was saved.
+    QCOMPARE(flexirob::app::SessionReader(file.toStdString()).areas().size(), std::size_t{0});
+    // Teaching after the last save: closing asks; Cancel keeps the window open, Save writes it
+    // there again.
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTest::keyClick(&window, Qt::Key_Space);
+    QTest::qWait(400);
+    QTest::keyClick(&window, Qt::Key_Return);
+    QTRY_COMPARE(window.live()->snapshot().areas, 2);
+    QVERIFY(window.teachingChangedSinceSave());
+    QMessageBox::StandardButton answer = QMessageBox::Cancel;
+    QString question;
+    QTimer answering;
+    connect(&answering, &QTimer::timeout, &window, [&] {
+      auto* box = qobject_cast<QMessageBox*>(QApplication::activeModalWidget());
+      if (box == nullptr) return;
+      question = box->text();
+      box->button(answer)->click();
+    });
+    answering.start(50);
+    window.show();
+    QVERIFY(!window.close());
+    QVERIFY(question.contains(QStringLiteral("second run.flexirob")));
+    QVERIFY(window.isVisible());
+    answer = QMessageBox::Save;
+    QVERIFY(window.close());
+    answering.stop();
+    QCOMPARE(flexirob::app::SessionReader((typed + QStringLiteral(".flexirob")).toStdString()).areas().size(), std::size_t{2});
   }
 
   // The window records the learned model as teach does (the control thread records the
@@ -872,8 +918,8 @@ class OperatorTest : public QObject {
     QCOMPARE(models[0].samples, learned_from);
     const std::string text = learned->modelText();
     QVERIFY(models[0].bytes == std::vector<std::uint8_t>(text.begin(), text.end()));
-    // The file recording goes on into holds the model again, with the samples it was learned
-    // from, not those of the areas there are now.
+    // A later copy holds the one model, with the samples it was learned from, not those of the
+    // areas there are now.
     QTest::qWait(300);
     const QString later = directory.filePath(QStringLiteral("later.flexirob"));
     QVERIFY(window.saveSession(later));
