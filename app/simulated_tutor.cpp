@@ -999,7 +999,15 @@ void SimulatedTutor::drawCheckPoints() {
   check_postures_.clear();
   Eigen::VectorXd q_found;
   const int budget = 100 * options_.check_points;
-  for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < budget; ++k) {
+  // An arm that reaches none of the grid (joints held in a narrow range) would spend the whole
+  // budget, minutes, on failed searches. Where a draw in 20 or more succeeds, a run of this
+  // many failures is next to impossible (0.95^500 < 1e-11), so stopping there changes no run
+  // of an arm that reaches the grid.
+  constexpr int kFailedDrawsInARowToGiveUp = 500;
+  int failed_in_a_row = 0;
+  for (int k = 0; static_cast<int>(check_points_.size()) < options_.check_points && k < budget &&
+                  failed_in_a_row < kFailedDrawsInARowToGiveUp;
+       ++k) {
     // Where the arm reaches little of the grid every draw is a failed search of 24 IK runs: this
     // takes minutes, so it says how far it is and yields to a stop.
     stopIfAsked();
@@ -1013,6 +1021,9 @@ void SimulatedTutor::drawCheckPoints() {
     if (robot::obstacleAt(*scene_, x, scaled(0.05)) == nullptr && accessibleWithoutCollision(*model_, parameters_, *world_, x, q_start, 24, draw, &q_found)) {
       check_points_.push_back(x);
       check_postures_.push_back(q_found);
+      failed_in_a_row = 0;
+    } else {
+      ++failed_in_a_row;
     }
   }
   check_failed_.assign(check_points_.size(), true);
