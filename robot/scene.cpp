@@ -246,7 +246,7 @@ class SceneReader {
     }
     if (const auto node = root["name"]) scene.name = name(node, "name");
     if (const auto node = root["description"]) scene.description = text(node, "description", kMaxTextLength);
-    if (const auto node = root["robot"]) scene.robot = robot(node, "robot");
+    if (const auto node = root["robot"]) scene.robot = robot(node, "robot", scene.robot_unreadable);
     if (const auto node = root["home_posture"]) {
       scene.home_posture = posture(node, "home_posture");
       scene.home_posture_in_degrees = inDegrees(node);
@@ -279,10 +279,15 @@ class SceneReader {
     return scene;
   }
 
-  [[noreturn]] void fail(const Node& node, const std::string& path, const std::string& reason) const {
+  // "<file>:<line>: <path>: <reason>"
+  std::string located(const Node& node, const std::string& path, const std::string& reason) const {
     std::string where = origin_;
     if (node.line() >= 0) where += ":" + std::to_string(node.line() + 1);
-    throw InputError(where + ": " + (path.empty() ? "" : path + ": ") + reason);
+    return where + ": " + (path.empty() ? "" : path + ": ") + reason;
+  }
+
+  [[noreturn]] void fail(const Node& node, const std::string& path, const std::string& reason) const {
+    throw InputError(located(node, path, reason));
   }
 
  private:
@@ -442,7 +447,7 @@ class SceneReader {
     return value;
   }
 
-  std::string robot(const Node& node, const std::string& path) {
+  std::string robot(const Node& node, const std::string& path, std::string& unreadable) {
     const std::string value = name(node, path);
     const auto& builtin = builtinRobotNames();
     if (std::find(builtin.begin(), builtin.end(), value) != builtin.end()) return value;
@@ -450,7 +455,7 @@ class SceneReader {
     if (file.is_relative()) file = base_dir_ / file;
     std::error_code error;
     if (source_ == SceneText::kFile && !fs::is_regular_file(file, error)) {
-      fail(node, path, "'" + printable(value) + "' is neither a built-in robot (lwr4, arm9) nor an existing URDF file");
+      unreadable = located(node, path, "'" + printable(value) + "' is neither a built-in robot (lwr4, arm9) nor an existing URDF file");
     }
     return file.lexically_normal().string();
   }
@@ -767,6 +772,7 @@ std::vector<Eigen::Vector3d> EvaluationGrid::points() const {
 
 std::string robotFor(const std::string& robot_option, const Scene& scene) {
   if (!robot_option.empty()) return robot_option;
+  if (!scene.robot_unreadable.empty()) throw InputError(scene.robot_unreadable + " (or give another robot: --robot)");
   return scene.robot.empty() ? std::string("lwr4") : scene.robot;
 }
 

@@ -92,6 +92,10 @@ struct Scene {
   std::string description;
   std::filesystem::path source;       ///< file it was read from (empty for scenes built in code)
   std::string robot = "lwr4";         ///< robot the scene was made for
+  /// Why `robot` names no robot ("<file>:<line>: robot: ..."), empty when it does. A scene
+  /// from elsewhere may name a URDF file this machine lacks: it still reads, and robotFor()
+  /// refuses it only where no other robot is given.
+  std::string robot_unreadable;
   std::optional<Eigen::VectorXd> home_posture;  ///< start posture [rad]
   bool home_posture_in_degrees = false;         ///< written {unit: deg} (refused on a robot with a slide)
   std::vector<Obstacle> obstacles;

@@ -348,6 +348,26 @@ TEST_F(SceneFileTest, ResolvesRelativeMeshAndRobotPathsAgainstTheSceneFolder) {
   EXPECT_EQ(loadScene(file.string()).obstacles.size(), 1U);
 }
 
+// A scene from another machine names a URDF file this one lacks: it reads, a program told
+// another robot uses that one, and one that would use the scene's own says where it is named.
+TEST_F(SceneFileTest, ARobotFileThatIsMissingIsRefusedOnlyWhereNoOtherRobotIsGiven) {
+  const fs::path file = write("cell/scene.yaml", "name: cell\nrobot: robots/theirs.urdf\n");
+  const Scene scene = loadSceneFile(file);
+  EXPECT_EQ(robotFor("lwr4", scene), "lwr4");
+  EXPECT_EQ(robotFor("/somewhere/mine.urdf", scene), "/somewhere/mine.urdf");
+  try {
+    robotFor("", scene);
+    FAIL() << "the missing robot file was used";
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(file.string() + ":2: robot: 'robots/theirs.urdf' is neither a built-in robot"), std::string::npos) << message;
+    EXPECT_NE(message.find("--robot"), std::string::npos) << message;
+  }
+  // Present, it is the scene's robot.
+  write("cell/robots/theirs.urdf", "<robot name='x'/>\n");
+  EXPECT_TRUE(fs::equivalent(robotFor("", loadSceneFile(file)), dir_ / "cell" / "robots" / "theirs.urdf"));
+}
+
 TEST(SceneNotes, AScenePlacedTensOfMetresAwayIsNotedAsPerhapsWrittenInMillimetres) {
   const Scene metres = parseScene("training_areas:\n  - {name: a, centre: [-0.5, 0.3, 0.4]}\n", ".", "metres");
   EXPECT_TRUE(sceneNotes(metres).empty());
@@ -641,7 +661,6 @@ TEST_F(SceneFileTest, RefusesValuesOfTheWrongType) {
            "parameters: {'bad name': 1}\n",
            "parameters: {sim.gravity: [1]}\n",
            "version: 2\n",
-           "robot: no_such_robot\n",
            "grid: {lower: [0, 0, 1], upper: [1, 1, 0]}\n",
            "grid: {exclude: [{lower: [0, 0, 1], upper: [1, 1, 0]}]}\n",
            "grid: {exclude: [{lower: [0, 0, 0]}]}\n",
