@@ -576,7 +576,7 @@ void Workflow::checkJointLimits(const Eigen::VectorXd& q_fixed, int area) {
       const double limit = q_fixed[j] - lower[j] < upper[j] - q_fixed[j] ? lower[j] : upper[j];
       detail << (shown == 0.0 ? " (" : " its software limit (") << std::fixed << std::setprecision(1)
              << limit * (sliding ? 1000.0 : 180.0 / std::numbers::pi) << (sliding ? " mm" : " deg")
-             << "): the controller has no room left to move that joint there; re-teach the area with the joint farther from it";
+             << "): the controller has " << (shown == 0.0 || margin < 0.0 ? "no" : "little") << " room left to move that joint there; re-teach the area with the joint farther from it";
       emit(WorkflowEvent::Kind::kWarning, "joint_limit", detail.str(), area);
     }
   }

@@ -717,9 +717,12 @@ TEST(Workflow, ANarrowRotaryJointIsNearItsLimitWithinATenthOfItsRangeAndSaysWher
   const std::vector<std::string> near_end = warningsFor(0.095);
   ASSERT_EQ(near_end.size(), 1U);
   EXPECT_NE(near_end[0].find("joint 3 (wrist) is 0.3 deg from its software limit (5.7 deg)"), std::string::npos) << near_end[0];
+  // Near it, some room is left; at it, none.
+  EXPECT_NE(near_end[0].find("has little room left"), std::string::npos) << near_end[0];
   const std::vector<std::string> at_end = warningsFor(0.1);
   ASSERT_EQ(at_end.size(), 1U);
   EXPECT_NE(at_end[0].find("joint 3 (wrist) is at its limit (5.7 deg)"), std::string::npos) << at_end[0];
+  EXPECT_NE(at_end[0].find("has no room left"), std::string::npos) << at_end[0];
 }
 
 // The tutor's feedback on a transition names what the arm hit and where along the line: a box
