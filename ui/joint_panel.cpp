@@ -173,6 +173,7 @@ void JointPanel::setRobot(const robot::RobotModel& model, const Eigen::VectorXd&
   }
   grid_->setColumnStretch(1, 1);
   home_button_->setEnabled(model.dof() > 0);
+  setReadOnly(read_only_);
   setPosture(q);
 }
 
@@ -186,7 +187,11 @@ void JointPanel::setPosture(const Eigen::VectorXd& q) {
 }
 
 void JointPanel::setReadOnly(bool read_only) {
+  // Kept for the rows of the next robot too: a mirror whose sliders could be dragged, or whose
+  // Home posture could be pressed, moved nothing and snapped back.
+  read_only_ = read_only;
   for (LimitSlider* slider : sliders_) slider->setEnabled(!read_only);
+  home_button_->setVisible(!read_only);
 }
 
 Eigen::VectorXd JointPanel::posture() const {

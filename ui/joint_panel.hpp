@@ -76,6 +76,8 @@ class JointPanel : public QWidget {
   LimitDistanceBar* limitBar(int joint) const { return bars_.at(static_cast<std::size_t>(joint)); }
   /// Live mirror: the sliders show the robot's posture and cannot be dragged.
   void setReadOnly(bool read_only);
+  /// "Home posture" (hidden while read-only: the backend owns the posture).
+  QPushButton* homeButton() const { return home_button_; }
 
  Q_SIGNALS:
   void postureChanged(const Eigen::VectorXd& q);
@@ -91,6 +93,7 @@ class JointPanel : public QWidget {
   Eigen::VectorXd home_;
   QPushButton* home_button_ = nullptr;
   bool updating_ = false;
+  bool read_only_ = false;
 };
 
 }  // namespace flexirob::ui

@@ -32,6 +32,7 @@
 #include <QThread>
 #include <QTimer>
 #include <QVBoxLayout>
+#include <osg/Version>
 #include <algorithm>
 #include <functional>
 #include <cmath>
@@ -308,7 +309,22 @@ void MainWindow::buildDocks() {
     view_->setFocus();
   });
   connect(stage_panel_, &StagePanel::removeAreaRequested, this, [this](int area) {
-    if (live_) live_->removeArea(area);
+    // One click beside Re-teach forgot an area for good: asked first, Cancel the default.
+    if (!live_) return;
+    const LiveSnapshot& now = live_->snapshot();
+    if (now.area_data && area >= 0 && area < static_cast<int>(now.area_data->size())) {
+      const app::TrainingArea& chosen = (*now.area_data)[static_cast<std::size_t>(area)];
+      QMessageBox question(QMessageBox::Question, tr("Remove area"),
+                           tr("Remove the area '%1'? Its %2 samples are forgotten%3.")
+                               .arg(QString::fromStdString(chosen.name))
+                               .arg(chosen.X.cols())
+                               .arg(now.model_ready ? tr(" and the map is learned again from the other areas") : QString()),
+                           QMessageBox::Cancel, this);
+      QPushButton* remove = question.addButton(tr("Remove the area"), QMessageBox::DestructiveRole);
+      question.setDefaultButton(QMessageBox::Cancel);
+      question.exec();
+      if (question.clickedButton() == remove && live_) live_->removeArea(area);
+    }
     view_->setFocus();
   });
   connect(stage_panel_, &StagePanel::reteachAreaRequested, this, [this](int area) {
@@ -1485,7 +1501,15 @@ void MainWindow::buildMenus() {
   const auto switchBackend = [this, markBackend](const std::string& choice, const QString& what) {
     if (!mayDiscardTeaching(what) || !setBackend(choice)) markBackend();
   };
-  QAction* sim = backend_menu_->addAction(tr("&Simulation"), this, [switchBackend, this] { switchBackend("sim", tr("simulation")); });
+  // The simulation chosen while it runs changes nothing (it had offered to discard the teaching).
+  const auto backToSimulation = [this, switchBackend, markBackend] {
+    if (backend_.kind == app::BackendKind::kSimulation) {
+      markBackend();
+      return;
+    }
+    switchBackend("sim", tr("simulation"));
+  };
+  QAction* sim = backend_menu_->addAction(tr("&Simulation"), this, backToSimulation);
   sim->setData(QStringLiteral("sim"));
   sim->setCheckable(true);
   sim->setChecked(backend_.kind == app::BackendKind::kSimulation);
@@ -1506,8 +1530,11 @@ void MainWindow::buildMenus() {
   fri->setChecked(backend_.kind == app::BackendKind::kFri);
   backends->addAction(fri);
   backend_menu_->addSeparator();
-  backend_menu_->addAction(tr("&Disconnect (back to the simulation)"), this,
-                           [switchBackend, this] { switchBackend("sim", tr("simulation")); });
+  QAction* disconnect = backend_menu_->addAction(tr("&Disconnect (back to the simulation)"), this, backToSimulation);
+  disconnect->setObjectName(QStringLiteral("disconnect_backend"));
+  connect(backend_menu_, &QMenu::aboutToShow, disconnect,
+          [this, disconnect] { disconnect->setEnabled(backend_.kind != app::BackendKind::kSimulation); });
+  disconnect->setEnabled(backend_.kind != app::BackendKind::kSimulation);
   reconnect_action_ = backend_menu_->addAction(tr("&Confirm reconnect after a fault"), this, [this] {
     if (!live_) return;
     if (QMessageBox::question(this, tr("Reconnect"),
@@ -1535,11 +1562,33 @@ void MainWindow::buildMenus() {
   menuBar()->addMenu(overlay_menu);
   connect(overlay_menu, &OverlayMenu::toggled, this, [this] { view_->requestFrame(); });
   QMenu* help = menuBar()->addMenu(tr("&Help"));
+  // In a box of its own: in the status bar the list was cut to the bar's width.
   help->addAction(tr("&Mouse"), this, [this] {
-    showStatusMessage(statusBar(), tr("Left drag on a link: pull the arm   Left drag elsewhere: orbit   Middle or "
-                                "Shift+left drag: pan   Right drag or wheel: zoom   Double click: home view   "
-                                "Ctrl+click in EXECUTION: set a goal, plan and execute"),
-                             15000);
+    QMessageBox::information(this, tr("Mouse"),
+                             tr("<b>In the 3D view</b><ul>"
+                                "<li>Left drag on a link: pull the arm (as a hand on the robot)</li>"
+                                "<li>Left drag elsewhere: orbit the view</li>"
+                                "<li>Middle or Shift+left drag: pan</li>"
+                                "<li>Right drag or wheel: zoom</li>"
+                                "<li>Double click: the home view (also View ▸ Reset camera, Home)</li>"
+                                "<li>Ctrl+click in EXECUTION: set a goal, plan a path to it and execute it</li></ul>"));
+  });
+  help->addAction(tr("&Keys (F1, H)"), this, [this] { toggleKeyMap(true); });
+  help->addAction(tr("&User guide"), this, [this] {
+    const std::filesystem::path guide = flexirob::resourceDir().parent_path() / "docs" / "USER_GUIDE.md";
+    std::error_code missing;
+    QMessageBox::information(this, tr("User guide"),
+                             std::filesystem::is_regular_file(guide, missing)
+                                 ? tr("The user guide, with pictures, is %1").arg(QString::fromStdString(guide.string()))
+                                 : tr("The user guide is docs/USER_GUIDE.md in FlexIRob's source folder."));
+  });
+  help->addSeparator();
+  help->addAction(tr("&About FlexIRob"), this, [this] {
+    QMessageBox::about(this, tr("About FlexIRob"),
+                       tr("<b>FlexIRob %1</b><br>Teaching redundant robot arms: show the posture in a few "
+                          "training areas, then guide only the tip.<br><br>Qt %2, OpenSceneGraph %3")
+                           .arg(QStringLiteral(FLEXIROB_VERSION_STRING), QString::fromLatin1(qVersion()),
+                                QString::fromLatin1(osgGetVersion())));
   });
   // A menu closed with Escape leaves the menu bar holding the keys: Space and Enter then opened
   // the File menu and ran its first entry instead of touching the arm. The keys go back where
@@ -1617,7 +1666,9 @@ void MainWindow::updateConfidence(const LiveSnapshot& s, bool force) {
 QWidget* MainWindow::confidenceLegend() const { return confidence_legend_; }
 
 void MainWindow::placeViewLabels() {
-  const bool legend = confidence_slices_ > 0 && overlays_->visible(render::OverlayLayer::kConfidence);
+  // Overlays ▸ Legend hides it as it hides the rendered legends.
+  const bool legend = confidence_slices_ > 0 && overlays_->visible(render::OverlayLayer::kConfidence) &&
+                      overlays_->visible(render::OverlayLayer::kLegend);
   if (legend != confidence_legend_->isVisible()) confidence_legend_->setVisible(legend);
   // A key, not a panel: at most 30 % of the view's height (on a 600 px screen it hid the arm).
   const int legend_height = std::clamp(view_->height() * 3 / 10, 90, confidence_legend_->sizeHint().height());

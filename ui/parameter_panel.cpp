@@ -1,6 +1,7 @@
 #include "ui/parameter_panel.hpp"
 
 #include <QDoubleSpinBox>
+#include <QEvent>
 #include <QFormLayout>
 #include <QLabel>
 #include <QPushButton>
@@ -52,9 +53,22 @@ void ParameterPanel::setParameters(const robot::ParameterSet& parameters) {
                         .arg(declaration.max_value)
                         .arg(declaration.default_value));
     box->setObjectName(QString::fromUtf8(declaration.name));
+    box->setFocusPolicy(Qt::StrongFocus);  // not focused by the wheel
+    box->installEventFilter(this);
     form_->addRow(QString::fromUtf8(declaration.name), box);
     boxes_.emplace_back(declaration.name, box);
   }
+}
+
+bool ParameterPanel::eventFilter(QObject* watched, QEvent* event) {
+  if (event->type() == QEvent::Wheel) {
+    auto* box = qobject_cast<QAbstractSpinBox*>(watched);
+    if (box != nullptr && !box->hasFocus()) {
+      event->ignore();  // on to the scroll area around the panel
+      return true;
+    }
+  }
+  return QWidget::eventFilter(watched, event);
 }
 
 std::map<std::string, double> ParameterPanel::values() const {

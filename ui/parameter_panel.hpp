@@ -30,6 +30,11 @@ class ParameterPanel : public QWidget {
  Q_SIGNALS:
   void applyRequested(const std::map<std::string, double>& values);
 
+ protected:
+  /// A wheel turned over a box the operator has not clicked into scrolls the panel instead of
+  /// changing the value (a scroll over the list changed sim.gravity unnoticed).
+  bool eventFilter(QObject* watched, QEvent* event) override;
+
  private:
   QFormLayout* form_ = nullptr;
   std::vector<std::pair<std::string, QDoubleSpinBox*>> boxes_;

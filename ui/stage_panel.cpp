@@ -228,7 +228,16 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
                   "areas.");
       }
       return tr("Next: Start configuration (F5) to add areas; the map is learned when you finish.");
-    case Stage::kConfiguration:
+    case Stage::kConfiguration: {
+      const bool reteaching = s.reteach_area >= 0 && s.reteach_area < s.areas;
+      const bool named = reteaching && s.area_data && s.reteach_area < static_cast<int>(s.area_data->size());
+      const QString reteach_name = named ? QString::fromStdString((*s.area_data)[static_cast<std::size_t>(s.reteach_area)].name)
+                                         : tr("area %1").arg(s.reteach_area + 1);
+      // Re-teach pressed: said until the area is recorded again, through the posing and the
+      // recording too.
+      const QString reteach_prefix =
+          reteaching && s.sub_stage != SubStage::kWaiting && s.sub_stage != SubStage::kNone ? tr("Re-teaching '%1'. ").arg(reteach_name) : QString();
+      return reteach_prefix + [&]() -> QString {
       switch (s.sub_stage) {
         case SubStage::kApproaching:
           // Said while the operator can still act: once posed, the area would be recorded in
@@ -259,17 +268,15 @@ QString StagePanel::nextStepHint(const LiveSnapshot& s, bool hand_can_pull) {
           }
           return tr("Recording: move the tip around inside the area; let go and keep still (or press Enter) to store it.");
         default:
-          // Re-teach pressed: said until the area is recorded again, not only in the status bar.
-          if (s.reteach_area >= 0 && s.reteach_area < s.areas) {
-            const bool named = s.area_data && s.reteach_area < static_cast<int>(s.area_data->size());
-            const QString name = named ? QString::fromStdString((*s.area_data)[static_cast<std::size_t>(s.reteach_area)].name)
-                                       : tr("area %1").arg(s.reteach_area + 1);
+          if (reteaching) {
             return tr("Re-teaching '%1': %2 and move the arm to the posture wanted there; its new recording replaces it.")
-                .arg(name, touch);
+                .arg(reteach_name, touch);
           }
           if (s.areas == 0) return tr("First area: %1 and move the arm to the posture wanted there.").arg(touch);
           return tr("Next area: %1 — or Finish configuration (F6) to learn from %2.").arg(touch, areas);
       }
+      }();
+    }
     case Stage::kProgramming:
       switch (s.sub_stage) {
         case SubStage::kApproaching:

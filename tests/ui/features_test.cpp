@@ -659,6 +659,13 @@ class FeaturesTest : public QObject {
       // A key, not a panel over the arm: at most 30 % of the view's height (90 px at least).
       QVERIFY2(window.confidenceLegend()->height() <= std::max(90, window.view()->height() * 3 / 10),
                qPrintable(QStringLiteral("%1 px of %2").arg(window.confidenceLegend()->height()).arg(window.view()->height())));
+      // Overlays ▸ Legend hides the colour bar too.
+      window.overlays().setVisible(flexirob::render::OverlayLayer::kLegend, false);
+      window.mirror();
+      QVERIFY(!window.confidenceLegend()->isVisible());
+      window.overlays().setVisible(flexirob::render::OverlayLayer::kLegend, true);
+      window.mirror();
+      QVERIFY(window.confidenceLegend()->isVisible());
       // The slices are drawn where they are: hiding the layer changes the picture.
       const QImage with = window.view()->grabFramebuffer();
       window.overlays().setVisible(flexirob::render::OverlayLayer::kConfidence, false);

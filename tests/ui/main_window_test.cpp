@@ -8,6 +8,7 @@
 #include <QLabel>
 #include <QMainWindow>
 #include <QMenu>
+#include <QPushButton>
 #include <QStatusBar>
 #include <QSignalSpy>
 #include <QTest>
@@ -126,6 +127,8 @@ class MainWindowTest : public QObject {
                           flexirob::render::toOsgMatrix(kinematics.X_WB(last_body))) < 1e-9);
     QVERIFY((window.kinematics()->q() - q).cwiseAbs().maxCoeff() < 1e-3);
     QVERIFY(!window.jointPanel()->slider(0)->isEnabled());
+    // The mirror offers no Home posture it could not take.
+    QVERIFY(window.jointPanel()->homeButton()->isHidden());
   }
 
   void menusListTheBuiltInRobotsAndScenes() {
@@ -137,6 +140,8 @@ class MainWindowTest : public QObject {
       if (action->data().toString() == QStringLiteral("arm9")) action->trigger();
     }
     QCOMPARE(window.jointPanel()->jointCount(), 9);
+    // The new rows mirror the arm as the old ones did.
+    QVERIFY(!window.jointPanel()->slider(8)->isEnabled());
     QVERIFY(window.robotMenu()->actions().at(1)->isChecked());
     for (QAction* action : window.sceneMenu()->actions()) {
       if (action->data().toString() == QStringLiteral("setup_II")) action->trigger();

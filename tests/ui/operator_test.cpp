@@ -20,6 +20,7 @@
 #include <QMenu>
 #include <QMenuBar>
 #include <QTimer>
+#include <QWheelEvent>
 #include <optional>
 #include <osg/Material>
 #include <chrono>
@@ -209,13 +210,17 @@ class OperatorTest : public QObject {
     QTRY_VERIFY(hintSays("Next area") && hintSays("Finish configuration (F6) to learn from 1 area."));
 
     // Area 1 again: Re-teach has the next RECORDING replace it instead of adding a second.
-    const auto recordArea = [&window, &s](Qt::Key direction) {
+    // While the area is re-taught, every step's hint says so.
+    const auto recordArea = [&window, &s, &hintSays](Qt::Key direction, const char* reteaching = nullptr) {
       QTest::keyClick(&window, Qt::Key_Space);
       QTRY_COMPARE(s.sub_stage, SubStage::kApproaching);
+      if (reteaching != nullptr) QTRY_VERIFY(hintSays(reteaching));
       QTest::keyClick(&window, Qt::Key_Return);
       QTRY_COMPARE(s.sub_stage, SubStage::kPosed);
+      if (reteaching != nullptr) QTRY_VERIFY(hintSays(reteaching) && hintSays("Posture fixed"));
       QTest::keyClick(&window, Qt::Key_Space);
       QTRY_COMPARE(s.sub_stage, SubStage::kRecording);
+      if (reteaching != nullptr) QTRY_VERIFY(hintSays(reteaching));
       QTest::keyPress(&window, direction);
       QTest::qWait(600);
       QTest::keyRelease(&window, direction);
@@ -229,8 +234,9 @@ class OperatorTest : public QObject {
     QTRY_VERIFY(flexirob::ui::fullStatusMessage(window.statusBar()).contains(QStringLiteral("replaces 'area_1'")));
     // The hint says it too, until the area is recorded again.
     QTRY_VERIFY(hintSays("Re-teaching 'area_1'"));
-    recordArea(Qt::Key_Up);
+    recordArea(Qt::Key_Up, "Re-teaching 'area_1'");
     QTRY_VERIFY(s.area_data != nullptr && (s.area_data->front().centre - first_centre).norm() > 0.01);
+    QVERIFY(!hintSays("Re-teaching"));
     QCOMPARE(s.areas, 1);
     // A second area: the newest is the one the choice names.
     recordArea(Qt::Key_Down);
@@ -290,7 +296,26 @@ class OperatorTest : public QObject {
     QVERIFY(remove_entry != nullptr && remove_entry->menu() != nullptr && remove_entry->isEnabled());
     QCOMPARE(remove_entry->menu()->actions().size(), 2);
     QCOMPARE(remove_entry->menu()->actions().at(0)->text(), QStringLiteral("area_1"));
+    // Removing asks first: Cancel keeps the area, "Remove the area" removes it.
+    QString removal_question;
+    QString removal_answer = QStringLiteral("Cancel");
+    QTimer removal;
+    connect(&removal, &QTimer::timeout, &window, [&] {
+      auto* box = qobject_cast<QMessageBox*>(QApplication::activeModalWidget());
+      if (box == nullptr) return;
+      removal_question = box->text();
+      for (QAbstractButton* button : box->buttons()) {
+        if (button->text() == removal_answer) button->click();
+      }
+    });
+    removal.start(50);
     remove_entry->menu()->actions().at(0)->trigger();
+    QVERIFY2(removal_question.startsWith(QStringLiteral("Remove the area 'area_1'? Its ")), qPrintable(removal_question));
+    QTest::qWait(200);
+    QCOMPARE(s.areas, 2);
+    removal_answer = QStringLiteral("Remove the area");
+    remove_entry->menu()->actions().at(0)->trigger();
+    removal.stop();
     QTRY_COMPARE(s.areas, 1);
     QTRY_COMPARE(panel->areaChoice()->count(), 1);
     QCOMPARE(panel->areaChoice()->itemText(0), QStringLiteral("area_2"));
@@ -812,6 +837,34 @@ class OperatorTest : public QObject {
     waitRunning(window);
   }
 
+  // A wheel turned over the Parameters panel while scrolling it changes no value; in a box the
+  // operator clicked into, it does.
+  void aWheelOverTheParametersChangesOnlyTheBoxClickedInto() {
+    MainWindow window("lwr4", "empty", quietOptions());
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    window.activateWindow();
+    const flexirob::robot::ParameterDeclaration declaration = window.parameters().declarations().front();
+    QDoubleSpinBox* box = window.parameterPanel()->spinBox(declaration.name);
+    QVERIFY(box != nullptr);
+    box->setValue(declaration.min_value + 0.5 * (declaration.max_value - declaration.min_value));
+    const double before = box->value();
+    const auto turnWheel = [box] {
+      const QPointF at(box->width() / 2.0, box->height() / 2.0);
+      QWheelEvent wheel(at, box->mapToGlobal(at), QPoint(), QPoint(0, -120), Qt::NoButton, Qt::NoModifier,
+                        Qt::NoScrollPhase, false);
+      QApplication::sendEvent(box, &wheel);
+    };
+    window.view()->setFocus();
+    QVERIFY(!box->hasFocus());
+    turnWheel();
+    QCOMPARE(box->value(), before);
+    box->setFocus();
+    QTRY_VERIFY(box->hasFocus());
+    turnWheel();
+    QVERIFY(box->value() != before);
+  }
+
   void aSessionIsRecordedAndSaved() {
     MainWindow::Options options = quietOptions();
     options.record_sessions = true;
@@ -944,8 +997,18 @@ class OperatorTest : public QObject {
     MainWindow window("lwr4", "empty", quietOptions());
     showIfDrawable(window);
     const std::string address = "fri://" + controller.localEndpoint().toString();
+    auto* disconnect = window.findChild<QAction*>(QStringLiteral("disconnect_backend"));
+    QVERIFY(disconnect != nullptr);
+    QVERIFY(!disconnect->isEnabled());  // on the simulation there is nothing to disconnect
     if (!window.setBackend(address)) QSKIP("the FRI port 49938 is taken on this machine");
     QVERIFY(!window.reconnectAction()->isEnabled());
+    QMenu* backend_menu = nullptr;
+    for (QAction* entry : window.menuBar()->actions()) {
+      if (entry->text() == QStringLiteral("&Backend")) backend_menu = entry->menu();
+    }
+    QVERIFY(backend_menu != nullptr);
+    Q_EMIT backend_menu->aboutToShow();
+    QVERIFY(disconnect->isEnabled());  // on the robot it is offered
     // Monitor mode, then command mode once our answers make the quality good enough.
     QTRY_VERIFY2_WITH_TIMEOUT(window.live()->linkStatus().link == "commanding", window.live()->linkStatus().summary().c_str(), 10000);
     QTRY_VERIFY(window.linkLabel()->text().contains(QStringLiteral("commanding")));
