@@ -887,12 +887,16 @@ class OperatorTest : public QObject {
     // and what came after.
     const QString run_file = window.sessionFile();
     QVERIFY(!run_file.isEmpty() && run_file != file);
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTest::keyClick(&window, Qt::Key_Return);
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTest::qWait(400);
-    QTest::keyClick(&window, Qt::Key_Return);
-    QTRY_COMPARE(window.live()->snapshot().areas, 1);
+    // An area: on_affected, on_converged, on_affected, recording, on_converged.
+    const auto recordAnArea = [&window](int areas_after) {
+      QTest::keyClick(&window, Qt::Key_Space);
+      QTest::keyClick(&window, Qt::Key_Return);
+      QTest::keyClick(&window, Qt::Key_Space);
+      QTest::qWait(400);
+      QTest::keyClick(&window, Qt::Key_Return);
+      QTRY_COMPARE(window.live()->snapshot().areas, areas_after);
+    };
+    recordAnArea(1);
     QCOMPARE(window.sessionFile(), run_file);
     QVERIFY(window.teachingChangedSinceSave());
     // A name typed without a suffix gets the one Open recording lists.
@@ -907,12 +911,7 @@ class OperatorTest : public QObject {
     QCOMPARE(flexirob::app::SessionReader(file.toStdString()).areas().size(), std::size_t{0});
     // Teaching after the last save: closing asks; Cancel keeps the window open, Save writes it
     // there again.
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTest::keyClick(&window, Qt::Key_Return);
-    QTest::keyClick(&window, Qt::Key_Space);
-    QTest::qWait(400);
-    QTest::keyClick(&window, Qt::Key_Return);
-    QTRY_COMPARE(window.live()->snapshot().areas, 2);
+    recordAnArea(2);
     QVERIFY(window.teachingChangedSinceSave());
     QMessageBox::StandardButton answer = QMessageBox::Cancel;
     QString question;
