@@ -547,7 +547,15 @@ void SessionRecorder::saveSnapshot(const std::filesystem::path& target) {
   if (!impl_->thread.joinable() || status().health != RecorderHealth::Recording) {
     throw InputError("the recording is not on disk (" + file_.string() + "): only a copy that ends it can be saved");
   }
+  std::error_code same_ec;
+  if (std::filesystem::equivalent(target, file_, same_ec)) {
+    throw InputError(target.string() + " is the file this run records into; choose another");
+  }
   flush();
+  // A commit that failed in the flush moved the recording into memory: the file lacks it.
+  if (status().health != RecorderHealth::Recording) {
+    throw InputError("the recording could not be written to " + file_.string() + ": " + status().message);
+  }
   // Written beside the target and renamed over it: a failure leaves the target as it was.
   const std::filesystem::path part = target.string() + ".part";
   removeDatabaseFiles(part);

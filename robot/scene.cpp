@@ -772,7 +772,7 @@ std::vector<Eigen::Vector3d> EvaluationGrid::points() const {
 
 std::string robotFor(const std::string& robot_option, const Scene& scene) {
   if (!robot_option.empty()) return robot_option;
-  if (!scene.robot_unreadable.empty()) throw InputError(scene.robot_unreadable + " (or give another robot: --robot)");
+  if (!scene.robot_unreadable.empty()) throw InputError(scene.robot_unreadable);
   return scene.robot.empty() ? std::string("lwr4") : scene.robot;
 }
 

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "app/backend_factory.hpp"
+#include "robot/scene.hpp"
 #include "ui/live_teaching.hpp"
 #include "ui/main_window.hpp"
 #include "ui/review_window.hpp"
@@ -239,6 +240,8 @@ int main(int argc, char** argv) {
   if (!parser.isSet(review)) {
     try {
       if (parser.isSet(scene)) window_options.scene_read = flexirob::ui::MainWindow::readScene(parser.value(scene).toStdString());
+      // A scene naming a robot file this machine lacks runs with a robot given, as in the CLI.
+      if (window_options.scene_read && !parser.isSet(robot)) flexirob::robot::robotFor("", *window_options.scene_read);
     } catch (const std::exception& error) {
       std::fprintf(stderr, "error: --scene: %s\n", error.what());
       return 2;

@@ -322,8 +322,17 @@ void MainWindow::buildDocks() {
                            QMessageBox::Cancel, this);
       QPushButton* remove = question.addButton(tr("Remove the area"), QMessageBox::DestructiveRole);
       question.setDefaultButton(QMessageBox::Cancel);
+      const std::string name = chosen.name;  // the areas may change while the question is open
       question.exec();
-      if (question.clickedButton() == remove && live_) live_->removeArea(area);
+      if (question.clickedButton() == remove && live_) {
+        const LiveSnapshot& after = live_->snapshot();
+        if (after.area_data && area < static_cast<int>(after.area_data->size()) &&
+            (*after.area_data)[static_cast<std::size_t>(area)].name == name) {
+          live_->removeArea(area);
+        } else {
+          showStatusMessage(statusBar(), tr("The areas changed while the question was open: nothing removed"), 10000);
+        }
+      }
     }
     view_->setFocus();
   });
@@ -736,6 +745,10 @@ void MainWindow::chooseScene(const std::string& name) {
   }
   if (own_robot.empty()) {
     loadScene(name, std::move(chosen));
+    return;
+  }
+  if (!chosen.robot_unreadable.empty()) {  // its own robot is needed and this machine lacks it
+    refuseScene(name, InputError(chosen.robot_unreadable));
     return;
   }
   const QString before = QString::fromStdString(model_->name());
@@ -1311,7 +1324,9 @@ void MainWindow::updateStatus() {
     status_fields_owner_ = fields_owner;
     status_label_->setMinimumWidth(0);
   }
-  status_label_->setMinimumWidth(std::max(status_label_->minimumWidth(), status_label_->sizeHint().width()));
+  // At most two thirds of the bar: a long text once must not hold the window wide for good.
+  status_label_->setMinimumWidth(
+      std::min(std::max(status_label_->minimumWidth(), status_label_->sizeHint().width()), statusBar()->width() * 2 / 3));
 }
 
 void MainWindow::watchDeadlines(const app::CycleStatistics& stats) {

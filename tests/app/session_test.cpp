@@ -605,6 +605,8 @@ TEST_F(SessionTest, ASnapshotHoldsWhatWasRecordedAndRecordingGoesOnIntoTheSameFi
   for (int i = 250; i < 300; ++i) ASSERT_TRUE(recorder.recordState(exampleState(i)));
   EXPECT_THROW(recorder.saveSnapshot(blocked), InputError);
   EXPECT_EQ(SessionReader(blocked).stateCount(), 250);
+  // The run's own file is no target: renamed over, its live WAL would belong to another file.
+  EXPECT_THROW(recorder.saveSnapshot(file), InputError);
   recorder.close();
   EXPECT_EQ(SessionReader(file).stateCount(), 300);
   // Closed, it has nothing live to copy from: saveCopy() is the way.

@@ -272,8 +272,8 @@ class FeaturesTest : public QObject {
     QTest::keyPress(&window, Qt::Key_Right);
     QTest::qWait(1500);
     QTest::keyRelease(&window, Qt::Key_Right);
-    watch(Qt::Key_Down, 1200);
-    watch(Qt::Key_Up, 2400);
+    watch(Qt::Key_Down, 1500);
+    watch(Qt::Key_Up, 3000);
     QVERIFY2(saw_negative_y && saw_positive_y, "the tip did not cross y = 0: nothing to keep the fields from");
   }
 

@@ -73,6 +73,17 @@ void waitRunning(MainWindow& window) {
   QTRY_VERIFY_WITH_TIMEOUT(window.live() != nullptr && window.live()->snapshot().running, 10000);
 }
 
+// In CONFIGURATION, one area with the keys: on_affected, on_converged, on_affected, recording,
+// on_converged; then `areas_after` areas stand.
+void recordAnArea(MainWindow& window, int areas_after) {
+  QTest::keyClick(&window, Qt::Key_Space);
+  QTest::keyClick(&window, Qt::Key_Return);
+  QTest::keyClick(&window, Qt::Key_Space);
+  QTest::qWait(400);
+  QTest::keyClick(&window, Qt::Key_Return);
+  QTRY_COMPARE(window.live()->snapshot().areas, areas_after);
+}
+
 // Starts configuration, drags `body` in the view 80 px left and 64 px up and holds it there for
 // 1.5 s of the robot's time (a loaded machine runs the paced loop late), then lets go: where its origin was before and at the end of the pull, and the pixel the
 // drag started at. The caller checks QTest::currentTestFailed().
@@ -887,16 +898,7 @@ class OperatorTest : public QObject {
     // and what came after.
     const QString run_file = window.sessionFile();
     QVERIFY(!run_file.isEmpty() && run_file != file);
-    // An area: on_affected, on_converged, on_affected, recording, on_converged.
-    const auto recordAnArea = [&window](int areas_after) {
-      QTest::keyClick(&window, Qt::Key_Space);
-      QTest::keyClick(&window, Qt::Key_Return);
-      QTest::keyClick(&window, Qt::Key_Space);
-      QTest::qWait(400);
-      QTest::keyClick(&window, Qt::Key_Return);
-      QTRY_COMPARE(window.live()->snapshot().areas, areas_after);
-    };
-    recordAnArea(1);
+    recordAnArea(window, 1);
     QCOMPARE(window.sessionFile(), run_file);
     QVERIFY(window.teachingChangedSinceSave());
     // A name typed without a suffix gets the one Open recording lists.
@@ -911,7 +913,7 @@ class OperatorTest : public QObject {
     QCOMPARE(flexirob::app::SessionReader(file.toStdString()).areas().size(), std::size_t{0});
     // Teaching after the last save: closing asks; Cancel keeps the window open, Save writes it
     // there again.
-    recordAnArea(2);
+    recordAnArea(window, 2);
     QVERIFY(window.teachingChangedSinceSave());
     QMessageBox::StandardButton answer = QMessageBox::Cancel;
     QString question;
@@ -940,25 +942,20 @@ class OperatorTest : public QObject {
     options.record_sessions = true;
     MainWindow window("lwr4", "empty", options);
     waitRunning(window);
-    // start_configuration, then one area: on_affected, on_converged, on_affected, recording, on_converged.
-    const auto recordAnArea = [&window](int areas_after) {
+    // start_configuration, then one area.
+    const auto configureAnArea = [&window](int areas_after) {
       QTest::keyClick(&window, Qt::Key_F5);
       QTRY_COMPARE(window.live()->snapshot().stage, Stage::kConfiguration);
-      QTest::keyClick(&window, Qt::Key_Space);
-      QTest::keyClick(&window, Qt::Key_Return);
-      QTest::keyClick(&window, Qt::Key_Space);
-      QTest::qWait(400);
-      QTest::keyClick(&window, Qt::Key_Return);
-      QTRY_COMPARE(window.live()->snapshot().areas, areas_after);
+      recordAnArea(window, areas_after);
     };
-    recordAnArea(1);
+    configureAnArea(1);
     QTest::keyClick(&window, Qt::Key_F6);
     QTRY_VERIFY_WITH_TIMEOUT(window.live()->snapshot().model_ready, 20000);
     QTest::qWait(200);
     const auto learned = window.live()->snapshot().model;
     const int learned_from = static_cast<int>(window.live()->snapshot().area_data->front().X.cols());
     // A second area changes the confidence (the model version) but not the model: recorded once.
-    recordAnArea(2);
+    configureAnArea(2);
     QTest::qWait(200);
     QTemporaryDir directory;
     const QString file = directory.filePath(QStringLiteral("learned.flexirob"));
