@@ -1397,9 +1397,9 @@ void MainWindow::fillTeachingMenu() {
 
 namespace {
 
-// The menus' mnemonics underlined, so a keyboard user sees which Alt+letter opens which menu, and
-// a bare Alt press and release highlights the first menu for the arrow keys: Qt's Fusion style
-// on Linux hides the mnemonics.
+// The menus' mnemonics underlined, so a keyboard user sees which Alt+letter opens which menu:
+// Qt's Fusion style on Linux hides them. Alt-key navigation is asked for too; under Xvfb a bare
+// Alt press still showed no highlight (docs/RELIABILITY.md, round twenty-two).
 class MenuBarKeyboardStyle : public QProxyStyle {
  public:
   int styleHint(StyleHint hint, const QStyleOption* option, const QWidget* widget,
