@@ -733,14 +733,14 @@ class FeaturesTest : public QObject {
     QTRY_VERIFY(!window.goal().has_value());
     window.mirror();
     QCOMPARE(window.overlays().layer(flexirob::render::OverlayLayer::kGoalAndPath)->getNumChildren(), 0U);
-    QVERIFY(!window.stagePanel()->warningLabel()->text().isEmpty());
+    QTRY_VERIFY(!window.stagePanel()->warningLabel()->text().isEmpty());
     // Another goal, then CONFIGURATION again: the goal and its path are no motion any more.
     const std::uint64_t before_second = s.path_version;
     QVERIFY(window.setGoal(start_tip));
     QTRY_VERIFY_WITH_TIMEOUT(s.path_version != before_second, 5000);
     // Accepted after the refusal: the refusal no longer describes what the arm does.
     QTRY_VERIFY(window.stagePanel()->warningLabel()->text().isEmpty());
-    QVERIFY(!window.bannerLabel()->text().contains(QStringLiteral("⚠")));
+    QTRY_VERIFY(!window.bannerLabel()->text().contains(QStringLiteral("⚠")));
     window.mirror();
     QVERIFY(window.overlays().layer(flexirob::render::OverlayLayer::kGoalAndPath)->getNumChildren() >= 2);
     QTest::keyClick(&window, Qt::Key_F5);
