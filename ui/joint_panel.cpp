@@ -5,7 +5,6 @@
 #include <QGridLayout>
 #include <QLabel>
 #include <QPainter>
-#include <QPushButton>
 #include <QStyleOptionSlider>
 #include <QVBoxLayout>
 #include <algorithm>
@@ -109,15 +108,6 @@ JointPanel::JointPanel(QWidget* parent) : QWidget(parent) {
   layout->addWidget(title);
   grid_ = new QGridLayout;
   layout->addLayout(grid_);
-  auto* home = new QPushButton(tr("Home posture"), this);
-  home->setToolTip(tr("Back to the start posture of robot and scene"));
-  home->setEnabled(false);  // until there is a robot
-  home_button_ = home;
-  connect(home, &QPushButton::clicked, this, [this] {
-    setPosture(home_);
-    Q_EMIT postureChanged(posture());
-  });
-  layout->addWidget(home);
   layout->addStretch(1);
 }
 
@@ -131,7 +121,6 @@ void JointPanel::setRobot(const robot::RobotModel& model, const Eigen::VectorXd&
   value_labels_.clear();
   bars_.clear();
   prismatic_.clear();
-  home_ = q;
   for (int j = 0; j < model.dof(); ++j) {
     const robot::Joint& joint = model.joints()[static_cast<std::size_t>(j)];
     const bool prismatic = joint.type == robot::JointType::kPrismatic;
@@ -141,6 +130,9 @@ void JointPanel::setRobot(const robot::RobotModel& model, const Eigen::VectorXd&
     name->setText(name->fontMetrics().elidedText(full_name, Qt::ElideRight, 110));
     name->setToolTip(full_name);
     auto* slider = new LimitSlider(joint.limits, this);
+    // The panel mirrors the live arm, whose posture the backend owns: a slider that could be
+    // dragged would move nothing and snap back.
+    slider->setEnabled(false);
     auto* value = new QLabel(this);
     value->setMinimumWidth(62);
     value->setAlignment(Qt::AlignRight | Qt::AlignVCenter);
@@ -166,32 +158,17 @@ void JointPanel::setRobot(const robot::RobotModel& model, const Eigen::VectorXd&
     sliders_.push_back(slider);
     value_labels_.push_back(value);
     prismatic_.push_back(prismatic);
-    connect(slider, &QSlider::valueChanged, this, [this, j] {
-      updateValueLabel(j);
-      if (!updating_) Q_EMIT postureChanged(posture());
-    });
+    connect(slider, &QSlider::valueChanged, this, [this, j] { updateValueLabel(j); });
   }
   grid_->setColumnStretch(1, 1);
-  home_button_->setEnabled(model.dof() > 0);
-  setReadOnly(read_only_);
   setPosture(q);
 }
 
 void JointPanel::setPosture(const Eigen::VectorXd& q) {
-  updating_ = true;
   for (int j = 0; j < jointCount() && j < q.size(); ++j) {
     sliders_[static_cast<std::size_t>(j)]->setValueSi(q[j]);
     updateValueLabel(j);
   }
-  updating_ = false;
-}
-
-void JointPanel::setReadOnly(bool read_only) {
-  // Kept for the rows of the next robot too: a mirror whose sliders could be dragged, or whose
-  // Home posture could be pressed, moved nothing and snapped back.
-  read_only_ = read_only;
-  for (LimitSlider* slider : sliders_) slider->setEnabled(!read_only);
-  home_button_->setVisible(!read_only);
 }
 
 Eigen::VectorXd JointPanel::posture() const {

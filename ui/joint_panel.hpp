@@ -13,7 +13,6 @@
 class QLabel;
 class QGridLayout;
 
-class QPushButton;
 
 namespace flexirob::ui {
 
@@ -68,20 +67,12 @@ class JointPanel : public QWidget {
 
   /// Rebuilds the rows for `model` and shows posture q (size model.dof()).
   void setRobot(const robot::RobotModel& model, const Eigen::VectorXd& q);
-  /// Shows posture q without emitting postureChanged.
+  /// Shows posture q.
   void setPosture(const Eigen::VectorXd& q);
   Eigen::VectorXd posture() const;
   int jointCount() const { return static_cast<int>(sliders_.size()); }
   LimitSlider* slider(int joint) const { return sliders_.at(static_cast<std::size_t>(joint)); }
   LimitDistanceBar* limitBar(int joint) const { return bars_.at(static_cast<std::size_t>(joint)); }
-  /// Live mirror: the sliders show the robot's posture and cannot be dragged.
-  void setReadOnly(bool read_only);
-  /// "Home posture" (hidden while read-only: the backend owns the posture).
-  QPushButton* homeButton() const { return home_button_; }
-
- Q_SIGNALS:
-  void postureChanged(const Eigen::VectorXd& q);
-
  private:
   void updateValueLabel(int joint);
 
@@ -90,10 +81,6 @@ class JointPanel : public QWidget {
   std::vector<QLabel*> value_labels_;
   std::vector<LimitDistanceBar*> bars_;
   std::vector<bool> prismatic_;
-  Eigen::VectorXd home_;
-  QPushButton* home_button_ = nullptr;
-  bool updating_ = false;
-  bool read_only_ = false;
 };
 
 }  // namespace flexirob::ui

@@ -350,7 +350,6 @@ void MainWindow::buildDocks() {
   joints_dock->setWidget(scroll);
   joints_dock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
   addDockWidget(Qt::RightDockWidgetArea, joints_dock);
-  connect(joint_panel_, &JointPanel::postureChanged, this, [this](const Eigen::VectorXd& q) { setPosture(q); });
 
   parameter_panel_ = new ParameterPanel;
   auto* parameter_scroll = new QScrollArea;
@@ -620,7 +619,6 @@ bool MainWindow::loadRobot(const std::string& name_or_path, robot::RobotModel re
   // Start posture: the scene's, if it was made for a robot with this many joints, else a free one.
   const Eigen::VectorXd q = shownHomePosture(*model_, scene_);
   joint_panel_->setRobot(*model_, q);
-  joint_panel_->setReadOnly(true);  // the panel mirrors the live arm; the backend owns the posture
   kinematics_->update(q);
   world_.robot()->setPosture(*kinematics_);
   frameView();
@@ -814,15 +812,6 @@ bool MainWindow::setBackend(const std::string& choice) {
   }
   updateStatus();
   return true;
-}
-
-void MainWindow::setPosture(const Eigen::VectorXd& q) {
-  if (!model_ || q.size() != model_->dof()) return;
-  kinematics_->update(q);
-  world_.robot()->setPosture(*kinematics_);
-  if (joint_panel_->posture() != q) joint_panel_->setPosture(q);
-  updateStatus();
-  view_->requestFrame();
 }
 
 double MainWindow::meanFramesPerSecond() const {

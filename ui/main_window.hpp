@@ -97,9 +97,6 @@ class MainWindow : public QMainWindow {
   static robot::Scene readScene(const std::string& name_or_path);
   /// Switches the backend ("sim" or "fri://HOST:PORT"); false and the reason shown on failure.
   bool setBackend(const std::string& choice);
-  /// Poses the robot shown (size dof(), radians / metres): view, joint panel and status bar.
-  /// With the live simulation in IDLE, the simulated arm is put there too.
-  void setPosture(const Eigen::VectorXd& q);
 
   /// Takes the newest snapshot of the live robot into the view and the panels (the display
   /// timer calls it; tests call it to avoid waiting).
