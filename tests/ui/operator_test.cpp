@@ -247,7 +247,8 @@ class OperatorTest : public QObject {
     QTRY_VERIFY(hintSays("Re-teaching 'area_1'"));
     recordArea(Qt::Key_Up, "Re-teaching 'area_1'");
     QTRY_VERIFY(s.area_data != nullptr && (s.area_data->front().centre - first_centre).norm() > 0.01);
-    QVERIFY(!hintSays("Re-teaching"));
+    // The panel reads the snapshot on its own tick, so the hint may follow the new area a tick later.
+    QTRY_VERIFY(!hintSays("Re-teaching"));
     QCOMPARE(s.areas, 1);
     // A second area: the newest is the one the choice names.
     recordArea(Qt::Key_Down);
