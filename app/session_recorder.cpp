@@ -484,14 +484,7 @@ void SessionRecorder::close() {
     } catch (const SqliteError&) {
       // The file is full or gone: its content up to the last commit stays valid.
     }
-    bool still_recording = false;
-    {
-      std::lock_guard lock(impl_->mutex);
-      still_recording = impl_->status.health == RecorderHealth::Recording;
-    }
-    struct stat now {};
-    if (still_recording && impl_->file_identity_known &&
-        (::stat(file_.c_str(), &now) != 0 || now.st_dev != impl_->file_device || now.st_ino != impl_->file_inode)) {
+    if (status().health == RecorderHealth::Recording && !fileIsTheOneOpened()) {
       // Still readable through the connection: copied into memory, for saveCopy().
       impl_->startInMemory(&impl_->db, "the session file " + file_.string() + " was removed or replaced while the run recorded");
       return;
@@ -504,6 +497,16 @@ void SessionRecorder::close() {
   }
   std::lock_guard lock(impl_->mutex);
   if (impl_->status.health == RecorderHealth::Recording) impl_->status.health = RecorderHealth::Closed;
+}
+
+bool SessionRecorder::fileIsTheOneOpened() const {
+  struct stat now {};
+  return impl_->file_identity_known && ::stat(file_.c_str(), &now) == 0 && now.st_dev == impl_->file_device &&
+         now.st_ino == impl_->file_inode;
+}
+
+bool SessionRecorder::fileHoldsTheRecording() const {
+  return impl_->thread.joinable() && status().health == RecorderHealth::Recording && fileIsTheOneOpened();
 }
 
 RecorderStatus SessionRecorder::status() const {
@@ -555,6 +558,10 @@ void SessionRecorder::saveSnapshot(const std::filesystem::path& target) {
   // A commit that failed in the flush moved the recording into memory: the file lacks it.
   if (status().health != RecorderHealth::Recording) {
     throw InputError("the recording could not be written to " + file_.string() + ": " + status().message);
+  }
+  // The connection still writes into a file removed (or replaced) under it: nothing to read.
+  if (!fileIsTheOneOpened()) {
+    throw InputError("the session file " + file_.string() + " was removed or replaced while the run recorded");
   }
   // Written beside the target and renamed over it: a failure leaves the target as it was.
   const std::filesystem::path part = target.string() + ".part";

@@ -217,6 +217,9 @@ class SessionRecorder {
 
   RecorderStatus status() const;
   const std::filesystem::path& file() const { return file_; }
+  /// Whether file() holds the recording and it goes on into it: recording (not in memory,
+  /// not closed) and file() still the file opened (not removed or replaced since).
+  bool fileHoldsTheRecording() const;
 
   /// Closes the recorder, then writes a complete copy of the recording (file or in-memory) to
   /// `target` (SQLite online backup). Use it after a disk failure to keep the session.
@@ -225,10 +228,12 @@ class SessionRecorder {
   /// Writes a complete copy of everything recorded so far to `target` (created or replaced)
   /// and goes on recording into file(). The copy is written beside `target` and renamed over
   /// it, so a failure leaves `target` as it was. Throws InputError on failure, and when the
-  /// recording is not on disk (in memory or closed: use saveCopy()).
+  /// recording is not on disk (in memory, closed, or its file removed: use saveCopy()).
   void saveSnapshot(const std::filesystem::path& target);
 
  private:
+  bool fileIsTheOneOpened() const;
+
   struct Impl;
   std::filesystem::path file_;
   std::unique_ptr<Impl> impl_;

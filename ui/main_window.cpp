@@ -542,20 +542,26 @@ bool MainWindow::saveSession(const QString& chosen) {
   const std::uint64_t teach_ins_version = now.teach_ins_version;
   bool ok = true;
   try {
-    if (recorder_->status().health == app::RecorderHealth::Recording) {
-      recorder_->saveSnapshot(file.toStdString());  // the run's file goes on holding the whole run
-    } else {
-      // Recording in memory (the run's file failed): the copy ends it; record on into a new file.
+    // Recording in memory (the run's file failed, or was removed): the copy ends it, and the
+    // run records on into a new file. A copy that fails keeps the ended recording for another
+    // try (closing asks for it): a new file in its place would lose it.
+    const auto copyEndingTheRecording = [this, &file] {
       live_->setRecorder(nullptr);
-      try {
-        recorder_->saveCopy(file.toStdString());
-      } catch (...) {
-        recorder_.reset();
-        startRecording();
-        throw;
-      }
+      recorder_->saveCopy(file.toStdString());
       recorder_.reset();
       startRecording();
+      saved_session_ended_a_recording_ = true;
+    };
+    if (!recorder_->fileHoldsTheRecording()) {
+      copyEndingTheRecording();
+    } else {
+      try {
+        recorder_->saveSnapshot(file.toStdString());  // the run's file goes on holding the whole run
+        saved_session_ended_a_recording_ = false;
+      } catch (const std::exception&) {
+        if (recorder_->fileHoldsTheRecording()) throw;  // the target failed, not the recording
+        copyEndingTheRecording();  // the flush failed: the recording is in memory now
+      }
     }
     saved_session_file_ = file;
     saved_areas_version_ = areas_version;
@@ -574,13 +580,26 @@ bool MainWindow::teachingChangedSinceSave() const {
   return now.areas_version != saved_areas_version_ || now.teach_ins_version != saved_teach_ins_version_;
 }
 
-void MainWindow::saveSessionAs() {
+bool MainWindow::saveSessionAgain() {
+  if (saved_session_file_.isEmpty()) return saveSessionAs();
+  if (saved_session_ended_a_recording_) {
+    // That file holds the run up to the recording's failure; the new recording holds only what
+    // came after, and would replace it.
+    showStatusMessage(statusBar(), tr("%1 holds the run up to the recording's failure: save the rest under another name")
+                                       .arg(saved_session_file_), 15000);
+    return saveSessionAs();
+  }
+  return saveSession(saved_session_file_);
+}
+
+bool MainWindow::saveSessionAs() {
   QFileDialog dialog(this, tr("Save session"),
                      saved_session_file_.isEmpty() ? QStringLiteral("session.flexirob") : saved_session_file_,
                      tr("FlexIRob sessions (*.flexirob);;All files (*)"));
   dialog.setAcceptMode(QFileDialog::AcceptSave);
   dialog.setDefaultSuffix(QStringLiteral("flexirob"));
-  if (dialog.exec() == QDialog::Accepted && !dialog.selectedFiles().isEmpty()) saveSession(dialog.selectedFiles().front());
+  if (dialog.exec() != QDialog::Accepted || dialog.selectedFiles().isEmpty()) return false;
+  return saveSession(dialog.selectedFiles().front());
 }
 
 void MainWindow::refuseRobot(const std::string& name_or_path, const std::exception& error) {
@@ -847,6 +866,7 @@ void MainWindow::mirror() {
   driveKeyboard();
   const LiveSnapshot& s = live_->snapshot();
   handleEvents();
+  watchRecording();
   stage_panel_->showSnapshot(s, robotMeasured(), live_->simulated());
   if (s.failed) {
     const auto end = std::find(s.failure.begin(), s.failure.end(), '\0');
@@ -1253,15 +1273,37 @@ void MainWindow::resizeEvent(QResizeEvent* event) {
   if (joints_dock->width() < wanted) resizeDocks({joints_dock}, {wanted}, Qt::Horizontal);
 }
 
+void MainWindow::watchRecording() {
+  if (!recorder_ || recorder_->status().health != app::RecorderHealth::InMemory) {
+    clearProblem(Problem::kRecording);
+    return;
+  }
+  const QString message = tr("The session is held in memory only (%1): File ▸ Save session as… keeps it")
+                              .arg(QString::fromStdString(recorder_->status().message));
+  const auto shown = problems_.find(Problem::kRecording);
+  if (shown == problems_.end() || shown->second != message) reportProblem(Problem::kRecording, message);
+}
+
 void MainWindow::closeEvent(QCloseEvent* event) {
-  if (teachingChangedSinceSave()) {
+  if (recorder_ && recorder_->status().health == app::RecorderHealth::InMemory) {
+    // Nothing on disk holds what the run recorded since its file failed.
+    const auto answer = QMessageBox::question(
+        this, tr("Save session"),
+        tr("This run's recording could not be written to %1 and is held in memory only (%2). Save it before closing?")
+            .arg(session_file_, QString::fromStdString(recorder_->status().message)),
+        QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
+    if (answer == QMessageBox::Cancel || (answer == QMessageBox::Save && !saveSessionAs())) {
+      event->ignore();
+      return;
+    }
+  } else if (teachingChangedSinceSave()) {
     const auto answer = QMessageBox::question(
         this, tr("Save session"),
         tr("The teaching changed since the session was saved to %1. Save it there again?\n"
            "(Every run is also recorded whole into %2.)")
             .arg(saved_session_file_, session_file_.isEmpty() ? tr("no file: this run is not recorded") : session_file_),
         QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
-    if (answer == QMessageBox::Cancel || (answer == QMessageBox::Save && !saveSession(saved_session_file_))) {
+    if (answer == QMessageBox::Cancel || (answer == QMessageBox::Save && !saveSessionAgain())) {
       event->ignore();
       return;
     }
@@ -1435,13 +1477,7 @@ void MainWindow::buildMenus() {
     if (recorder_) recorder_->flush();  // the review opens what is on disk
     openRecording(session_file_);
   });
-  file->addAction(tr("&Save session"), QKeySequence::Save, this, [this] {
-    if (saved_session_file_.isEmpty()) {
-      saveSessionAs();
-    } else {
-      saveSession(saved_session_file_);
-    }
-  });
+  file->addAction(tr("&Save session"), QKeySequence::Save, this, &MainWindow::saveSessionAgain);
   file->addAction(tr("Save session &as…"), QKeySequence::SaveAs, this, &MainWindow::saveSessionAs);
   file->addAction(tr("Show session &folder"), this, [this] {
     QMessageBox::information(this, tr("Sessions"),

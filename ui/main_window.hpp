@@ -187,13 +187,16 @@ class MainWindow : public QMainWindow {
   void buildMenus();
   /// The Teaching menu from the Teaching panel's controls as they are now (run as it opens).
   void fillTeachingMenu();
-  void saveSessionAs();  // File ▸ Save session as…: the dialog, then saveSession()
+  bool saveSessionAs();  // File ▸ Save session as…: the dialog, then saveSession()
+  // File ▸ Save session: saveSession() into the file saved last, or the dialog where there is
+  // none, or where that file holds a recording that ended (the rest would replace it).
+  bool saveSessionAgain();
   void buildDocks();
   void updateStatus();
   void reportError(const QString& what, const std::exception& error);
   /// What keeps the window from doing what was asked: a robot, a scene or a backend that could
   /// not be used. Shown whole in the view until that kind of thing is next loaded.
-  enum class Problem { kRobot, kRobotNotes, kScene, kSceneNotes, kPostures, kStartContact, kBackend, kDeadlines };
+  enum class Problem { kRobot, kRobotNotes, kScene, kSceneNotes, kPostures, kStartContact, kBackend, kDeadlines, kRecording };
   void reportProblem(Problem kind, const QString& message);
   void clearProblem(Problem kind);
   /// The notes the CLI prints on stderr, shown in the view under `kind` (cleared when none).
@@ -208,6 +211,8 @@ class MainWindow : public QMainWindow {
   void frameView();
   /// Says in the view when most control cycles of the last seconds were late.
   void watchDeadlines(const app::CycleStatistics& stats);
+  /// Says in the view when the run's file failed and the recording goes on in memory only.
+  void watchRecording();
   /// Stops the live robot and closes its session (before model or scene change).
   void stopLive();
   /// Builds and starts the live robot for the current model, scene, backend and parameters.
@@ -255,6 +260,7 @@ class MainWindow : public QMainWindow {
   std::unique_ptr<LiveTeaching> live_;
   QString session_file_;
   QString saved_session_file_;
+  bool saved_session_ended_a_recording_ = false;  // the file holds a recording the run left
   std::uint64_t saved_areas_version_ = 0, saved_teach_ins_version_ = 0;
   std::uint64_t shown_cycle_ = ~0ULL;
   int chimes_ = 0;

@@ -611,6 +611,28 @@ TEST_F(SessionTest, ASnapshotHoldsWhatWasRecordedAndRecordingGoesOnIntoTheSameFi
   EXPECT_EQ(SessionReader(file).stateCount(), 300);
   // Closed, it has nothing live to copy from: saveCopy() is the way.
   EXPECT_THROW(recorder.saveSnapshot(path("late.flexirob")), InputError);
+  EXPECT_FALSE(recorder.fileHoldsTheRecording());
+}
+
+TEST_F(SessionTest, AFileRemovedWhileRecordingIsNoSnapshotSourceButTheWholeRunIsCopied) {
+  const auto file = path("removed.flexirob");
+  SessionRecorder recorder(file, exampleMetadata());
+  for (int i = 0; i < 100; ++i) ASSERT_TRUE(recorder.recordState(exampleState(i)));
+  recorder.flush();
+  EXPECT_TRUE(recorder.fileHoldsTheRecording());
+  std::filesystem::remove(file);
+  EXPECT_FALSE(recorder.fileHoldsTheRecording());
+  for (int i = 100; i < 150; ++i) ASSERT_TRUE(recorder.recordState(exampleState(i)));
+  try {
+    recorder.saveSnapshot(path("snapshot.flexirob"));
+    ADD_FAILURE() << "a snapshot of a removed file was written";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("was removed or replaced"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("snapshot.flexirob")));
+  // The connection still holds every row: the copy that ends the recording keeps them all.
+  recorder.saveCopy(path("copy.flexirob"));
+  EXPECT_EQ(SessionReader(path("copy.flexirob")).stateCount(), 150);
 }
 
 TEST(LockFreeQueue, SpscRingDeliversEverythingInOrderAcrossThreads) {

@@ -3,10 +3,14 @@
 // and the key map show in the window, the joint-limit bars, parameters and sessions.
 #include <QAction>
 #include <QComboBox>
+#include <QDir>
+#include <QFileInfo>
+#include <QScopeGuard>
 #include <QApplication>
 #include <QDoubleSpinBox>
 #include <QElapsedTimer>
 #include <QFile>
+#include <QFileDialog>
 #include <QGuiApplication>
 #include <QLabel>
 #include <QMessageBox>
@@ -934,6 +938,96 @@ class OperatorTest : public QObject {
     QVERIFY(window.close());
     answering.stop();
     QCOMPARE(flexirob::app::SessionReader((typed + QStringLiteral(".flexirob")).toStdString()).areas().size(), std::size_t{2});
+  }
+
+  // The run's file removed under the running window (a cleaned-up folder): the recording is
+  // still held by the recorder's connection, and Save session keeps all of it.
+  void aSessionWhoseFileWasRemovedIsStillSavedWhole() {
+    MainWindow::Options options = quietOptions();
+    options.record_sessions = true;
+    MainWindow window("lwr4", "empty", options);
+    waitRunning(window);
+    QTest::keyClick(&window, Qt::Key_F5);
+    QTRY_COMPARE(window.live()->snapshot().stage, Stage::kConfiguration);
+    recordAnArea(window, 1);
+    const QString run_file = window.sessionFile();
+    QVERIFY(QFile::remove(run_file));
+    QTemporaryDir directory;
+    const QString file = directory.filePath(QStringLiteral("rescued.flexirob"));
+    QVERIFY(window.saveSession(file));
+    const flexirob::app::SessionReader rescued(file.toStdString());
+    QCOMPARE(rescued.areas().size(), std::size_t{1});
+    QVERIFY(rescued.stateCount() > 5);
+    // The run records on, into a new file of its own.
+    QVERIFY(!window.sessionFile().isEmpty() && window.sessionFile() != run_file);
+    QVERIFY(QFileInfo::exists(window.sessionFile()));
+    // That file holds only what comes after: Save session asks for another name instead of
+    // writing it over the rescued run.
+    recordAnArea(window, 2);
+    bool asked_for_a_name = false;
+    QTimer answering;
+    connect(&answering, &QTimer::timeout, &window, [&] {
+      auto* dialog = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
+      if (dialog == nullptr) return;
+      asked_for_a_name = true;
+      dialog->reject();
+    });
+    answering.start(50);
+    QAction* save_again = nullptr;
+    for (QAction* action : window.menuBar()->actions().front()->menu()->actions()) {
+      if (action->text() == QStringLiteral("&Save session")) save_again = action;
+    }
+    QVERIFY(save_again != nullptr);
+    save_again->trigger();
+    answering.stop();
+    QVERIFY(asked_for_a_name);
+    QCOMPARE(flexirob::app::SessionReader(file.toStdString()).areas().size(), std::size_t{1});
+  }
+
+  // A sessions folder no file can be created in (it leads into /proc, which refuses even root):
+  // the run records in memory, the view says so, and closing asks to save it.
+  void aRecordingHeldInMemoryIsShownAndClosingAsksToSaveIt() {
+    const QString sessions = MainWindow::sessionDirectory();
+    const QString aside = sessions + QStringLiteral(".aside");
+    QDir().mkpath(QFileInfo(sessions).absolutePath());
+    const bool moved_aside = QFileInfo::exists(sessions) && QDir().rename(sessions, aside);
+    QVERIFY(QFile::link(QStringLiteral("/proc/self"), sessions));
+    const auto restore = qScopeGuard([&] {
+      QFile::remove(sessions);
+      if (moved_aside) QDir().rename(aside, sessions);
+    });
+    MainWindow::Options options = quietOptions();
+    options.record_sessions = true;
+    MainWindow window("lwr4", "empty", options);
+    waitRunning(window);
+    QTRY_VERIFY(window.problemLabel()->text().contains(QStringLiteral("held in memory only")));
+    QTest::keyClick(&window, Qt::Key_F5);
+    QTRY_COMPARE(window.live()->snapshot().stage, Stage::kConfiguration);
+    QTest::qWait(300);
+    QTemporaryDir directory;
+    const QString file = directory.filePath(QStringLiteral("kept.flexirob"));
+    QString question;
+    QTimer answering;
+    connect(&answering, &QTimer::timeout, &window, [&] {
+      QWidget* modal = QApplication::activeModalWidget();
+      if (auto* box = qobject_cast<QMessageBox*>(modal)) {
+        question = box->text();
+        box->button(QMessageBox::Save)->click();
+      } else if (auto* dialog = qobject_cast<QFileDialog*>(modal)) {
+        dialog->selectFile(file);
+        static_cast<QDialog*>(dialog)->accept();  // QFileDialog::accept() is protected
+      }
+    });
+    answering.start(50);
+    window.show();
+    QVERIFY(window.close());
+    answering.stop();
+    QVERIFY2(question.contains(QStringLiteral("held in memory only")), qPrintable(question));
+    const flexirob::app::SessionReader kept(file.toStdString());
+    QVERIFY(kept.stateCount() > 5);
+    bool configuration = false;
+    for (const auto& stage : kept.stages()) configuration = configuration || stage.stage == "CONFIGURATION";
+    QVERIFY(configuration);
   }
 
   // The window records the learned model as teach does (the control thread records the
