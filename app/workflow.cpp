@@ -264,6 +264,10 @@ void Workflow::setState(Stage stage, SubStage sub_stage) {
   hold_q_ = state_.q;
   const bool mapped = controller_ != InteractionController::kHierarchicalControl || stage == Stage::kExecution;
   interaction_.setRedundancyMap(mapped ? &posture_map_ : nullptr);
+  // PROGRAMMING's POSED holds the start position: the compliant following of APPROACHING would
+  // give way to a slow pull before its torque crossed on_affected's threshold, and the arm
+  // would leave the start without the TEACH-IN starting.
+  interaction_.setTaskHeld(stage == Stage::kProgramming && sub_stage == SubStage::kPosed);
   restartController();
   emit(WorkflowEvent::Kind::kStage, stateName(), std::string("controller ") + toString(controller_));
 }

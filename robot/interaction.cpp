@@ -165,7 +165,7 @@ void InteractionController::update(const RobotState& state, JointImpedanceComman
       pd_target_.setZero();
       break;
     case InteractionMode::kAssistedGravityCompensation: {
-      if (!keyboard_ && state.X_WT.matrix().allFinite()) {
+      if (!keyboard_ && !task_held_ && state.X_WT.matrix().allFinite()) {
         // π_x: x_des follows the tip the tutor pulls, with virtual mass and Cartesian damping (Sect. 5.1).
         const Eigen::Vector3d pull = cartesian_stiffness_ * mass_scale_ * (state.p_WT() - p_des_);
         const double mass = gains_.inertia;

@@ -100,6 +100,11 @@ class InteractionController {
   /// Keyboard mode: the tutor commands x_des and q_c by steps instead of pushing the arm
   /// (the simulated 9-DoF arm of Sect. 8.1 has no hand to feel).
   void setKeyboardMode(bool keyboard) { keyboard_ = keyboard; }
+  /// Assisted gravity compensation holds x_des where it is instead of letting it follow the
+  /// tip: PROGRAMMING's POSED keeps the start position the tutor chose (Sect. 2.3.3), so that a
+  /// hand taking the arm again shows as external torque (on_affected) before the arm gives way.
+  /// The keyboard's steps still move x_des.
+  void setTaskHeld(bool held) { task_held_ = held; }
   /// Tab. A.1's gains and the admittances' damping are the LWR IV's. An arm lighter or much
   /// heavier than it gets its joint stiffness, joint-space virtual inertia and damping times
   /// `inertia` (robot::inertiaScaleToLwr), the Cartesian ones times `mass`, so that it moves as
@@ -141,6 +146,7 @@ class InteractionController {
   ModeGains gains_{};
   double inertia_scale_ = 1.0, mass_scale_ = 1.0;  // setArmScale()
   bool keyboard_ = false;
+  bool task_held_ = false;  // setTaskHeld()
   Eigen::VectorXd q_fixed_, q_c_, q_des_, qd_des_, qd_, q_map_;
   Matrix3Xd J_des_;                 // tip position Jacobian at q_des (assistance blending)
   Eigen::VectorXd q_des_to_held_;   // q_held − q_des, then its null-space part

@@ -18,6 +18,11 @@ constexpr std::array kTriggerParameters{
                          "measurement (a compliant arm yields to the hand before tau_ext shows it)"},
 };
 
+// A touch begins where max |τ_ext| first exceeds this fraction of on_affected's threshold: a
+// hand taking a held arm slowly deflects it, and the arm may move faster than still_velocity
+// before the torque reaches the threshold; the touch still began on a still robot.
+constexpr double kContactFraction = 1.0 / 3.0;
+
 }  // namespace
 
 std::span<const ParameterDeclaration> triggerParameters() { return kTriggerParameters; }
@@ -35,6 +40,8 @@ InteractionTriggers::InteractionTriggers(const ParameterSet& parameters)
 void InteractionTriggers::reset() {
   affected_ = false;
   armed_ = true;
+  in_contact_ = false;
+  contact_began_still_ = false;
   last_moving_time_ = 0.0;
   last_still_time_ = -1e9;
 }
@@ -48,7 +55,8 @@ void InteractionTriggers::markAffected(double time) {
 std::optional<TriggerEvent> InteractionTriggers::update(const RobotState& state) {
   const bool finite = state.qd.allFinite() && state.tau_ext.allFinite();
   const bool moving = !finite || (state.qd.size() > 0 && state.qd.cwiseAbs().maxCoeff() > still_velocity_);
-  const bool touched = finite && state.tau_ext.size() > 0 && state.tau_ext.cwiseAbs().maxCoeff() > torque_threshold_;
+  const double torque = finite && state.tau_ext.size() > 0 ? state.tau_ext.cwiseAbs().maxCoeff() : 0.0;
+  const bool touched = torque > torque_threshold_;
   if (moving) {
     last_moving_time_ = state.time;
   } else {
@@ -58,8 +66,15 @@ std::optional<TriggerEvent> InteractionTriggers::update(const RobotState& state)
   // App. A.3 asks for a touch on a robot that is not moving. Read causally: the touch began
   // while the robot was still. Under gravity compensation the arm yields to the hand within a
   // cycle, and τ_ext of a real (or FRI) measurement shows the push only after it has acted, so
-  // "still at this very measurement" would never hold for a push on a compliant arm.
-  const bool began_still = state.time - last_still_time_ <= onset_window_ + 1e-9;
+  // "still at this very measurement" would never hold for a push on a compliant arm. A slow
+  // pull on a held arm moves it before its torque crosses the threshold: the touch began where
+  // the torque first showed it (kContactFraction).
+  const bool still_lately = state.time - last_still_time_ <= onset_window_ + 1e-9;
+  const bool contact = torque > kContactFraction * torque_threshold_;
+  if (contact && !in_contact_) contact_began_still_ = still_lately;
+  in_contact_ = contact;
+  if (!contact) contact_began_still_ = false;
+  const bool began_still = still_lately || contact_began_still_;
   if (touched && began_still && armed_ && !affected_) {
     affected_ = true;
     armed_ = false;

@@ -1,7 +1,8 @@
 #pragma once
 // The physical interaction triggers of App. A.3: `on_affected` fires when max |τ_ext| exceeds
-// 1.5 Nm on a robot that was not moving when the touch began (within triggers.onset_window); `on_converged` fires when, after `on_affected`, the
-// robot has not moved for 2 s. Events carry the robot's time stamps. Allocation-free.
+// 1.5 Nm on a robot that was not moving when the touch began (within triggers.onset_window of a
+// still measurement); `on_converged` fires when, after `on_affected`, the robot has not moved for
+// 2 s. Events carry the robot's time stamps. Allocation-free.
 #include <Eigen/Core>
 #include <cstdint>
 #include <optional>
@@ -44,6 +45,10 @@ class InteractionTriggers {
   double torque_threshold_, still_velocity_, converged_time_, onset_window_;
   bool affected_ = false;
   bool armed_ = true;  // torque has been below the threshold since the last on_affected
+  // The touch under way (max |τ_ext| above kContactFraction of the threshold since it began)
+  // began while the robot was still.
+  bool in_contact_ = false;
+  bool contact_began_still_ = false;
   double last_moving_time_ = 0.0;
   double last_still_time_ = -1e9;  // of the last measurement in which the robot was not moving
   std::uint64_t affected_count_ = 0;

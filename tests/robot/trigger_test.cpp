@@ -113,6 +113,45 @@ TEST(InteractionTriggers, ATouchThatBeganOnAStillRobotFiresEvenWhenTheArmYieldsF
   EXPECT_EQ(fired, 0);
 }
 
+// A hand taking a held arm slowly: τ_ext rises by 3 Nm/s from 1.0 s, and the arm gives way
+// (faster than still) once it exceeds 0.6 Nm, long before the 1.5 Nm threshold. The touch
+// began while the arm was still, so on_affected fires where the torque crosses the threshold.
+TEST(InteractionTriggers, ASlowPullThatBeganOnAStillArmFiresWhereItsTorqueCrossesTheThreshold) {
+  const ParameterSet parameters(triggerParameters());
+  const double threshold = parameters.get("triggers.torque_threshold");
+  const auto pull = [](double t) { return t >= 1.0 ? 3.0 * (t - 1.0) : 0.0; };
+  InteractionTriggers triggers(parameters);
+  std::vector<TriggerEvent> events;
+  for (int k = 0; k < 2500; ++k) {
+    const double t = k * 1e-3;
+    const double torque = pull(t);
+    if (auto event = triggers.update(stateAt(t, torque > 0.6 ? 0.2 : 0.0, torque))) events.push_back(*event);
+  }
+  ASSERT_EQ(events.size(), 1U);
+  EXPECT_EQ(events[0].kind, TriggerKind::kOnAffected);
+  EXPECT_NEAR(events[0].time, 1.0 + threshold / 3.0, 1.5e-3);
+
+  // The same pull on an arm that was already moving when it began: nothing fires.
+  InteractionTriggers moving(parameters);
+  int fired = 0;
+  for (int k = 0; k < 2500; ++k) {
+    const double t = k * 1e-3;
+    if (moving.update(stateAt(t, t >= 0.5 ? 0.2 : 0.0, pull(t)))) ++fired;
+  }
+  EXPECT_EQ(fired, 0);
+
+  // A touch that ended (the torque gone below a third of the threshold) before the arm moved
+  // does not count for a later pull that begins on the moving arm.
+  InteractionTriggers ended(parameters);
+  fired = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const double t = k * 1e-3;
+    const double torque = t >= 0.5 && t < 0.6 ? 1.0 : (t >= 1.5 ? 3.0 * (t - 1.5) : 0.0);
+    if (ended.update(stateAt(t, t >= 0.7 ? 0.2 : 0.0, torque))) ++fired;
+  }
+  EXPECT_EQ(fired, 0);
+}
+
 TEST(InteractionTriggers, FireWhenATutorPushesAndReleasesTheSimulatedArm) {
   const RobotModel model = RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
   Simulation sim(model, nullptr, ParameterSet(simulationParameters()));
