@@ -10,14 +10,13 @@
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/sim/reach.hpp"
+#include "tests/app/workflow_rigs.hpp"
 
 namespace flexirob::app {
 namespace {
 
-const robot::RobotModel& lwr4() {
-  static const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
-  return model;
-}
+using workflow_rigs::lwr4;
+using workflow_rigs::run;
 
 // A kinematic arm: while `following`, the measured posture is the last command (an ideal
 // position-controlled robot); otherwise the test places it (the tutor's hand) and sets τ_ext.
@@ -89,17 +88,7 @@ struct Rig {
   robot::ParameterSet parameters;
 };
 
-WorkflowOptions syncOptions() {
-  WorkflowOptions options;
-  options.background_learning = false;
-  options.elm.hidden = 40;
-  return options;
-}
-
-void run(Workflow& workflow, double seconds) {
-  const int steps = static_cast<int>(std::lround(seconds / 1e-3));
-  for (int i = 0; i < steps; ++i) workflow.step();
-}
+WorkflowOptions syncOptions() { return workflow_rigs::syncOptions(40); }
 
 // Moves the placed arm from its posture to q in `seconds`, as a hand would (samples every cycle).
 void guide(Workflow& workflow, KinematicBackend& backend, const Eigen::VectorXd& from, const Eigen::VectorXd& to,

@@ -4,49 +4,16 @@
 #include <gtest/gtest.h>
 
 #include "app/workflow.hpp"
-#include "robot/resources.hpp"
-#include "robot/robot_model.hpp"
-#include "robot/sim/reach.hpp"
 #include "robot/sim/simulation.hpp"
+#include "tests/app/workflow_rigs.hpp"
 
 namespace flexirob::app {
 namespace {
 
-const robot::RobotModel& lwr4() {
-  static const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
-  return model;
-}
-
-struct Rig {
-  Rig() : declarations(robot::reachParameters()), parameters(declarations), sim(lwr4(), nullptr, parameters) {
-    Eigen::VectorXd q = lwr4().midPosture();
-    q[1] = 0.6;
-    q[3] = -1.4;
-    q[5] = 0.7;
-    sim.reset(q);
-  }
-  robot::RobotState state() const {
-    robot::RobotState s;
-    s.resize(lwr4().dof());
-    sim.readState(s);
-    return s;
-  }
-  std::vector<robot::ParameterDeclaration> declarations;
-  robot::ParameterSet parameters;
-  robot::Simulation sim;
-};
-
-WorkflowOptions syncOptions() {
-  WorkflowOptions options;
-  options.background_learning = false;
-  options.elm.hidden = 30;
-  return options;
-}
-
-void run(Workflow& workflow, double seconds) {
-  const int steps = static_cast<int>(std::lround(seconds / 1e-3));
-  for (int i = 0; i < steps; ++i) workflow.step();
-}
+using workflow_rigs::lwr4;
+using workflow_rigs::run;
+using workflow_rigs::syncOptions;
+using Rig = workflow_rigs::SimulatedLwr4;
 
 // One area where the arm stands, taught with the keyboard's triggers, learned; then
 // PROGRAMMING with the arm posed (APPROACHING, then POSED).

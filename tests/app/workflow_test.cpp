@@ -13,15 +13,15 @@
 #include "robot/resources.hpp"
 #include "robot/robot_model.hpp"
 #include "robot/sim/reach.hpp"
+#include "tests/app/workflow_rigs.hpp"
 #include "tests/common/cylinder_arms.hpp"
 
 namespace flexirob::app {
 namespace {
 
-const robot::RobotModel& lwr4() {
-  static const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
-  return model;
-}
+using workflow_rigs::lwr4;
+using workflow_rigs::run;
+using workflow_rigs::syncOptions;
 
 // A backend the test moves by hand: q follows what the test sets, τ_ext and q̇ are given.
 class ScriptedBackend final : public robot::RobotBackend {
@@ -70,18 +70,6 @@ struct Fixture {
   std::vector<robot::ParameterDeclaration> declarations;
   robot::ParameterSet parameters;
 };
-
-WorkflowOptions syncOptions() {
-  WorkflowOptions options;
-  options.background_learning = false;
-  options.elm.hidden = 30;
-  return options;
-}
-
-void run(Workflow& workflow, double seconds) {
-  const int steps = static_cast<int>(std::lround(seconds / 1e-3));
-  for (int i = 0; i < steps; ++i) workflow.step();
-}
 
 // One CONFIGURATION area through the real triggers: touch, move, rest, touch, circle (of
 // `circle` rad in A1 and A4; none: the tutor let go at once), rest.

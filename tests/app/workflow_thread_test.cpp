@@ -20,33 +20,13 @@
 #include "robot/robot_model.hpp"
 #include "robot/sim/reach.hpp"
 #include "robot/sim/simulation.hpp"
+#include "tests/app/workflow_rigs.hpp"
 
 namespace flexirob::app {
 namespace {
 
-const robot::RobotModel& lwr4() {
-  static const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"));
-  return model;
-}
-
-struct Rig {
-  Rig() : declarations(robot::reachParameters()), parameters(declarations), sim(lwr4(), nullptr, parameters) {
-    Eigen::VectorXd q = lwr4().midPosture();
-    q[1] = 0.6;
-    q[3] = -1.4;
-    q[5] = 0.7;
-    sim.reset(q);
-  }
-  WorkflowOptions options() const {
-    WorkflowOptions options;
-    options.background_learning = false;
-    options.elm.hidden = 30;
-    return options;
-  }
-  std::vector<robot::ParameterDeclaration> declarations;
-  robot::ParameterSet parameters;
-  robot::Simulation sim;
-};
+using workflow_rigs::lwr4;
+using Rig = workflow_rigs::SimulatedLwr4;
 
 WorkflowThread::Options fast() {
   WorkflowThread::Options options;
