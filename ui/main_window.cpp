@@ -1278,8 +1278,9 @@ void MainWindow::watchRecording() {
     clearProblem(Problem::kRecording);
     return;
   }
-  const QString message = tr("The session is held in memory only (%1): File ▸ Save session as… keeps it")
-                              .arg(QString::fromStdString(recorder_->status().message));
+  QString reason = QString::fromStdString(recorder_->status().message);
+  reason.remove(QStringLiteral("; recording in memory"));  // the sentence says so already
+  const QString message = tr("The session is held in memory only (%1). File ▸ Save session as… keeps it.").arg(reason);
   const auto shown = problems_.find(Problem::kRecording);
   if (shown == problems_.end() || shown->second != message) reportProblem(Problem::kRecording, message);
 }
