@@ -22,6 +22,10 @@ constexpr std::array kTriggerParameters{
 // hand taking a held arm slowly deflects it, and the arm may move faster than still_velocity
 // before the torque reaches the threshold; the touch still began on a still robot.
 constexpr double kContactFraction = 1.0 / 3.0;
+// [s] from such a beginning to the threshold at most: a hand's pull gets there within a second
+// or two, while a standing offset of a measured τ_ext above the fraction (a real arm's
+// estimate) would otherwise count as a touch begun still for as long as it stands.
+constexpr double kMaxRiseTime = 2.0;
 
 }  // namespace
 
@@ -42,6 +46,7 @@ void InteractionTriggers::reset() {
   armed_ = true;
   in_contact_ = false;
   contact_began_still_ = false;
+  contact_began_time_ = -1e9;
   last_moving_time_ = 0.0;
   last_still_time_ = -1e9;
 }
@@ -71,13 +76,17 @@ std::optional<TriggerEvent> InteractionTriggers::update(const RobotState& state)
   // the torque first showed it (kContactFraction).
   const bool still_lately = state.time - last_still_time_ <= onset_window_ + 1e-9;
   const bool contact = torque > kContactFraction * torque_threshold_;
-  if (contact && !in_contact_) contact_began_still_ = still_lately;
+  if (contact && !in_contact_) {
+    contact_began_still_ = still_lately;
+    contact_began_time_ = state.time;
+  }
   in_contact_ = contact;
-  if (!contact) contact_began_still_ = false;
+  if (!contact || state.time - contact_began_time_ > kMaxRiseTime + 1e-9) contact_began_still_ = false;
   const bool began_still = still_lately || contact_began_still_;
   if (touched && began_still && armed_ && !affected_) {
     affected_ = true;
     armed_ = false;
+    contact_began_still_ = false;  // one beginning, one on_affected
     last_moving_time_ = state.time;  // stillness is counted from the touch on
     ++affected_count_;
     return TriggerEvent{TriggerKind::kOnAffected, state.time};

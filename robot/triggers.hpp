@@ -45,10 +45,12 @@ class InteractionTriggers {
   double torque_threshold_, still_velocity_, converged_time_, onset_window_;
   bool affected_ = false;
   bool armed_ = true;  // torque has been below the threshold since the last on_affected
-  // The touch under way (max |τ_ext| above kContactFraction of the threshold since it began)
-  // began while the robot was still.
+  // The touch under way (max |τ_ext| above kContactFraction of the threshold since it began at
+  // contact_began_time_) began while the robot was still, at most kMaxRiseTime ago, and has not
+  // yet fired on_affected.
   bool in_contact_ = false;
   bool contact_began_still_ = false;
+  double contact_began_time_ = -1e9;
   double last_moving_time_ = 0.0;
   double last_still_time_ = -1e9;  // of the last measurement in which the robot was not moving
   std::uint64_t affected_count_ = 0;

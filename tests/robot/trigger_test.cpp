@@ -150,6 +150,16 @@ TEST(InteractionTriggers, ASlowPullThatBeganOnAStillArmFiresWhereItsTorqueCrosse
     if (ended.update(stateAt(t, t >= 0.7 ? 0.2 : 0.0, torque))) ++fired;
   }
   EXPECT_EQ(fired, 0);
+
+  // A standing τ_ext of 0.7 Nm (a real arm's estimate may stand off zero) above a third of the
+  // threshold since the start: a push seconds later on the moving arm is no touch of a still arm.
+  InteractionTriggers offset(parameters);
+  fired = 0;
+  for (int k = 0; k < 5000; ++k) {
+    const double t = k * 1e-3;
+    if (offset.update(stateAt(t, t >= 1.0 ? 0.2 : 0.0, t >= 3.5 ? 4.0 : 0.7))) ++fired;
+  }
+  EXPECT_EQ(fired, 0);
 }
 
 TEST(InteractionTriggers, FireWhenATutorPushesAndReleasesTheSimulatedArm) {
