@@ -424,8 +424,7 @@ void MainWindow::stopLive() {
   if (live_ && recorder_) recordSnapshotData(live_->snapshot());
   live_.reset();
   stage_panel_->setModelSummary(QString());  // the next run learns its own map
-  if (recorder_) recorder_->close();
-  recorder_.reset();
+  endRecording();
   keyboard_mode_ = false;
   teleop_.clear();
   if (force_arrow_) force_arrow_->hide();
@@ -527,8 +526,23 @@ void MainWindow::startLive() {
   mirror();
 }
 
+void MainWindow::endRecording() {
+  if (!recorder_) return;
+  if (live_) live_->setRecorder(nullptr);
+  const bool on_disk = recorder_->fileHoldsTheRecording();
+  recorder_->close();
+  // Held in memory only (its file failed or was removed): kept for Save session, and closing
+  // the window asks for it.
+  if (!on_disk) unsaved_recordings_.push_back(std::move(recorder_));
+  recorder_.reset();
+}
+
+bool MainWindow::recordingAtRisk() const {
+  return !unsaved_recordings_.empty() || (recorder_ && !recorder_->fileHoldsTheRecording());
+}
+
 bool MainWindow::saveSession(const QString& chosen) {
-  if (!recorder_ || !live_) {
+  if (!recorder_ && unsaved_recordings_.empty()) {
     showStatusMessage(statusBar(), tr("No session is being recorded"), 10000);
     return false;
   }
@@ -536,37 +550,46 @@ bool MainWindow::saveSession(const QString& chosen) {
   const QString file = QFileInfo(chosen).suffix().isEmpty() ? chosen + QStringLiteral(".flexirob") : chosen;
   // Everything shown so far goes in.
   handleEvents();
-  const LiveSnapshot& now = live_->snapshot();
-  recordSnapshotData(now);
-  const std::uint64_t areas_version = now.areas_version;
-  const std::uint64_t teach_ins_version = now.teach_ins_version;
+  std::uint64_t areas_version = saved_areas_version_, teach_ins_version = saved_teach_ins_version_;
+  if (live_) {
+    const LiveSnapshot& now = live_->snapshot();
+    recordSnapshotData(now);
+    areas_version = now.areas_version;
+    teach_ins_version = now.teach_ins_version;
+  }
   bool ok = true;
   try {
-    // Recording in memory (the run's file failed, or was removed): the copy ends it, and the
-    // run records on into a new file. A copy that fails keeps the ended recording for another
-    // try (closing asks for it): a new file in its place would lose it.
-    const auto copyEndingTheRecording = [this, &file] {
-      live_->setRecorder(nullptr);
-      recorder_->saveCopy(file.toStdString());
-      recorder_.reset();
-      startRecording();
-      saved_session_ended_a_recording_ = true;
-    };
-    if (!recorder_->fileHoldsTheRecording()) {
-      copyEndingTheRecording();
-    } else {
+    bool saved = false;
+    if (unsaved_recordings_.empty() && recorder_ && recorder_->fileHoldsTheRecording()) {
       try {
         recorder_->saveSnapshot(file.toStdString());  // the run's file goes on holding the whole run
         saved_session_ended_a_recording_ = false;
+        saved = true;
       } catch (const std::exception&) {
         if (recorder_->fileHoldsTheRecording()) throw;  // the target failed, not the recording
-        copyEndingTheRecording();  // the flush failed: the recording is in memory now
       }
+    }
+    if (!saved) {
+      // A recording no file holds: the one the run's file failed under ends (the run records
+      // on into a new file at once), and the oldest held in memory is copied. A copy that
+      // fails keeps it for another try.
+      if (recorder_ && !recorder_->fileHoldsTheRecording()) {
+        endRecording();
+        startRecording();
+      }
+      unsaved_recordings_.front()->saveCopy(file.toStdString());
+      unsaved_recordings_.erase(unsaved_recordings_.begin());
+      saved_session_ended_a_recording_ = true;
     }
     saved_session_file_ = file;
     saved_areas_version_ = areas_version;
     saved_teach_ins_version_ = teach_ins_version;
-    showStatusMessage(statusBar(), tr("Session saved to %1").arg(file), 10000);
+    showStatusMessage(statusBar(), unsaved_recordings_.empty()
+                                       ? tr("Session saved to %1").arg(file)
+                                       : tr("Session saved to %1; %n more recording(s) of this run held in memory: save again",
+                                            nullptr, static_cast<int>(unsaved_recordings_.size()))
+                                             .arg(file),
+                      10000);
   } catch (const std::exception& error) {
     reportError(tr("Cannot save the session to %1").arg(file), error);
     ok = false;
@@ -593,9 +616,14 @@ bool MainWindow::saveSessionAgain() {
 }
 
 bool MainWindow::saveSessionAs() {
-  QFileDialog dialog(this, tr("Save session"),
-                     saved_session_file_.isEmpty() ? QStringLiteral("session.flexirob") : saved_session_file_,
-                     tr("FlexIRob sessions (*.flexirob);;All files (*)"));
+  // After a copy of an ended recording, the name offered is another one: the rest of the run
+  // saved over it would replace what it holds.
+  QString offered = saved_session_file_.isEmpty() ? QStringLiteral("session.flexirob") : saved_session_file_;
+  if (saved_session_ended_a_recording_ && !saved_session_file_.isEmpty()) {
+    const QFileInfo saved(saved_session_file_);
+    offered = saved.dir().filePath(saved.completeBaseName() + QStringLiteral("-continued.flexirob"));
+  }
+  QFileDialog dialog(this, tr("Save session"), offered, tr("FlexIRob sessions (*.flexirob);;All files (*)"));
   dialog.setAcceptMode(QFileDialog::AcceptSave);
   dialog.setDefaultSuffix(QStringLiteral("flexirob"));
   if (dialog.exec() != QDialog::Accepted || dialog.selectedFiles().isEmpty()) return false;
@@ -902,9 +930,7 @@ void MainWindow::mirror() {
     for (int j = 0; j < s.dof; ++j) q[j] = s.q[static_cast<std::size_t>(j)];
     kinematics_->update(q);
     world_.robot()->setPosture(*kinematics_);
-    bool dragging = false;
-    for (int j = 0; j < joint_panel_->jointCount(); ++j) dragging = dragging || joint_panel_->slider(j)->isSliderDown();
-    if (!dragging) joint_panel_->setPosture(q);
+    joint_panel_->setPosture(q);
 
     // Links in contact turn red (issue #7 item 4, collisions).
     std::vector<std::string> touching;
@@ -1273,37 +1299,61 @@ void MainWindow::resizeEvent(QResizeEvent* event) {
   if (joints_dock->width() < wanted) resizeDocks({joints_dock}, {wanted}, Qt::Horizontal);
 }
 
+QString MainWindow::recordingAtRiskReason() const {
+  QStringList reasons;
+  if (recorder_ && recorder_->status().health == app::RecorderHealth::InMemory) {
+    QString reason = QString::fromStdString(recorder_->status().message);
+    reason.remove(QStringLiteral("; recording in memory"));  // the sentence says so already
+    reasons << reason;
+  } else if (recorder_ && !recorder_->fileHoldsTheRecording()) {
+    reasons << tr("the session file %1 was removed or replaced while the run recorded").arg(session_file_);
+  }
+  if (!unsaved_recordings_.empty()) {
+    reasons << tr("%n earlier recording(s) of this run found no file", nullptr, static_cast<int>(unsaved_recordings_.size()));
+  }
+  return reasons.join(QStringLiteral("; "));
+}
+
 void MainWindow::watchRecording() {
-  if (!recorder_ || recorder_->status().health != app::RecorderHealth::InMemory) {
+  if (!recordingAtRisk()) {
     clearProblem(Problem::kRecording);
     return;
   }
-  QString reason = QString::fromStdString(recorder_->status().message);
-  reason.remove(QStringLiteral("; recording in memory"));  // the sentence says so already
-  const QString message = tr("The session is held in memory only (%1). File ▸ Save session as… keeps it.").arg(reason);
+  const QString message =
+      tr("The session is held in memory only (%1). File ▸ Save session as… keeps it.").arg(recordingAtRiskReason());
   const auto shown = problems_.find(Problem::kRecording);
   if (shown == problems_.end() || shown->second != message) reportProblem(Problem::kRecording, message);
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
-  if (recorder_ && recorder_->status().health == app::RecorderHealth::InMemory) {
-    // Nothing on disk holds what the run recorded since its file failed.
-    const auto answer = QMessageBox::question(
-        this, tr("Save session"),
-        tr("This run's recording could not be written to %1 and is held in memory only (%2). Save it before closing?")
-            .arg(session_file_, QString::fromStdString(recorder_->status().message)),
-        QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
-    if (answer == QMessageBox::Cancel || (answer == QMessageBox::Save && !saveSessionAs())) {
-      event->ignore();
-      return;
+  if (recordingAtRisk()) {
+    // Nothing on disk holds what the run recorded since its file failed. The recording ends
+    // here (a new one would be held in memory again), and each held in memory is asked for
+    // until all are saved or the rest discarded; Cancel records on.
+    endRecording();
+    while (!unsaved_recordings_.empty()) {
+      const auto answer = QMessageBox::question(
+          this, tr("Save session"),
+          tr("This run's recording is held in memory only (%1). Save it before closing?").arg(recordingAtRiskReason()),
+          QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
+      if (answer == QMessageBox::Discard) break;
+      if (answer == QMessageBox::Cancel || !saveSessionAs()) {
+        startRecording();
+        event->ignore();
+        return;
+      }
     }
   } else if (teachingChangedSinceSave()) {
-    const auto answer = QMessageBox::question(
-        this, tr("Save session"),
-        tr("The teaching changed since the session was saved to %1. Save it there again?\n"
-           "(Every run is also recorded whole into %2.)")
-            .arg(saved_session_file_, session_file_.isEmpty() ? tr("no file: this run is not recorded") : session_file_),
-        QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
+    const QString question =
+        saved_session_ended_a_recording_
+            ? tr("The teaching changed since the session was saved to %1, which holds the run up to its recording's "
+                 "failure. Save the rest under another name?")
+                  .arg(saved_session_file_)
+            : tr("The teaching changed since the session was saved to %1. Save it there again?\n"
+                 "(Every run is also recorded whole into %2.)")
+                  .arg(saved_session_file_, session_file_.isEmpty() ? tr("no file: this run is not recorded") : session_file_);
+    const auto answer = QMessageBox::question(this, tr("Save session"), question,
+                                              QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
     if (answer == QMessageBox::Cancel || (answer == QMessageBox::Save && !saveSessionAgain())) {
       event->ignore();
       return;

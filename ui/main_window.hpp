@@ -213,6 +213,11 @@ class MainWindow : public QMainWindow {
   void watchDeadlines(const app::CycleStatistics& stats);
   /// Says in the view when the run's file failed and the recording goes on in memory only.
   void watchRecording();
+  /// Ends the run's recording (stop, save, close); one no file holds joins unsaved_recordings_.
+  void endRecording();
+  /// Whether some of what this run recorded is held in memory only, and why (one line).
+  bool recordingAtRisk() const;
+  QString recordingAtRiskReason() const;
   /// Stops the live robot and closes its session (before model or scene change).
   void stopLive();
   /// Builds and starts the live robot for the current model, scene, backend and parameters.
@@ -261,6 +266,9 @@ class MainWindow : public QMainWindow {
   QString session_file_;
   QString saved_session_file_;
   bool saved_session_ended_a_recording_ = false;  // the file holds a recording the run left
+  // Recordings of this run that ended held in memory only (their file failed or was removed),
+  // oldest first: Save session copies them one by one, and closing the window asks for them.
+  std::vector<std::unique_ptr<app::SessionRecorder>> unsaved_recordings_;
   std::uint64_t saved_areas_version_ = 0, saved_teach_ins_version_ = 0;
   std::uint64_t shown_cycle_ = ~0ULL;
   int chimes_ = 0;

@@ -982,20 +982,40 @@ class OperatorTest : public QObject {
     answering.stop();
     QVERIFY(asked_for_a_name);
     QCOMPARE(flexirob::app::SessionReader(file.toStdString()).areas().size(), std::size_t{1});
+    // The new file removed too: the view says so, and closing asks before the recording goes.
+    QVERIFY(QFile::remove(window.sessionFile()));
+    QTRY_VERIFY(window.problemLabel()->text().contains(QStringLiteral("was removed or replaced")));
+    QString question;
+    connect(&answering, &QTimer::timeout, &window, [&] {
+      if (auto* box = qobject_cast<QMessageBox*>(QApplication::activeModalWidget())) {
+        question = box->text();
+        box->button(QMessageBox::Discard)->click();
+      }
+    });
+    answering.start(50);
+    window.show();
+    QVERIFY(window.close());
+    answering.stop();
+    QVERIFY2(question.contains(QStringLiteral("held in memory only")), qPrintable(question));
   }
 
   // A sessions folder no file can be created in (it leads into /proc, which refuses even root):
   // the run records in memory, the view says so, and closing asks to save it.
   void aRecordingHeldInMemoryIsShownAndClosingAsksToSaveIt() {
+    // The suites that record into this folder hold CTest's lock "qt_test_sessions"
+    // (tests/ui/CMakeLists.txt), so none records while it leads elsewhere.
     const QString sessions = MainWindow::sessionDirectory();
     const QString aside = sessions + QStringLiteral(".aside");
-    QDir().mkpath(QFileInfo(sessions).absolutePath());
-    const bool moved_aside = QFileInfo::exists(sessions) && QDir().rename(sessions, aside);
-    QVERIFY(QFile::link(QStringLiteral("/proc/self"), sessions));
+    bool moved_aside = false;
     const auto restore = qScopeGuard([&] {
-      QFile::remove(sessions);
+      if (QFileInfo(sessions).isSymLink()) QFile::remove(sessions);
       if (moved_aside) QDir().rename(aside, sessions);
     });
+    QDir().mkpath(QFileInfo(sessions).absolutePath());
+    if (QFileInfo(sessions).isSymLink()) QFile::remove(sessions);  // left by a run that was killed
+    if (QFileInfo::exists(aside) && !QFileInfo::exists(sessions)) QDir().rename(aside, sessions);
+    moved_aside = QFileInfo::exists(sessions) && QDir().rename(sessions, aside);
+    QVERIFY(QFile::link(QStringLiteral("/proc/self"), sessions));
     MainWindow::Options options = quietOptions();
     options.record_sessions = true;
     MainWindow window("lwr4", "empty", options);
@@ -1014,8 +1034,13 @@ class OperatorTest : public QObject {
         question = box->text();
         box->button(QMessageBox::Save)->click();
       } else if (auto* dialog = qobject_cast<QFileDialog*>(modal)) {
-        dialog->selectFile(file);
-        static_cast<QDialog*>(dialog)->accept();  // QFileDialog::accept() is protected
+        // The dialog takes a path in another folder only once it has listed that folder: the
+        // name is typed again until the dialog holds it.
+        if (dialog->selectedFiles().value(0) == file) {
+          static_cast<QDialog*>(dialog)->accept();  // QFileDialog::accept() is protected
+        } else {
+          dialog->selectFile(file);
+        }
       }
     });
     answering.start(50);
