@@ -734,6 +734,7 @@ class FeaturesTest : public QObject {
     window.mirror();
     QCOMPARE(window.overlays().layer(flexirob::render::OverlayLayer::kGoalAndPath)->getNumChildren(), 0U);
     QTRY_VERIFY(!window.stagePanel()->warningLabel()->text().isEmpty());
+    QTRY_VERIFY(window.bannerLabel()->text().contains(QStringLiteral("⚠")));
     // Another goal, then CONFIGURATION again: the goal and its path are no motion any more.
     const std::uint64_t before_second = s.path_version;
     QVERIFY(window.setGoal(start_tip));
