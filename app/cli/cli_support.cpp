@@ -157,7 +157,15 @@ std::optional<std::string> fileText(const std::filesystem::path& file) {
 
 }  // namespace
 
-robot::RobotModel loadSessionRobot(const std::string& reference, const std::string& stored_urdf, const std::string& tip) {
+robot::RobotModel loadSessionRobot(const std::string& reference, const std::string& stored_urdf, const std::string& tip,
+                                   const std::string& named) {
+  if (!named.empty()) {
+    robot::RobotModel model = loadRobotNoting(named, tip);
+    if (!stored_urdf.empty() && fileText(resolveRobotPath(named)) != stored_urdf) {
+      std::fprintf(stderr, "note: the robot '%s' differs from the copy the session stores; it is used as --robot asks\n", named.c_str());
+    }
+    return model;
+  }
   if (stored_urdf.empty()) return loadRobotNoting(reference, tip);
   const auto& builtins = builtinRobotNames();
   const bool builtin = std::find(builtins.begin(), builtins.end(), reference) != builtins.end();
@@ -174,14 +182,48 @@ robot::RobotModel loadSessionRobot(const std::string& reference, const std::stri
     return noted(std::move(stored), reference, tip);
   } catch (const InputError& damaged) {
     // A damaged session file: the robot's own file, where it still reads, is the next best.
-    if (!on_disk) throw InputError(std::string("robot stored in the session: ") + damaged.what() + ", and '" + reference + "' cannot be read");
+    if (!on_disk) {
+      throw InputError(std::string("robot stored in the session: ") + damaged.what() + ", and '" + reference +
+                       "' cannot be read (if the robot's files moved since teaching, --robot names its URDF where it lies now)");
+    }
     std::fprintf(stderr, "note: the robot stored in the session does not read (%s); '%s' is used instead\n", damaged.what(),
                  reference.c_str());
     return noted(robot::RobotModel::fromUrdfString(*on_disk, file.parent_path(), tip), reference, tip);
   }
 }
 
-robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text) {
+namespace {
+
+// A scene as sceneToYaml writes it, with each file it names (a mesh, a robot's URDF) reduced to
+// the file's name: the same scene moved to another folder reads the same.
+std::string withFilesNamedOnly(const std::string& scene_yaml) {
+  std::istringstream lines(scene_yaml);
+  std::string result;
+  for (std::string line; std::getline(lines, line);) {
+    for (const std::string key : {"file: ", "robot: "}) {
+      const std::size_t at = line.find(key);
+      if (at == std::string::npos || line.find_first_not_of(" -") != at) continue;
+      std::string value = line.substr(at + key.size());
+      if (value.size() >= 2 && (value.front() == '"' || value.front() == '\'') && value.back() == value.front()) {
+        value = value.substr(1, value.size() - 2);
+      }
+      line = line.substr(0, at + key.size()) + std::filesystem::path(value).filename().string();
+    }
+    result += line + "\n";
+  }
+  return result;
+}
+
+}  // namespace
+
+robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text, const std::string& named) {
+  if (!named.empty()) {
+    robot::Scene scene = loadSceneNoting(named);
+    if (!stored_scene_text.empty() && withFilesNamedOnly(robot::sceneToYaml(scene)) != withFilesNamedOnly(stored_scene_text)) {
+      std::fprintf(stderr, "note: the scene '%s' differs from the copy the session stores; it is used as --scene asks\n", named.c_str());
+    }
+    return scene;
+  }
   if (stored_scene_text.empty()) return loadSceneNoting(reference);
   const auto& builtins = robot::builtinSceneNames();
   const bool empty = reference.empty() || reference == "empty";
@@ -204,7 +246,10 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
   } catch (const InputError& damaged) {
     // A damaged session file: the scene file, where it still reads, is the next best.
     // Both reasons: the same missing mesh fails both, and the file named alone would be blamed.
-    if (!on_disk) throw InputError(std::string(damaged.what()) + "; the scene file does not read either: " + on_disk_error);
+    if (!on_disk) {
+      throw InputError(std::string(damaged.what()) + "; the scene file does not read either: " + on_disk_error +
+                       " (if the scene's files moved since teaching, --scene names the scene file where it lies now)");
+    }
     std::fprintf(stderr, "note: the scene stored in the session does not read (%s); '%s' is used instead\n", damaged.what(),
                  reference.c_str());
     return loadSceneNoting(reference);
@@ -226,6 +271,13 @@ bool progressShown() {
 // A progress line not ended yet: a line said after it starts on a line of its own.
 bool g_progress_line_open = false;
 }  // namespace
+
+void addMovedFilesOptions(CLI::App& command, std::string& robot_file, std::string& scene_file) {
+  command.add_option("--robot", robot_file,
+                     "the URDF the session was taught with, read in place of the copy the session stores (when the robot's files moved since teaching)");
+  command.add_option("--scene", scene_file,
+                     "the scene file the session was taught in, read in place of the copy the session stores (when the scene's files moved since teaching)");
+}
 
 void endProgressLine() {
   if (!g_progress_line_open) return;

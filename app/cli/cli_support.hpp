@@ -152,8 +152,16 @@ robot::RobotModel loadRobotNoting(const std::string& name_or_path, const std::st
 /// not change what is evaluated or drawn. Relative mesh paths resolve against the original file's
 /// folder (the resources folder for built-in names). Without a stored copy (older sessions) the
 /// file is read as before; a file that now differs from the stored copy is said in a "note:" line.
-robot::RobotModel loadSessionRobot(const std::string& reference, const std::string& stored_urdf, const std::string& tip);
-robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text);
+/// `named` is a file given on the command line (--robot, --scene) for a session whose files moved
+/// since teaching, so that the stored copy's paths name files that are gone: it is read in place
+/// of the stored copy, with a note where the two differ other than in where their files lie.
+robot::RobotModel loadSessionRobot(const std::string& reference, const std::string& stored_urdf, const std::string& tip,
+                                   const std::string& named = "");
+robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text, const std::string& named = "");
+
+/// Adds --robot and --scene to a command reading a session, in the sense of loadSessionRobot's
+/// and loadSessionScene's `named`.
+void addMovedFilesOptions(CLI::App& command, std::string& robot_file, std::string& scene_file);
 
 /// The --approach option of eval reachable, eval scene-model and sweep (app::ApproachFrom),
 /// default "visited".

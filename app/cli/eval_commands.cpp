@@ -121,7 +121,7 @@ void checkAreaNamesDiffer(const Session& session) {
 }
 
 // A session recorded in SQLite by the session recorder: the complete areas' latest takes.
-Session loadRecordedSession(const std::string& file) {
+Session loadRecordedSession(const std::string& file, const std::string& robot_file, const std::string& scene_file) {
   const app::SessionReader reader(file);
   app::RecordedTeaching teaching = app::readRecordedTeaching(reader);
   Session session;
@@ -137,8 +137,8 @@ Session loadRecordedSession(const std::string& file) {
   session.robot = teaching.robot;
   session.tip = teaching.tip;
   session.scene = teaching.scene;
-  session.model = std::make_unique<robot::RobotModel>(loadSessionRobot(session.robot, teaching.robot_urdf, session.tip));
-  session.scene_data = loadSessionScene(session.scene, teaching.scene_text);
+  session.model = std::make_unique<robot::RobotModel>(loadSessionRobot(session.robot, teaching.robot_urdf, session.tip, robot_file));
+  session.scene_data = loadSessionScene(session.scene, teaching.scene_text, scene_file);
   robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
   if (!teaching.closed_cleanly) {
     std::fprintf(stderr, "note: the session '%s' was not closed cleanly (interrupted, or still being written); the evaluation covers what was recorded\n",
@@ -181,10 +181,10 @@ Session loadRecordedSession(const std::string& file) {
   return session;
 }
 
-Session loadSession(const std::string& file) {
+Session loadSession(const std::string& file, const std::string& robot_file, const std::string& scene_file) {
   std::ifstream in(file);
   if (!in) throw InputError("--session: cannot read '" + file + "'");
-  if (!startsAsJson(in)) return readingSession(file, [&file] { return loadRecordedSession(file); });
+  if (!startsAsJson(in)) return readingSession(file, [&] { return loadRecordedSession(file, robot_file, scene_file); });
   Json json;
   try {
     json = Json::parse(in);
@@ -205,8 +205,8 @@ Session loadSession(const std::string& file) {
     session.scene = json.at("scene").get<std::string>();
     session.learner = evaluableLearner(json.value("learner", "elm"), file);
     session.model = std::make_unique<robot::RobotModel>(
-        loadSessionRobot(session.robot, json.value("robot_urdf", ""), session.tip));
-    session.scene_data = loadSessionScene(session.scene, json.value("scene_text", ""));
+        loadSessionRobot(session.robot, json.value("robot_urdf", ""), session.tip, robot_file));
+    session.scene_data = loadSessionScene(session.scene, json.value("scene_text", ""), scene_file);
     robot::checkPosturesFit(session.scene_data, *session.model, session.robot);
     const int n = session.model->dof();
     // teach writes the robot's joint count; one edited to another count or type says the file
@@ -295,6 +295,7 @@ struct EvalOptions {
   double speed = 0.1;
   std::string approach = "visited";  ///< reachable / scene-model: where each target is approached from
   std::string source = "auto";  ///< trajectories: the scene's, or drawn around the training data
+  std::string robot_file, scene_file;  ///< where the session's robot and scene files lie now (addMovedFilesOptions)
 };
 
 // The learner asked for, else the one the session was taught with.
@@ -322,7 +323,7 @@ void requireTargets(const std::string& command, const app::ReachableResult& resu
 }
 
 Json runReachable(const EvalOptions& options) {
-  const Session session = loadSession(options.session);
+  const Session session = loadSession(options.session, options.robot_file, options.scene_file);
   const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
   const auto learner = learnMap(session, learnerOf(options, session));
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
@@ -427,7 +428,7 @@ std::vector<app::EvaluatedArea> sessionAreas(const Session& session) {
 }
 
 Json runSceneModel(const EvalOptions& options) {
-  const Session session = loadSession(options.session);
+  const Session session = loadSession(options.session, options.robot_file, options.scene_file);
   const robot::EvaluationGrid grid = app::sceneGrid(session.scene_data, options.spacing);
   const auto learner = learnMap(session, learnerOf(options, session));
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
@@ -506,7 +507,7 @@ Json trajectoryJson(const app::TrajectoryResult& result) {
 }
 
 Json runTrajectories(const EvalOptions& options) {
-  const Session session = loadSession(options.session);
+  const Session session = loadSession(options.session, options.robot_file, options.scene_file);
   const auto learner = learnMap(session, learnerOf(options, session));
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
   const app::TrajectoryResult result =
@@ -536,7 +537,7 @@ Json runTrajectories(const EvalOptions& options) {
 }
 
 Json runPlan(const EvalOptions& options) {
-  const Session session = loadSession(options.session);
+  const Session session = loadSession(options.session, options.robot_file, options.scene_file);
   const auto learner = learnMap(session, learnerOf(options, session));
   const robot::ParameterSet parameters = app::sceneParameters(session.scene_data);
   const Eigen::VectorXd start = session.q_fixed.empty() ? startPosture(session) : session.q_fixed.front();
@@ -588,12 +589,14 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   reachable->add_option("--learner", options->learner, "elm, oselm or llm (default: the one the session was taught with)");
   reachable->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
   addApproachOption(*reachable, options->approach);
+  addMovedFilesOptions(*reachable, options->robot_file, options->scene_file);
   reachable->callback([&runner, options] { runner.select([options] { return runReachable(*options); }); });
   CLI::App* scene_model = eval->add_subcommand("scene-model", "implicit scene model S of Eq. 4.1 and how much of the obstacles it encloses");
   scene_model->add_option("--session", options->session, "session file written by teach")->required();
   scene_model->add_option("--learner", options->learner, "elm, oselm or llm (default: the one the session was taught with)");
   scene_model->add_option("--spacing", options->spacing, "grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
   addApproachOption(*scene_model, options->approach);
+  addMovedFilesOptions(*scene_model, options->robot_file, options->scene_file);
   scene_model->callback([&runner, options] { runner.select([options] { return runSceneModel(*options); }); });
   CLI::App* trajectories = eval->add_subcommand("trajectories", "E_task and E_coll along straight trajectories per area (Tab. 3.2)");
   trajectories->add_option("--session", options->session, "session file written by teach")->required();
@@ -606,6 +609,7 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
   trajectories->add_option("--per-area", options->per_area, "trajectories per training area where they are drawn (between areas taught one after the other: twice)")->check(finiteRange(1, 10000));
   trajectories->add_option("--speed", options->speed, "tip speed [m/s]")->check(finiteRange(0.01, 1.0));
   trajectories->add_option("--seed", options->seed, "random seed for drawn trajectories")->check(seedValidator());
+  addMovedFilesOptions(*trajectories, options->robot_file, options->scene_file);
   trajectories->callback([&runner, options] { runner.select([options] { return runTrajectories(*options); }); });
 
   CLI::App* plan = app.add_subcommand("plan", "plan to random ITM nodes and execute (Sect. 8.3)");
@@ -618,6 +622,7 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
                    "or the learned map alone, as in the thesis (learned)")
       ->check(CLI::IsMember({"demonstrated", "learned"}))
       ->capture_default_str();
+  addMovedFilesOptions(*plan, options->robot_file, options->scene_file);
   plan->callback([&runner, options] { runner.select([options] { return runPlan(*options); }); });
 }
 

@@ -32,6 +32,7 @@ struct ExportOptions {
   std::string session;
   std::string samples, stream, model, graph;
   double sample_period = 0.02;
+  std::string robot_file, scene_file;  ///< where the session's robot and scene files lie now (addMovedFilesOptions)
 };
 
 // A session driven over FRI (the real robot, or teach --backend fri-sim): the workflow saw no
@@ -98,6 +99,10 @@ Json exportSession(const ExportOptions& options) {
     for (const char* suffix : {"", "-wal", "-shm", "-journal"}) chosen.emplace(sameFileKey(session + suffix), "--session");
     chosen.emplace(sameFileKey(app::SessionWriteLock::lockFileFor(session).string()), "--session");
   }
+  // The robot and scene files read in place of the session's copies are inputs as well.
+  for (const auto& [option, input] : {std::pair<std::string, std::string>{"--robot", options.robot_file}, {"--scene", options.scene_file}}) {
+    if (!input.empty()) chosen.emplace(sameFileKey(input), option);
+  }
   bool any = false;
   for (const auto& [option, path] : outputs) {
     if (path.empty()) continue;
@@ -154,8 +159,8 @@ Json exportSession(const ExportOptions& options) {
     std::unique_ptr<robot::CollisionWorld> world;
     const bool over_fri = drivenOverFri(stored_parameters);
     if (!over_fri) {
-      model = std::make_unique<robot::RobotModel>(loadSessionRobot(teaching.robot, teaching.robot_urdf, teaching.tip));
-      scene = std::make_unique<robot::Scene>(loadSessionScene(teaching.scene, teaching.scene_text));
+      model = std::make_unique<robot::RobotModel>(loadSessionRobot(teaching.robot, teaching.robot_urdf, teaching.tip, options.robot_file));
+      scene = std::make_unique<robot::Scene>(loadSessionScene(teaching.scene, teaching.scene_text, options.scene_file));
       world = std::make_unique<robot::CollisionWorld>(*model, *scene);
     }
     const app::ConfigurationStream stream = app::configurationStream(
@@ -249,6 +254,7 @@ void registerExportCommand(CLI::App& app, CommandRunner& runner) {
   command->add_option("--sample-period", options->sample_period, "with --stream: seconds between positions (the workflow's sample period)")
       ->check(finiteRange(1e-4, 10.0))
       ->capture_default_str();
+  addMovedFilesOptions(*command, options->robot_file, options->scene_file);
   command->callback([&runner, options] { runner.select([options] { return readingSession(options->session, [options] { return exportSession(*options); }); }); });
 }
 

@@ -376,6 +376,64 @@ TEST(EvalReachableCli, EvaluatesTheRobotAndSceneTheSessionStoresNotTheFilesChang
   std::filesystem::remove_all(robot_dir.parent_path());
 }
 
+// A cell moved to another folder with its session (a robot's URDF and meshes, a scene naming
+// them and a mesh of its own by relative path): the stored copies name files that are gone, the
+// error says how to name where they lie now, and --robot and --scene read them there; a scene
+// changed since is said to differ, one merely moved is not.
+TEST(EvalReachableCli, ASessionWhoseFilesMovedIsEvaluatedFromWhereTheyLieNow) {
+  const robot::RobotModel model = robot::RobotModel::fromUrdfFile(resolveRobotPath("lwr4"), "");
+  const Eigen::Vector3d taught = robot::tipPose(model, tinySessionPostures().front()).translation();
+  const auto cell = scratchDir() / "cell-before-moving";
+  const auto moved = scratchDir() / "cell-after-moving";
+  std::filesystem::remove_all(cell);
+  std::filesystem::remove_all(moved);
+  std::filesystem::create_directories(cell / "robots");
+  std::filesystem::copy(resolveRobotPath("lwr4").parent_path(), cell / "robots" / "lwr4", std::filesystem::copy_options::recursive);
+  std::filesystem::create_directories(cell / "meshes");
+  writeText(cell / "meshes" / "wedge.stl",
+            "solid wedge\n"
+            "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\nvertex 0 0.1 0\nendloop\nendfacet\n"
+            "facet normal 0 -1 0\nouter loop\nvertex 0 0 0\nvertex 0 0 0.1\nvertex 0.1 0 0\nendloop\nendfacet\n"
+            "facet normal -1 0 0\nouter loop\nvertex 0 0 0\nvertex 0 0.1 0\nvertex 0 0 0.1\nendloop\nendfacet\n"
+            "facet normal 1 1 1\nouter loop\nvertex 0.1 0 0\nvertex 0 0 0.1\nvertex 0 0.1 0\nendloop\nendfacet\n"
+            "endsolid wedge\n");
+  std::ostringstream text;
+  text << "name: cell\nrobot: robots/lwr4/lwr4.urdf\n"
+       << "obstacles:\n  - {name: wedge, shape: mesh, file: meshes/wedge.stl, position: [-2.0, 0.0, 0.3]}\n"
+       << "targets: [[" << taught.x() << ", " << taught.y() << ", " << taught.z() << "]]\n";
+  writeText(cell / "cell.yaml", text.str());
+  const auto session = tinySession((cell / "cell.yaml").string(), "moved-cell.json");
+  storeTaughtCopies(session, cell / "robots" / "lwr4" / "lwr4.urdf", (cell / "cell.yaml").string());
+  std::filesystem::rename(cell, moved);
+
+  const std::string evaluate = "eval reachable --spacing 0.3 --session " + session.string();
+  const auto robot_gone = runCliBinary(evaluate);
+  EXPECT_EQ(robot_gone.exit_code, 2) << robot_gone.err;
+  EXPECT_NE(robot_gone.err.find("--robot names its URDF where it lies now"), std::string::npos) << robot_gone.err;
+  const std::string with_robot = evaluate + " --robot " + (moved / "robots" / "lwr4" / "lwr4.urdf").string();
+  const auto scene_gone = runCliBinary(with_robot);
+  EXPECT_EQ(scene_gone.exit_code, 2) << scene_gone.err;
+  EXPECT_NE(scene_gone.err.find("--scene names the scene file where it lies now"), std::string::npos) << scene_gone.err;
+
+  const std::string with_both = with_robot + " --scene " + (moved / "cell.yaml").string();
+  const auto result = runCliBinary(with_both);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_TRUE(result.json().at("scene_targets").at(0).at("reached").get<bool>()) << result.out;
+  EXPECT_EQ(result.err.find("differs from the copy the session stores"), std::string::npos) << result.err;
+
+  // The wedge moved by 1 cm after teaching: what is evaluated is no longer what was taught in.
+  std::string edited = text.str();
+  edited.replace(edited.find("[-2.0, 0.0, 0.3]"), 16, "[-2.0, 0.01, 0.3]");
+  writeText(moved / "cell.yaml", edited);
+  const auto changed = runCliBinary(with_both);
+  ASSERT_EQ(changed.exit_code, 0) << changed.err;
+  EXPECT_NE(changed.err.find("note: the scene '" + (moved / "cell.yaml").string() + "' differs from the copy the session stores; it is used as --scene asks"),
+            std::string::npos)
+      << changed.err;
+  std::filesystem::remove(session);
+  std::filesystem::remove_all(moved);
+}
+
 // A session whose stored scene and robot copies were damaged (the files beside it intact): the
 // files serve, each with a note that says which copy did not read, instead of an error about
 // the damaged copy after a note that blames the intact file.
