@@ -592,30 +592,69 @@ struct Canvas {
 
 }  // namespace
 
+namespace {
+
+// A length of 1, 2 or 5 times a power of ten near `about`, for a scale bar.
+double roundLength(double about) {
+  const double decade = std::pow(10.0, std::floor(std::log10(about)));
+  for (const double step : {5.0, 2.0, 1.0}) {
+    if (step * decade <= about) return step * decade;
+  }
+  return decade;
+}
+
+std::string lengthText(double length) {
+  std::ostringstream text;
+  text << length << " rad";
+  return text.str();
+}
+
+}  // namespace
+
 ScatterImage renderMdsScatter(const StudyResult& study, int width, int height) {
   if (width < 16 || height < 16 || width > 8192 || height > 8192) {
     throw InputError("scatter plot: expected a size in [16, 8192] pixels");
   }
-  ScatterImage image{width, height, std::vector<std::uint8_t>(static_cast<std::size_t>(4 * width * height), 255)};
+  ScatterImage image{width, height, std::vector<std::uint8_t>(static_cast<std::size_t>(4 * width * height), 255), {}};
   const Canvas canvas{image};
   const int panels = std::max<int>(1, static_cast<int>(study.clusterings.size()));
   const int panel_width = width / panels;
   constexpr int kMargin = 12;
+  constexpr int kTitleBand = 24;    // the panel's title above its frame
+  constexpr int kLegendLine = 18;   // one row of the legend
+  constexpr int kLegendColumn = 96;  // one entry of a row
   const Rgb frame{160, 160, 160};
+  const Rgb ink{40, 40, 40};
   for (int p = 0; p < static_cast<int>(study.clusterings.size()); ++p) {
     const AreaClustering& c = study.clusterings[static_cast<std::size_t>(p)];
     const int x0 = p * panel_width + kMargin;
     const int x1 = (p + 1) * panel_width - kMargin;
-    const int y0 = kMargin;
-    const int y1 = height - kMargin;
+    // The legend: one entry per used cluster, the ring, then the scale bar on a row of its own.
+    std::vector<std::size_t> used;
+    for (std::size_t k = 0; k < c.kmeans.sizes.size(); ++k) {
+      if (c.kmeans.sizes[k] > 0) used.push_back(k);
+    }
+    const int columns = std::max(1, (x1 - x0) / kLegendColumn);
+    const auto entries = static_cast<int>(used.size()) + 1;
+    const int legend_rows = (entries + columns - 1) / columns + 1;
+    const int y0 = kMargin + kTitleBand;
+    const int y1 = height - kMargin - legend_rows * kLegendLine;
+    if (y1 - y0 < 16 || x1 - x0 < 16) continue;  // too small a picture for this panel's plot
+    std::ostringstream title;
+    title << "Area " << c.area << ": " << c.participants.size() << (c.participants.size() == 1 ? " participant, " : " participants, ")
+          << used.size() << (used.size() == 1 ? " cluster" : " clusters");
+    image.labels.push_back({title.str(), x0 - 4, kMargin + kTitleBand - 9, x1 - x0 + 8});
     canvas.rectangle(x0 - 4, y0 - 4, x1 + 4, y1 + 4, frame);
     // One scale for both axes (MDS distances are meaningful), fitted to points and centres.
     Eigen::MatrixXd all(2, c.mds.cols() + c.centre_mds.cols());
     all << c.mds, c.centre_mds;
     const Eigen::Vector2d low = all.rowwise().minCoeff();
     const Eigen::Vector2d high = all.rowwise().maxCoeff();
-    const double span = std::max({high.x() - low.x(), high.y() - low.y(), 1e-9});
-    const double scale = std::min(x1 - x0, y1 - y0) / span;
+    // A single posture, or postures all alike, span nothing: a tenth of a radian is drawn as the
+    // plot's width then, so that the scale bar still says a true length.
+    const double span = std::max({high.x() - low.x(), high.y() - low.y(), 0.1});
+    constexpr int kRingRoom = 8;  // a centre's ring stays inside the frame
+    const double scale = std::max(1, std::min(x1 - x0, y1 - y0) - 2 * kRingRoom) / span;
     const double ox = 0.5 * (x0 + x1) - scale * 0.5 * (low.x() + high.x());
     const double oy = 0.5 * (y0 + y1) + scale * 0.5 * (low.y() + high.y());
     const auto px = [&](double x) { return ox + scale * x; };
@@ -624,11 +663,37 @@ ScatterImage renderMdsScatter(const StudyResult& study, int width, int height) {
       const auto label = static_cast<std::size_t>(c.kmeans.labels[static_cast<std::size_t>(m)]);
       canvas.disc(px(c.mds(0, m)), py(c.mds(1, m)), 4.0, kPalette[label % kPalette.size()]);
     }
-    for (Eigen::Index k = 0; k < c.centre_mds.cols(); ++k) {
-      if (c.kmeans.sizes[static_cast<std::size_t>(k)] == 0) continue;  // an unused seed
-      canvas.ring(px(c.centre_mds(0, k)), py(c.centre_mds(1, k)), 9.0, 2.0,
-                  kPalette[static_cast<std::size_t>(k) % kPalette.size()]);
+    for (const std::size_t k : used) {
+      canvas.ring(px(c.centre_mds(0, static_cast<Eigen::Index>(k))), py(c.centre_mds(1, static_cast<Eigen::Index>(k))), 9.0, 2.0,
+                  kPalette[k % kPalette.size()]);
     }
+    const auto entry_at = [&](int index) {
+      return std::pair<int, int>{x0 + (index % columns) * kLegendColumn, y1 + 4 + (index / columns + 1) * kLegendLine};
+    };
+    for (std::size_t e = 0; e < used.size(); ++e) {
+      const std::size_t k = used[e];
+      const auto [x, baseline] = entry_at(static_cast<int>(e));
+      canvas.disc(x + 5, baseline - 5, 4.0, kPalette[k % kPalette.size()]);
+      const std::string name = k < c.names.size() ? c.names[k] : "cluster " + std::to_string(k + 1);
+      image.labels.push_back({name + ": " + std::to_string(c.kmeans.sizes[k]), x + 14, baseline, kLegendColumn - 18});
+    }
+    {
+      const auto [x, baseline] = entry_at(static_cast<int>(used.size()));
+      canvas.ring(x + 5, baseline - 5, 4.5, 1.5, ink);
+      image.labels.push_back({"centre", x + 14, baseline, kLegendColumn - 18});
+    }
+    // The scale bar: MDS keeps the distances between postures (Euclidean, in joint space).
+    const double bar = roundLength(0.3 * (x1 - x0) / scale);
+    const int bar_pixels = std::max(1, static_cast<int>(std::lround(bar * scale)));
+    const int bar_baseline = y1 + 4 + legend_rows * kLegendLine;
+    for (int dy = -6; dy <= -4; ++dy) {
+      for (int x = x0; x <= x0 + bar_pixels; ++x) canvas.set(x, bar_baseline + dy, ink);
+    }
+    for (int dy = -9; dy <= -1; ++dy) {
+      canvas.set(x0, bar_baseline + dy, ink);
+      canvas.set(x0 + bar_pixels, bar_baseline + dy, ink);
+    }
+    image.labels.push_back({lengthText(bar) + " (joint space)", x0 + bar_pixels + 8, bar_baseline, x1 - x0 - bar_pixels - 8});
   }
   return image;
 }

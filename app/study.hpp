@@ -156,12 +156,25 @@ void clusterStudy(StudyResult& study, const StudyOptions& options);
 std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const std::filesystem::path& folder,
                                                  const std::vector<OutputFile>& along = {});
 
-/// The MDS scatter plot of every clustered area side by side (points coloured by cluster,
-/// centres as rings) as an RGBA image of width x height pixels.
+/// A line of text the scatter plot needs (a panel's title, a legend entry, the scale bar's
+/// length). app/ draws no text: the caller prints the labels onto the image (flexirob-cli
+/// through render::printLabels).
+struct ScatterLabel {
+  std::string text;   ///< UTF-8
+  int x = 0;          ///< left end [px]
+  int baseline = 0;   ///< base line [px from the top]
+  int max_width = 0;  ///< cut with an ellipsis beyond this [px]
+};
+
+/// The MDS scatter plot of every clustered area side by side, as an RGBA image of width x
+/// height pixels: per panel a title (the area, its participants), the postures as discs
+/// coloured by cluster, the used centres as rings, and below them a legend (each cluster's
+/// colour, name and members, the ring, a scale bar in rad) whose text is in `labels`.
 struct ScatterImage {
   int width = 0;
   int height = 0;
   std::vector<std::uint8_t> rgba;
+  std::vector<ScatterLabel> labels;
 };
 ScatterImage renderMdsScatter(const StudyResult& study, int width = 480, int height = 360);
 

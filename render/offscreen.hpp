@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "render/camera.hpp"
+#include "render/overlays.hpp"
 
 namespace flexirob::render {
 
@@ -43,6 +44,10 @@ class OffscreenRenderer {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// `base` with `labels` printed on it in dark ink: the text is drawn offscreen on white and
+/// multiplied in, so that what lies under a letter's gaps stays as it was.
+Image printLabels(const Image& base, const std::vector<PlacedLabel>& labels);
 
 /// The image as the bytes of an 8-bit RGBA PNG file. The caller writes them (the CLI through
 /// app::writeFileReplacing, so that a picture is replaced whole or not at all).

@@ -165,6 +165,21 @@ void appendChunk(std::string& out, const char* type, const std::string& data) {
 
 }  // namespace
 
+Image printLabels(const Image& base, const std::vector<PlacedLabel>& labels) {
+  if (labels.empty()) return base;
+  OffscreenRenderer renderer(base.width, base.height);
+  osg::ref_ptr<osg::Group> root = new osg::Group();
+  root->addChild(makePlacedLabels(labels, base.width, base.height));
+  const Image ink = renderer.render(root.get(), CameraPose{}, {1.0F, 1.0F, 1.0F, 1.0F});
+  Image printed = base;
+  for (std::size_t i = 0; i + 3 < printed.rgba.size(); i += 4) {
+    for (std::size_t c = 0; c < 3; ++c) {
+      printed.rgba[i + c] = static_cast<std::uint8_t>((static_cast<unsigned>(printed.rgba[i + c]) * ink.rgba[i + c] + 127U) / 255U);
+    }
+  }
+  return printed;
+}
+
 std::string encodePng(const Image& image) {
   if (image.width < 1 || image.height < 1 ||
       image.rgba.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) * 4) {

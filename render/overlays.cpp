@@ -439,10 +439,12 @@ std::vector<LegendEntry> legendRows(const std::vector<LegendEntry>& entries, int
   return rows;
 }
 
-osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, int viewport_width,
-                                     int viewport_height) {
+namespace {
+
+// A camera drawn after the scene in pixels of a viewport of width x height, y up.
+osg::ref_ptr<osg::Camera> makeHud(const char* name, int viewport_width, int viewport_height) {
   osg::ref_ptr<osg::Camera> hud = new osg::Camera();
-  hud->setName("legend");
+  hud->setName(name);
   hud->setReferenceFrame(osg::Transform::ABSOLUTE_RF);
   hud->setProjectionMatrixAsOrtho2D(0.0, std::max(1, viewport_width), 0.0, std::max(1, viewport_height));
   hud->setViewMatrix(osg::Matrixd::identity());
@@ -453,6 +455,14 @@ osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, in
   state->setMode(GL_LIGHTING, osg::StateAttribute::OFF | osg::StateAttribute::PROTECTED);
   state->setMode(GL_DEPTH_TEST, osg::StateAttribute::OFF);
   state->setAttributeAndModes(new osg::BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA));
+  return hud;
+}
+
+}  // namespace
+
+osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, int viewport_width,
+                                     int viewport_height) {
+  osg::ref_ptr<osg::Camera> hud = makeHud("legend", viewport_width, viewport_height);
   if (entries.empty()) return hud;
 
   const std::vector<LegendEntry> rows = legendRows(entries, viewport_height);
@@ -496,6 +506,19 @@ osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, in
   panel->setColorArray(colors, osg::Array::BIND_PER_VERTEX);
   panel->addPrimitiveSet(new osg::DrawArrays(GL_QUADS, 0, static_cast<int>(quads->size())));
   geode->insertChild(0, panel);  // behind the swatches and labels
+  hud->addChild(geode);
+  return hud;
+}
+
+osg::ref_ptr<osg::Camera> makePlacedLabels(const std::vector<PlacedLabel>& labels, int viewport_width, int viewport_height) {
+  osg::ref_ptr<osg::Camera> hud = makeHud("labels", viewport_width, viewport_height);
+  LegendFonts fonts;
+  osg::ref_ptr<osg::Geode> geode = new osg::Geode();
+  for (const PlacedLabel& label : labels) {
+    osg::ref_ptr<osgText::Text> text = fittedLabel(label.text, fonts, std::max(kLegendCharHeight, label.max_width));
+    text->setPosition(osg::Vec3(label.x, static_cast<float>(viewport_height) - label.baseline, 0.0F));
+    geode->addDrawable(text);
+  }
   hud->addChild(geode);
   return hud;
 }

@@ -133,6 +133,17 @@ struct LegendEntry {
 osg::ref_ptr<osg::Camera> makeLegend(const std::vector<LegendEntry>& entries, int viewport_width,
                                      int viewport_height);
 
+/// A line of text at a place of a viewport, in pixels counted as images count them (y down).
+struct PlacedLabel {
+  std::string text;  ///< UTF-8
+  float x = 0.0F;          ///< left end
+  float baseline = 0.0F;   ///< base line, from the top
+  float max_width = 0.0F;  ///< cut with an ellipsis beyond this
+};
+/// The labels as a head-up display of a viewport of width x height pixels, in the legend's face,
+/// size and ink.
+osg::ref_ptr<osg::Camera> makePlacedLabels(const std::vector<PlacedLabel>& labels, int viewport_width, int viewport_height);
+
 /// The code points of UTF-8 `text`; a byte that starts no valid sequence (stray continuation,
 /// overlong form, surrogate, beyond U+10FFFF, cut short) reads as U+FFFD.
 std::vector<char32_t> decodeUtf8(const std::string& text);

@@ -269,12 +269,16 @@ Json reviewStudy(const StudyArguments& arguments) {
   const bool plotted = !arguments.plot.empty() && !study.clusterings.empty();
   if (!arguments.plot.empty() && !plotted) std::cerr << "note: --plot: no area was clustered, so no picture was written (a file already there is left as it was)\n";
   if (plotted) {
-    const app::ScatterImage scatter = app::renderMdsScatter(study, 360 * std::max<int>(1, static_cast<int>(study.clusterings.size())), 360);
+    const app::ScatterImage scatter = app::renderMdsScatter(study, 360 * std::max<int>(1, static_cast<int>(study.clusterings.size())), 440);
     render::Image image;
     image.width = scatter.width;
     image.height = scatter.height;
     image.rgba = scatter.rgba;
-    plot.push_back({"--plot", arguments.plot, render::encodePng(image)});
+    std::vector<render::PlacedLabel> labels;
+    for (const app::ScatterLabel& label : scatter.labels) {
+      labels.push_back({label.text, static_cast<float>(label.x), static_cast<float>(label.baseline), static_cast<float>(label.max_width)});
+    }
+    plot.push_back({"--plot", arguments.plot, render::encodePng(render::printLabels(image, labels))});
   }
   // The tables and the plot together: all of them or none.
   if (!arguments.csv_dir.empty()) {

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -271,6 +272,26 @@ TEST(StudyClusters, TabulatesConsistentCombinations) {
     coloured += image.rgba[i] != image.rgba[i + 1] || image.rgba[i + 1] != image.rgba[i + 2] ? 1 : 0;
   }
   EXPECT_GT(coloured, 5 * 20);  // at least the discs of the members of one panel
+  // Each panel says what it shows: the area and its participants, each used cluster's name and
+  // members (L2 has none), and the length of its scale bar.
+  const auto labelled = [&image](const std::string& text) {
+    return std::count_if(image.labels.begin(), image.labels.end(), [&text](const ScatterLabel& label) { return label.text == text; });
+  };
+  EXPECT_EQ(labelled("Area 0: 5 participants, 2 clusters"), 1);
+  EXPECT_EQ(labelled("L1: 3"), 1);
+  EXPECT_EQ(labelled("L3: 2"), 1);
+  EXPECT_EQ(labelled("L2: 0"), 0);
+  EXPECT_EQ(labelled("centre"), 2);
+  const auto bars = std::count_if(image.labels.begin(), image.labels.end(), [](const ScatterLabel& label) {
+    return label.text.find(" rad (joint space)") != std::string::npos;
+  });
+  EXPECT_EQ(bars, 2);
+  for (const ScatterLabel& label : image.labels) {
+    EXPECT_GE(label.x, 0) << label.text;
+    EXPECT_LE(label.x + label.max_width, image.width) << label.text;
+    EXPECT_GT(label.baseline, 0) << label.text;
+    EXPECT_LE(label.baseline, image.height) << label.text;
+  }
   std::filesystem::remove_all(dir);
 }
 

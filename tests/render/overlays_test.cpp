@@ -398,6 +398,39 @@ TEST_F(OverlayRender, LegendCutsALabelTooLongForThePicture) {
   }
 }
 
+// Text printed onto a finished picture (the study's scatter plot): dark letters where the label
+// stands, cut at its width, and every other pixel exactly as it was.
+TEST(PrintedLabels, DarkenTheirOwnPlaceAndLeaveTheRestOfThePictureAsItWas) {
+  Image base;
+  base.width = 240;
+  base.height = 60;
+  base.rgba.resize(static_cast<std::size_t>(4 * base.width * base.height));
+  for (std::size_t i = 0; i < base.rgba.size(); i += 4) {
+    base.rgba[i] = 90;
+    base.rgba[i + 1] = 200;
+    base.rgba[i + 2] = 250;
+    base.rgba[i + 3] = 255;
+  }
+  const Image printed = printLabels(base, {{std::string(60, 'W'), 20.0F, 30.0F, 100.0F}});
+  ASSERT_EQ(printed.width, base.width);
+  ASSERT_EQ(printed.height, base.height);
+  int dark = 0;
+  for (int y = 0; y < base.height; ++y) {
+    for (int x = 0; x < base.width; ++x) {
+      const auto before = base.pixel(x, y);
+      const auto after = printed.pixel(x, y);
+      for (int c = 0; c < 3; ++c) ASSERT_LE(after[c], before[c]) << x << ", " << y;
+      const bool inside = x >= 18 && x <= 20 + 100 + 2 && y >= 30 - 16 && y <= 30 + 5;
+      if (!inside) {
+        ASSERT_EQ(after, before) << "ink outside the label's place at " << x << ", " << y;
+      }
+      dark += after[1] < before[1] / 2 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(dark, 150) << "the letters of a 100 px label";
+  EXPECT_EQ(printLabels(base, {}).rgba, base.rgba);
+}
+
 TEST(OverlayLegend, RowsBeyondThePicturesHeightEndInOneCountingRow) {
   std::vector<LegendEntry> entries;
   for (int i = 0; i < 100; ++i) entries.push_back({"area " + std::to_string(i), OverlayPalette::area(i)});
