@@ -222,6 +222,24 @@ std::optional<StateRecord> SessionReader::stateAt(double time) const {
   return std::nullopt;
 }
 
+std::pair<double, double> SessionReader::recordedTimeSpan() const {
+  if (state_count_ > 0) return {start_time_, end_time_};
+  std::optional<double> first, last;
+  // Each table's own ends: one aggregate per query answers from its index or a short scan.
+  const auto extend = [&](const std::string& low_query, const std::string& high_query) {
+    SqliteStatement low(impl_->db, low_query);
+    SqliteStatement high(impl_->db, high_query);
+    if (low.step() && !low.columnIsNull(0)) first = std::min(first.value_or(low.columnDouble(0)), low.columnDouble(0));
+    if (high.step() && !high.columnIsNull(0)) last = std::max(last.value_or(high.columnDouble(0)), high.columnDouble(0));
+  };
+  for (const std::string table : {"stage", "signal", "area", "sample", "collision"}) {
+    extend("SELECT min(t) FROM " + table, "SELECT max(t) FROM " + table);
+  }
+  extend("SELECT min(t_start) FROM trajectory", "SELECT max(t_end) FROM trajectory");
+  if (!first || !last) return {0.0, 0.0};
+  return {*first, *last};
+}
+
 std::vector<StageRecord> SessionReader::stages() const {
   std::vector<StageRecord> out;
   SqliteStatement st(impl_->db, "SELECT t, stage, sub_stage FROM stage ORDER BY t, id");

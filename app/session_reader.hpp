@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "app/session_recorder.hpp"
@@ -45,6 +46,10 @@ class SessionReader {
   /// [s] first and last state time (0, 0 without states).
   double startTime() const { return start_time_; }
   double endTime() const { return end_time_; }
+  /// [s] first and last time the session records anything: its states' times, or, where it holds
+  /// no state (none recorded, or the rows deleted since), those of its events (stages, signals,
+  /// areas, samples, motions, contacts); 0, 0 if it holds neither.
+  std::pair<double, double> recordedTimeSpan() const;
   /// States with t0 <= time <= t1 in time order; every `stride`-th row only (stride >= 1), for
   /// plots of long ranges.
   std::vector<StateRecord> states(double t0, double t1, int stride = 1) const;

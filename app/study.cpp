@@ -222,7 +222,8 @@ ParticipantResult analyseSession(const SessionReader& reader, double replay_inte
   result.robot = meta.robot_name;
   result.scene = meta.scene_name;
   result.closed_cleanly = !reader.meta("end_time_utc").empty();
-  result.duration_s = reader.endTime() - reader.startTime();
+  const auto [first_time, last_time] = reader.recordedTimeSpan();
+  result.duration_s = last_time - first_time;
 
   // Each area's latest take; a RECORDING the session ended in taught nothing (session_teaching.hpp).
   for (const RecordedArea& area : readRecordedTeaching(reader, /*read_graph=*/false).areas) {
@@ -268,11 +269,12 @@ ParticipantResult analyseSession(const SessionReader& reader, double replay_inte
   result.procrustes = mean(procrustes);
   result.jerk_mean = mean(jerks);
   result.e_coll_recorded = static_cast<std::int64_t>(reader.collisions().size());
-  result.time_per_phase = timePerPhase(reader.stages(), reader.endTime());
+  result.time_per_phase = timePerPhase(reader.stages(), last_time);
 
   // E_coll (Sect. 3.3) by replay: the recorded postures in the collision world of the recorded
   // robot and scene, an event per pair that starts touching.
   try {
+    if (reader.stateCount() == 0) throw InputError("the session holds no robot states (none recorded, or deleted since), so no posture could be replayed");
     const robot::RobotModel model = recordedRobot(reader);
     const robot::Scene scene = meta.scene_text.empty()
                                    ? robot::Scene{}

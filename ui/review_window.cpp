@@ -455,6 +455,7 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
                          .arg(reader_->stateCount())
                          .arg(t1 - t0, 0, 'f', 1)
                          .arg(QString::fromStdString(model_->name()));
+    if (reader_->stateCount() == 0) status += QStringLiteral(" (no robot states: none recorded, or deleted since)");
     if (!left_out.empty()) {
       // Said on stderr as well: the status bar may be too narrow for the reason.
       status += QStringLiteral(", drawn without %1 mesh(es) not on this machine: %2")

@@ -78,8 +78,12 @@ Json review(const std::string& file) {
   // Damage where this review does not read (a stored model's pages) still makes the file suspect.
   const std::string damage = reader.damage();
   out["damage"] = damage.empty() ? Json(nullptr) : Json(damage);
-  out["duration_s"] = reader.endTime() - reader.startTime();
+  const auto [first_time, last_time] = reader.recordedTimeSpan();
+  out["duration_s"] = last_time - first_time;
   out["states"] = reader.stateCount();
+  if (reader.stateCount() == 0 && last_time > first_time) {
+    std::cerr << "note: the session holds no robot states (none recorded, or deleted since): duration_s spans its events, and no posture is replayed\n";
+  }
 
   // Training areas and samples: each area's latest take (a re-taught area counts once), and the
   // samples of a RECORDING the session ended in apart (app/session_teaching.hpp).

@@ -402,6 +402,55 @@ TEST(StudyClusters, SaysWhichGivenCentresFitNoSession) {
   EXPECT_EQ(study.not_clustered[1], "area 5: its centres name an area no session of 'lwr4' taught");
 }
 
+// A session whose state rows were deleted (or never recorded) still has its stages and areas:
+// its duration is theirs, not 0, and E_coll is unknown, not 0.
+TEST(StudyReplay, ASessionWithoutStatesLastsAsLongAsItsEventsAndReplaysNothing) {
+  const auto dir = scratchDir("no-states");
+  Eigen::VectorXd q(7);
+  q << 0.0, 0.6, 0.0, -1.6, 0.0, 0.9, 0.0;
+  robot::Scene empty;
+  empty.name = "empty";
+  {
+    SessionMetadata metadata;
+    metadata.robot_name = "lwr4";
+    metadata.tip_link = lwr4().tipLink();
+    metadata.scene_name = empty.name;
+    metadata.scene_text = robot::sceneToYaml(empty);
+    SessionRecorder recorder(dir / "cut.db", metadata);
+    robot::RobotState state;
+    state.resize(7);
+    state.q = q;
+    state.q_cmd = q;
+    state.X_WT = robot::tipPose(lwr4(), q);
+    for (int i = 0; i <= 4000; ++i) {  // 0 .. 4 s
+      state.time = 1e-3 * i;
+      while (!recorder.recordState(state)) {
+      }
+    }
+    recorder.recordStage({0.5, "CONFIGURATION", "APPROACHING"});
+    recorder.recordStage({1.25, "CONFIGURATION", "RECORDING"});
+    recorder.recordArea({0, 1.25, state.X_WT.translation(), q, "front"});
+    recorder.recordStage({3.75, "PROGRAMMING", "APPROACHING"});
+    recorder.close();
+  }
+  // With its states, the span is theirs.
+  EXPECT_EQ(SessionReader(dir / "cut.db").recordedTimeSpan(), (std::pair<double, double>{0.0, 4.0}));
+  {
+    SqliteDatabase db((dir / "cut.db").string(), 0x00000002);  // SQLITE_OPEN_READWRITE
+    db.exec("DELETE FROM state");
+  }
+  const SessionReader reader(dir / "cut.db");
+  EXPECT_EQ(reader.stateCount(), 0);
+  EXPECT_EQ(reader.recordedTimeSpan(), (std::pair<double, double>{0.5, 3.75}));
+  const ParticipantResult result = analyseSession(reader, 0.0);
+  EXPECT_DOUBLE_EQ(result.duration_s, 3.25);
+  EXPECT_FALSE(result.e_coll.has_value());
+  EXPECT_NE(result.replay_note.find("no robot states"), std::string::npos) << result.replay_note;
+  EXPECT_EQ(result.replayed_samples, 0);
+  EXPECT_EQ(result.areas, 1);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(StudyReplay, CountsContactsOfTheRecordedPosturesInTheRecordedScene) {
   const auto dir = scratchDir("replay");
   Eigen::VectorXd free_q(7), touching_q(7);
