@@ -821,6 +821,7 @@ void MainWindow::refuseScene(const std::string& name_or_path, const std::excepti
 
 void MainWindow::frameView() {
   const render::CameraPose camera = world_.defaultCamera(static_cast<double>(view_->width()) / std::max(1, view_->height()));
+  view_->setFloor(scene_.table ? std::optional<double>(0.0) : std::nullopt);
   view_->setHomeCamera(camera);
   // Walls all round and a roof: no side shows the arm, so what hides it is drawn see-through.
   const std::vector<std::string> revealed = world_.revealRobot(camera);

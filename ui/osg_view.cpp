@@ -1,5 +1,7 @@
 #include "ui/osg_view.hpp"
 
+#include <optional>
+
 #include <QMouseEvent>
 #include <QOffscreenSurface>
 #include <QOpenGLContext>
@@ -16,8 +18,54 @@
 
 namespace flexirob::ui {
 
+// OSG's orbit, pan and zoom, with the eye kept above a floor: a move that would take it below
+// (and lower than it was) is taken back whole.
+class AboveFloorManipulator : public osgGA::OrbitManipulator {
+ public:
+  void setFloor(std::optional<double> floor_z) { floor_z_ = floor_z; }
+
+ protected:
+  bool performMovement() override {
+    return keptAboveFloor([this] { return osgGA::OrbitManipulator::performMovement(); });
+  }
+  bool handleMouseWheel(const osgGA::GUIEventAdapter& event, osgGA::GUIActionAdapter& action) override {
+    return keptAboveFloor([&] { return osgGA::OrbitManipulator::handleMouseWheel(event, action); });
+  }
+
+ private:
+  // A hand's width above the table top: at the floor itself the view would graze the grid.
+  static constexpr double kClearance = 0.05;  // [m]
+
+  double eyeHeight() const {
+    osg::Vec3d eye;
+    osg::Vec3d center;
+    osg::Vec3d up;
+    getTransformation(eye, center, up);
+    return eye.z();
+  }
+
+  template <typename Move>
+  bool keptAboveFloor(Move move) {
+    if (!floor_z_) return move();
+    const osg::Vec3d center = _center;
+    const osg::Quat rotation = _rotation;
+    const double distance = _distance;
+    const double before = eyeHeight();
+    const bool handled = move();
+    const double after = eyeHeight();
+    if (after < *floor_z_ + kClearance && after < before) {
+      _center = center;
+      _rotation = rotation;
+      _distance = distance;
+    }
+    return handled;
+  }
+
+  std::optional<double> floor_z_;
+};
+
 OsgView::OsgView(QWidget* parent)
-    : QWidget(parent), viewer_(new osgViewer::Viewer), manipulator_(new osgGA::OrbitManipulator) {
+    : QWidget(parent), viewer_(new osgViewer::Viewer), manipulator_(new AboveFloorManipulator) {
   // Beside the docks' own minimum widths the window still fits an 800 px screen.
   setMinimumSize(300, 200);
   // Every pixel comes from the frame: Qt need not clear behind it.
@@ -60,6 +108,8 @@ void OsgView::setHomeCamera(const render::CameraPose& camera) {
   home_ = camera;
   resetCamera();
 }
+
+void OsgView::setFloor(std::optional<double> floor_z) { manipulator_->setFloor(floor_z); }
 
 void OsgView::resetCamera() {
   manipulator_->setHomePosition(render::toOsg(home_.eye_W), render::toOsg(home_.center_W),

@@ -10,6 +10,7 @@
 #include <osg/Node>
 #include <osg/ref_ptr>
 #include <functional>
+#include <optional>
 #include <memory>
 #include <vector>
 
@@ -25,6 +26,8 @@ class QOpenGLContext;
 class QOpenGLFramebufferObject;
 
 namespace flexirob::ui {
+
+class AboveFloorManipulator;
 
 /// Takes the left mouse button before the camera does (the mouse perturbation of the arm).
 /// press() returns true to take the drag; move() and release() then follow until release.
@@ -47,6 +50,10 @@ class OsgView : public QWidget {
   void setSceneRoot(osg::Node* root);
   /// Makes `camera` the home view and moves there.
   void setHomeCamera(const render::CameraPose& camera);
+  /// The height [m] the eye is kept above while orbiting, panning and zooming (the table top a
+  /// robot stands on: seen from below it the scene reads upside down), or none (a robot that
+  /// hangs, a scene without a table). A move that would take the eye lower is not made.
+  void setFloor(std::optional<double> floor_z);
   /// Back to the home view.
   void resetCamera();
   /// Where the eye is now and what it looks at (world frame).
@@ -94,7 +101,7 @@ class OsgView : public QWidget {
 
   osg::ref_ptr<osgViewer::Viewer> viewer_;
   osg::ref_ptr<osgViewer::GraphicsWindowEmbedded> window_;
-  osg::ref_ptr<osgGA::OrbitManipulator> manipulator_;
+  osg::ref_ptr<AboveFloorManipulator> manipulator_;
   render::CameraPose home_;
   long frames_ = 0;
   std::unique_ptr<QOpenGLContext> context_;

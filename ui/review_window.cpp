@@ -447,6 +447,7 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     operator_heights_ = false;
     error_.clear();
     damage_.clear();
+    view_->setFloor(scene.table ? std::optional<double>(0.0) : std::nullopt);
     view_->setHomeCamera(world_->defaultCamera(static_cast<double>(std::max(1, view_->width())) /
                                                std::max(1, view_->height())));
     setWindowTitle(QStringLiteral("FlexIRob review — %1").arg(QString::fromStdString(file.filename().string())));
