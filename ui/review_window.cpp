@@ -384,7 +384,8 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     const double t1 = std::max(reader->endTime(), t0 + 1e-3);
     std::vector<TimelineMarker> markers;
     for (const app::SignalRecord& signal : events->signals) {
-      markers.push_back({signal.time, signal.kind == app::SignalKind::Trigger, signal.name});
+      const bool trigger = signal.kind == app::SignalKind::Trigger;
+      markers.push_back({signal.time, trigger, trigger ? signal.name : operatorSignalName(signal.name).toStdString()});
     }
 
     // Plots from states picked through the time index (never a scan of the whole table).

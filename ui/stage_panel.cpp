@@ -496,13 +496,17 @@ void StagePanel::fitWarningBox() {
   });
 }
 
-QString operatorWording(const QString& message) {
-  // The workflow names its requests as the session file records them; the window says which
-  // button, key or click they came from.
-  static const struct {
-    const char* request;
-    const char* operator_name;
-  } kNames[] = {
+namespace {
+
+// The workflow names its requests as the session file records them; the window says which
+// button, key or click they came from.
+struct RequestName {
+  const char* request;
+  const char* operator_name;
+};
+
+const std::vector<RequestName>& requestNames() {
+  static const std::vector<RequestName> names{
       {"start_configuration", QT_TRANSLATE_NOOP("StagePanel", "Start configuration")},
       {"finished_configuration", QT_TRANSLATE_NOOP("StagePanel", "Finish configuration")},
       {"start_programming", QT_TRANSLATE_NOOP("StagePanel", "Start programming")},
@@ -515,7 +519,30 @@ QString operatorWording(const QString& message) {
       {"nudge_joint", QT_TRANSLATE_NOOP("StagePanel", "Joint key")},
       {"nudge_task", QT_TRANSLATE_NOOP("StagePanel", "Tip key")},
   };
-  for (const auto& name : kNames) {
+  return names;
+}
+
+}  // namespace
+
+QString operatorSignalName(const std::string& recorded) {
+  const QString text = QString::fromStdString(recorded);
+  const QString request = text.section(QLatin1Char(' '), 0, 0);
+  const QString rest = text.section(QLatin1Char(' '), 1);
+  for (const RequestName& name : requestNames()) {
+    if (request != QLatin1String(name.request)) continue;
+    const QString shown = QCoreApplication::translate("StagePanel", name.operator_name);
+    if (rest.isEmpty()) return shown;
+    bool is_index = false;
+    const int index = rest.toInt(&is_index);
+    const bool about_an_area = request == QLatin1String("remove_area") || request == QLatin1String("reteach_area");
+    if (about_an_area && is_index && index >= 0) return shown + QStringLiteral(": ") + QCoreApplication::translate("StagePanel", "area %1").arg(index + 1);
+    return shown + QStringLiteral(": ") + rest;
+  }
+  return text;
+}
+
+QString operatorWording(const QString& message) {
+  for (const RequestName& name : requestNames()) {
     const QString prefix = QString::fromLatin1(name.request) + QStringLiteral(": ");
     if (message.startsWith(prefix)) {
       return QCoreApplication::translate("StagePanel", name.operator_name) + QStringLiteral(": ") + message.mid(prefix.size());

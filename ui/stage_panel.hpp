@@ -27,6 +27,11 @@ namespace flexirob::ui {
 /// "plan:") becomes what the operator pressed ("Finish configuration:", "Goal:"); the rest stays.
 QString operatorWording(const QString& message);
 
+/// A button signal as a session records it ("remove_area 0", "start_programming") in the
+/// operator's words ("Remove area: area 1", "Start programming"): areas counted from 1, as the
+/// Teaching panel counts them.
+QString operatorSignalName(const std::string& recorded);
+
 /// The Teaching panel's warning box: every warning about an area or the map that still stands
 /// (app::standingWarnings over `events`, with the pose being recorded), then `last`, the newest warning or refusal, unless it
 /// is one of them; one per line, bulleted when there are several. Empty when none stands.

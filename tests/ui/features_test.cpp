@@ -499,6 +499,14 @@ class FeaturesTest : public QObject {
              QStringLiteral("Goal (Ctrl+click): the goal is 796.2 mm from the nearest explored position"));
     // A warning about an area keeps its name.
     QCOMPARE(operatorWording(QStringLiteral("area_2: near a joint limit")), QStringLiteral("area_2: near a joint limit"));
+    // A session's button signals, as the review window's timeline names them: areas counted
+    // from 1, as the Teaching panel counts them.
+    using flexirob::ui::operatorSignalName;
+    QCOMPARE(operatorSignalName("remove_area 0"), QStringLiteral("Remove area: area 1"));
+    QCOMPARE(operatorSignalName("reteach_area 2"), QStringLiteral("Re-teach area: area 3"));
+    QCOMPARE(operatorSignalName("start_programming"), QStringLiteral("Start programming"));
+    QCOMPARE(operatorSignalName("remove_area x"), QStringLiteral("Remove area: x"));
+    QCOMPARE(operatorSignalName("remove_areas 0"), QStringLiteral("remove_areas 0"));
   }
 
   // Links red while the arm is led to an area's posture: said then, while the operator can

@@ -197,7 +197,7 @@ class ReviewWindowTest : public QObject {
     QCOMPARE(timeline->describeAt(timeline->xOf(3.2)), QStringLiteral("CONFIGURATION / RECORDING: 2.500 s to 4.000 s (1.500 s)"));
     QCOMPARE(timeline->describeAt(timeline->xOf(2.5) + 3.0),
              QStringLiteral("CONFIGURATION / RECORDING: 2.500 s to 4.000 s (1.500 s)\ntrigger on_converged at 2.500 s"));
-    QCOMPARE(timeline->describeAt(timeline->xOf(0.9)), QStringLiteral("IDLE: 0.000 s to 1.000 s (1.000 s)\nbutton start_configuration at 0.900 s"));
+    QCOMPARE(timeline->describeAt(timeline->xOf(0.9)), QStringLiteral("IDLE: 0.000 s to 1.000 s (1.000 s)\nbutton Start configuration at 0.900 s"));
     // The pointer moved there (no button held): the tooltip Qt shows is that text.
     QTest::mouseMove(window.timeline(), QPoint(static_cast<int>(std::lround(timeline->xOf(4.5))), timeline->height() / 2));
     QTRY_COMPARE(timeline->toolTip(), QStringLiteral("PROGRAMMING / TEACH-IN: 4.000 s to 6.000 s (2.000 s)"));
