@@ -340,7 +340,7 @@ PlotPanel::PlotPanel(QWidget* parent) : QWidget(parent) {
   task_error_->setMinimumValueSpan(0.001);  // [m]
   // Joint values scaled to their hard limits: every joint shares one axis, the limits are the
   // lines at 0 and 1 (Sect. 4.3.4).
-  joints_ = new TimePlot(QStringLiteral("Joints within their limits (0 = lower, 1 = upper)"), QString(), this);
+  joints_ = new TimePlot(QStringLiteral("Joints: 0 lower, 1 upper limit"), QString(), this);
   joints_->setValueRange(-0.05, 1.05);
   cycles_ = new TimePlot(QStringLiteral("Control cycle"), QStringLiteral("[µs]"), this);
   compute_series_ = cycles_->addSeries(QStringLiteral("compute"), QColor(0, 158, 115));
@@ -362,7 +362,7 @@ void PlotPanel::setJoints(const std::vector<std::string>& names, const Eigen::Ve
   upper_ = upper;
   samples_.clear();
   // The joint chart's series are rebuilt: limit lines first, then one per joint.
-  auto* fresh = new TimePlot(QStringLiteral("Joints within their limits (0 = lower, 1 = upper)"), QString(), this);
+  auto* fresh = new TimePlot(QStringLiteral("Joints: 0 lower, 1 upper limit"), QString(), this);
   fresh->setValueRange(-0.05, 1.05);
   fresh->addSeries(QStringLiteral("limits"), QColor(200, 30, 30), Qt::DashLine, 1.0);
   fresh->addSeries(QString(), QColor(200, 30, 30), Qt::DashLine, 1.0);

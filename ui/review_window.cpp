@@ -45,6 +45,40 @@
 
 namespace flexirob::ui {
 
+// The whole name where there is room; on a narrow window (an 800 px screen) as much as fits,
+// ended with an ellipsis, and whole in its tooltip. A QLabel would hold the window as wide as the
+// longest stage name.
+class StageLabel : public QLabel {
+ public:
+  using QLabel::QLabel;
+
+  void setStage(const QString& stage) {
+    if (stage == stage_) return;
+    stage_ = stage;
+    setToolTip(stage);
+    updateGeometry();
+    fit();
+  }
+  QSize sizeHint() const override {
+    return {fontMetrics().horizontalAdvance(stage_) + kPadding, QLabel::sizeHint().height()};
+  }
+  QSize minimumSizeHint() const override { return {kShortest, QLabel::minimumSizeHint().height()}; }
+
+ protected:
+  void resizeEvent(QResizeEvent* event) override {
+    QLabel::resizeEvent(event);
+    fit();
+  }
+
+ private:
+  static constexpr int kPadding = 20;   // the style sheet's 8 px each side, and the frame
+  static constexpr int kShortest = 110;  // "CONFIGURATI…": enough to tell the stages apart
+
+  void fit() { setText(fontMetrics().elidedText(stage_, Qt::ElideRight, std::max(0, width() - kPadding))); }
+
+  QString stage_;
+};
+
 namespace {
 
 // States picked for the plots: enough for a smooth curve across a wide window, few enough to
@@ -240,9 +274,13 @@ ReviewWindow::ReviewWindow(QWidget* parent)
   timeline_ = new Timeline(central);
   layout->addWidget(timeline_);
   auto* controls = new QHBoxLayout();
-  auto* back = new QPushButton(QStringLiteral("◀ frame"), central);
+  // Arrows alone, the words in their tooltips: the row leaves the stage's name room on an 800 px screen.
+  auto* back = new QPushButton(QStringLiteral("◀"), central);
+  back->setToolTip(QStringLiteral("One frame back (←; Shift+← a second)"));
   play_button_ = new QPushButton(QStringLiteral("Play"), central);
-  auto* forward = new QPushButton(QStringLiteral("frame ▶"), central);
+  auto* forward = new QPushButton(QStringLiteral("▶"), central);
+  forward->setToolTip(QStringLiteral("One frame on (→; Shift+→ a second)"));
+  for (QPushButton* arrow : {back, forward}) arrow->setFixedWidth(arrow->fontMetrics().horizontalAdvance(arrow->text()) + 28);
   speed_box_ = new QComboBox(central);
   for (double speed : {-4.0, -2.0, -1.0, -0.5, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0}) {
     speed_box_->addItem(QStringLiteral("%1×").arg(speed), speed);
@@ -250,7 +288,7 @@ ReviewWindow::ReviewWindow(QWidget* parent)
   speed_box_->setCurrentIndex(speed_box_->findData(1.0));
   speed_box_->setToolTip(QStringLiteral("Playback speed (negative: backwards)"));
   time_label_ = new QLabel(central);
-  stage_label_ = new QLabel(central);
+  stage_label_ = new StageLabel(central);
   QFont big = stage_label_->font();
   big.setBold(true);
   stage_label_->setFont(big);
@@ -434,7 +472,7 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     plots_->setJoints(names, lower, upper);
     plots_->setSamples(samples);
     // Not the live plot's |x - x_des|: the title says which error this is.
-    plots_->taskErrorPlot()->setTitle(QStringLiteral("Tip from the commanded posture's tip"));
+    plots_->taskErrorPlot()->setTitle(QStringLiteral("Tip vs. commanded tip"));
     plots_->taskErrorPlot()->setSeriesName(0, QStringLiteral("|FK(q_cmd) - x|"));
 
     reader_ = std::move(reader);
@@ -653,7 +691,7 @@ void ReviewWindow::updateConfidence(bool force) {
 void ReviewWindow::updateLabels() {
   time_label_->setText(QStringLiteral("t = %1 s / %2 s").arg(time_, 0, 'f', 3).arg(reader_ ? reader_->endTime() : 0.0, 0, 'f', 3));
   const std::string stage = stageAt(time_);
-  stage_label_->setText(QString::fromStdString(stage));
+  stage_label_->setStage(QString::fromStdString(stage));
   const QColor color = stageColor(stage);
   stage_label_->setStyleSheet(stage.empty() ? QString()
                                             : QStringLiteral("background: %1; color: white; padding: 2px 8px;").arg(color.name()));

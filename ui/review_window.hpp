@@ -101,6 +101,9 @@ class Timeline : public QWidget {
   std::vector<TimelineMarker> markers_;
 };
 
+/// The stage's name beside the playback controls, cut to the room they leave (review_window.cpp).
+class StageLabel;
+
 class ReviewWindow : public QMainWindow {
   Q_OBJECT
 
@@ -186,7 +189,7 @@ class ReviewWindow : public QMainWindow {
   QPushButton* play_button_ = nullptr;
   QComboBox* speed_box_ = nullptr;
   QLabel* time_label_ = nullptr;
-  QLabel* stage_label_ = nullptr;
+  StageLabel* stage_label_ = nullptr;
   QTimer* timer_ = nullptr;
   QString error_;
   QString damage_;

@@ -187,6 +187,19 @@ class ReviewWindowTest : public QObject {
     QVERIFY(std::abs(window.plots()->cursorTime() - 1.0) < 1e-9);
   }
 
+  // The controls, the stage's name and the plots leave the window narrow enough for an 800 px
+  // screen (the stage's name cut to fit, whole in its tooltip).
+  void theWindowFitsAnEightHundredPixelScreen() {
+    ui::ReviewWindow window;
+    QVERIFY(window.open(file_));
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    window.setTime(3.2);
+    QVERIFY2(window.minimumSizeHint().width() <= 800, qPrintable(QString::number(window.minimumSizeHint().width())));
+    window.resize(800, 600);
+    QTRY_COMPARE(window.width(), 800);
+  }
+
   // A phase too short for its label, and a tick or a triangle, are read by pointing at them.
   void timelineTooltipNamesThePhaseAndTheSignalsUnderThePointer() {
     ui::ReviewWindow window;
