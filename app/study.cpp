@@ -420,7 +420,7 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
   }
 }
 
-StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions& options) {
+std::vector<std::filesystem::path> studySessionFiles(const std::filesystem::path& folder) {
   if (!std::filesystem::is_directory(folder)) throw InputError("study: '" + folder.string() + "' is no folder");
   std::vector<std::filesystem::path> files;
   for (const auto& entry : std::filesystem::directory_iterator(folder)) {
@@ -431,6 +431,11 @@ StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions
     }
   }
   std::sort(files.begin(), files.end());
+  return files;
+}
+
+StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions& options) {
+  const std::vector<std::filesystem::path> files = studySessionFiles(folder);
   StudyResult study;
   for (std::size_t i = 0; i < files.size(); ++i) {
     if (options.progress) options.progress(files[i].filename().string(), static_cast<double>(i) / static_cast<double>(files.size()));
@@ -458,10 +463,8 @@ StudyResult analyseStudy(const std::filesystem::path& folder, const StudyOptions
 }
 
 std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const std::filesystem::path& folder,
-                                                 const std::vector<OutputFile>& along) {
-  std::error_code error;
-  std::filesystem::create_directories(folder, error);
-  if (error) throw InputError("--csv-dir: cannot create '" + folder.string() + "': " + error.message());
+                                                 const std::vector<OutputFile>& along,
+                                                 const std::vector<std::pair<std::string, std::filesystem::path>>& inputs) {
   // All tables or, interrupted or refused, none (writeFilesTogether).
   std::vector<OutputFile> outputs;
   const auto write = [&](const std::string& name, const std::string& text) {
@@ -533,6 +536,16 @@ std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const
                  << ',' << csvNumber(c.median_e_coll) << ',' << (c.consistent ? 1 : 0) << "\n";
   }
   write("combinations.csv", combinations.str());
+  std::error_code error;
+  for (const OutputFile& output : outputs) {
+    for (const auto& [option, input] : inputs) {
+      if (!input.empty() && std::filesystem::exists(output.path, error) && std::filesystem::equivalent(input, output.path, error)) {
+        throw InputError("--csv-dir: '" + output.path.string() + "' is the " + option + " file the run reads; give another folder");
+      }
+    }
+  }
+  std::filesystem::create_directories(folder, error);
+  if (error) throw InputError("--csv-dir: cannot create '" + folder.string() + "': " + error.message());
   std::vector<std::filesystem::path> written;
   for (const OutputFile& output : outputs) written.push_back(output.path);
   outputs.insert(outputs.end(), along.begin(), along.end());

@@ -141,6 +141,10 @@ struct StudyResult {
 /// Metrics of one recording, E_coll replayed every `replay_interval` seconds of states.
 ParticipantResult analyseSession(const SessionReader& reader, double replay_interval);
 
+/// The files of `folder` a study reads: those ending in .flexirob, .db, .sqlite or .session,
+/// sorted by name. Throws InputError if the folder does not exist.
+std::vector<std::filesystem::path> studySessionFiles(const std::filesystem::path& folder);
+
 /// Every session database in `folder` (files ending in .flexirob, .db, .sqlite or .session,
 /// sorted by name), analysed, clustered and combined. Unreadable files are listed in `skipped`. Throws
 /// InputError if the folder does not exist or holds no readable session.
@@ -152,9 +156,11 @@ void clusterStudy(StudyResult& study, const StudyOptions& options);
 /// CSV files of every table: participants.csv, phases.csv, clusters_area<k>.csv,
 /// centres_area<k>.csv and combinations.csv, written together with `along` (the plot) through
 /// writeFilesTogether. Returns the CSV files written. Throws InputError if the folder cannot be
-/// created or a file written, or if one of `along` names a table's file.
+/// created or a file written, if one of `along` names a table's file, or if a table's file is one
+/// of `inputs` (option, file: what the run reads), before anything is written.
 std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const std::filesystem::path& folder,
-                                                 const std::vector<OutputFile>& along = {});
+                                                 const std::vector<OutputFile>& along = {},
+                                                 const std::vector<std::pair<std::string, std::filesystem::path>>& inputs = {});
 
 /// A line of text the scatter plot needs (a panel's title, a legend entry, the scale bar's
 /// length). app/ draws no text: the caller prints the labels onto the image (flexirob-cli

@@ -199,8 +199,11 @@ Json reviewStudy(const StudyArguments& arguments) {
   options.success_e_task = arguments.success_e_task;
   options.replay_interval = arguments.replay_interval;
   options.progress = [](const std::string& what, double fraction) { reportProgress("review " + what, fraction); };
-  // A study runs for a while: a --plot path that cannot be written is refused before it.
-  if (!arguments.plot.empty()) checkOutputPath("--plot", arguments.plot);
+  // A study runs for a while: a --plot path that cannot be written, or that names a file the run
+  // reads, is refused before it.
+  std::vector<std::pair<std::string, std::string>> inputs{{"--centres", arguments.centres}};
+  for (const std::filesystem::path& session : app::studySessionFiles(arguments.folder)) inputs.emplace_back("--study", session.string());
+  if (!arguments.plot.empty()) checkOutputPath("--plot", arguments.plot, inputs);
   const app::StudyResult study = app::analyseStudy(arguments.folder, options);
 
   Json out;
@@ -287,7 +290,9 @@ Json reviewStudy(const StudyArguments& arguments) {
   // The tables and the plot together: all of them or none.
   if (!arguments.csv_dir.empty()) {
     Json files = Json::array();
-    for (const auto& file : app::writeStudyCsv(study, arguments.csv_dir, plot)) files.push_back(file.string());
+    std::vector<std::pair<std::string, std::filesystem::path>> read;
+    for (const auto& [option, file] : inputs) read.emplace_back(option, file);
+    for (const auto& file : app::writeStudyCsv(study, arguments.csv_dir, plot, read)) files.push_back(file.string());
     out["csv_files"] = files;
   } else {
     app::writeFilesTogether(plot);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <sqlite3.h>
 
@@ -153,6 +154,38 @@ TEST_F(ReviewCli, StudyCentresThatFitNoSessionAreNamedAndNoBlankPlotIsWritten) {
   EXPECT_NE(result.err.find("note: not clustered: area 7: its centres name an area no session of 'lwr4' taught"), std::string::npos)
       << result.err;
   EXPECT_NE(result.err.find("note: --plot: no area was clustered, so no picture was written"), std::string::npos) << result.err;
+}
+
+// The study's outputs never take the place of what it reads: a participant's recording named as
+// --plot, the --centres file named as --plot or lying where --csv-dir puts a table. Each is
+// refused with one line before anything is written, and the files stay as they were.
+TEST_F(ReviewCli, StudyOutputsNeverReplaceTheSessionsOrTheCentresItReads) {
+  const fs::path alice = writeSession("alice.flexirob", "alice", 0.0);
+  writeSession("bob.flexirob", "bob", 0.3);
+  const fs::path tables = dir_ / "tables";
+  fs::create_directories(tables);
+  const fs::path centres = tables / "centres_area0.csv";
+  const std::string centres_text = "0,L1,0,1.5708,-1.5708,-1.5708,1.5708,1.5708\n";
+  { std::ofstream(centres) << centres_text; }
+  const auto bytes = [](const fs::path& file) {
+    std::ostringstream text;
+    text << std::ifstream(file, std::ios::binary).rdbuf();
+    return text.str();
+  };
+  const std::string alice_bytes = bytes(alice);
+  const std::string study = "review --study " + dir_.string();
+  for (const auto& [arguments, refusal] : std::vector<std::pair<std::string, std::string>>{
+           {" --plot " + alice.string(), "is the --study file the run reads"},
+           {" --centres " + centres.string() + " --plot " + centres.string(), "is the --centres file the run reads"},
+           {" --centres " + centres.string() + " --csv-dir " + tables.string(), "is the --centres file the run reads"}}) {
+    const auto result = runCliBinary(study + arguments);
+    EXPECT_EQ(result.exit_code, 2) << arguments << "\n" << result.err;
+    EXPECT_NE(result.err.find(refusal), std::string::npos) << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  }
+  EXPECT_EQ(bytes(alice), alice_bytes);
+  EXPECT_EQ(bytes(centres), centres_text);
+  EXPECT_FALSE(fs::exists(tables / "participants.csv"));
 }
 
 TEST_F(ReviewCli, RefusesTruncatedForeignAndMissingFilesWithOneLine) {
