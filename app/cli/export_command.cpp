@@ -87,6 +87,28 @@ void describeRefit(const std::unique_ptr<learning::Learner>& learner, Json& entr
   }
 }
 
+void refuseOutputsOverMeshes(const std::vector<std::pair<std::string, std::string>>& outputs, const robot::RobotModel& model,
+                             const robot::Scene& scene) {
+  std::vector<std::pair<std::string, std::filesystem::path>> meshes;
+  for (const robot::Body& body : model.bodies()) {
+    for (const auto* geometries : {&body.visuals, &body.collisions}) {
+      for (const robot::Geometry& geometry : *geometries) {
+        if (!geometry.mesh_file.empty()) meshes.emplace_back("a mesh of the robot's link '" + body.name + "'", geometry.mesh_file);
+      }
+    }
+  }
+  for (const robot::Obstacle& obstacle : scene.obstacles) {
+    if (!obstacle.mesh_file.empty()) meshes.emplace_back("the mesh of the scene's obstacle '" + obstacle.name + "'", obstacle.mesh_file);
+  }
+  std::error_code error;
+  for (const auto& [option, path] : outputs) {
+    if (path.empty() || !std::filesystem::exists(path, error)) continue;
+    for (const auto& [what, mesh] : meshes) {
+      if (std::filesystem::equivalent(path, mesh, error)) throw InputError(option + ": '" + path + "' is " + what + "; give another file");
+    }
+  }
+}
+
 Json exportSession(const ExportOptions& options) {
   const std::vector<std::pair<std::string, std::string>> outputs = {
       {"--samples", options.samples}, {"--stream", options.stream}, {"--model", options.model}, {"--graph", options.graph}};
@@ -162,6 +184,9 @@ Json exportSession(const ExportOptions& options) {
       model = std::make_unique<robot::RobotModel>(loadSessionRobot(teaching.robot, teaching.robot_urdf, teaching.tip, options.robot_file));
       scene = std::make_unique<robot::Scene>(loadSessionScene(teaching.scene, teaching.scene_text, options.scene_file));
       world = std::make_unique<robot::CollisionWorld>(*model, *scene);
+      // The meshes the robot and the scene read are inputs too: an output in their place would
+      // replace a cell's geometry with a table.
+      refuseOutputsOverMeshes(outputs, *model, *scene);
     }
     const app::ConfigurationStream stream = app::configurationStream(
         reader, options.sample_period, world.get(), [](double fraction) { reportProgress("export: replaying the configuration stage", fraction); });

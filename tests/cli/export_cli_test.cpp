@@ -211,6 +211,27 @@ TEST_F(ExportCli, BadRequestsAreRefusedWithOneLineAndWriteNothing) {
   EXPECT_EQ(discarded.exit_code, 0) << discarded.err;
 }
 
+// The robot's meshes are read for the stream's contacts: an output named in their place is
+// refused, and the mesh stays as it was (--robot names a copy of the arm, as for a moved cell).
+TEST_F(ExportCli, AnOutputInPlaceOfAMeshTheRobotReadsIsRefused) {
+  const fs::path robot_dir = scratchDir() / "robot-copy" / "lwr4";
+  fs::remove_all(robot_dir.parent_path());
+  fs::create_directories(robot_dir.parent_path());
+  fs::copy(resolveRobotPath("lwr4").parent_path(), robot_dir, fs::copy_options::recursive);
+  const fs::path mesh = robot_dir / "meshes" / "link1_collision.stl";
+  ASSERT_TRUE(fs::exists(mesh));
+  const std::string mesh_bytes = fileBytes(mesh);
+  const fs::path stream = scratchDir() / "over-mesh-stream.csv";
+  const auto result = runCliBinary("export --session " + session_->string() + " --robot " + (robot_dir / "lwr4.urdf").string() +
+                                   " --stream " + stream.string() + " --graph " + mesh.string());
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("is a mesh of the robot's link 'link1'"), std::string::npos) << result.err;
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_EQ(fileBytes(mesh), mesh_bytes);
+  EXPECT_FALSE(fs::exists(stream));
+  fs::remove_all(robot_dir.parent_path());
+}
+
 // A copy of the session edited with `sql`, handed to `command` with `--session COPY` and an
 // output `output_option NAME`: refused in one line naming `reason`, the output not written.
 auto expectAnEditedCopyRefused(const fs::path& session, const std::string& name, const std::string& sql, const std::string& command,
