@@ -232,7 +232,7 @@ std::pair<double, double> SessionReader::recordedTimeSpan() const {
     if (low.step() && !low.columnIsNull(0)) first = std::min(first.value_or(low.columnDouble(0)), low.columnDouble(0));
     if (high.step() && !high.columnIsNull(0)) last = std::max(last.value_or(high.columnDouble(0)), high.columnDouble(0));
   };
-  for (const std::string table : {"stage", "signal", "area", "sample", "collision"}) {
+  for (const std::string table : {"stage", "signal", "area", "sample", "collision", "model", "itm"}) {
     extend("SELECT min(t) FROM " + table, "SELECT max(t) FROM " + table);
   }
   extend("SELECT min(t_start) FROM trajectory", "SELECT max(t_end) FROM trajectory");

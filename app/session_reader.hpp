@@ -48,7 +48,7 @@ class SessionReader {
   double endTime() const { return end_time_; }
   /// [s] first and last time the session records anything: its states' times, or, where it holds
   /// no state (none recorded, or the rows deleted since), those of its events (stages, signals,
-  /// areas, samples, motions, contacts); 0, 0 if it holds neither.
+  /// areas, samples, motions, contacts, models, graphs); 0, 0 if it holds neither.
   std::pair<double, double> recordedTimeSpan() const;
   /// States with t0 <= time <= t1 in time order; every `stride`-th row only (stride >= 1), for
   /// plots of long ranges.

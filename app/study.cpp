@@ -640,18 +640,45 @@ ScatterImage renderMdsScatter(const StudyResult& study, int width, int height) {
   constexpr int kLegendColumn = 96;  // one entry of a row
   const Rgb frame{160, 160, 160};
   const Rgb ink{40, 40, 40};
+  // Each panel's legend: one entry per used cluster and the ring, in columns as wide as the
+  // longest entry (about 8 px a character at the legend's 14 px, so that long cluster names are
+  // not cut to look alike), then the scale bar on a row of its own. Every frame ends where the
+  // tallest legend begins, so that the panels line up.
+  struct Legend {
+    std::vector<std::size_t> used;  // clusters with members
+    int column_width = 0;
+    int columns = 1;
+    int rows = 0;
+  };
+  const auto clusterName = [](const AreaClustering& c, std::size_t k) {
+    return k < c.names.size() ? c.names[k] : "cluster " + std::to_string(k + 1);
+  };
+  std::vector<Legend> legends;
+  int legend_rows = 0;
+  for (const AreaClustering& c : study.clusterings) {
+    Legend legend;
+    std::size_t longest = std::string("centre").size();
+    for (std::size_t k = 0; k < c.kmeans.sizes.size(); ++k) {
+      if (c.kmeans.sizes[k] == 0) continue;
+      legend.used.push_back(k);
+      longest = std::max(longest, clusterName(c, k).size() + 2 + std::to_string(c.kmeans.sizes[k]).size());
+    }
+    const int inner = std::max(1, panel_width - 2 * kMargin);
+    legend.column_width = std::min(inner, std::max(kLegendColumn, 18 + 8 * static_cast<int>(longest)));
+    legend.columns = std::max(1, inner / legend.column_width);
+    const auto entries = static_cast<int>(legend.used.size()) + 1;
+    legend.rows = (entries + legend.columns - 1) / legend.columns + 1;
+    legend_rows = std::max(legend_rows, legend.rows);
+    legends.push_back(std::move(legend));
+  }
   for (int p = 0; p < static_cast<int>(study.clusterings.size()); ++p) {
     const AreaClustering& c = study.clusterings[static_cast<std::size_t>(p)];
     const int x0 = p * panel_width + kMargin;
     const int x1 = (p + 1) * panel_width - kMargin;
-    // The legend: one entry per used cluster, the ring, then the scale bar on a row of its own.
-    std::vector<std::size_t> used;
-    for (std::size_t k = 0; k < c.kmeans.sizes.size(); ++k) {
-      if (c.kmeans.sizes[k] > 0) used.push_back(k);
-    }
-    const int columns = std::max(1, (x1 - x0) / kLegendColumn);
-    const auto entries = static_cast<int>(used.size()) + 1;
-    const int legend_rows = (entries + columns - 1) / columns + 1;
+    const Legend& legend = legends[static_cast<std::size_t>(p)];
+    const std::vector<std::size_t>& used = legend.used;
+    const int column_width = legend.column_width;
+    const int columns = legend.columns;
     const int y0 = kMargin + kTitleBand;
     const int y1 = height - kMargin - legend_rows * kLegendLine;
     if (y1 - y0 < 16 || x1 - x0 < 16) continue;  // too small a picture for this panel's plot
@@ -660,9 +687,13 @@ ScatterImage renderMdsScatter(const StudyResult& study, int width, int height) {
           << used.size() << (used.size() == 1 ? " cluster" : " clusters");
     image.labels.push_back({title.str(), x0 - 4, kMargin + kTitleBand - 9, x1 - x0 + 8});
     canvas.rectangle(x0 - 4, y0 - 4, x1 + 4, y1 + 4, frame);
-    // One scale for both axes (MDS distances are meaningful), fitted to points and centres.
-    Eigen::MatrixXd all(2, c.mds.cols() + c.centre_mds.cols());
-    all << c.mds, c.centre_mds;
+    // One scale for both axes (MDS distances are meaningful), fitted to what is drawn: the
+    // postures and the used centres (an unused seed far off would leave them in one corner).
+    Eigen::MatrixXd all(2, c.mds.cols() + static_cast<Eigen::Index>(used.size()));
+    all.leftCols(c.mds.cols()) = c.mds;
+    for (std::size_t u = 0; u < used.size(); ++u) {
+      all.col(c.mds.cols() + static_cast<Eigen::Index>(u)) = c.centre_mds.col(static_cast<Eigen::Index>(used[u]));
+    }
     const Eigen::Vector2d low = all.rowwise().minCoeff();
     const Eigen::Vector2d high = all.rowwise().maxCoeff();
     // A single posture, or postures all alike, span nothing: a tenth of a radian is drawn as the
@@ -683,19 +714,19 @@ ScatterImage renderMdsScatter(const StudyResult& study, int width, int height) {
                   kPalette[k % kPalette.size()]);
     }
     const auto entry_at = [&](int index) {
-      return std::pair<int, int>{x0 + (index % columns) * kLegendColumn, y1 + 4 + (index / columns + 1) * kLegendLine};
+      return std::pair<int, int>{x0 + (index % columns) * column_width, y1 + 4 + (index / columns + 1) * kLegendLine};
     };
     for (std::size_t e = 0; e < used.size(); ++e) {
       const std::size_t k = used[e];
       const auto [x, baseline] = entry_at(static_cast<int>(e));
       canvas.disc(x + 5, baseline - 5, 4.0, kPalette[k % kPalette.size()]);
-      const std::string name = k < c.names.size() ? c.names[k] : "cluster " + std::to_string(k + 1);
-      image.labels.push_back({name + ": " + std::to_string(c.kmeans.sizes[k]), x + 14, baseline, kLegendColumn - 18});
+      const std::string name = clusterName(c, k);
+      image.labels.push_back({name + ": " + std::to_string(c.kmeans.sizes[k]), x + 14, baseline, column_width - 18});
     }
     {
       const auto [x, baseline] = entry_at(static_cast<int>(used.size()));
       canvas.ring(x + 5, baseline - 5, 4.5, 1.5, ink);
-      image.labels.push_back({"centre", x + 14, baseline, kLegendColumn - 18});
+      image.labels.push_back({"centre", x + 14, baseline, column_width - 18});
     }
     // The scale bar: MDS keeps the distances between postures (Euclidean, in joint space).
     const double bar = roundLength(0.3 * (x1 - x0) / scale);

@@ -81,7 +81,7 @@ Json review(const std::string& file) {
   const auto [first_time, last_time] = reader.recordedTimeSpan();
   out["duration_s"] = last_time - first_time;
   out["states"] = reader.stateCount();
-  if (reader.stateCount() == 0 && last_time > first_time) {
+  if (reader.stateCount() == 0) {
     std::cerr << "note: the session holds no robot states (none recorded, or deleted since): duration_s spans its events, and no posture is replayed\n";
   }
 
@@ -173,7 +173,7 @@ Json review(const std::string& file) {
   // E_coll by replay: the recorded postures against the recorded scene in the collision world.
   const app::ParticipantResult replayed = app::analyseSession(reader, 0.01);
   out["e_coll_replayed"] = replayed.e_coll ? Json(*replayed.e_coll) : Json(nullptr);
-  out["colliding_samples_replayed"] = replayed.colliding_samples;
+  out["colliding_samples_replayed"] = replayed.e_coll ? Json(replayed.colliding_samples) : Json(nullptr);
   out["replayed_samples"] = replayed.replayed_samples;
   if (!replayed.replay_note.empty()) out["replay_note"] = replayed.replay_note;
   return out;
