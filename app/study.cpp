@@ -318,19 +318,26 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
   study.combinations.clear();
   for (auto& participant : study.participants) participant.cluster.clear();
   // One robot's postures only: the robot most participants used, ties to the first in file order.
+  // A robot is known by its name, a URDF file by its name without the folder and ".urdf": the
+  // same arm built in ("lwr4"), copied into a cell ("/cell/lwr4.urdf") or the cell moved between
+  // participants ("/old/cell/lwr4.urdf", "/new/cell/lwr4.urdf") is one robot.
+  const auto robotKey = [](const std::string& robot) {
+    const std::filesystem::path file(robot);
+    return file.extension() == ".urdf" ? file.stem().string() : robot;
+  };
   study.not_clustered.clear();
   std::map<std::string, int> per_robot;
-  for (const auto& participant : study.participants) ++per_robot[participant.robot];
+  for (const auto& participant : study.participants) ++per_robot[robotKey(participant.robot)];
   std::string robot;
   int most = 0;
   for (const auto& participant : study.participants) {
-    if (per_robot[participant.robot] > most) {
-      most = per_robot[participant.robot];
+    if (per_robot[robotKey(participant.robot)] > most) {
+      most = per_robot[robotKey(participant.robot)];
       robot = participant.robot;
     }
   }
   for (const auto& participant : study.participants) {
-    if (participant.robot != robot) {
+    if (robotKey(participant.robot) != robotKey(robot)) {
       study.not_clustered.push_back(participant.file + ": robot '" + participant.robot + "', the study's postures are of '" + robot + "'");
     }
   }
@@ -353,7 +360,7 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
     std::vector<std::size_t> members;
     for (std::size_t i = 0; i < study.participants.size(); ++i) {
       const auto found = study.participants[i].q_fixed.find(seeds.area);
-      if (study.participants[i].robot == robot && found != study.participants[i].q_fixed.end() && found->second.size() >= joints) {
+      if (robotKey(study.participants[i].robot) == robotKey(robot) && found != study.participants[i].q_fixed.end() && found->second.size() >= joints) {
         members.push_back(i);
       }
     }
@@ -363,7 +370,7 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
       Eigen::Index posture_joints = 0;
       for (const auto& participant : study.participants) {
         const auto found = participant.q_fixed.find(seeds.area);
-        if (participant.robot != robot || found == participant.q_fixed.end()) continue;
+        if (robotKey(participant.robot) != robotKey(robot) || found == participant.q_fixed.end()) continue;
         ++taught;
         posture_joints = found->second.size();
       }
