@@ -175,7 +175,12 @@ Json review(const std::string& file) {
   out["e_coll_replayed"] = replayed.e_coll ? Json(*replayed.e_coll) : Json(nullptr);
   out["colliding_samples_replayed"] = replayed.e_coll ? Json(replayed.colliding_samples) : Json(nullptr);
   out["replayed_samples"] = replayed.replayed_samples;
-  if (!replayed.replay_note.empty()) out["replay_note"] = replayed.replay_note;
+  if (!replayed.replay_note.empty()) {
+    out["replay_note"] = replayed.replay_note;
+    // Said where a person reads, as the missing states are: a null E_coll in the JSON alone
+    // would pass unnoticed.
+    if (reader.stateCount() > 0) std::cerr << "note: E_coll was not replayed: " << replayed.replay_note << "\n";
+  }
   return out;
 }
 
