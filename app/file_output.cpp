@@ -72,6 +72,11 @@ bool writtenInPlace(const std::filesystem::path& file) {
   return S_ISFIFO(status.st_mode) || isNull(status) || (S_ISCHR(status.st_mode) && isTerminal(status.st_rdev));
 }
 
+bool isExistingFile(const std::filesystem::path& output, const std::filesystem::path& input) {
+  std::error_code error;
+  return !output.empty() && !input.empty() && std::filesystem::exists(output, error) && std::filesystem::equivalent(input, output, error);
+}
+
 bool isNullDevice(const std::filesystem::path& file) {
   struct stat output {};
   return ::stat(file.c_str(), &output) == 0 && isNull(output);

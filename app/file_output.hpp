@@ -38,6 +38,10 @@ std::string sameFileKey(const std::filesystem::path& path);
 /// refuses them).
 bool writtenInPlace(const std::filesystem::path& file);
 
+/// True where `output` already exists and is the file `input` names (through links, or by
+/// another spelling): writing it would replace what a run reads.
+bool isExistingFile(const std::filesystem::path& output, const std::filesystem::path& input);
+
 /// True where `file` is the null device (/dev/null): it takes any number of outputs.
 bool isNullDevice(const std::filesystem::path& file);
 

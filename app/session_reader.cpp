@@ -225,7 +225,8 @@ std::optional<StateRecord> SessionReader::stateAt(double time) const {
 std::pair<double, double> SessionReader::recordedTimeSpan() const {
   if (state_count_ > 0) return {start_time_, end_time_};
   std::optional<double> first, last;
-  // Each table's own ends: one aggregate per query answers from its index or a short scan.
+  // Each table's own ends, one aggregate per query: from the index where the table has one on t
+  // (collision), else by one pass over a table of events, not of states.
   const auto extend = [&](const std::string& low_query, const std::string& high_query) {
     SqliteStatement low(impl_->db, low_query);
     SqliteStatement high(impl_->db, high_query);

@@ -220,6 +220,7 @@ ParticipantResult analyseSession(const SessionReader& reader, double replay_inte
   result.file = reader.file().filename().string();
   result.participant = meta.participant.empty() ? reader.file().stem().string() : meta.participant;
   result.robot = meta.robot_name;
+  result.robot_urdf = meta.robot_urdf;
   result.scene = meta.scene_name;
   result.closed_cleanly = !reader.meta("end_time_utc").empty();
   const auto [first_time, last_time] = reader.recordedTimeSpan();
@@ -318,26 +319,31 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
   study.combinations.clear();
   for (auto& participant : study.participants) participant.cluster.clear();
   // One robot's postures only: the robot most participants used, ties to the first in file order.
-  // A robot is known by its name, a URDF file by its name without the folder and ".urdf": the
-  // same arm built in ("lwr4"), copied into a cell ("/cell/lwr4.urdf") or the cell moved between
-  // participants ("/old/cell/lwr4.urdf", "/new/cell/lwr4.urdf") is one robot.
-  const auto robotKey = [](const std::string& robot) {
-    const std::filesystem::path file(robot);
-    return file.extension() == ".urdf" ? file.stem().string() : robot;
+  // A robot is known by the URDF the recording stores: the same arm built in ("lwr4"), copied
+  // into a cell ("/cell/lwr4.urdf") or the cell moved between participants is one robot, and two
+  // arms whose files share a name are two. A recording without the copy (older ones) is known
+  // by the robot's name, a URDF file by its name without folder and ".urdf".
+  const auto robotKey = [](const ParticipantResult& participant) {
+    if (!participant.robot_urdf.empty()) return "urdf:" + participant.robot_urdf;
+    const std::filesystem::path file(participant.robot);
+    return "name:" + (file.extension() == ".urdf" ? file.stem().string() : participant.robot);
   };
   study.not_clustered.clear();
   std::map<std::string, int> per_robot;
-  for (const auto& participant : study.participants) ++per_robot[robotKey(participant.robot)];
+  for (const auto& participant : study.participants) ++per_robot[robotKey(participant)];
   std::string robot;
+  std::string robot_key;
   int most = 0;
   for (const auto& participant : study.participants) {
-    if (per_robot[robotKey(participant.robot)] > most) {
-      most = per_robot[robotKey(participant.robot)];
+    if (per_robot[robotKey(participant)] > most) {
+      most = per_robot[robotKey(participant)];
       robot = participant.robot;
+      robot_key = robotKey(participant);
     }
   }
+  const auto ofTheStudysRobot = [&](const ParticipantResult& participant) { return robotKey(participant) == robot_key; };
   for (const auto& participant : study.participants) {
-    if (robotKey(participant.robot) != robotKey(robot)) {
+    if (!ofTheStudysRobot(participant)) {
       study.not_clustered.push_back(participant.file + ": robot '" + participant.robot + "', the study's postures are of '" + robot + "'");
     }
   }
@@ -360,7 +366,7 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
     std::vector<std::size_t> members;
     for (std::size_t i = 0; i < study.participants.size(); ++i) {
       const auto found = study.participants[i].q_fixed.find(seeds.area);
-      if (robotKey(study.participants[i].robot) == robotKey(robot) && found != study.participants[i].q_fixed.end() && found->second.size() >= joints) {
+      if (ofTheStudysRobot(study.participants[i]) && found != study.participants[i].q_fixed.end() && found->second.size() >= joints) {
         members.push_back(i);
       }
     }
@@ -370,7 +376,7 @@ void clusterStudy(StudyResult& study, const StudyOptions& options) {
       Eigen::Index posture_joints = 0;
       for (const auto& participant : study.participants) {
         const auto found = participant.q_fixed.find(seeds.area);
-        if (robotKey(participant.robot) != robotKey(robot) || found == participant.q_fixed.end()) continue;
+        if (!ofTheStudysRobot(participant) || found == participant.q_fixed.end()) continue;
         ++taught;
         posture_joints = found->second.size();
       }
@@ -543,14 +549,14 @@ std::vector<std::filesystem::path> writeStudyCsv(const StudyResult& study, const
                  << ',' << csvNumber(c.median_e_coll) << ',' << (c.consistent ? 1 : 0) << "\n";
   }
   write("combinations.csv", combinations.str());
-  std::error_code error;
   for (const OutputFile& output : outputs) {
     for (const auto& [option, input] : inputs) {
-      if (!input.empty() && std::filesystem::exists(output.path, error) && std::filesystem::equivalent(input, output.path, error)) {
+      if (isExistingFile(output.path, input)) {
         throw InputError("--csv-dir: '" + output.path.string() + "' is the " + option + " file the run reads; give another folder");
       }
     }
   }
+  std::error_code error;
   std::filesystem::create_directories(folder, error);
   if (error) throw InputError("--csv-dir: cannot create '" + folder.string() + "': " + error.message());
   std::vector<std::filesystem::path> written;

@@ -71,6 +71,7 @@ struct ParticipantResult {
   std::string participant;  ///< the recording's participant, or its file name without extension
   std::string file;         ///< the recording's file name
   std::string robot, scene;
+  std::string robot_urdf;  ///< the URDF text the recording stores (empty in older recordings)
   bool closed_cleanly = false;
   double duration_s = 0.0;
   int areas = 0;

@@ -412,14 +412,16 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
       }
       events->itm = std::move(kept);
     }
+    // The states' times; a recording without states (none recorded, or deleted since) spans its events.
+    const std::pair<double, double> span = reader->recordedTimeSpan();
     const std::vector<app::StageRecord> stages = reader->stages();
     std::vector<StageBand> bands;
     for (std::size_t i = 0; i < stages.size(); ++i) {
-      const double t1 = i + 1 < stages.size() ? stages[i + 1].time : reader->endTime();
+      const double t1 = i + 1 < stages.size() ? stages[i + 1].time : span.second;
       bands.push_back({stages[i].time, std::max(t1, stages[i].time), bandLabel(stages[i])});
     }
-    const double t0 = reader->startTime();
-    const double t1 = std::max(reader->endTime(), t0 + 1e-3);
+    const double t0 = span.first;
+    const double t1 = std::max(span.second, t0 + 1e-3);
     std::vector<TimelineMarker> markers;
     for (const app::SignalRecord& signal : events->signals) {
       const bool trigger = signal.kind == app::SignalKind::Trigger;
@@ -476,6 +478,7 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
     plots_->taskErrorPlot()->setSeriesName(0, QStringLiteral("|FK(q_cmd) - x|"));
 
     reader_ = std::move(reader);
+    span_ = span;
     model_ = std::move(model);
     events_ = std::move(events);
     shown_samples_ = shown_areas_ = shown_trajectories_ = static_cast<std::size_t>(-1);
@@ -521,7 +524,7 @@ bool ReviewWindow::open(const std::filesystem::path& file) {
 
 void ReviewWindow::setTime(double time) {
   if (!reader_) return;
-  time = std::clamp(time, reader_->startTime(), std::max(reader_->startTime(), reader_->endTime()));
+  time = std::clamp(time, span_.first, std::max(span_.first, span_.second));
   time_ = time;
   if (const std::optional<app::StateRecord> state = reader_->stateAt(time)) {
     const Eigen::VectorXd q = state->qVector();
@@ -689,7 +692,7 @@ void ReviewWindow::updateConfidence(bool force) {
 }
 
 void ReviewWindow::updateLabels() {
-  time_label_->setText(QStringLiteral("t = %1 s / %2 s").arg(time_, 0, 'f', 3).arg(reader_ ? reader_->endTime() : 0.0, 0, 'f', 3));
+  time_label_->setText(QStringLiteral("t = %1 s / %2 s").arg(time_, 0, 'f', 3).arg(reader_ ? span_.second : 0.0, 0, 'f', 3));
   const std::string stage = stageAt(time_);
   stage_label_->setStage(QString::fromStdString(stage));
   const QColor color = stageColor(stage);
@@ -707,8 +710,8 @@ std::string ReviewWindow::stageAt(double time) const {
 void ReviewWindow::play() {
   if (!reader_) return;
   // At an end, playing starts again from the other end.
-  if (speed_ > 0 && time_ >= reader_->endTime()) setTime(reader_->startTime());
-  if (speed_ < 0 && time_ <= reader_->startTime()) setTime(reader_->endTime());
+  if (speed_ > 0 && time_ >= span_.second) setTime(span_.first);
+  if (speed_ < 0 && time_ <= span_.first) setTime(span_.second);
   last_tick_ms_ = QDateTime::currentMSecsSinceEpoch();
   timer_->start();
   play_button_->setText(QStringLiteral("Pause"));
@@ -757,8 +760,8 @@ void ReviewWindow::keyPressEvent(QKeyEvent* event) {
     case Qt::Key_Space: playing() ? pause() : play(); break;
     case Qt::Key_Left: stepFrames(by_second ? -frames_per_second : -1); break;
     case Qt::Key_Right: stepFrames(by_second ? frames_per_second : 1); break;
-    case Qt::Key_Home: pause(); setTime(reader_->startTime()); break;
-    case Qt::Key_End: pause(); setTime(reader_->endTime()); break;
+    case Qt::Key_Home: pause(); setTime(span_.first); break;
+    case Qt::Key_End: pause(); setTime(span_.second); break;
     default: QMainWindow::keyPressEvent(event); return;
   }
   event->accept();
@@ -769,7 +772,7 @@ void ReviewWindow::advance() {
   const double elapsed = static_cast<double>(now - last_tick_ms_) * 1e-3;
   last_tick_ms_ = now;
   setTime(time_ + speed_ * elapsed);
-  if ((speed_ > 0 && time_ >= reader_->endTime()) || (speed_ < 0 && time_ <= reader_->startTime())) pause();
+  if ((speed_ > 0 && time_ >= span_.second) || (speed_ < 0 && time_ <= span_.first)) pause();
 }
 
 }  // namespace flexirob::ui

@@ -22,6 +22,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "render/world.hpp"
@@ -174,6 +175,7 @@ class ReviewWindow : public QMainWindow {
 
   std::unique_ptr<render::World> world_;
   std::unique_ptr<app::SessionReader> reader_;
+  std::pair<double, double> span_{0.0, 0.0};  ///< [s] first and last time the recording holds (SessionReader::recordedTimeSpan)
   std::unique_ptr<robot::RobotModel> model_;
   std::unique_ptr<robot::Kinematics> kinematics_;
   /// The recorded scene with the recorded arm: which links touch something in the posture shown

@@ -96,7 +96,7 @@ void checkOutputPath(const std::string& option, const std::string& path,
   }
   app::refuseStandardStreams(option, path);
   for (const auto& [input_option, input] : inputs) {
-    if (!input.empty() && fs::exists(path, error) && fs::equivalent(input, path, error)) {
+    if (app::isExistingFile(path, input)) {
       throw InputError(option + ": '" + path + "' is the " + input_option + " file the run reads; give another file");
     }
   }

@@ -154,7 +154,8 @@ robot::RobotModel loadRobotNoting(const std::string& name_or_path, const std::st
 /// file is read as before; a file that now differs from the stored copy is said in a "note:" line.
 /// `named` is a file given on the command line (--robot, --scene) for a session whose files moved
 /// since teaching, so that the stored copy's paths name files that are gone: it is read in place
-/// of the stored copy, with a note where the two differ other than in where their files lie.
+/// of the stored copy, with a note where the two differ (a scene other than in where the files it
+/// names lie; a URDF in any way).
 robot::RobotModel loadSessionRobot(const std::string& reference, const std::string& stored_urdf, const std::string& tip,
                                    const std::string& named = "");
 robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text, const std::string& named = "");

@@ -100,11 +100,9 @@ void refuseOutputsOverMeshes(const std::vector<std::pair<std::string, std::strin
   for (const robot::Obstacle& obstacle : scene.obstacles) {
     if (!obstacle.mesh_file.empty()) meshes.emplace_back("the mesh of the scene's obstacle '" + obstacle.name + "'", obstacle.mesh_file);
   }
-  std::error_code error;
   for (const auto& [option, path] : outputs) {
-    if (path.empty() || !std::filesystem::exists(path, error)) continue;
     for (const auto& [what, mesh] : meshes) {
-      if (std::filesystem::equivalent(path, mesh, error)) throw InputError(option + ": '" + path + "' is " + what + "; give another file");
+      if (app::isExistingFile(path, mesh)) throw InputError(option + ": '" + path + "' is " + what + "; give another file");
     }
   }
 }

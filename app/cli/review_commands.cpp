@@ -4,6 +4,7 @@
 // `review --study DIR`: every session in DIR: per-participant table, k-means clusters of the
 // q_fixed postures per area (App. B.4), MDS coordinates, the consistent combinations (Tab. 4.1);
 // --csv-dir writes every table as CSV, --plot the MDS scatter plot as PNG (docs/STUDY.md).
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -141,7 +142,7 @@ Json review(const std::string& file) {
 
   // Time per phase (Sect. 4.3.3: efficiency).
   Json phases = Json::object();
-  for (const auto& [phase, seconds] : app::timePerPhase(reader.stages(), reader.endTime())) phases[phase] = seconds;
+  for (const auto& [phase, seconds] : app::timePerPhase(reader.stages(), last_time)) phases[phase] = seconds;
   out["time_per_phase_s"] = phases;
   std::int64_t triggers = 0;
   std::int64_t buttons = 0;
@@ -207,7 +208,10 @@ Json reviewStudy(const StudyArguments& arguments) {
   // A study runs for a while: a --plot path that cannot be written, or that names a file the run
   // reads, is refused before it.
   std::vector<std::pair<std::string, std::string>> inputs{{"--centres", arguments.centres}};
-  for (const std::filesystem::path& session : app::studySessionFiles(arguments.folder)) inputs.emplace_back("--study", session.string());
+  // The sessions and the logs SQLite keeps beside them.
+  for (const std::filesystem::path& session : app::studySessionFiles(arguments.folder)) {
+    for (const char* suffix : {"", "-wal", "-shm", "-journal"}) inputs.emplace_back("--study", session.string() + suffix);
+  }
   if (!arguments.plot.empty()) checkOutputPath("--plot", arguments.plot, inputs);
   const app::StudyResult study = app::analyseStudy(arguments.folder, options);
 
@@ -281,7 +285,14 @@ Json reviewStudy(const StudyArguments& arguments) {
   const bool plotted = !arguments.plot.empty() && !study.clusterings.empty();
   if (!arguments.plot.empty() && !plotted) std::cerr << "note: --plot: no area was clustered, so no picture was written (a file already there is left as it was)\n";
   if (plotted) {
-    const app::ScatterImage scatter = app::renderMdsScatter(study, 360 * std::max<int>(1, static_cast<int>(study.clusterings.size())), 440);
+    // Room for the legend below each frame: a row per used cluster at most, and the ring's and
+    // the scale bar's.
+    std::size_t most_used = 0;
+    for (const app::AreaClustering& clustering : study.clusterings) {
+      most_used = std::max<std::size_t>(most_used, std::count_if(clustering.kmeans.sizes.begin(), clustering.kmeans.sizes.end(), [](int size) { return size > 0; }));
+    }
+    const int height = std::min(8192, 360 + 18 * static_cast<int>(most_used + 2));
+    const app::ScatterImage scatter = app::renderMdsScatter(study, 360 * std::max<int>(1, static_cast<int>(study.clusterings.size())), height);
     render::Image image;
     image.width = scatter.width;
     image.height = scatter.height;

@@ -380,8 +380,9 @@ TEST(StudyClusters, ClustersTheRobotMostParticipantsUsedAndNamesTheOthers) {
 // Centres of an area no session taught, or of more joints than the postures hold (given with
 // --centres for another arm): nothing to cluster, and the study says why for each area.
 // One arm under several names: built in, as a copy in a cell's folder, and the cell moved to
-// another folder between participants. Their postures are one robot's and are clustered
-// together against Tab. B.1's LWR IV centres.
+// another folder between participants; the URDF each recording stores is the same, so their
+// postures are one robot's. Another arm whose file has the same name is another robot, and
+// recordings without the stored URDF are told apart by the file's name.
 TEST(StudyClusters, TheSameArmByNameOrByItsUrdfFileInAnyFolderIsOneRobot) {
   const auto seeds = thesisClusterSeeds();
   const auto& L = seeds[0].centres;
@@ -391,16 +392,27 @@ TEST(StudyClusters, TheSameArmByNameOrByItsUrdfFileInAnyFolderIsOneRobot) {
                         participant("p2", near(L[0], -0.1), near(R[5], 0.02), 0.006, 0),
                         participant("p3", near(L[2], 0.0), near(R[0], 0.0), 0.004, 0),
                         participant("p4", near(L[0], 0.0), near(R[5], 0.0), 0.009, 0)};
+  const std::string lwr4_urdf = "<robot name=\"lwr4\">...</robot>";
   study.participants[0].robot = "lwr4";
   study.participants[1].robot = "/old/cell/lwr4.urdf";
   study.participants[2].robot = "/new/cell/lwr4.urdf";
-  study.participants[3].robot = "/new/cell/other_arm.urdf";
+  study.participants[3].robot = "/other/cell/lwr4.urdf";
+  for (int i = 0; i < 3; ++i) study.participants[static_cast<std::size_t>(i)].robot_urdf = lwr4_urdf;
+  study.participants[3].robot_urdf = "<robot name=\"another_arm\">...</robot>";
   clusterStudy(study, StudyOptions{});
   ASSERT_EQ(study.clusterings.size(), 2U);
   EXPECT_EQ(study.clusterings[0].participants, (std::vector<std::string>{"p1", "p2", "p3"}));
   ASSERT_EQ(study.not_clustered.size(), 1U);
-  EXPECT_EQ(study.not_clustered[0].rfind("p4.db: robot '/new/cell/other_arm.urdf'", 0), 0U) << study.not_clustered[0];
+  EXPECT_EQ(study.not_clustered[0].rfind("p4.db: robot '/other/cell/lwr4.urdf'", 0), 0U) << study.not_clustered[0];
   EXPECT_TRUE(study.clustering_note.empty()) << study.clustering_note;
+
+  // Without stored URDFs: the file's name decides.
+  for (auto& p : study.participants) p.robot_urdf.clear();
+  study.participants[3].robot = "/new/cell/other_arm.urdf";
+  clusterStudy(study, StudyOptions{});
+  EXPECT_EQ(study.clusterings.at(0).participants, (std::vector<std::string>{"p1", "p2", "p3"}));
+  ASSERT_EQ(study.not_clustered.size(), 1U);
+  EXPECT_EQ(study.not_clustered[0].rfind("p4.db: robot '/new/cell/other_arm.urdf'", 0), 0U) << study.not_clustered[0];
 }
 
 TEST(StudyClusters, SaysWhichGivenCentresFitNoSession) {

@@ -15,6 +15,7 @@
 #include "app/session_reader.hpp"
 #include "app/session_schema.hpp"
 
+#include <QStatusBar>
 #include <sqlite3.h>
 #include "ui/stage_panel.hpp"
 #include "app/session_recorder.hpp"
@@ -385,6 +386,26 @@ class ReviewWindowTest : public QObject {
     window.setTime(0.5);
     QCOMPARE(window.shownPosture().size(), 7);
     QVERIFY(std::abs(window.shownPosture()[0] - postureAt(*window.robotModel(), 0.5)[0]) < 1e-3);
+  }
+
+  // A recording whose states were deleted spans its events: its phases on the timeline, a scrub
+  // through them, and the status bar saying why the arm does not move.
+  void aRecordingWithoutStatesSpansItsEvents() {
+    const auto cut = std::filesystem::path(dir_.path().toStdString()) / "no_states.db";
+    writeRecording(cut);
+    {
+      app::SqliteDatabase database(cut.string(), SQLITE_OPEN_READWRITE);
+      database.exec("DELETE FROM state");
+    }
+    ui::ReviewWindow window;
+    QVERIFY2(window.open(cut), qPrintable(window.errorString()));
+    const ui::Timeline* timeline = window.timeline();
+    QVERIFY2(timeline->t1() >= 4.0, qPrintable(QString::number(timeline->t1())));
+    QCOMPARE(timeline->describeAt(timeline->xOf(3.2)), QStringLiteral("CONFIGURATION / RECORDING: 2.500 s to 4.000 s (1.500 s)"));
+    window.setTime(3.0);
+    QCOMPARE(window.time(), 3.0);
+    QVERIFY2(window.statusBar()->currentMessage().contains(QStringLiteral("no robot states")),
+             qPrintable(window.statusBar()->currentMessage()));
   }
 
   // The states of a 7-joint arm under the name of the 9-joint one: refused, not replayed as a
