@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -204,6 +205,18 @@ Eigen::VectorXd near(const Eigen::VectorXd& seed, double offset) {
   return q;
 }
 
+// Four participants near Tab. B.1's centres: the first, second and fourth in L1-R6, the third
+// in L3-R1.
+std::vector<ParticipantResult> fourParticipants(const std::array<std::string, 4>& names) {
+  const auto seeds = thesisClusterSeeds();
+  const auto& L = seeds[0].centres;
+  const auto& R = seeds[1].centres;
+  return {participant(names[0], near(L[0], 0.05), near(R[5], -0.04), 0.004, 0),
+          participant(names[1], near(L[0], -0.1), near(R[5], 0.02), 0.006, 0),
+          participant(names[2], near(L[2], 0.0), near(R[0], 0.0), 0.004, 0),
+          participant(names[3], near(L[0], 0.0), near(R[5], 0.0), 0.009, 0)};
+}
+
 TEST(StudyClusters, TabulatesConsistentCombinations) {
   const auto seeds = thesisClusterSeeds();
   const auto& L = seeds[0].centres;
@@ -331,14 +344,8 @@ void recordPostures(const std::filesystem::path& file, const robot::Scene& scene
 // Postures of another robot are not comparable: a study folder holding one arm9 session among
 // LWR IV sessions clusters the LWR IV's and names the other, whatever its postures.
 TEST(StudyClusters, ClustersTheRobotMostParticipantsUsedAndNamesTheOthers) {
-  const auto seeds = thesisClusterSeeds();
-  const auto& L = seeds[0].centres;
-  const auto& R = seeds[1].centres;
   StudyResult study;
-  study.participants = {participant("p1", near(L[0], 0.05), near(R[5], -0.04), 0.004, 0),
-                        participant("p2", near(L[0], -0.1), near(R[5], 0.02), 0.006, 0),
-                        participant("other", near(L[2], 0.0), near(R[0], 0.0), 0.004, 0),
-                        participant("p3", near(L[0], 0.0), near(R[5], 0.0), 0.009, 0)};
+  study.participants = fourParticipants({"p1", "p2", "other", "p3"});
   for (auto& p : study.participants) p.robot = "lwr4";
   study.participants[2].robot = "arm9";
   StudyOptions options;
@@ -377,21 +384,13 @@ TEST(StudyClusters, ClustersTheRobotMostParticipantsUsedAndNamesTheOthers) {
   EXPECT_EQ(study.clusterings[0].participants, (std::vector<std::string>{"p1", "other"}));
 }
 
-// Centres of an area no session taught, or of more joints than the postures hold (given with
-// --centres for another arm): nothing to cluster, and the study says why for each area.
 // One arm under several names: built in, as a copy in a cell's folder, and the cell moved to
 // another folder between participants; the URDF each recording stores is the same, so their
 // postures are one robot's. Another arm whose file has the same name is another robot, and
 // recordings without the stored URDF are told apart by the file's name.
 TEST(StudyClusters, TheSameArmByNameOrByItsUrdfFileInAnyFolderIsOneRobot) {
-  const auto seeds = thesisClusterSeeds();
-  const auto& L = seeds[0].centres;
-  const auto& R = seeds[1].centres;
   StudyResult study;
-  study.participants = {participant("p1", near(L[0], 0.05), near(R[5], -0.04), 0.004, 0),
-                        participant("p2", near(L[0], -0.1), near(R[5], 0.02), 0.006, 0),
-                        participant("p3", near(L[2], 0.0), near(R[0], 0.0), 0.004, 0),
-                        participant("p4", near(L[0], 0.0), near(R[5], 0.0), 0.009, 0)};
+  study.participants = fourParticipants({"p1", "p2", "p3", "p4"});
   const std::string lwr4_urdf = "<robot name=\"lwr4\">...</robot>";
   study.participants[0].robot = "lwr4";
   study.participants[1].robot = "/old/cell/lwr4.urdf";
@@ -415,6 +414,8 @@ TEST(StudyClusters, TheSameArmByNameOrByItsUrdfFileInAnyFolderIsOneRobot) {
   EXPECT_EQ(study.not_clustered[0].rfind("p4.db: robot '/new/cell/other_arm.urdf'", 0), 0U) << study.not_clustered[0];
 }
 
+// Centres of an area no session taught, or of more joints than the postures hold (given with
+// --centres for another arm): nothing to cluster, and the study says why for each area.
 TEST(StudyClusters, SaysWhichGivenCentresFitNoSession) {
   const auto seeds = thesisClusterSeeds();
   StudyResult study;

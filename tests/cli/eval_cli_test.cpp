@@ -26,7 +26,19 @@ namespace {
 using testing::runCliBinary;
 
 std::filesystem::path scratchDir() { return testing::scratchDir("eval-cli-test"); }
+
 using testing::writeText;
+
+// A closed tetrahedron of 10 cm edges at the origin, as an ASCII STL.
+void writeWedgeStl(const std::filesystem::path& file) {
+  writeText(file,
+            "solid wedge\n"
+            "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\nvertex 0 0.1 0\nendloop\nendfacet\n"
+            "facet normal 0 -1 0\nouter loop\nvertex 0 0 0\nvertex 0 0 0.1\nvertex 0.1 0 0\nendloop\nendfacet\n"
+            "facet normal -1 0 0\nouter loop\nvertex 0 0 0\nvertex 0 0.1 0\nvertex 0 0 0.1\nendloop\nendfacet\n"
+            "facet normal 1 1 1\nouter loop\nvertex 0.1 0 0\nvertex 0 0 0.1\nvertex 0 0.1 0\nendloop\nendfacet\n"
+            "endsolid wedge\n");
+}
 
 // A session as `teach --out F.json` writes it, made by hand: in each area the postures are
 // q_fixed plus small joint offsets and the task positions their forward kinematics, so the
@@ -210,13 +222,7 @@ TEST(EvalReachableCli, AMeshGoneFromBesideTheSceneIsNamedAsTheCause) {
   const auto directory = scratchDir() / "mesh_gone";
   std::filesystem::create_directories(directory);
   const auto mesh = directory / "wedge.stl";
-  writeText(mesh,
-            "solid wedge\n"
-            "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\nvertex 0 0.1 0\nendloop\nendfacet\n"
-            "facet normal 0 -1 0\nouter loop\nvertex 0 0 0\nvertex 0 0 0.1\nvertex 0.1 0 0\nendloop\nendfacet\n"
-            "facet normal -1 0 0\nouter loop\nvertex 0 0 0\nvertex 0 0.1 0\nvertex 0 0 0.1\nendloop\nendfacet\n"
-            "facet normal 1 1 1\nouter loop\nvertex 0.1 0 0\nvertex 0 0 0.1\nvertex 0 0.1 0\nendloop\nendfacet\n"
-            "endsolid wedge\n");
+  writeWedgeStl(mesh);
   const auto scene = directory / "cell.yaml";
   writeText(scene, "name: cell\nobstacles:\n  - {name: wedge, shape: mesh, file: wedge.stl, position: [-2.0, 0.0, 0.3]}\n");
   const auto session = tinySession(scene.string(), "mesh-gone.json");
@@ -390,13 +396,7 @@ TEST(EvalReachableCli, ASessionWhoseFilesMovedIsEvaluatedFromWhereTheyLieNow) {
   std::filesystem::create_directories(cell / "robots");
   std::filesystem::copy(resolveRobotPath("lwr4").parent_path(), cell / "robots" / "lwr4", std::filesystem::copy_options::recursive);
   std::filesystem::create_directories(cell / "meshes");
-  writeText(cell / "meshes" / "wedge.stl",
-            "solid wedge\n"
-            "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\nvertex 0 0.1 0\nendloop\nendfacet\n"
-            "facet normal 0 -1 0\nouter loop\nvertex 0 0 0\nvertex 0 0 0.1\nvertex 0.1 0 0\nendloop\nendfacet\n"
-            "facet normal -1 0 0\nouter loop\nvertex 0 0 0\nvertex 0 0.1 0\nvertex 0 0 0.1\nendloop\nendfacet\n"
-            "facet normal 1 1 1\nouter loop\nvertex 0.1 0 0\nvertex 0 0 0.1\nvertex 0 0.1 0\nendloop\nendfacet\n"
-            "endsolid wedge\n");
+  writeWedgeStl(cell / "meshes" / "wedge.stl");
   std::ostringstream text;
   text << "name: cell\nrobot: robots/lwr4/lwr4.urdf\n"
        << "obstacles:\n  - {name: wedge, shape: mesh, file: meshes/wedge.stl, position: [-2.0, 0.0, 0.3]}\n"
