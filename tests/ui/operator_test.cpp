@@ -13,6 +13,7 @@
 #include <QFileDialog>
 #include <QGuiApplication>
 #include <QLabel>
+#include <QLineEdit>
 #include <QMessageBox>
 #include <QMouseEvent>
 #include <QPushButton>
@@ -1034,12 +1035,16 @@ class OperatorTest : public QObject {
         question = box->text();
         box->button(QMessageBox::Save)->click();
       } else if (auto* dialog = qobject_cast<QFileDialog*>(modal)) {
-        // The dialog takes a path in another folder only once it has listed that folder: the
-        // name is typed again until the dialog holds it.
-        if (dialog->selectedFiles().value(0) == file) {
+        // The whole path is typed into the name field, as a person would. selectFile() would
+        // not do: it leaves the field as it was once the field has the focus, which depends
+        // on when the dialog was activated, and the name offered would be saved instead.
+        auto* name_field = dialog->findChild<QLineEdit*>(QStringLiteral("fileNameEdit"));
+        if (name_field == nullptr) {
+          dialog->reject();  // the question then fails below, naming no file
+        } else if (dialog->selectedFiles().value(0) == file) {
           static_cast<QDialog*>(dialog)->accept();  // QFileDialog::accept() is protected
-        } else {
-          dialog->selectFile(file);
+        } else if (name_field->text() != file) {
+          name_field->setText(file);
         }
       }
     });
