@@ -1,8 +1,12 @@
 #include "robot/resources.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <system_error>
+
+#include <unistd.h>
 
 #include "robot/errors.hpp"
 
@@ -47,14 +51,23 @@ fs::path resolveRobotPath(const std::string& robot_argument) {
     if (robot_argument == name) return resourceDir() / "robots" / name / (name + ".urdf");
   }
   const fs::path path(robot_argument);
-  std::error_code error;
-  if (!fs::is_regular_file(path, error)) {
+  if (const std::string reason = unreadableFileReason(path); !reason.empty()) {
     std::string known;
     for (const auto& name : builtinRobotNames()) known += (known.empty() ? "" : ", ") + name;
-    throw InputError("robot '" + robot_argument + "' is neither a built-in robot (" + known +
-                     ") nor a readable URDF file");
+    throw InputError("robot '" + printable(robot_argument, 200) + "' is neither a built-in robot (" + known +
+                     ") nor a readable URDF file (" + reason + ")");
   }
   return path;
+}
+
+std::string unreadableFileReason(const fs::path& path) {
+  std::error_code error;
+  const fs::file_status status = fs::status(path, error);
+  if (!fs::exists(status)) return fs::is_symlink(fs::symlink_status(path, error)) ? "a broken symbolic link" : "no such file";
+  if (fs::is_directory(status)) return "it is a folder";
+  if (!fs::is_regular_file(status)) return "it is not a regular file";
+  if (::access(path.c_str(), R_OK) != 0) return "cannot read it: " + std::string(std::strerror(errno));
+  return {};
 }
 
 std::string portableReference(const std::string& argument, const std::vector<std::string>& builtin_names) {

@@ -18,6 +18,10 @@ const std::vector<std::string>& builtinRobotNames();
 /// else is taken as a path to a URDF file. Throws InputError if the file does not exist.
 std::filesystem::path resolveRobotPath(const std::string& robot_argument);
 
+/// Why `path` cannot be read as a file ("no such file", "it is a folder", ...), or an empty
+/// string when it can: an error naming a path says which of these it met.
+std::string unreadableFileReason(const std::filesystem::path& path);
+
 /// How a session refers to a robot or scene argument so that it still resolves from another
 /// working directory: a built-in name as it is, a file as its absolute path. Empty stays empty.
 std::string portableReference(const std::string& argument, const std::vector<std::string>& builtin_names);

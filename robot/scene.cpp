@@ -1088,12 +1088,11 @@ Scene loadScene(const std::string& name_or_path) {
   if (std::find(names.begin(), names.end(), name_or_path) != names.end()) {
     return loadSceneFile(resourceDir() / "scenes" / (name_or_path + ".yaml"));
   }
-  std::error_code error;
-  if (!fs::is_regular_file(name_or_path, error)) {
+  if (const std::string reason = unreadableFileReason(name_or_path); !reason.empty()) {
     std::string known;
     for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
     throw InputError("scene '" + printable(name_or_path, 200) + "' is neither a built-in scene (" + known +
-                     ") nor a readable scene file");
+                     ") nor a readable scene file (" + reason + ")");
   }
   return loadSceneFile(name_or_path);
 }

@@ -212,7 +212,10 @@ INSTANTIATE_TEST_SUITE_P(
                       BadInvocation{"fk --robot lwr4 --q 1,2,3,4,5,6,7,8", "expected 7 values, got 8"},
                       BadInvocation{"fk --robot lwr4 --q 1e999,0,0,0,0,0,0", "not a finite number"},
                       BadInvocation{"fk --robot lwr4 --q abc", "not a finite number"},
-                      BadInvocation{"fk --robot /nonexistent.urdf --q 0", "neither a built-in robot"},
+                      BadInvocation{"fk --robot /nonexistent.urdf --q 0", "nor a readable URDF file (no such file)"},
+                      // A folder given for the URDF in it is named as a folder.
+                      BadInvocation{"fk --robot / --q 0", "nor a readable URDF file (it is a folder)"},
+                      BadInvocation{"render --scene / --out /dev/null", "nor a readable scene file (it is a folder)"},
                       BadInvocation{"fk --robot /etc/hostname --q 0", "invalid URDF"},
                       BadInvocation{"robot info --robot lwr4 --tip nowhere", "tip link 'nowhere'"},
                       BadInvocation{"fk --robot lwr4", "--q is required"},

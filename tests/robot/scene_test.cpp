@@ -875,6 +875,21 @@ TEST_F(SceneFileTest, RefusesMissingFilesAndUnknownSceneNames) {
   }
 }
 
+TEST_F(SceneFileTest, AFolderOrABrokenLinkGivenForASceneIsNamedAsSuch) {
+  const auto messageFor = [](const fs::path& path) {
+    try {
+      loadScene(path.string());
+    } catch (const InputError& error) {
+      return std::string(error.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(messageFor(dir_).find("nor a readable scene file (it is a folder)"), std::string::npos) << messageFor(dir_);
+  EXPECT_NE(messageFor(dir_ / "absent.yaml").find("(no such file)"), std::string::npos) << messageFor(dir_ / "absent.yaml");
+  fs::create_symlink(dir_ / "moved.yaml", dir_ / "link.yaml");
+  EXPECT_NE(messageFor(dir_ / "link.yaml").find("(a broken symbolic link)"), std::string::npos) << messageFor(dir_ / "link.yaml");
+}
+
 // ---------------------------------------------------------------------------------------------
 // Built-in scenes
 
