@@ -1,5 +1,6 @@
 // `export --session F`: a recorded session as the files the offline tools read (docs/SESSIONS.md):
 // --samples (learn fit), --stream (itm build), --model (learn predict), --graph (itm path).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -24,6 +25,8 @@
 #include "planning/itm_file.hpp"
 #include "robot/collision.hpp"
 #include "robot/errors.hpp"
+#include "robot/resources.hpp"
+#include "robot/scene.hpp"
 
 namespace flexirob::cli {
 namespace {
@@ -119,9 +122,18 @@ Json exportSession(const ExportOptions& options) {
     for (const char* suffix : {"", "-wal", "-shm", "-journal"}) chosen.emplace(sameFileKey(session + suffix), "--session");
     chosen.emplace(sameFileKey(app::SessionWriteLock::lockFileFor(session).string()), "--session");
   }
-  // The robot and scene files read in place of the session's copies are inputs as well.
-  for (const auto& [option, input] : {std::pair<std::string, std::string>{"--robot", options.robot_file}, {"--scene", options.scene_file}}) {
-    if (!input.empty()) chosen.emplace(sameFileKey(input), option);
+  // The robot and scene files read in place of the session's copies are inputs as well; a
+  // built-in name reads its file among the resources, not one of that name here.
+  const auto& robots = builtinRobotNames();
+  const auto& scenes = robot::builtinSceneNames();
+  if (!options.robot_file.empty()) {
+    const bool builtin = std::find(robots.begin(), robots.end(), options.robot_file) != robots.end();
+    chosen.emplace(sameFileKey(builtin ? resolveRobotPath(options.robot_file).string() : options.robot_file), "--robot");
+  }
+  if (!options.scene_file.empty()) {
+    const bool builtin = std::find(scenes.begin(), scenes.end(), options.scene_file) != scenes.end();
+    chosen.emplace(sameFileKey(builtin ? (resourceDir() / "scenes" / (options.scene_file + ".yaml")).string() : options.scene_file),
+                   "--scene");
   }
   bool any = false;
   for (const auto& [option, path] : outputs) {

@@ -232,6 +232,22 @@ TEST_F(ExportCli, AnOutputInPlaceOfAMeshTheRobotReadsIsRefused) {
   fs::remove_all(robot_dir.parent_path());
 }
 
+// A built-in name given to --robot or --scene reads the file among the resources: an output of
+// that name in the working folder is another file, and is written.
+TEST_F(ExportCli, AnOutputNamedAsABuiltInRobotOrSceneIsNotTakenForIt) {
+  const fs::path folder = scratchDir() / "named-as-builtins";
+  fs::create_directories(folder);
+  const fs::path before = fs::current_path();
+  fs::current_path(folder);
+  const auto result =
+      runCliBinary("export --session " + session_->string() + " --robot lwr4 --scene setup_A --samples lwr4 --stream setup_A");
+  fs::current_path(before);
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_TRUE(fs::is_regular_file(folder / "lwr4"));
+  EXPECT_TRUE(fs::is_regular_file(folder / "setup_A"));
+  fs::remove_all(folder);
+}
+
 // A copy of the session edited with `sql`, handed to `command` with `--session COPY` and an
 // output `output_option NAME`: refused in one line naming `reason`, the output not written.
 auto expectAnEditedCopyRefused(const fs::path& session, const std::string& name, const std::string& sql, const std::string& command,
