@@ -570,7 +570,7 @@ namespace {
 
 using Rgb = std::array<std::uint8_t, 3>;
 
-// Distinct colours for up to ten clusters (then they repeat).
+// Distinct colours for the first ten clusters drawn in a panel.
 constexpr std::array<Rgb, 10> kPalette{{{228, 26, 28},
                                         {55, 126, 184},
                                         {77, 175, 74},
@@ -581,6 +581,25 @@ constexpr std::array<Rgb, 10> kPalette{{{228, 26, 28},
                                         {0, 0, 0},
                                         {0, 160, 160},
                                         {120, 120, 0}}};
+
+// The colour of the `rank`-th cluster drawn in a panel: the palette's, then hues a golden angle
+// apart at two brightnesses, so that a study of many clusters does not draw two alike (the
+// palette repeated had coloured the first and the eleventh the same).
+Rgb clusterColour(std::size_t rank) {
+  if (rank < kPalette.size()) return kPalette[rank];
+  const std::size_t n = rank - kPalette.size();
+  const double hue = std::fmod(20.0 + 137.50776 * static_cast<double>(n), 360.0) / 60.0;  // sextant
+  const double value = n % 2 == 0 ? 0.55 : 0.85;
+  const double saturation = 0.9;
+  const double chroma = value * saturation;
+  const double x = chroma * (1.0 - std::abs(std::fmod(hue, 2.0) - 1.0));
+  const std::array<std::array<double, 3>, 6> sextants{{{chroma, x, 0}, {x, chroma, 0}, {0, chroma, x},
+                                                        {0, x, chroma}, {x, 0, chroma}, {chroma, 0, x}}};
+  const auto& rgb = sextants[static_cast<std::size_t>(hue) % 6];
+  const double m = value - chroma;
+  const auto channel = [m](double c) { return static_cast<std::uint8_t>(std::lround(255.0 * (c + m))); };
+  return {channel(rgb[0]), channel(rgb[1]), channel(rgb[2])};
+}
 
 struct Canvas {
   ScatterImage& image;
@@ -690,6 +709,9 @@ ScatterImage renderMdsScatter(const StudyResult& study, int width, int height) {
     const int x1 = (p + 1) * panel_width - kMargin;
     const Legend& legend = legends[static_cast<std::size_t>(p)];
     const std::vector<std::size_t>& used = legend.used;
+    // Colours by the order the legend lists the clusters in, the members' and the centre's alike.
+    std::vector<Rgb> colour(c.kmeans.sizes.size(), ink);
+    for (std::size_t e = 0; e < used.size(); ++e) colour[used[e]] = clusterColour(e);
     const int column_width = legend.column_width;
     const int columns = legend.columns;
     const int y0 = kMargin + kTitleBand;
@@ -720,11 +742,11 @@ ScatterImage renderMdsScatter(const StudyResult& study, int width, int height) {
     const auto py = [&](double y) { return oy - scale * y; };  // y up
     for (Eigen::Index m = 0; m < c.mds.cols(); ++m) {
       const auto label = static_cast<std::size_t>(c.kmeans.labels[static_cast<std::size_t>(m)]);
-      canvas.disc(px(c.mds(0, m)), py(c.mds(1, m)), 4.0, kPalette[label % kPalette.size()]);
+      canvas.disc(px(c.mds(0, m)), py(c.mds(1, m)), 4.0, colour.at(label));
     }
     for (const std::size_t k : used) {
       canvas.ring(px(c.centre_mds(0, static_cast<Eigen::Index>(k))), py(c.centre_mds(1, static_cast<Eigen::Index>(k))), 9.0, 2.0,
-                  kPalette[k % kPalette.size()]);
+                  colour[k]);
     }
     const auto entry_at = [&](int index) {
       return std::pair<int, int>{x0 + (index % columns) * column_width, y1 + 4 + (index / columns + 1) * kLegendLine};
@@ -732,7 +754,7 @@ ScatterImage renderMdsScatter(const StudyResult& study, int width, int height) {
     for (std::size_t e = 0; e < used.size(); ++e) {
       const std::size_t k = used[e];
       const auto [x, baseline] = entry_at(static_cast<int>(e));
-      canvas.disc(x + 5, baseline - 5, 4.0, kPalette[k % kPalette.size()]);
+      canvas.disc(x + 5, baseline - 5, 4.0, colour[k]);
       const std::string name = clusterName(c, k);
       image.labels.push_back({name + ": " + std::to_string(c.kmeans.sizes[k]), x + 14, baseline, column_width - 18});
     }

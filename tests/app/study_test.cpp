@@ -10,6 +10,7 @@
 #include <fstream>
 #include <numbers>
 #include <random>
+#include <set>
 #include <sstream>
 #include <unistd.h>
 
@@ -306,6 +307,43 @@ TEST(StudyClusters, TabulatesConsistentCombinations) {
     EXPECT_LE(label.baseline, image.height) << label.text;
   }
   std::filesystem::remove_all(dir);
+}
+
+// A study of many clusters draws each in a colour of its own: the legend's disc beside each
+// cluster's entry differs from every other's.
+TEST(StudyPlot, TwelveClustersAreDrawnInTwelveColours) {
+  StudyOptions options;
+  AreaClusterSeeds many;
+  many.area = 0;
+  StudyResult study;
+  const auto right = thesisClusterSeeds()[1].centres[0];
+  for (int k = 0; k < 12; ++k) {
+    Eigen::VectorXd centre = Eigen::VectorXd::Zero(6);
+    centre(0) = -1.5 + 0.25 * k;
+    centre(1) = k % 2 == 0 ? 0.3 : -0.3;
+    many.names.push_back("C" + std::to_string(k + 1));
+    many.centres.push_back(centre);
+    study.participants.push_back(participant("p" + std::to_string(k + 1), near(centre, 0.01), near(right, 0.0), 0.004, 0));
+  }
+  options.seeds = {many, thesisClusterSeeds()[1]};
+  clusterStudy(study, options);
+  ASSERT_EQ(study.clusterings.size(), 2U);
+  ASSERT_EQ(study.clusterings[0].kmeans.sizes, std::vector<int>(12, 1));
+  const ScatterImage image = renderMdsScatter(study, 1200, 600);
+  std::set<std::array<std::uint8_t, 3>> colours;
+  int entries = 0;
+  for (const ScatterLabel& label : image.labels) {
+    if (label.text.size() < 4 || label.text[0] != 'C' || label.text.substr(label.text.size() - 3) != ": 1") continue;
+    ++entries;
+    // The disc sits 9 px left of the entry's text, 5 px above its baseline (renderMdsScatter).
+    const std::size_t i = (static_cast<std::size_t>(label.baseline - 5) * static_cast<std::size_t>(image.width) +
+                           static_cast<std::size_t>(label.x - 9)) * 4;
+    ASSERT_LT(i + 2, image.rgba.size());
+    colours.insert({image.rgba[i], image.rgba[i + 1], image.rgba[i + 2]});
+  }
+  EXPECT_EQ(entries, 12);
+  EXPECT_EQ(colours.size(), 12U);
+  EXPECT_EQ(colours.count({255, 255, 255}), 0U) << "a disc is drawn under every entry";
 }
 
 const robot::RobotModel& lwr4() {
