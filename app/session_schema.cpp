@@ -2,8 +2,10 @@
 
 #include <sqlite3.h>
 
+#include <array>
 #include <bit>
 #include <cstring>
+#include <fstream>
 
 namespace flexirob::app {
 
@@ -235,6 +237,20 @@ std::vector<std::uint8_t> doublesToBlob(const double* values, std::size_t count)
   std::vector<std::uint8_t> blob(count * sizeof(double));
   if (count) std::memcpy(blob.data(), values, blob.size());
   return blob;
+}
+
+bool isSessionDatabase(const std::filesystem::path& file) {
+  // The database header: "SQLite format 3\0", then the application_id big-endian at offset 68.
+  // Only a regular file: opening a pipe to read would wait for a writer.
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(file, error)) return false;
+  std::ifstream in(file, std::ios::binary);
+  std::array<char, 72> header{};
+  if (!in.read(header.data(), header.size())) return false;
+  if (std::memcmp(header.data(), "SQLite format 3", 16) != 0) return false;
+  std::uint32_t id = 0;
+  for (int i = 68; i < 72; ++i) id = (id << 8) | static_cast<std::uint8_t>(header[static_cast<std::size_t>(i)]);
+  return id == static_cast<std::uint32_t>(kSessionApplicationId);
 }
 
 }  // namespace flexirob::app

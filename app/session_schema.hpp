@@ -27,6 +27,10 @@ const char* sessionSchemaSql();
 /// Tables a readable session must have.
 const std::vector<std::string>& requiredSessionTables();
 
+/// Whether `file` is a session database (SQLite with kSessionApplicationId), judged by its
+/// header alone; false for anything that cannot be read.
+bool isSessionDatabase(const std::filesystem::path& file);
+
 /// An SQLite error: `what()` is "<context>: <sqlite message>"; code() the primary result code.
 class SqliteError : public std::runtime_error {
  public:

@@ -21,6 +21,7 @@
 #include <iostream>
 
 #include "app/file_output.hpp"
+#include "app/session_schema.hpp"
 #include "robot/errors.hpp"
 #include "robot/resources.hpp"
 
@@ -83,15 +84,15 @@ Json toJsonRows(const Eigen::MatrixXd& m) {
 }
 
 void checkOutputPath(const std::string& option, const std::string& path,
-                     const std::vector<std::pair<std::string, std::string>>& inputs, bool regular_file_only) {
+                     const std::vector<std::pair<std::string, std::string>>& inputs, bool output_is_a_session) {
   namespace fs = std::filesystem;
   if (path.empty()) throw InputError(option + ": expected a file path");
   std::error_code error;
   if (fs::is_directory(path, error)) throw InputError(option + ": '" + path + "' is a directory; expected a file path");
   const bool in_place = app::writtenInPlace(path);
-  if (fs::exists(path, error) && !fs::is_regular_file(path, error) && (regular_file_only || !in_place)) {
+  if (fs::exists(path, error) && !fs::is_regular_file(path, error) && (output_is_a_session || !in_place)) {
     throw InputError(option + ": '" + path + "' is not a regular file (" +
-                     (regular_file_only ? "a device, a pipe or a socket" : "a device other than a terminal or /dev/null, or a socket") +
+                     (output_is_a_session ? "a device, a pipe or a socket" : "a device other than a terminal or /dev/null, or a socket") +
                      "); expected a file path");
   }
   app::refuseStandardStreams(option, path);
@@ -99,6 +100,9 @@ void checkOutputPath(const std::string& option, const std::string& path,
     if (app::isExistingFile(path, input)) {
       throw InputError(option + ": '" + path + "' is the " + input_option + " file the run reads; give another file");
     }
+  }
+  if (!output_is_a_session && app::isSessionDatabase(path)) {
+    throw InputError(option + ": '" + path + "' is a recorded session, which this output would replace; give another file");
   }
   if (in_place) {
     // Written as it is: /dev/null or a terminal lies in a folder only root may write in.

@@ -132,10 +132,13 @@ using app::sameFileKey;
 /// run's `inputs` ({option, path}: writing would destroy what is being read), that is where
 /// standard output or error goes (app::refuseStandardStreams), or whose folder does not exist or
 /// cannot be written, before any work is done. A block device or a socket is refused, a pipe or a
-/// character device is written in place (app::writeFileReplacing) and must be writable; with
-/// `regular_file_only` (a session SQLite keeps open) those are refused too.
+/// character device is written in place (app::writeFileReplacing) and must be writable. A
+/// recorded session in the output's place is refused: a table or a picture written over it
+/// would lose the recording. With `output_is_a_session` (teach's --out: SQLite keeps it open)
+/// anything but a regular file is refused, and whether a session may be replaced is the
+/// caller's to decide (teach --overwrite).
 void checkOutputPath(const std::string& option, const std::string& path,
-                     const std::vector<std::pair<std::string, std::string>>& inputs = {}, bool regular_file_only = false);
+                     const std::vector<std::pair<std::string, std::string>>& inputs = {}, bool output_is_a_session = false);
 
 /// robot::loadScene, and its sceneNotes on stderr ("note: ..."), once per scene and process.
 robot::Scene loadSceneNoting(const std::string& name_or_path);

@@ -248,6 +248,33 @@ TEST_F(ExportCli, AnOutputNamedAsABuiltInRobotOrSceneIsNotTakenForIt) {
   fs::remove_all(folder);
 }
 
+// No output replaces a recorded session: a table or a picture named in its place (a slip of the
+// shell's completion) is refused before any work, and the recording stays whole.
+TEST_F(ExportCli, AnOutputNamedAsARecordedSessionIsRefusedAndTheSessionStays) {
+  const fs::path other = scratchDir() / "other-recording.flexirob";
+  fs::copy_file(*session_, other, fs::copy_options::overwrite_existing);
+  const std::string bytes = fileBytes(other);
+  const fs::path data = scratchDir() / "other-samples.csv";
+  ASSERT_EQ(runCliBinary("export --session " + session_->string() + " --samples " + data.string()).exit_code, 0);
+  for (const std::string& command :
+       {"export --session " + session_->string() + " --samples " + other.string(), "render --scene setup_A --out " + other.string(),
+        "sweep --tables 3.3 --only setup_I:1 --spacing 0.2 --json " + other.string(),
+        "learn fit --data " + data.string() + " --out " + other.string()}) {
+    const auto result = runCliBinary(command);
+    EXPECT_EQ(result.exit_code, 2) << command << "\n" << result.err;
+    EXPECT_NE(result.err.find("is a recorded session, which this output would replace"), std::string::npos) << command << "\n" << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_EQ(fileBytes(other), bytes) << command;
+  }
+  // teach --overwrite replaces a session by design; another file that merely looks alike does not
+  // stop an output.
+  const fs::path not_a_session = scratchDir() / "notes.flexirob";
+  testing::writeText(not_a_session, "SQLite format 3 is what a session starts with\n");
+  const auto replaced = runCliBinary("export --session " + session_->string() + " --samples " + not_a_session.string());
+  EXPECT_EQ(replaced.exit_code, 0) << replaced.err;
+  fs::remove(other);
+}
+
 // A copy of the session edited with `sql`, handed to `command` with `--session COPY` and an
 // output `output_option NAME`: refused in one line naming `reason`, the output not written.
 auto expectAnEditedCopyRefused(const fs::path& session, const std::string& name, const std::string& sql, const std::string& command,
