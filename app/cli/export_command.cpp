@@ -36,6 +36,7 @@ struct ExportOptions {
   std::string samples, stream, model, graph;
   double sample_period = 0.02;
   std::string robot_file, scene_file;  ///< where the session's robot and scene files lie now (addMovedFilesOptions)
+  bool accept_damage = false;  ///< export from a file SQLite's quick check finds damaged
 };
 
 // A session driven over FRI (the real robot, or teach --backend fri-sim): the workflow saw no
@@ -157,6 +158,17 @@ Json exportSession(const ExportOptions& options) {
     }
   }
   const app::SessionReader reader(options.session);
+  // Damage need not stop a read: rows on pages that still read can hold wrong values, and a
+  // table of them, learned from without a word, would pass for the teaching.
+  const std::string damage = reader.damage();
+  if (!damage.empty() && !options.accept_damage) {
+    throw InputError("--session: session file " + options.session + " is damaged (" + printable(damage, 200) +
+                     "); what reads from it may hold wrong values, so nothing is written (--accept-damage writes what still reads)");
+  }
+  if (!damage.empty()) {
+    std::fprintf(stderr, "note: the session file is damaged (%s); what is written may hold wrong values (eval checks each sample against the robot)\n",
+                 printable(damage, 200).c_str());
+  }
   // The graph is read only where it is asked for: a damaged snapshot does not stand in the way
   // of the samples.
   const app::RecordedTeaching teaching = app::readRecordedTeaching(reader, false);
@@ -270,6 +282,7 @@ Json exportSession(const ExportOptions& options) {
                  options.session.c_str());
   }
   result["closed_cleanly"] = teaching.closed_cleanly;
+  result["damage"] = damage.empty() ? Json(nullptr) : Json(damage);
   // Through a symbolic link to the file it points at, keeping the link; all of them or none.
   app::writeFilesTogether(files);
   return result;
@@ -290,6 +303,8 @@ void registerExportCommand(CLI::App& app, CommandRunner& runner) {
       ->check(finiteRange(1e-4, 10.0))
       ->capture_default_str();
   addMovedFilesOptions(*command, options->robot_file, options->scene_file);
+  command->add_flag("--accept-damage", options->accept_damage,
+                    "export from a session file SQLite finds damaged (refused otherwise): what still reads, which may hold wrong values");
   command->callback([&runner, options] { runner.select([options] { return readingSession(options->session, [options] { return exportSession(*options); }); }); });
 }
 

@@ -275,6 +275,34 @@ TEST_F(ExportCli, AnOutputNamedAsARecordedSessionIsRefusedAndTheSessionStays) {
   fs::remove(other);
 }
 
+// A file damaged where export does not read can still hold wrong values where it does: export
+// refuses it unless told, and then says so in a note and in the JSON.
+TEST_F(ExportCli, ADamagedSessionIsExportedOnlyWhenAskedAndSaysSo) {
+  const std::string bytes = fileBytes(*session_);
+  constexpr std::size_t kPage = 4096;
+  const std::size_t at = bytes.size() / 2 / kPage * kPage;  // a page of the state table, which export --samples does not read
+  ASSERT_GT(bytes.size(), 8 * kPage);
+  const fs::path damaged = scratchDir() / "damaged-pages.flexirob";
+  testing::writeText(damaged, bytes.substr(0, at) + std::string(kPage, '\xA5') + bytes.substr(at + kPage));
+  const fs::path out = scratchDir() / "from-damaged.csv";
+  const auto refused = runCliBinary("export --session " + damaged.string() + " --samples " + out.string());
+  EXPECT_EQ(refused.exit_code, 2) << refused.err;
+  EXPECT_NE(refused.err.find("session file " + damaged.string() + " is damaged ("), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("--accept-damage"), std::string::npos) << refused.err;
+  EXPECT_EQ(std::count(refused.err.begin(), refused.err.end(), '\n'), 1) << refused.err;
+  EXPECT_FALSE(fs::exists(out));
+  const auto accepted = runCliBinary("export --session " + damaged.string() + " --samples " + out.string() + " --accept-damage");
+  ASSERT_EQ(accepted.exit_code, 0) << accepted.err;
+  EXPECT_TRUE(accepted.json().at("damage").is_string()) << accepted.out;
+  EXPECT_NE(accepted.err.find("note: the session file is damaged"), std::string::npos) << accepted.err;
+  EXPECT_TRUE(fs::exists(out));
+  // A whole file says so too.
+  const auto whole = runCliBinary("export --session " + session_->string() + " --samples " + out.string());
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  EXPECT_TRUE(whole.json().at("damage").is_null()) << whole.out;
+  fs::remove(damaged);
+}
+
 // A copy of the session edited with `sql`, handed to `command` with `--session COPY` and an
 // output `output_option NAME`: refused in one line naming `reason`, the output not written.
 auto expectAnEditedCopyRefused(const fs::path& session, const std::string& name, const std::string& sql, const std::string& command,
