@@ -313,7 +313,8 @@ namespace {
 
 // " (did you mean --areas?)" where an argument left over names an option of the command given
 // with a slip of a letter or two (`teach --area 2`); CLI11 names only what it did not expect.
-std::string optionMeant(const CLI::App& app) {
+// The innermost command the arguments named (`app` itself when they named none).
+const CLI::App* commandGiven(const CLI::App& app) {
   const CLI::App* command = &app;
   for (std::vector<const CLI::App*> parsed = command->get_subcommands({}); !parsed.empty();) {
     const auto given = std::find_if(parsed.begin(), parsed.end(), [](const CLI::App* sub) { return sub->parsed(); });
@@ -321,6 +322,35 @@ std::string optionMeant(const CLI::App& app) {
     command = *given;
     parsed = command->get_subcommands({});
   }
+  return command;
+}
+
+// In place of CLI11's "A subcommand is required": the word given where a command was expected
+// (a slip of a letter or two named), or that none was, and the commands there are.
+std::string commandMissing(const CLI::App& app) {
+  const CLI::App* command = commandGiven(app);
+  std::vector<std::string> names;
+  std::string listed;
+  for (const CLI::App* sub : command->get_subcommands({})) {
+    names.push_back(sub->get_name());
+    listed += (listed.empty() ? "" : ", ") + sub->get_name();
+  }
+  const std::string where = command == &app ? "" : command->get_name() + ": ";
+  std::string word;
+  for (const std::string& extra : app.remaining(true)) {
+    if (!extra.empty() && extra.front() != '-') {
+      word = extra;
+      break;
+    }
+  }
+  if (word.empty()) return where + "a command is needed (" + listed + ")";
+  const std::string guess = closestName(word, names, std::max<std::size_t>(1, word.size() / 3));
+  return where + "unknown command '" + printable(word) + "'" + (guess.empty() ? "" : " (did you mean " + guess + "?)") +
+         "; the commands are " + listed;
+}
+
+std::string optionMeant(const CLI::App& app) {
+  const CLI::App* command = commandGiven(app);
   std::vector<std::string> names;
   for (const CLI::Option* option : command->get_options()) {
     for (const std::string& name : option->get_lnames()) names.push_back(name);
@@ -373,6 +403,10 @@ int runCli(int argc, const char* const* argv) {
   } catch (const CLI::Success& e) {
     // --help and --version: CLI11 prints them itself.
     return app.exit(e);
+  } catch (const CLI::RequiredError& e) {
+    const bool command_missing = std::string(e.what()).find("subcommand") != std::string::npos;
+    std::cerr << "error: " << (command_missing ? commandMissing(app) : e.what() + optionMeant(app)) << std::endl;
+    return 2;
   } catch (const CLI::ParseError& e) {
     std::cerr << "error: " << e.what() << optionMeant(app) << std::endl;
     return 2;

@@ -219,7 +219,10 @@ INSTANTIATE_TEST_SUITE_P(
                       BadInvocation{"fk --robot /etc/hostname --q 0", "invalid URDF"},
                       BadInvocation{"robot info --robot lwr4 --tip nowhere", "tip link 'nowhere'"},
                       BadInvocation{"fk --robot lwr4", "--q is required"},
-                      BadInvocation{"no-such-command", "error"},
+                      // A command mistyped is named, with the one meant and the commands there are.
+                      BadInvocation{"no-such-command", "unknown command 'no-such-command'; the commands are robot, fk,"},
+                      BadInvocation{"eval reachabel --session s.flexirob", "eval: unknown command 'reachabel' (did you mean reachable?)"},
+                      BadInvocation{"learn", "learn: a command is needed (fit, predict)"},
                       // A slip in an option's name: the option meant is named.
                       BadInvocation{"teach --area 2 --out x.db", "(--area: did you mean --areas?)"},
                       BadInvocation{"reach --robot lwr4 --taget=0,0,1", "(--taget: did you mean --target?)"}),
