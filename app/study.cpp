@@ -172,13 +172,16 @@ std::vector<AreaClusterSeeds> loadClusterSeeds(const std::filesystem::path& file
   std::string line;
   int line_number = 0;
   std::optional<Eigen::Index> joints;
+  bool first_row = true;  // the header, if any, is the first line that is no comment
   while (std::getline(in, line)) {
     ++line_number;
     const std::string where = file.filename().string() + ":" + std::to_string(line_number);
     if (line_number == 1) app::prepareFirstLine(line, "cluster seeds " + file.filename().string());
     if (trimmed(line).empty() || trimmed(line)[0] == '#') continue;
     const auto fields = splitCommaFields(line);
-    if (line_number == 1 && !fields.empty() && fields[0] == "area") continue;  // header
+    const bool header = first_row && !fields.empty() && fields[0] == "area";
+    first_row = false;
+    if (header) continue;
     if (fields.size() < 3) throw InputError("cluster seeds " + where + ": expected area,name,q1,...");
     int area = 0;
     try {

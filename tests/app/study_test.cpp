@@ -182,6 +182,13 @@ TEST(StudyClusters, ReadsSeedFilesAndRefusesBadOnes) {
     out << "\xEF\xBB\xBF" << "area,name,q1,q2\n0,A,0.0,1.0\n";
   }
   EXPECT_EQ(loadClusterSeeds(dir / "marked.csv").size(), 1U);
+  // Comments and blank lines may come before the header; a header later is no row.
+  {
+    std::ofstream out(dir / "commented.csv");
+    out << "# seeds of Tab. B.1\n\narea,name,q1,q2\n0,A,0.0,1.0\n";
+  }
+  EXPECT_EQ(loadClusterSeeds(dir / "commented.csv").size(), 1U);
+  refused("0,A,0.0,1.0\narea,name,q1,q2\n");
   EXPECT_THROW(loadClusterSeeds(dir / "missing.csv"), InputError);
   std::filesystem::remove_all(dir);
 }
