@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <map>
 #include <regex>
+#include <sstream>
 #include <vector>
 
 #include "app/cli/bench/benchmarks.hpp"
@@ -33,7 +34,7 @@ class CollectingReporter : public benchmark::BenchmarkReporter {
       samples_[run.run_name.function_name].push_back(seconds_per_iteration * 1e6);  // microseconds
       iterations_[run.run_name.function_name] += run.iterations;
       for (const auto& [counter, value] : run.counters) counters_[run.run_name.function_name][counter] = value.value;
-      std::fprintf(stderr, ".");
+      if (progressShown()) std::fprintf(stderr, ".");
     }
   }
   Json results() const {
@@ -68,7 +69,8 @@ class CollectingReporter : public benchmark::BenchmarkReporter {
                          {"min_us", sorted.front()},
                          {"max_us", sorted.back()},
                          {"repetitions", sorted.size()},
-                         {"iterations", iterations_.at(name)}});
+                         {"iterations", iterations_.at(name)},
+                         {"counters", Json::object()}});
       if (const auto found = counters_.find(name); found != counters_.end()) {
         for (const auto& [counter, value] : found->second) entries.back()["counters"][counter] = value;
       }
@@ -222,10 +224,15 @@ void registerBenchCommand(CLI::App& app, CommandRunner& runner) {
       int argc = static_cast<int>(argv.size());
       benchmark::Initialize(&argc, argv.data());
       CollectingReporter reporter;
-      std::fprintf(stderr, "benchmarks: ");
+      // What Google Benchmark says itself ("Failed to match any benchmarks ...") is held back:
+      // a filter that matches nothing is said once, in one line; anything else it says follows.
+      std::ostringstream library_says;
+      reporter.SetErrorStream(&library_says);
+      if (progressShown()) std::fprintf(stderr, "benchmarks: ");
       const std::size_t count = benchmark::RunSpecifiedBenchmarks(&reporter);
-      std::fprintf(stderr, " done\n");
-      if (count == 0) throw InputError("no benchmark matches '" + *filter + "'");
+      if (progressShown()) std::fprintf(stderr, " done\n");
+      if (count == 0) throw InputError("no benchmark matches '" + printable(*filter) + "'");
+      std::fputs(library_says.str().c_str(), stderr);
       return Json{{"benchmarks", reporter.results()}};
     });
   });

@@ -266,12 +266,12 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
   return scene;
 }
 
-namespace {
 bool progressShown() {
   static const bool enabled = isatty(STDERR_FILENO) != 0 || std::getenv("FLEXIROB_PROGRESS") != nullptr;
   return enabled;
 }
 
+namespace {
 // A progress line not ended yet: a line said after it starts on a line of its own.
 bool g_progress_line_open = false;
 }  // namespace

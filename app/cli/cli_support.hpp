@@ -171,8 +171,10 @@ void addMovedFilesOptions(CLI::App& command, std::string& robot_file, std::strin
 /// default "visited".
 CLI::Option* addApproachOption(CLI::App& command, std::string& approach);
 
-/// Progress on stderr for long work ("what: 42%"); silent when stderr is not a terminal
-/// unless FLEXIROB_PROGRESS=1.
+/// Whether progress is shown: stderr is a terminal, or FLEXIROB_PROGRESS is set.
+bool progressShown();
+
+/// Progress on stderr for long work ("what: 42%"); silent unless progressShown().
 void reportProgress(const std::string& what, double fraction);
 
 /// The same for work whose end is not known in advance (a fit that stops when it no longer

@@ -133,6 +133,8 @@ TEST_F(HostileCli, ReachRefusesTargetsUnderTheTableAndPosturesOutsideTheLimits) 
   // The value as given, not its 300 digits.
   expectRefused(runCliBinary("fri simulate --peer 127.0.0.1:49999 --seconds 1e300"), "--seconds: expected a duration in (0, 86400], got 1e+300");
   expectRefused(runCliBinary("bench --filter ["), "--filter: '[' is not a valid regular expression");
+  // One line: neither Google Benchmark's own words nor progress, stderr being no terminal.
+  expectRefused(runCliBinary("bench --filter nomatch"), "no benchmark matches 'nomatch'");
   expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --posture 0,0,0,0,0,0,10"), "--posture: joint 7");
   expectRefused(runCliBinary("reach --target -0.5,0.2,0.4 --from 0,0,0,0,0,0,10"), "--from: joint 7");
 }

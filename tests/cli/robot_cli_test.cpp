@@ -57,6 +57,22 @@ TEST(RobotCli, FkPrintsPoseAndAWorldAlignedJacobianOfTheTip) {
   }
 }
 
+// bench prints its suite entries with the fields PERFORMANCE.md names, counters too where a
+// case has none, and says nothing on a stderr that is no terminal.
+TEST(RobotCli, BenchEntriesHaveTheDocumentedFieldsAndNoProgressGoesToAFile) {
+  const auto result = runCliBinary("bench --filter kinematics/fk_jacobian/arm9 --repetitions 2 --min-time 0.001");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_TRUE(result.err.empty()) << result.err;
+  const auto entries = result.json().at("benchmarks");
+  ASSERT_EQ(entries.size(), 1U);
+  for (const char* field : {"name", "median_us", "mean_us", "min_us", "max_us", "repetitions", "iterations", "counters"}) {
+    EXPECT_TRUE(entries[0].contains(field)) << field << " in " << entries[0].dump();
+  }
+  EXPECT_TRUE(entries[0].at("counters").is_object());
+  EXPECT_EQ(entries[0].at("repetitions"), 2);
+  EXPECT_LE(entries[0].at("min_us").get<double>(), entries[0].at("median_us").get<double>());
+}
+
 TEST(RobotCli, AcceptsNegativeFirstJointValue) {
   const auto result = runCliBinary("fk --robot lwr4 --q -0.5,0.3,0,0,0,0,0");
   ASSERT_EQ(result.exit_code, 0) << result.err;
