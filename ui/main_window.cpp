@@ -1056,6 +1056,13 @@ void MainWindow::showWarnings() {
   }
 }
 
+void MainWindow::showLastWarning(const QString& text, bool refused) {
+  last_warning_ = operatorWording(text);
+  last_warning_refused_ = refused;
+  showWarnings();
+  showStatusMessage(statusBar(), last_warning_, 15000);
+}
+
 void MainWindow::handleEvents() {
   if (!live_) return;
   for (const LiveEvent& event : live_->takeEvents()) {
@@ -1079,10 +1086,7 @@ void MainWindow::handleEvents() {
     if (event.kind == K::kRefused && event.name == "plan") clearGoal();  // the ball was drawn at the click
     rememberForStandingWarnings(event);
     if (event.kind == K::kWarning || event.kind == K::kRefused) {
-      last_warning_ = operatorWording(QString::fromStdString(event.detail.empty() ? event.name : event.detail));
-      last_warning_refused_ = event.kind == K::kRefused;
-      showWarnings();
-      showStatusMessage(statusBar(), last_warning_, 15000);
+      showLastWarning(QString::fromStdString(event.detail.empty() ? event.name : event.detail), event.kind == K::kRefused);
     } else if (event.kind == K::kStage || event.kind == K::kButton) {
       // A new stage: the last warning no longer applies to what the operator sees, in the
       // banner or in the status bar; the warnings about the areas and the map stand.
@@ -1243,7 +1247,7 @@ void MainWindow::keyPressEvent(QKeyEvent* event) {
         live_->fire(action->trigger);
       } else if (action->kind == TeleopAction::Kind::kReplay) {
         if (live_->snapshot().teach_ins == 0) {
-          showStatusMessage(statusBar(), tr("No teach-in to replay: record one in PROGRAMMING first"), 8000);
+          showLastWarning(QStringLiteral("replay: ") + tr("no teach-in to replay; record one in PROGRAMMING first"), true);
         } else {
           live_->replayTeachIn(stage_panel_->chosenTeachIn());
         }

@@ -297,6 +297,10 @@ class MainWindow : public QMainWindow {
   QElapsedTimer key_clock_;
   void rememberForStandingWarnings(const LiveEvent& event);
   void showWarnings();
+  /// The newest warning, or a request's refusal (the workflow's, or one the window refuses
+  /// itself): in the warning box, the banner and the status bar, named by its button
+  /// (`text` as "replay: ..." is worded, operatorWording).
+  void showLastWarning(const QString& text, bool refused);
   std::vector<app::WorkflowEvent> standing_warning_events_;  ///< read by app::standingWarnings()
   QPointer<QWidget> focus_before_menu_;  ///< where the keys go back to when a menu closes
   bool replay_moving_ = false;  ///< a replay accepted and not yet ended

@@ -471,6 +471,12 @@ class OperatorTest : public QObject {
     QTest::keyClick(&window, Qt::Key_F6);
     QTRY_VERIFY(window.stagePanel()->warningLabel()->text().startsWith(QStringLiteral("Finish configuration: not in CONFIGURATION")));
     QCOMPARE(window.live()->snapshot().stage, Stage::kIdle);
+    // F9 with no teach-in, which the window refuses itself: said the same way, replacing the
+    // refusal before it.
+    QTest::keyClick(&window, Qt::Key_F9);
+    QTRY_COMPARE(window.stagePanel()->warningLabel()->text(),
+                 QStringLiteral("Replay: no teach-in to replay; record one in PROGRAMMING first"));
+    QVERIFY(window.statusBar()->currentMessage().startsWith(QStringLiteral("Replay: no teach-in")));
   }
 
   // What the window says and allows when a robot, a scene or the link to the arm fails: the
