@@ -606,9 +606,9 @@ void registerEvalCommands(CLI::App& app, CommandRunner& runner) {
                            "training data and between them, as the thesis defines its regions (training-data), or "
                            "the scene's where it lists any (auto, the default)")
       ->check(CLI::IsMember({"auto", "scene", "training-data"}));
-  trajectories->add_option("--per-area", options->per_area, "trajectories per training area where they are drawn (between areas taught one after the other: twice)")->check(finiteRange(1, 10000));
-  trajectories->add_option("--speed", options->speed, "tip speed [m/s]")->check(finiteRange(0.01, 1.0));
-  trajectories->add_option("--seed", options->seed, "random seed for drawn trajectories")->check(seedValidator());
+  trajectories->add_option("--per-area", options->per_area, "trajectories per training area where they are drawn (between areas taught one after the other: twice)")->check(finiteRange(1, 10000))->capture_default_str();
+  trajectories->add_option("--speed", options->speed, "tip speed [m/s]")->check(finiteRange(0.01, 1.0))->capture_default_str();
+  trajectories->add_option("--seed", options->seed, "random seed for drawn trajectories")->check(seedValidator())->capture_default_str();
   addMovedFilesOptions(*trajectories, options->robot_file, options->scene_file);
   trajectories->callback([&runner, options] { runner.select([options] { return runTrajectories(*options); }); });
 

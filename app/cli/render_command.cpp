@@ -651,7 +651,7 @@ void registerRenderCommand(CLI::App& app, CommandRunner& runner) {
   command->add_option("--scene-model", options->scene_model, "JSON of eval scene-model: the points of S (Eq. 4.1, Fig. 4.6)");
   command->add_option("--plan", options->plan, "JSON of plan: goals and planned paths (Fig. 7.7, 8.4)");
   command->add_option("--plan-paths", options->plan_paths, "draw only the first N planned paths")->check(finiteRange(0, 100000));
-  command->add_option("--hide", options->hide, "overlay layers not to draw: samples,ghosts,confidence,itm,path,reachability,trajectories (also the scene's),legend");
+  command->add_option("--hide", options->hide, "overlay layers not to draw: samples,ghosts,confidence,itm,path,trajectories (also the scene's),reachability,force,legend");
   command->add_option("--point-size", options->point_size, "size of points [px]")
       ->capture_default_str()
       ->check(finiteRange(1.0, 64.0));

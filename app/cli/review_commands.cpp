@@ -237,6 +237,7 @@ Json reviewStudy(const StudyArguments& arguments) {
                             {"jerk_mean", optionalNumber(p.jerk_mean)},
                             {"e_coll", p.e_coll ? Json(*p.e_coll) : Json(nullptr)},
                             {"colliding_samples", p.colliding_samples},
+                            {"replayed_samples", p.replayed_samples},
                             {"e_coll_recorded", p.e_coll_recorded},
                             {"clusters", clusters},
                             {"time_per_phase_s", phases}});

@@ -377,10 +377,10 @@ void registerSweepCommand(CLI::App& app, CommandRunner& runner) {
   CLI::App* sweep = app.add_subcommand("sweep", "reproduce the thesis' tables with the simulated tutor (Tab. 3.2, 3.3, 3.4, 7.1, Sect. 8.3)");
   sweep->add_option("--tables", options->tables, "subset of 3.2 3.3 3.4 7.1 8.3")->delimiter(',');
   sweep->add_option("--spacing", options->spacing, "Tab. 3.3 grid spacing [m] (default: the scene's)")->check(finiteRange(0.01, 1.0));
-  sweep->add_option("--spacing-34", options->spacing_34, "Tab. 3.4 grid spacing [m]")->check(finiteRange(0.01, 1.0));
-  sweep->add_option("--seeds", options->seeds, "Tab. 3.4 network initializations")->check(finiteRange(1, 100));
-  sweep->add_option("--goals", options->goals, "Sect. 8.3 goals")->check(finiteRange(1, 10000));
-  sweep->add_option("--max-areas", options->max_areas, "skip Tab. 3.3 rows with more areas")->check(finiteRange(1, 1000));
+  sweep->add_option("--spacing-34", options->spacing_34, "Tab. 3.4 grid spacing [m]")->check(finiteRange(0.01, 1.0))->capture_default_str();
+  sweep->add_option("--seeds", options->seeds, "Tab. 3.4 network initializations")->check(finiteRange(1, 100))->capture_default_str();
+  sweep->add_option("--goals", options->goals, "Sect. 8.3 goals")->check(finiteRange(1, 10000))->capture_default_str();
+  sweep->add_option("--max-areas", options->max_areas, "skip Tab. 3.3 rows with more areas (default: none skipped)")->check(finiteRange(1, 1000));
   addApproachOption(*sweep, options->approach);  // Tab. 3.3 and 3.4
   sweep->add_option("--only", options->only, "Tab. 3.3 rows to run, e.g. setup_I:4,setup_II:1")->delimiter(',');
   sweep->add_option("--markdown", options->markdown, "write the tables as markdown to this file");

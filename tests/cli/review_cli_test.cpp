@@ -132,6 +132,12 @@ TEST_F(ReviewCli, StudyReadsTheGuisRecordingsAndSkipsAForeignFile) {
   EXPECT_EQ(json.at("participants")[0].at("participant"), "alice");
   EXPECT_EQ(json.at("participants")[1].at("participant"), "bob");
   EXPECT_EQ(json.at("participants")[1].at("areas").get<int>(), 2);
+  // The fields STUDY.md names, the replay's count among them.
+  for (const char* field : {"participant", "file", "robot", "scene", "closed_cleanly", "duration_s", "areas", "samples", "e_task",
+                            "max_deviation_m", "procrustes_m", "jerk_mean", "e_coll", "colliding_samples", "replayed_samples",
+                            "e_coll_recorded", "clusters", "time_per_phase_s"}) {
+    EXPECT_TRUE(json.at("participants")[0].contains(field)) << field;
+  }
   ASSERT_EQ(json.at("skipped").size(), 1U);
   EXPECT_NE(json.at("skipped")[0].get<std::string>().find("notes.db"), std::string::npos);
   ASSERT_FALSE(json.at("csv_files").empty());
