@@ -151,6 +151,7 @@ SessionReader::SessionReader(const std::filesystem::path& file) : file_(file), i
     metadata_.tip_link = this->meta("tip_link");
     metadata_.scene_name = this->meta("scene_name");
     metadata_.scene_text = this->meta("scene_text");
+    metadata_.mesh_digests = this->meta("mesh_digests");  // none in files written before 2026-12-08
     metadata_.parameters = this->meta("parameters");
     metadata_.software_version = this->meta("software_version");
     metadata_.participant = this->meta("participant");

@@ -185,6 +185,7 @@ void createSchema(SqliteDatabase& db, const SessionMetadata& metadata) {
   put("tip_link", metadata.tip_link);
   put("scene_name", metadata.scene_name);
   put("scene_text", metadata.scene_text);
+  put("mesh_digests", metadata.mesh_digests);
   put("parameters", metadata.parameters);
   put("software_version", metadata.software_version);
   put("participant", metadata.participant);

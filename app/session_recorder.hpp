@@ -141,6 +141,7 @@ struct SessionMetadata {
   std::string tip_link;
   std::string scene_name;        ///< "harting", "setup_I", a file name, or "empty"
   std::string scene_text;        ///< the scene file text (robot::writeScene)
+  std::string mesh_digests;      ///< the robot's and the scene's meshes (app::meshDigestsText); may be empty
   std::string parameters;        ///< parameters in use, as text (JSON object recommended)
   std::string software_version;  ///< e.g. "0.1.0"
   std::string participant;       ///< free text (study participant id), may be empty

@@ -120,6 +120,7 @@ RecordedTeaching readRecordedTeaching(const SessionReader& reader, bool read_gra
   teaching.scene = reader.meta("scene_name", "empty");
   teaching.robot_urdf = reader.metadata().robot_urdf;
   teaching.scene_text = reader.metadata().scene_text;
+  teaching.mesh_digests = reader.metadata().mesh_digests;
   teaching.closed_cleanly = !reader.meta("end_time_utc").empty();
   teaching.areas = replayTeaching(reader.areas(), reader.samples(), reader.signals());
 

@@ -36,6 +36,7 @@ struct RecordedTeaching {
   std::string robot, tip, scene;
   /// The URDF and scene text the session was taught with (empty in sessions that predate them).
   std::string robot_urdf, scene_text;
+  std::string mesh_digests;  ///< SessionMetadata::mesh_digests
   /// False while the session is being written or after it was interrupted (no end_time_utc).
   bool closed_cleanly = false;
   std::vector<RecordedArea> areas;  ///< by index, ascending

@@ -40,6 +40,7 @@
 #include <sstream>
 
 #include "app/evaluation.hpp"
+#include "app/mesh_digest.hpp"
 #include "app/session_recorder.hpp"
 #include "app/workflow_session.hpp"
 #include "learning/confidence.hpp"
@@ -470,6 +471,7 @@ void MainWindow::startRecording() {
     metadata.tip_link = model_->tipLink();
     metadata.scene_name = scene_.name.empty() ? std::string("empty") : scene_.name;
     metadata.scene_text = robot::sceneToYaml(scene_);
+    metadata.mesh_digests = app::meshDigestsText(app::meshDigests(*model_, scene_));
     std::ostringstream parameters;
     parameters << "{\"backend\": \"" << backend_.text << "\"";
     for (const auto& declaration : parameters_->declarations()) {

@@ -21,6 +21,7 @@
 #include <iostream>
 
 #include "app/file_output.hpp"
+#include "app/mesh_digest.hpp"
 #include "app/session_schema.hpp"
 #include "robot/errors.hpp"
 #include "robot/resources.hpp"
@@ -264,6 +265,15 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
   }
   for (const std::string& note : robot::sceneNotes(scene)) std::fprintf(stderr, "note: %s\n", note.c_str());
   return scene;
+}
+
+void noteMeshesChangedSinceTeaching(const std::string& recorded, const robot::RobotModel& model, const robot::Scene& scene) {
+  static std::set<std::string> said;  // eval and plan load a session's robot and scene more than once
+  for (const std::string& part : app::meshesChanged(app::parseMeshDigests(recorded), model, scene)) {
+    if (!said.insert(part).second) continue;
+    std::fprintf(stderr, "note: the mesh of %s differs from the one the session was taught with (changed since); it is used as it is now\n",
+                 printable(part, 400).c_str());
+  }
 }
 
 bool progressShown() {

@@ -163,6 +163,11 @@ robot::RobotModel loadSessionRobot(const std::string& reference, const std::stri
                                    const std::string& named = "");
 robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text, const std::string& named = "");
 
+/// A note on stderr for each mesh `model` or `scene` reads that differs from the one the session
+/// was taught with (`recorded`: SessionMetadata::mesh_digests; empty in older sessions, which
+/// are not checked): the URDF and the scene the session stores name meshes, not their shapes.
+void noteMeshesChangedSinceTeaching(const std::string& recorded, const robot::RobotModel& model, const robot::Scene& scene);
+
 /// Adds --robot and --scene to a command reading a session, in the sense of loadSessionRobot's
 /// and loadSessionScene's `named`.
 void addMovedFilesOptions(CLI::App& command, std::string& robot_file, std::string& scene_file);

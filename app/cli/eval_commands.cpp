@@ -139,6 +139,7 @@ Session loadRecordedSession(const std::string& file, const std::string& robot_fi
   session.scene = teaching.scene;
   session.model = std::make_unique<robot::RobotModel>(loadSessionRobot(session.robot, teaching.robot_urdf, session.tip, robot_file));
   session.scene_data = loadSessionScene(session.scene, teaching.scene_text, scene_file);
+  noteMeshesChangedSinceTeaching(teaching.mesh_digests, *session.model, session.scene_data);
   robot::checkPosturesFit(session.scene_data, *session.model, robot_file.empty() ? session.robot : robot_file);
   if (!teaching.closed_cleanly) {
     std::fprintf(stderr, "note: the session '%s' was not closed cleanly (interrupted, or still being written); the evaluation covers what was recorded\n",
@@ -207,6 +208,7 @@ Session loadSession(const std::string& file, const std::string& robot_file, cons
     session.model = std::make_unique<robot::RobotModel>(
         loadSessionRobot(session.robot, json.value("robot_urdf", ""), session.tip, robot_file));
     session.scene_data = loadSessionScene(session.scene, json.value("scene_text", ""), scene_file);
+    noteMeshesChangedSinceTeaching(json.value("mesh_digests", ""), *session.model, session.scene_data);
     robot::checkPosturesFit(session.scene_data, *session.model, robot_file.empty() ? session.robot : robot_file);
     const int n = session.model->dof();
     // teach writes the robot's joint count; one edited to another count or type says the file

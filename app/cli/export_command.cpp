@@ -205,6 +205,7 @@ Json exportSession(const ExportOptions& options) {
     if (!over_fri) {
       model = std::make_unique<robot::RobotModel>(loadSessionRobot(teaching.robot, teaching.robot_urdf, teaching.tip, options.robot_file));
       scene = std::make_unique<robot::Scene>(loadSessionScene(teaching.scene, teaching.scene_text, options.scene_file));
+      noteMeshesChangedSinceTeaching(teaching.mesh_digests, *model, *scene);
       world = std::make_unique<robot::CollisionWorld>(*model, *scene);
       // The meshes the robot and the scene read are inputs too: an output in their place would
       // replace a cell's geometry with a table.

@@ -145,6 +145,7 @@ std::vector<Eigen::Vector3d> pointList(const Json& object, const char* key, cons
 struct SessionOverlay {
   std::string robot, tip, scene;
   std::string robot_urdf, scene_text;  ///< the copies taught with (empty in older sessions)
+  std::string mesh_digests;            ///< SessionMetadata::mesh_digests
   std::vector<render::AreaSamples> areas;
   std::vector<std::string> area_names;  ///< areas[k]'s name as taught (empty where the file keeps none)
   std::vector<Eigen::VectorXd> q_fixed;
@@ -170,6 +171,7 @@ SessionOverlay sessionFromJson(const Json& json, const std::string& file) {
     session.scene = json.at("scene").get<std::string>();
     if (json.contains("robot_urdf")) session.robot_urdf = json.at("robot_urdf").get<std::string>();
     if (json.contains("scene_text")) session.scene_text = json.at("scene_text").get<std::string>();
+    if (json.contains("mesh_digests")) session.mesh_digests = json.at("mesh_digests").get<std::string>();
     int k = 0;
     for (const Json& area : json.at("areas")) {
       render::AreaSamples samples;
@@ -208,6 +210,7 @@ SessionOverlay sessionFromRecording(const std::string& file) {
   session.scene = teaching.scene;
   session.robot_urdf = teaching.robot_urdf;
   session.scene_text = teaching.scene_text;
+  session.mesh_digests = teaching.mesh_digests;
   Eigen::Index unfinished = 0;
   for (const app::RecordedArea& area : teaching.areas) unfinished += area.unfinished_X.cols();
   if (unfinished > 0) {
@@ -314,6 +317,8 @@ Json renderPicture(const RenderOptions& options) {
   const std::string tip = !options.tip.empty() ? options.tip : session && options.robot.empty() ? session->tip : "";
   const robot::RobotModel model = options.robot.empty() && session ? loadSessionRobot(session->robot, session->robot_urdf, tip)
                                                                    : loadRobotNoting(robot_name, tip);
+  // The session's own robot and scene: their meshes as they were taught with.
+  if (session && options.robot.empty() && options.scene.empty()) noteMeshesChangedSinceTeaching(session->mesh_digests, model, scene);
   robot::checkPosturesFit(scene, model, robot_name);
   if (session && !session->dof.empty() && session->dof != std::to_string(model.dof())) {
     throw InputError("session: dof is " + printable(session->dof) + ", but the robot '" + session->robot + "' has " +

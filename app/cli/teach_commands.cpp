@@ -25,6 +25,7 @@
 #include "app/experiments.hpp"
 #include "app/file_output.hpp"
 #include "app/cli/cli_support.hpp"
+#include "app/mesh_digest.hpp"
 #include "app/session_recorder.hpp"
 #include "app/session_write_lock.hpp"
 #include "planning/itm_file.hpp"
@@ -259,6 +260,7 @@ Json runTeach(TeachOptions options) {
     metadata.scene_name = scene_reference;
     metadata.software_version = FLEXIROB_VERSION_STRING;
     metadata.scene_text = robot::sceneToYaml(scene);
+    metadata.mesh_digests = app::meshDigestsText(app::meshDigests(model, scene));
     metadata.parameters = Json{{"seed", options.seed}, {"learner", options.learner}, {"areas", options.areas},
                                {"diameter_m", options.diameter}, {"backend", options.backend}}.dump();
     app::RecorderOptions recorder_options;
@@ -390,6 +392,7 @@ Json runTeach(TeachOptions options) {
                         {"scene", scene_reference},
                         {"robot_urdf", readText(model.urdfPath())},
                         {"scene_text", robot::sceneToYaml(scene)},
+                        {"mesh_digests", app::meshDigestsText(app::meshDigests(model, scene))},
                         {"seed", options.seed},
                         {"learner", options.learner},
                         {"dof", model.dof()},

@@ -303,6 +303,34 @@ TEST_F(ExportCli, ADamagedSessionIsExportedOnlyWhenAskedAndSaysSo) {
   fs::remove(damaged);
 }
 
+// A session records what its robot's meshes held: one changed after teaching is said when the
+// session is drawn or exported again (the stored URDF names the mesh, not its shape).
+TEST_F(ExportCli, AMeshChangedSinceTeachingIsNoted) {
+  const fs::path cell = scratchDir() / "changed-mesh-cell";
+  fs::remove_all(cell);
+  fs::create_directories(cell);
+  fs::copy(resolveRobotPath("lwr4").parent_path(), cell / "lwr4", fs::copy_options::recursive);
+  const fs::path session = cell / "taught.flexirob";
+  const auto taught = runCliBinary("teach --robot " + (cell / "lwr4" / "lwr4.urdf").string() +
+                                   " --scene setup_A --areas 1 --seed 3 --check-points 0 --out " + session.string());
+  ASSERT_EQ(taught.exit_code, 0) << taught.err;
+  const std::string render = "render --session " + session.string() + " --width 64 --height 48 --out " + (cell / "view.png").string();
+  const std::string note = "note: the mesh of link 'link1' collision 0 (";
+  const auto before = runCliBinary(render);
+  ASSERT_EQ(before.exit_code, 0) << before.err;
+  EXPECT_EQ(before.err.find(note), std::string::npos) << before.err;
+  fs::copy_file(cell / "lwr4" / "meshes" / "link2_collision.stl", cell / "lwr4" / "meshes" / "link1_collision.stl",
+                fs::copy_options::overwrite_existing);
+  const auto after = runCliBinary(render);
+  ASSERT_EQ(after.exit_code, 0) << after.err;
+  EXPECT_NE(after.err.find(note), std::string::npos) << after.err;
+  const auto exported =
+      runCliBinary("export --session " + session.string() + " --stream " + (cell / "stream.csv").string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  EXPECT_NE(exported.err.find(note), std::string::npos) << exported.err;
+  fs::remove_all(cell);
+}
+
 // A copy of the session edited with `sql`, handed to `command` with `--session COPY` and an
 // output `output_option NAME`: refused in one line naming `reason`, the output not written.
 auto expectAnEditedCopyRefused(const fs::path& session, const std::string& name, const std::string& sql, const std::string& command,
