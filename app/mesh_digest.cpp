@@ -35,7 +35,8 @@ std::string oneLine(std::string name) {
   return name;
 }
 
-// Part -> mesh file, for every mesh the robot and the scene read.
+}  // namespace
+
 std::map<std::string, std::filesystem::path> meshFiles(const robot::RobotModel& model, const robot::Scene& scene) {
   std::map<std::string, std::filesystem::path> files;
   for (const robot::Body& body : model.bodies()) {
@@ -58,8 +59,6 @@ std::map<std::string, std::filesystem::path> meshFiles(const robot::RobotModel& 
   }
   return files;
 }
-
-}  // namespace
 
 MeshDigests meshDigests(const robot::RobotModel& model, const robot::Scene& scene) {
   MeshDigests digests;

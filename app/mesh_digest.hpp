@@ -2,6 +2,7 @@
 // Digests of the mesh files a robot and a scene read. A session stores its robot's URDF and its
 // scene's text, not their meshes: it records a digest of each, so that a mesh changed after
 // teaching is noticed when the session is evaluated, planned, exported or drawn again.
+#include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
@@ -14,6 +15,9 @@ namespace flexirob::app {
 /// Part ("link 'l3' collision 1", "obstacle 'crate'") -> digest of the bytes of its mesh file
 /// (64-bit FNV-1a, hexadecimal; "unreadable" for a file that does not read).
 using MeshDigests = std::map<std::string, std::string>;
+
+/// Part (as MeshDigests names it) -> the mesh file it reads, for every mesh of `model` and `scene`.
+std::map<std::string, std::filesystem::path> meshFiles(const robot::RobotModel& model, const robot::Scene& scene);
 
 MeshDigests meshDigests(const robot::RobotModel& model, const robot::Scene& scene);
 

@@ -267,6 +267,32 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
   return scene;
 }
 
+std::string robotFileOf(const std::string& robot_argument) {
+  const auto& builtins = builtinRobotNames();
+  const bool builtin = std::find(builtins.begin(), builtins.end(), robot_argument) != builtins.end();
+  return builtin ? resolveRobotPath(robot_argument).string() : robot_argument;
+}
+
+std::string sceneFileOf(const std::string& scene_argument) {
+  if (scene_argument.empty() || scene_argument == "empty") return {};
+  const auto& builtins = robot::builtinSceneNames();
+  const bool builtin = std::find(builtins.begin(), builtins.end(), scene_argument) != builtins.end();
+  return builtin ? (resourceDir() / "scenes" / (scene_argument + ".yaml")).string() : scene_argument;
+}
+
+void refuseOutputsOverMeshes(const std::vector<std::pair<std::string, std::string>>& outputs, const robot::RobotModel& model,
+                             const robot::Scene& scene) {
+  const auto meshes = app::meshFiles(model, scene);
+  for (const auto& [option, path] : outputs) {
+    if (path.empty()) continue;
+    for (const auto& [part, mesh] : meshes) {
+      if (app::isExistingFile(path, mesh)) {
+        throw InputError(option + ": '" + path + "' is the mesh of " + printable(part, 200) + ", which the run reads; give another file");
+      }
+    }
+  }
+}
+
 void noteMeshesChangedSinceTeaching(const std::string& recorded, const robot::RobotModel& model, const robot::Scene& scene) {
   static std::set<std::string> said;  // eval and plan load a session's robot and scene more than once
   for (const std::string& part : app::meshesChanged(app::parseMeshDigests(recorded), model, scene)) {

@@ -163,6 +163,17 @@ robot::RobotModel loadSessionRobot(const std::string& reference, const std::stri
                                    const std::string& named = "");
 robot::Scene loadSessionScene(const std::string& reference, const std::string& stored_scene_text, const std::string& named = "");
 
+/// The file a robot argument reads: a built-in's URDF among the resources, else the argument.
+std::string robotFileOf(const std::string& robot_argument);
+/// The file a scene argument reads: a built-in's among the resources, else the argument; empty
+/// for the empty scene.
+std::string sceneFileOf(const std::string& scene_argument);
+
+/// Refuses (InputError naming the option) an output ({option, path}) that is a mesh `model` or
+/// `scene` reads: the output would replace a cell's geometry.
+void refuseOutputsOverMeshes(const std::vector<std::pair<std::string, std::string>>& outputs, const robot::RobotModel& model,
+                             const robot::Scene& scene);
+
 /// A note on stderr for each mesh `model` or `scene` reads that differs from the one the session
 /// was taught with (`recorded`: SessionMetadata::mesh_digests; empty in older sessions, which
 /// are not checked): the URDF and the scene the session stores name meshes, not their shapes.

@@ -91,26 +91,6 @@ void describeRefit(const std::unique_ptr<learning::Learner>& learner, Json& entr
   }
 }
 
-void refuseOutputsOverMeshes(const std::vector<std::pair<std::string, std::string>>& outputs, const robot::RobotModel& model,
-                             const robot::Scene& scene) {
-  std::vector<std::pair<std::string, std::filesystem::path>> meshes;
-  for (const robot::Body& body : model.bodies()) {
-    for (const auto* geometries : {&body.visuals, &body.collisions}) {
-      for (const robot::Geometry& geometry : *geometries) {
-        if (!geometry.mesh_file.empty()) meshes.emplace_back("a mesh of the robot's link '" + body.name + "'", geometry.mesh_file);
-      }
-    }
-  }
-  for (const robot::Obstacle& obstacle : scene.obstacles) {
-    if (!obstacle.mesh_file.empty()) meshes.emplace_back("the mesh of the scene's obstacle '" + obstacle.name + "'", obstacle.mesh_file);
-  }
-  for (const auto& [option, path] : outputs) {
-    for (const auto& [what, mesh] : meshes) {
-      if (app::isExistingFile(path, mesh)) throw InputError(option + ": '" + path + "' is " + what + "; give another file");
-    }
-  }
-}
-
 Json exportSession(const ExportOptions& options) {
   const std::vector<std::pair<std::string, std::string>> outputs = {
       {"--samples", options.samples}, {"--stream", options.stream}, {"--model", options.model}, {"--graph", options.graph}};
@@ -125,17 +105,8 @@ Json exportSession(const ExportOptions& options) {
   }
   // The robot and scene files read in place of the session's copies are inputs as well; a
   // built-in name reads its file among the resources, not one of that name here.
-  const auto& robots = builtinRobotNames();
-  const auto& scenes = robot::builtinSceneNames();
-  if (!options.robot_file.empty()) {
-    const bool builtin = std::find(robots.begin(), robots.end(), options.robot_file) != robots.end();
-    chosen.emplace(sameFileKey(builtin ? resolveRobotPath(options.robot_file).string() : options.robot_file), "--robot");
-  }
-  if (!options.scene_file.empty()) {
-    const bool builtin = std::find(scenes.begin(), scenes.end(), options.scene_file) != scenes.end();
-    chosen.emplace(sameFileKey(builtin ? (resourceDir() / "scenes" / (options.scene_file + ".yaml")).string() : options.scene_file),
-                   "--scene");
-  }
+  if (!options.robot_file.empty()) chosen.emplace(sameFileKey(robotFileOf(options.robot_file)), "--robot");
+  if (const std::string file = sceneFileOf(options.scene_file); !file.empty()) chosen.emplace(sameFileKey(file), "--scene");
   bool any = false;
   for (const auto& [option, path] : outputs) {
     if (path.empty()) continue;
@@ -153,6 +124,11 @@ Json exportSession(const ExportOptions& options) {
     std::ifstream in(options.session);
     if (!in) throw InputError("--session: cannot read '" + options.session + "'");
     if (startsAsJson(in)) {
+      // Told apart from any other text that starts as JSON might (a scene's "name: ...").
+      const Json json = Json::parse(in, nullptr, false);
+      if (!json.is_object() || !json.contains("format") || json.at("format") != "flexirob-session-json") {
+        throw InputError("--session: '" + options.session + "' is not a session file (neither a recorded session nor a JSON session)");
+      }
       throw InputError("--session: '" + options.session +
                        "' is a JSON session, which holds its areas as text already; export reads the sessions teach and the GUI record");
     }
@@ -172,6 +148,16 @@ Json exportSession(const ExportOptions& options) {
   // The graph is read only where it is asked for: a damaged snapshot does not stand in the way
   // of the samples.
   const app::RecordedTeaching teaching = app::readRecordedTeaching(reader, false);
+  // The robot and scene files the session names are its cell's own (the session keeps copies,
+  // their owner does not): no output replaces them.
+  for (const auto& [what, file] : {std::pair<std::string, std::string>{"the robot's URDF", robotFileOf(teaching.robot)},
+                                   {"the scene file", sceneFileOf(teaching.scene)}}) {
+    for (const auto& [option, path] : outputs) {
+      if (!file.empty() && !path.empty() && app::isExistingFile(path, file)) {
+        throw InputError(option + ": '" + path + "' is " + what + " the session was taught with; give another file");
+      }
+    }
+  }
   const Json stored_parameters = Json::parse(reader.metadata().parameters, nullptr, false);
   // The last ITM snapshot, read once for --stream and --graph.
   const std::optional<app::ItmRecord> snapshot =

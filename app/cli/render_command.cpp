@@ -314,11 +314,13 @@ Json renderPicture(const RenderOptions& options) {
                        "'; leave --robot out to draw the session on its own robot");
     }
   }
-  const std::string tip = !options.tip.empty() ? options.tip : session && options.robot.empty() ? session->tip : "";
+  // A --robot given with a session is the session's own (refused above otherwise): its tip too.
+  const std::string tip = !options.tip.empty() ? options.tip : session ? session->tip : "";
   const robot::RobotModel model = options.robot.empty() && session ? loadSessionRobot(session->robot, session->robot_urdf, tip)
                                                                    : loadRobotNoting(robot_name, tip);
   // The session's own robot and scene: their meshes as they were taught with.
   if (session && options.robot.empty() && options.scene.empty()) noteMeshesChangedSinceTeaching(session->mesh_digests, model, scene);
+  refuseOutputsOverMeshes({{"--out", options.out}}, model, scene);
   robot::checkPosturesFit(scene, model, robot_name);
   if (session && !session->dof.empty() && session->dof != std::to_string(model.dof())) {
     throw InputError("session: dof is " + printable(session->dof) + ", but the robot '" + session->robot + "' has " +

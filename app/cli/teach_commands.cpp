@@ -77,7 +77,8 @@ bool endsWith(const std::string& text, const std::string& suffix) {
 }
 
 // A recording, a scene or anything else already at --out is data a run must not destroy; the
-// scene and URDF the run reads (as resolved: a built-in name, the scene's own robot) never.
+// scene, the URDF and the meshes the run reads (as resolved: a built-in name, the scene's own
+// robot) never, --overwrite or not.
 void checkNoInputIsAt(const std::filesystem::path& output, const robot::Scene& scene, const robot::RobotModel& model,
                       const std::string& named) {
   namespace fs = std::filesystem;
@@ -89,6 +90,7 @@ void checkNoInputIsAt(const std::filesystem::path& output, const robot::Scene& s
       throw InputError("--out: " + named + " is " + what + " the run reads; give another file");
     }
   }
+  refuseOutputsOverMeshes({{"--out", output.string()}}, model, scene);
 }
 
 void checkNothingIsOverwritten(const TeachOptions& options, const robot::Scene& scene, const robot::RobotModel& model) {

@@ -225,7 +225,7 @@ TEST_F(ExportCli, AnOutputInPlaceOfAMeshTheRobotReadsIsRefused) {
   const auto result = runCliBinary("export --session " + session_->string() + " --robot " + (robot_dir / "lwr4.urdf").string() +
                                    " --stream " + stream.string() + " --graph " + mesh.string());
   EXPECT_EQ(result.exit_code, 2) << result.err;
-  EXPECT_NE(result.err.find("is a mesh of the robot's link 'link1'"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("is the mesh of link 'link1' collision 0, which the run reads"), std::string::npos) << result.err;
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
   EXPECT_EQ(fileBytes(mesh), mesh_bytes);
   EXPECT_FALSE(fs::exists(stream));
@@ -329,6 +329,62 @@ TEST_F(ExportCli, AMeshChangedSinceTeachingIsNoted) {
   ASSERT_EQ(exported.exit_code, 0) << exported.err;
   EXPECT_NE(exported.err.find(note), std::string::npos) << exported.err;
   fs::remove_all(cell);
+}
+
+// The files of a cell taught in (its URDF, its scene file, their meshes) are inputs of every
+// command that reads the cell, named by a session or by option: no output replaces them,
+// teach --overwrite included.
+TEST_F(ExportCli, NoOutputReplacesAFileOfTheCellTaughtIn) {
+  const fs::path cell = scratchDir() / "own-cell";
+  fs::remove_all(cell);
+  fs::create_directories(cell);
+  fs::copy(resolveRobotPath("lwr4").parent_path(), cell / "lwr4", fs::copy_options::recursive);
+  fs::copy_file(resourceDir() / "scenes" / "setup_A.yaml", cell / "setup_A.yaml");
+  const fs::path urdf = cell / "lwr4" / "lwr4.urdf";
+  const fs::path scene = cell / "setup_A.yaml";
+  const fs::path mesh = cell / "lwr4" / "meshes" / "link3_collision.stl";
+  const fs::path session = cell / "taught.flexirob";
+  const auto taught = runCliBinary("teach --robot " + urdf.string() + " --scene " + scene.string() +
+                                   " --areas 1 --seed 3 --check-points 0 --out " + session.string());
+  ASSERT_EQ(taught.exit_code, 0) << taught.err;
+  const std::string urdf_bytes = fileBytes(urdf), scene_bytes = fileBytes(scene), mesh_bytes = fileBytes(mesh);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"export --session " + session.string() + " --samples " + urdf.string(), "is the robot's URDF the session was taught with"},
+      {"export --session " + session.string() + " --stream " + scene.string(), "is the scene file the session was taught with"},
+      {"render --robot " + urdf.string() + " --out " + mesh.string(), "is the mesh of link 'link3' collision 0, which the run reads"},
+      {"teach --robot " + urdf.string() + " --scene setup_A --areas 1 --out " + mesh.string() + " --overwrite",
+       "is the mesh of link 'link3' collision 0, which the run reads"},
+  };
+  for (const auto& [command, reason] : cases) {
+    const auto result = runCliBinary(command);
+    EXPECT_EQ(result.exit_code, 2) << command << "\n" << result.err;
+    EXPECT_NE(result.err.find(reason), std::string::npos) << command << "\n" << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  }
+  EXPECT_EQ(fileBytes(urdf), urdf_bytes);
+  EXPECT_EQ(fileBytes(scene), scene_bytes);
+  EXPECT_EQ(fileBytes(mesh), mesh_bytes);
+  // A scene file given as the session is none, and said so: one whose first word is "name" had
+  // been called a JSON session (JSON may start with "null").
+  testing::writeText(cell / "scene.flexirob", "name: my cell\nobstacles: []\n");
+  const auto not_a_session =
+      runCliBinary("export --session " + (cell / "scene.flexirob").string() + " --samples " + (cell / "s.csv").string());
+  EXPECT_EQ(not_a_session.exit_code, 2);
+  EXPECT_NE(not_a_session.err.find("is not a session file"), std::string::npos) << not_a_session.err;
+  fs::remove_all(cell);
+}
+
+// A session taught to a tip short of the chain's end is drawn with that tip when --robot names
+// its own robot again (the default tip, the chain's end, had made its postures not fit).
+TEST_F(ExportCli, RenderKeepsTheSessionsTipWhenRobotIsGiven) {
+  const fs::path session = scratchDir() / "tip-link6.flexirob";
+  const auto taught = runCliBinary("teach --robot lwr4 --tip link6 --scene empty --areas 1 --seed 3 --check-points 0 --out " +
+                                   session.string());
+  ASSERT_EQ(taught.exit_code, 0) << taught.err;
+  const auto drawn = runCliBinary("render --session " + session.string() + " --robot lwr4 --width 64 --height 48 --out " +
+                                  (scratchDir() / "tip-link6.png").string());
+  EXPECT_EQ(drawn.exit_code, 0) << drawn.err;
+  fs::remove(session);
 }
 
 // A copy of the session edited with `sql`, handed to `command` with `--session COPY` and an
