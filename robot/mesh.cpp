@@ -47,6 +47,23 @@ std::string lowerExtension(const fs::path& file) {
 // STL needs a look before assimp: a binary STL declares its triangle count in the header, so a
 // truncated file or an absurd count is caught without reading (or allocating) anything more.
 // ASCII STL (starts with "solid" and is text) carries no count and is bounded by the file size.
+// Whether an ASCII STL declares any facet: one without ("solid x" and "endsolid x" alone) made
+// the importer say "Mesh with invalid primitive type", which names neither the file's fault nor
+// the fix.
+bool asciiStlHasAFacet(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  const std::string word = "facet";
+  std::string window;
+  std::array<char, 65536> chunk{};
+  while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
+    // The last few characters of the chunk before, so that a word across two chunks is found.
+    window = window.substr(window.size() > word.size() ? window.size() - word.size() : 0) +
+             std::string(chunk.data(), static_cast<std::size_t>(in.gcount()));
+    if (window.find(word) != std::string::npos) return true;
+  }
+  return false;
+}
+
 void precheckStl(const fs::path& file, std::uintmax_t file_bytes, const MeshLimits& limits) {
   std::ifstream in(file, std::ios::binary);
   std::array<char, 84> head{};
@@ -62,8 +79,11 @@ void precheckStl(const fs::path& file, std::uintmax_t file_bytes, const MeshLimi
   const auto notAnStl = [&file] {
     return InputError("mesh '" + file.string() + "' is text but not an ASCII STL (which begins with \"solid\")");
   };
+  const auto checkAscii = [&file] {
+    if (!asciiStlHasAFacet(file)) throw InputError("mesh '" + file.string() + "' contains no triangles (an ASCII STL without a facet)");
+  };
   if (got < 84) {
-    if (starts_solid) return;  // a tiny ASCII STL
+    if (starts_solid) return checkAscii();  // a tiny ASCII STL
     if (printable) throw notAnStl();
     throw InputError("mesh '" + file.string() + "' is truncated (shorter than a binary STL header)");
   }
@@ -78,7 +98,7 @@ void precheckStl(const fs::path& file, std::uintmax_t file_bytes, const MeshLimi
     return;
   }
   // Not a consistent binary STL: accept it only as text.
-  if (starts_solid && printable) return;
+  if (starts_solid && printable) return checkAscii();
   if (printable) throw notAnStl();
   throw InputError("mesh '" + file.string() + "' is truncated or corrupt: the binary STL header declares " +
                    std::to_string(count) + " triangles (" + std::to_string(expected) + " bytes), the file has " +

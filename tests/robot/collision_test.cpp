@@ -527,11 +527,11 @@ TEST(CollisionWorld, LeavesPairsAroundShoulderElbowAndWristToTheJointLimits) {
 // words name a file, the message also the link and the robot it belongs to.
 TEST(CollisionWorld, AnUnreadableLinkMeshIsNamedWithItsLinkAndRobot) {
   flexirob::testing::TempDir dir;
-  dir.write("meshes/hand.stl", "solid x\nendsolid x\n");
+  dir.write("meshes/hand.dae", "<COLLADA><this is not");
   const auto urdf = dir.write("arm.urdf", R"(<robot name="meshy"><link name="base"/>
     <joint name="j" type="revolute"><parent link="base"/><child link="hand"/><origin xyz="0 0 0.3"/>
       <axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="1" effort="10"/></joint>
-    <link name="hand"><collision><geometry><mesh filename="meshes/hand.stl"/></geometry></collision></link></robot>)");
+    <link name="hand"><collision><geometry><mesh filename="meshes/hand.dae"/></geometry></collision></link></robot>)");
   const RobotModel model = RobotModel::fromUrdfFile(urdf);
   try {
     CollisionWorld world(model, Scene{});
@@ -539,7 +539,7 @@ TEST(CollisionWorld, AnUnreadableLinkMeshIsNamedWithItsLinkAndRobot) {
   } catch (const InputError& error) {
     const std::string message = error.what();
     EXPECT_EQ(message.rfind("link 'hand' of robot 'meshy': cannot load mesh '", 0), 0U) << message;
-    EXPECT_NE(message.find("hand.stl"), std::string::npos) << message;
+    EXPECT_NE(message.find("hand.dae"), std::string::npos) << message;
   }
 }
 

@@ -289,6 +289,11 @@ TEST(MeshLoader, RefusesMissingEmptyAndGarbageFiles) {
   expectOneLineInputError([&] { loadMesh(dir / "readme.stl"); }, "text but not an ASCII STL");
   std::ofstream(dir / "short.stl") << "v 0 0 0\n";
   expectOneLineInputError([&] { loadMesh(dir / "short.stl"); }, "text but not an ASCII STL");
+  // An ASCII STL without a facet, short and long: no triangles, said so.
+  std::ofstream(dir / "hollow.stl") << "solid x\nendsolid x\n";
+  expectOneLineInputError([&] { loadMesh(dir / "hollow.stl"); }, "contains no triangles (an ASCII STL without a facet)");
+  std::ofstream(dir / "hollow_long.stl") << "solid exported by a tool that wrote no geometry\n" << std::string(200000, ' ') << "\nendsolid\n";
+  expectOneLineInputError([&] { loadMesh(dir / "hollow_long.stl"); }, "contains no triangles");
   fs::remove_all(dir);
 }
 
