@@ -240,17 +240,26 @@ std::vector<std::uint8_t> doublesToBlob(const double* values, std::size_t count)
 }
 
 bool isSessionDatabase(const std::filesystem::path& file) {
-  // The database header: "SQLite format 3\0", then the application_id big-endian at offset 68.
   // Only a regular file: opening a pipe to read would wait for a writer.
   std::error_code error;
   if (!std::filesystem::is_regular_file(file, error)) return false;
+  // The database header: "SQLite format 3\0", then the application_id big-endian at offset 68.
   std::ifstream in(file, std::ios::binary);
   std::array<char, 72> header{};
   if (!in.read(header.data(), header.size())) return false;
   if (std::memcmp(header.data(), "SQLite format 3", 16) != 0) return false;
   std::uint32_t id = 0;
   for (int i = 68; i < 72; ++i) id = (id << 8) | static_cast<std::uint8_t>(header[static_cast<std::size_t>(i)]);
-  return id == static_cast<std::uint32_t>(kSessionApplicationId);
+  if (id == static_cast<std::uint32_t>(kSessionApplicationId)) return true;
+  // A recording still being written, or one that ended in a crash, holds its application_id in
+  // its write-ahead log until SQLite copies the log back: SQLite itself reads it there.
+  if (std::filesystem::file_size(file.string() + "-wal", error) == 0 || error) return false;
+  try {
+    SqliteDatabase db(file.string(), SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX);
+    return db.queryInt("PRAGMA application_id") == kSessionApplicationId;
+  } catch (const SqliteError&) {
+    return false;
+  }
 }
 
 }  // namespace flexirob::app

@@ -44,25 +44,30 @@ std::string lowerExtension(const fs::path& file) {
   return ext;
 }
 
-// STL needs a look before assimp: a binary STL declares its triangle count in the header, so a
-// truncated file or an absurd count is caught without reading (or allocating) anything more.
-// ASCII STL (starts with "solid" and is text) carries no count and is bounded by the file size.
-// Whether an ASCII STL declares any facet: one without ("solid x" and "endsolid x" alone) made
-// the importer say "Mesh with invalid primitive type", which names neither the file's fault nor
-// the fix.
+// Whether an ASCII STL declares any facet ("facet normal ..."): one without ("solid x" and
+// "endsolid x" alone) made the importer say "Mesh with invalid primitive type", which names
+// neither the file's fault nor the fix.
 bool asciiStlHasAFacet(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   const std::string word = "facet";
   std::string window;
   std::array<char, 65536> chunk{};
   while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
-    // The last few characters of the chunk before, so that a word across two chunks is found.
+    // The end of the chunk before, so that a keyword across two chunks is found.
     window = window.substr(window.size() > word.size() ? window.size() - word.size() : 0) +
              std::string(chunk.data(), static_cast<std::size_t>(in.gcount()));
-    if (window.find(word) != std::string::npos) return true;
+    // The keyword, followed by a blank: not "facets" in the solid's name.
+    for (std::size_t at = window.find(word); at != std::string::npos; at = window.find(word, at + 1)) {
+      const std::size_t after = at + word.size();
+      if (after < window.size() && (window[after] == ' ' || window[after] == '\t')) return true;
+    }
   }
   return false;
 }
+
+// STL needs a look before assimp: a binary STL declares its triangle count in the header, so a
+// truncated file or an absurd count is caught without reading (or allocating) anything more.
+// ASCII STL (starts with "solid" and is text) carries no count and is bounded by the file size.
 
 void precheckStl(const fs::path& file, std::uintmax_t file_bytes, const MeshLimits& limits) {
   std::ifstream in(file, std::ios::binary);

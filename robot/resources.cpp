@@ -63,6 +63,10 @@ fs::path resolveRobotPath(const std::string& robot_argument) {
 std::string unreadableFileReason(const fs::path& path) {
   std::error_code error;
   const fs::file_status status = fs::status(path, error);
+  // A folder on the way that cannot be searched, a name too long: not a missing file.
+  if (error && error != std::errc::no_such_file_or_directory && error != std::errc::not_a_directory) {
+    return "cannot read it: " + error.message();
+  }
   if (!fs::exists(status)) return fs::is_symlink(fs::symlink_status(path, error)) ? "a broken symbolic link" : "no such file";
   if (fs::is_directory(status)) return "it is a folder";
   if (!fs::is_regular_file(status)) return "it is not a regular file";

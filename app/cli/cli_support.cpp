@@ -372,13 +372,10 @@ std::string commandMissing(const CLI::App& app) {
     listed += (listed.empty() ? "" : ", ") + sub->get_name();
   }
   const std::string where = command == &app ? "" : command->get_name() + ": ";
-  std::string word;
-  for (const std::string& extra : app.remaining(true)) {
-    if (!extra.empty() && extra.front() != '-') {
-      word = extra;
-      break;
-    }
-  }
+  // The word where the command was expected, right after the command given: a later one is an
+  // option's value (`eval --session s.flexirob`, the command left out).
+  const std::vector<std::string> rest = app.remaining(true);
+  const std::string word = !rest.empty() && !rest.front().empty() && rest.front().front() != '-' ? rest.front() : std::string();
   if (word.empty()) return where + "a command is needed (" + listed + ")";
   const std::string guess = closestName(word, names, std::max<std::size_t>(1, word.size() / 3));
   return where + "unknown command '" + printable(word) + "'" + (guess.empty() ? "" : " (did you mean " + guess + "?)") +

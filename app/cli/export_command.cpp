@@ -149,11 +149,13 @@ Json exportSession(const ExportOptions& options) {
   // of the samples.
   const app::RecordedTeaching teaching = app::readRecordedTeaching(reader, false);
   // The robot and scene files the session names are its cell's own (the session keeps copies,
-  // their owner does not): no output replaces them.
+  // their owner does not): no output replaces them. teach names a file by its absolute path; the
+  // GUI names a robot or scene by the name it gives itself, which is no file here.
   for (const auto& [what, file] : {std::pair<std::string, std::string>{"the robot's URDF", robotFileOf(teaching.robot)},
                                    {"the scene file", sceneFileOf(teaching.scene)}}) {
+    if (file.empty() || !std::filesystem::path(file).is_absolute()) continue;
     for (const auto& [option, path] : outputs) {
-      if (!file.empty() && !path.empty() && app::isExistingFile(path, file)) {
+      if (!path.empty() && app::isExistingFile(path, file)) {
         throw InputError(option + ": '" + path + "' is " + what + " the session was taught with; give another file");
       }
     }

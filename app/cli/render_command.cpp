@@ -298,6 +298,7 @@ Json renderPicture(const RenderOptions& options) {
     }
   }
   const std::string robot_name = !options.robot.empty() ? options.robot : session ? session->robot : robot::robotFor("", scene);
+  bool robot_is_the_sessions = options.robot.empty();
   if (session && !options.robot.empty()) {
     // The session's postures and samples belong to its robot: drawn on another arm of the same
     // joint count they would show postures that never put that arm's tip into the samples.
@@ -309,17 +310,18 @@ Json renderPicture(const RenderOptions& options) {
       session_robot = canonical(session->robot);
     } catch (const InputError&) {
     }
+    robot_is_the_sessions = !session_robot.empty() && canonical(options.robot) == session_robot;
     if (!session_robot.empty() && canonical(options.robot) != session_robot) {
       throw InputError("--robot '" + options.robot + "' is not the session's robot '" + session->robot +
                        "'; leave --robot out to draw the session on its own robot");
     }
   }
-  // A --robot given with a session is the session's own (refused above otherwise): its tip too.
-  const std::string tip = !options.tip.empty() ? options.tip : session ? session->tip : "";
+  // The session's own robot, named again by --robot or not: its tip too.
+  const std::string tip = !options.tip.empty() ? options.tip : session && robot_is_the_sessions ? session->tip : "";
   const robot::RobotModel model = options.robot.empty() && session ? loadSessionRobot(session->robot, session->robot_urdf, tip)
                                                                    : loadRobotNoting(robot_name, tip);
   // The session's own robot and scene: their meshes as they were taught with.
-  if (session && options.robot.empty() && options.scene.empty()) noteMeshesChangedSinceTeaching(session->mesh_digests, model, scene);
+  if (session && robot_is_the_sessions && options.scene.empty()) noteMeshesChangedSinceTeaching(session->mesh_digests, model, scene);
   refuseOutputsOverMeshes({{"--out", options.out}}, model, scene);
   robot::checkPosturesFit(scene, model, robot_name);
   if (session && !session->dof.empty() && session->dof != std::to_string(model.dof())) {

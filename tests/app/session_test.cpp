@@ -316,6 +316,36 @@ TEST_F(SessionTest, AClosedSessionIsOneFileThatReadingLeavesAlone) {
   EXPECT_EQ(names, std::vector<std::string>{"alone.flexirob"}) << "no -wal or -shm files beside a finished session";
 }
 
+// A session is told by its header, and while it is written (or after a crash) by its
+// write-ahead log, which holds the header's application_id until SQLite copies it back.
+TEST_F(SessionTest, ASessionIsKnownWhileRecordedAndAfterItClosed) {
+  const auto file = path("live.flexirob");
+  {
+    SessionRecorder recorder(file, exampleMetadata());
+    for (int i = 0; i < 10; ++i) {
+      while (!recorder.recordState(exampleState(i))) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    while (recorder.status().commits == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    ASSERT_GT(fs::file_size(file.string() + "-wal"), 0U) << "the recording is still in its log";
+    EXPECT_TRUE(isSessionDatabase(file));
+    recorder.close();
+  }
+  EXPECT_TRUE(isSessionDatabase(file));
+  // Another application's SQLite database, with its own log beside it, is none; nor is text.
+  const auto other = path("other.db");
+  {
+    SqliteDatabase db(other.string(), 0x00000002 | 0x00000004);  // SQLITE_OPEN_READWRITE | CREATE
+    db.exec("PRAGMA journal_mode=WAL", "wal");
+    db.exec("CREATE TABLE t(x); INSERT INTO t VALUES(1)", "table");
+    EXPECT_GT(fs::file_size(other.string() + "-wal"), 0U);
+    EXPECT_FALSE(isSessionDatabase(other));
+  }
+  EXPECT_FALSE(isSessionDatabase(other));
+  std::ofstream(path("text.flexirob")) << "SQLite format 3 is how a session begins";
+  EXPECT_FALSE(isSessionDatabase(path("text.flexirob")));
+  EXPECT_FALSE(isSessionDatabase(path("absent.flexirob")));
+}
+
 TEST_F(SessionTest, RefusesToOverwriteAnExistingFile) {
   const auto file = path("exists.flexirob");
   std::ofstream(file) << "keep me";

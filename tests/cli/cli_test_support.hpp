@@ -28,7 +28,8 @@ inline CliResult runCliBinary(const std::string& arguments) {
   const int err_fd = mkstemp(err_template);
   if (err_fd >= 0) close(err_fd);
   const std::string err_file = err_template;
-  const std::string command = std::string(FLEXIROB_CLI_EXECUTABLE) + " " + arguments + " 2>" + err_file;
+  // Whatever the calling shell sets: progress on stderr is asked for by the tests that want it.
+  const std::string command = "env -u FLEXIROB_PROGRESS " + std::string(FLEXIROB_CLI_EXECUTABLE) + " " + arguments + " 2>" + err_file;
   CliResult result;
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return result;

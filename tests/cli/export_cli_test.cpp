@@ -237,11 +237,16 @@ TEST_F(ExportCli, AnOutputInPlaceOfAMeshTheRobotReadsIsRefused) {
 TEST_F(ExportCli, AnOutputNamedAsABuiltInRobotOrSceneIsNotTakenForIt) {
   const fs::path folder = scratchDir() / "named-as-builtins";
   fs::create_directories(folder);
-  const fs::path before = fs::current_path();
-  fs::current_path(folder);
-  const auto result =
-      runCliBinary("export --session " + session_->string() + " --robot lwr4 --scene setup_A --samples lwr4 --stream setup_A");
-  fs::current_path(before);
+  struct WorkingFolder {
+    fs::path before = fs::current_path();
+    explicit WorkingFolder(const fs::path& folder) { fs::current_path(folder); }
+    ~WorkingFolder() { fs::current_path(before); }
+  };
+  testing::CliResult result;
+  {
+    const WorkingFolder inside(folder);
+    result = runCliBinary("export --session " + session_->string() + " --robot lwr4 --scene setup_A --samples lwr4 --stream setup_A");
+  }
   EXPECT_EQ(result.exit_code, 0) << result.err;
   EXPECT_TRUE(fs::is_regular_file(folder / "lwr4"));
   EXPECT_TRUE(fs::is_regular_file(folder / "setup_A"));

@@ -239,6 +239,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadInvocation{"no-such-command", "unknown command 'no-such-command'; the commands are robot, fk,"},
                       BadInvocation{"eval reachabel --session s.flexirob", "eval: unknown command 'reachabel' (did you mean reachable?)"},
                       BadInvocation{"learn", "learn: a command is needed (fit, predict)"},
+                      BadInvocation{"eval --session s.flexirob", "eval: a command is needed (reachable, scene-model, trajectories)"},
                       // A slip in an option's name: the option meant is named.
                       BadInvocation{"teach --area 2 --out x.db", "(--area: did you mean --areas?)"},
                       BadInvocation{"reach --robot lwr4 --taget=0,0,1", "(--taget: did you mean --target?)"}),
