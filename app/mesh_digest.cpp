@@ -60,17 +60,23 @@ std::map<std::string, std::filesystem::path> meshFiles(const robot::RobotModel& 
   return files;
 }
 
-MeshDigests meshDigests(const robot::RobotModel& model, const robot::Scene& scene) {
+namespace {
+
+// The digest of each part's mesh; a mesh several parts share is read once.
+MeshDigests digestsOf(const std::map<std::string, std::filesystem::path>& files) {
   MeshDigests digests;
-  // A mesh several parts share is read once.
   std::map<std::filesystem::path, std::string> by_file;
-  for (const auto& [part, file] : meshFiles(model, scene)) {
+  for (const auto& [part, file] : files) {
     auto found = by_file.find(file);
     if (found == by_file.end()) found = by_file.emplace(file, fileDigest(file)).first;
     digests.emplace(part, found->second);
   }
   return digests;
 }
+
+}  // namespace
+
+MeshDigests meshDigests(const robot::RobotModel& model, const robot::Scene& scene) { return digestsOf(meshFiles(model, scene)); }
 
 std::string meshDigestsText(const MeshDigests& digests) {
   std::string text;
@@ -93,7 +99,7 @@ std::vector<std::string> meshesChanged(const MeshDigests& recorded, const robot:
   std::vector<std::string> changed;
   if (recorded.empty()) return changed;
   const auto files = meshFiles(model, scene);
-  const MeshDigests now = meshDigests(model, scene);
+  const MeshDigests now = digestsOf(files);
   for (const auto& [part, digest] : now) {
     const auto then = recorded.find(part);
     if (then != recorded.end() && then->second != digest) changed.push_back(part + " (" + files.at(part).string() + ")");

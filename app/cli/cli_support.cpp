@@ -172,11 +172,9 @@ robot::RobotModel loadSessionRobot(const std::string& reference, const std::stri
     return model;
   }
   if (stored_urdf.empty()) return loadRobotNoting(reference, tip);
-  const auto& builtins = builtinRobotNames();
-  const bool builtin = std::find(builtins.begin(), builtins.end(), reference) != builtins.end();
   // A session stores a file robot by its absolute path (portableReference), so its folder is known
   // even after the file has gone.
-  const std::filesystem::path file = builtin ? resolveRobotPath(reference) : std::filesystem::path(reference);
+  const std::filesystem::path file = robotFileOf(reference);
   const std::optional<std::string> on_disk = fileText(file);
   try {
     robot::RobotModel stored = robot::RobotModel::fromUrdfString(stored_urdf, file.parent_path(), tip);
@@ -230,11 +228,7 @@ robot::Scene loadSessionScene(const std::string& reference, const std::string& s
     return scene;
   }
   if (stored_scene_text.empty()) return loadSceneNoting(reference);
-  const auto& builtins = robot::builtinSceneNames();
-  const bool empty = reference.empty() || reference == "empty";
-  const bool builtin = !empty && std::find(builtins.begin(), builtins.end(), reference) != builtins.end();
-  const std::filesystem::path file =
-      empty ? std::filesystem::path() : builtin ? resourceDir() / "scenes" / (reference + ".yaml") : std::filesystem::path(reference);
+  const std::filesystem::path file = sceneFileOf(reference);
   // The session stores the scene as sceneToYaml wrote it, so the file is compared in that form.
   std::optional<std::string> on_disk;
   std::string on_disk_error;
