@@ -1,6 +1,5 @@
 // `export --session F`: a recorded session as the files the offline tools read (docs/SESSIONS.md):
 // --samples (learn fit), --stream (itm build), --model (learn predict), --graph (itm path).
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -25,7 +24,6 @@
 #include "planning/itm_file.hpp"
 #include "robot/collision.hpp"
 #include "robot/errors.hpp"
-#include "robot/resources.hpp"
 #include "robot/scene.hpp"
 
 namespace flexirob::cli {
